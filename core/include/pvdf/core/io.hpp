@@ -1,0 +1,58 @@
+// Output files that are never half-written, number-range flags, and line-numbered CSV reading.
+#pragma once
+
+#include <functional>
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+namespace pvdf {
+
+/// Writes a file atomically: `write` fills a temporary file beside `path`, which is flushed
+/// and renamed over `path` only if `write` returns without throwing. A crash or an exception
+/// leaves either the old file or none, never a half-written one. Throws InputError when the
+/// folder cannot be written.
+void write_file_atomically(const std::string& path, const std::function<void(std::ostream&)>& write);
+/// Same for binary writers that need a file name (libpng, HDF5): `write` gets the temporary
+/// path, and the file is renamed to `path` afterwards.
+void write_path_atomically(const std::string& path, const std::function<void(const std::string&)>& write);
+
+/// Creates a folder and its parents if missing; InputError if that fails.
+void make_directories(const std::string& path);
+
+/// Parses "START:STEP:STOP" (inclusive STOP, up to round-off) into values; `what` names the
+/// flag in messages. Limits the count to `max_count`.
+std::vector<double> parse_range(const std::string& text, const std::string& what, std::size_t max_count = 100000);
+/// Parses "A,B,C" into finite numbers; `count` = 0 accepts any count >= 1.
+std::vector<double> parse_number_list(const std::string& text, const std::string& what, std::size_t count = 0);
+
+/// A table read from CSV with a header row. Numbers only; comments start with '#'.
+struct CsvTable {
+  std::vector<std::string> columns;
+  std::vector<std::vector<double>> rows;   ///< rows[i][j] is column j of data row i
+  std::vector<std::size_t> line_numbers;   ///< 1-based file line of each data row
+  /// Index of a column, or throws InputError naming the file and the missing column.
+  std::size_t column(const std::string& name) const;
+  bool has_column(const std::string& name) const;
+  std::string source;
+};
+
+/// How read_csv treats a malformed data row (wrong field count, non-number, non-finite).
+enum class BadRowPolicy {
+  refuse,  ///< throw InputError naming the file and the line number
+  skip     ///< skip it, and append "file:line: reason" to `skipped`
+};
+
+/// Reads a numeric CSV file with a header. Throws InputError for a missing file or header.
+CsvTable read_csv(const std::string& path, BadRowPolicy policy = BadRowPolicy::refuse,
+                  std::vector<std::string>* skipped = nullptr);
+/// Same from a stream; `source` names it.
+CsvTable read_csv(std::istream& in, const std::string& source, BadRowPolicy policy = BadRowPolicy::refuse,
+                  std::vector<std::string>* skipped = nullptr);
+
+/// Splits one CSV line on commas, trimming spaces.
+std::vector<std::string> split_csv_line(const std::string& line);
+/// Parses a finite double from the whole of `text`; false if it is not one.
+bool parse_finite(const std::string& text, double& value);
+
+}  // namespace pvdf

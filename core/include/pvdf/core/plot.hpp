@@ -1,0 +1,109 @@
+// PNG figures a person wants to look at: line plots, scatter, filled fields with contours,
+// polygons (mesh previews), with labelled axes, ticks, legends and titles. No external
+// plotting program: rasterized here, text through FreeType with the DejaVu fonts, PNG via libpng.
+#pragma once
+
+#include <array>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace pvdf::plot {
+
+/// RGB colour, components 0..255.
+struct Color {
+  unsigned char r = 0, g = 0, b = 0;
+};
+
+/// The default cycle of line colours (colour-blind-friendly); `index` wraps around.
+Color cycle_color(std::size_t index);
+/// Perceptually ordered colour map (viridis-like), t in [0, 1].
+Color colormap(double t);
+/// Diverging colour map (blue–white–red), t in [0, 1], 0.5 is white.
+Color colormap_diverging(double t);
+
+enum class LineStyle { solid, dashed, dotted, none };
+enum class Marker { none, circle, square, triangle, cross, plus };
+
+/// A regular grid of values over [x0, x1] × [y0, y1] (nx × ny nodes, row-major in y:
+/// value(i, j) = values[j * nx + i]). NaN marks "no value" (drawn as background).
+struct Grid {
+  double x0 = 0, x1 = 1, y0 = 0, y1 = 1;
+  std::size_t nx = 0, ny = 0;
+  std::vector<double> values;
+  double at(std::size_t i, std::size_t j) const { return values[j * nx + i]; }
+};
+
+/// One panel of a figure: data coordinates, axes, ticks, labels, legend.
+class Axes {
+ public:
+  /// Line and/or markers through points (NaN breaks the line).
+  Axes& line(const std::vector<double>& x, const std::vector<double>& y, const std::string& label = "",
+             std::optional<Color> color = std::nullopt, LineStyle style = LineStyle::solid,
+             Marker marker = Marker::none, double width_px = 2.0);
+  /// Markers only.
+  Axes& scatter(const std::vector<double>& x, const std::vector<double>& y, const std::string& label = "",
+                std::optional<Color> color = std::nullopt, Marker marker = Marker::circle, double size_px = 6.0);
+  /// Error bars (vertical, ± err).
+  Axes& error_bars(const std::vector<double>& x, const std::vector<double>& y, const std::vector<double>& err,
+                   std::optional<Color> color = std::nullopt);
+  /// Filled field (colour map) with a colour bar labelled `colorbar_label`.
+  Axes& field(const Grid& grid, const std::string& colorbar_label, bool diverging = false,
+              std::optional<double> vmin = std::nullopt, std::optional<double> vmax = std::nullopt);
+  /// Contour lines of a grid at `levels`, optionally labelled with their value (`label_format`
+  /// is a printf format such as "%.0f pC", values multiplied by `label_scale` first).
+  Axes& contour(const Grid& grid, const std::vector<double>& levels, std::optional<Color> color = std::nullopt,
+                double width_px = 1.5, const std::string& label_format = "", double label_scale = 1.0,
+                const std::string& legend_label = "");
+  /// Closed polygon, filled and/or outlined.
+  Axes& polygon(const std::vector<std::array<double, 2>>& vertices, std::optional<Color> fill,
+                std::optional<Color> edge = Color{0, 0, 0}, double edge_width_px = 1.0, const std::string& label = "");
+  /// Text at a data point.
+  Axes& text(double x, double y, const std::string& text, Color color = Color{0, 0, 0}, double size_pt = 10);
+  /// Horizontal / vertical reference lines.
+  Axes& hline(double y, Color color = Color{120, 120, 120}, LineStyle style = LineStyle::dashed, const std::string& label = "");
+  Axes& vline(double x, Color color = Color{120, 120, 120}, LineStyle style = LineStyle::dashed, const std::string& label = "");
+
+  Axes& title(const std::string& t);
+  Axes& xlabel(const std::string& t);
+  Axes& ylabel(const std::string& t);
+  Axes& xlim(double lo, double hi);
+  Axes& ylim(double lo, double hi);
+  Axes& log_x(bool on = true);
+  Axes& log_y(bool on = true);
+  /// Same scale on both axes (maps, meshes).
+  Axes& equal_aspect(bool on = true);
+  Axes& grid_lines(bool on = true);
+  /// Legend placement: "best", "upper right", "upper left", "lower right", "lower left", "none".
+  Axes& legend(const std::string& where = "best");
+
+  struct Impl;
+  Impl* impl() const { return impl_; }
+  explicit Axes(Impl* impl) : impl_(impl) {}
+
+ private:
+  Impl* impl_;
+};
+
+/// A figure of rows × cols panels, saved as PNG (written atomically).
+class Figure {
+ public:
+  Figure(int width_px = 1000, int height_px = 700, int rows = 1, int cols = 1);
+  ~Figure();
+  Figure(const Figure&) = delete;
+  Figure& operator=(const Figure&) = delete;
+
+  /// Panel at (row, col), 0-based.
+  Axes& axes(int row = 0, int col = 0);
+  /// Title over all panels.
+  Figure& suptitle(const std::string& t);
+  /// Renders and writes the PNG. Throws InputError if the path cannot be written.
+  void save_png(const std::string& path) const;
+
+  struct Impl;
+
+ private:
+  Impl* impl_;
+};
+
+}  // namespace pvdf::plot

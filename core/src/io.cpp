@@ -1,0 +1,220 @@
+// Atomic output, range flags and CSV input.
+#include "pvdf/core/io.hpp"
+
+#include "pvdf/core/error.hpp"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include <unistd.h>
+
+namespace pvdf {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+std::string temporary_name_for(const std::string& path) {
+  std::random_device rd;
+  std::ostringstream os;
+  os << path << ".tmp." << ::getpid() << "." << std::hex << rd();
+  return os.str();
+}
+
+}  // namespace
+
+void make_directories(const std::string& path) {
+  if (path.empty()) return;
+  std::error_code ec;
+  fs::create_directories(path, ec);
+  if (ec) throw InputError(path + ": cannot create the folder (" + ec.message() + "); choose a writable place");
+}
+
+void write_path_atomically(const std::string& path, const std::function<void(const std::string&)>& write) {
+  const fs::path target(path);
+  if (target.has_parent_path()) {
+    std::error_code ec;
+    if (!fs::exists(target.parent_path(), ec)) {
+      throw InputError(path + ": folder " + target.parent_path().string() +
+                       " does not exist; create it or choose another output path");
+    }
+  }
+  const std::string tmp = temporary_name_for(path);
+  try {
+    write(tmp);
+  } catch (...) {
+    std::remove(tmp.c_str());
+    throw;
+  }
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    const std::string why = std::strerror(errno);
+    std::remove(tmp.c_str());
+    throw InputError(path + ": cannot write the file (" + why + "); choose a writable path");
+  }
+}
+
+void write_file_atomically(const std::string& path, const std::function<void(std::ostream&)>& write) {
+  write_path_atomically(path, [&](const std::string& tmp) {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) throw InputError(path + ": cannot open for writing; check the folder and its permissions");
+    write(out);
+    out.flush();
+    if (!out) throw InputError(path + ": write failed (disk full?); free space and run again");
+  });
+}
+
+bool parse_finite(const std::string& text, double& value) {
+  if (text.empty()) return false;
+  const char* begin = text.c_str();
+  char* end = nullptr;
+  errno = 0;
+  const double x = std::strtod(begin, &end);
+  if (end == begin) return false;
+  while (*end == ' ' || *end == '\t' || *end == '\r') ++end;
+  if (*end != '\0') return false;
+  if (!std::isfinite(x)) return false;
+  value = x;
+  return true;
+}
+
+std::vector<double> parse_number_list(const std::string& text, const std::string& what, std::size_t count) {
+  std::vector<double> out;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    double x = 0;
+    const auto b = item.find_first_not_of(" \t");
+    const auto e = item.find_last_not_of(" \t");
+    const std::string t = b == std::string::npos ? "" : item.substr(b, e - b + 1);
+    if (!parse_finite(t, x)) {
+      throw InputError(what + " = '" + text + "': '" + t + "' is not a finite number; write numbers separated by commas");
+    }
+    out.push_back(x);
+  }
+  if (out.empty()) throw InputError(what + " = '" + text + "' is empty; give at least one number");
+  if (count != 0 && out.size() != count) {
+    throw InputError(what + " = '" + text + "' has " + std::to_string(out.size()) + " numbers; it needs exactly " +
+                     std::to_string(count));
+  }
+  return out;
+}
+
+std::vector<double> parse_range(const std::string& text, const std::string& what, std::size_t max_count) {
+  std::vector<std::string> parts;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ':')) parts.push_back(item);
+  double start = 0, step = 0, stop = 0;
+  if (parts.size() != 3 || !parse_finite(parts[0], start) || !parse_finite(parts[1], step) ||
+      !parse_finite(parts[2], stop)) {
+    throw InputError(what + " = '" + text + "' must be START:STEP:STOP with three finite numbers, e.g. 0:5:90");
+  }
+  if (step == 0 || (stop - start) / step < 0) {
+    throw InputError(what + " = '" + text + "': STEP must be non-zero and lead from START to STOP");
+  }
+  const double n_real = std::floor((stop - start) / step + 1e-9) + 1;
+  if (n_real > static_cast<double>(max_count)) {
+    throw InputError(what + " = '" + text + "' gives " + std::to_string(static_cast<long long>(n_real)) +
+                     " values; the limit is " + std::to_string(max_count) + ": use a larger STEP");
+  }
+  std::vector<double> out;
+  for (long i = 0; i < static_cast<long>(n_real); ++i) out.push_back(start + i * step);
+  return out;
+}
+
+std::vector<std::string> split_csv_line(const std::string& line) {
+  std::vector<std::string> out;
+  std::string cur;
+  for (char c : line) {
+    if (c == ',') {
+      out.push_back(cur);
+      cur.clear();
+    } else if (c != '\r') {
+      cur += c;
+    }
+  }
+  out.push_back(cur);
+  for (auto& s : out) {
+    const auto b = s.find_first_not_of(" \t");
+    const auto e = s.find_last_not_of(" \t");
+    s = b == std::string::npos ? "" : s.substr(b, e - b + 1);
+  }
+  return out;
+}
+
+std::size_t CsvTable::column(const std::string& name) const {
+  for (std::size_t i = 0; i < columns.size(); ++i) {
+    if (columns[i] == name) return i;
+  }
+  std::string have;
+  for (const auto& c : columns) have += (have.empty() ? "" : ",") + c;
+  throw InputError(source + ": no column '" + name + "' in the header (" + have + "); add it (see docs)");
+}
+
+bool CsvTable::has_column(const std::string& name) const {
+  for (const auto& c : columns) {
+    if (c == name) return true;
+  }
+  return false;
+}
+
+CsvTable read_csv(std::istream& in, const std::string& source, BadRowPolicy policy,
+                  std::vector<std::string>* skipped) {
+  CsvTable t;
+  t.source = source;
+  std::string line;
+  std::size_t line_no = 0;
+  bool have_header = false;
+  while (std::getline(in, line)) {
+    ++line_no;
+    const auto first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '#') continue;
+    auto fields = split_csv_line(line);
+    if (!have_header) {
+      for (const auto& f : fields) {
+        if (f.empty()) throw InputError(source + ":" + std::to_string(line_no) + ": empty column name in the header; name every column");
+      }
+      t.columns = fields;
+      have_header = true;
+      continue;
+    }
+    std::string problem;
+    std::vector<double> row;
+    if (fields.size() != t.columns.size()) {
+      problem = "has " + std::to_string(fields.size()) + " fields, the header has " + std::to_string(t.columns.size());
+    } else {
+      for (std::size_t j = 0; j < fields.size(); ++j) {
+        double x = 0;
+        if (!parse_finite(fields[j], x)) {
+          problem = "column " + t.columns[j] + " = '" + fields[j] + "' is not a finite number";
+          break;
+        }
+        row.push_back(x);
+      }
+    }
+    if (!problem.empty()) {
+      const std::string msg = source + ":" + std::to_string(line_no) + ": " + problem;
+      if (policy == BadRowPolicy::refuse) throw InputError(msg + "; fix or remove the row");
+      if (skipped) skipped->push_back(msg);
+      continue;
+    }
+    t.rows.push_back(std::move(row));
+    t.line_numbers.push_back(line_no);
+  }
+  if (!have_header) throw InputError(source + ": no header row; the first line must name the columns");
+  return t;
+}
+
+CsvTable read_csv(const std::string& path, BadRowPolicy policy, std::vector<std::string>* skipped) {
+  std::ifstream in(path);
+  if (!in) throw InputError(path + ": cannot open the file; check the path and its permissions");
+  return read_csv(in, path, policy, skipped);
+}
+
+}  // namespace pvdf
