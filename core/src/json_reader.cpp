@@ -252,6 +252,25 @@ nlohmann::json parse_json_text(const std::string& text, const std::string& sourc
       msg += "; fix the syntax (strict JSON: double quotes, no comments, no trailing commas)";
     }
     throw InputError(msg);
+  } catch (const nlohmann::json::exception& e) {
+    // e.g. a number too large for a double ("1e400"): name the key it was written under.
+    std::string what = e.what();
+    std::string key;
+    const auto q1 = what.find('\'');
+    const auto q2 = q1 == std::string::npos ? q1 : what.find('\'', q1 + 1);
+    if (q2 != std::string::npos) {
+      const std::string token = what.substr(q1 + 1, q2 - q1 - 1);
+      const auto at = text.find(token);
+      if (at != std::string::npos) {
+        static const std::regex key_re("\"([^\"\\\\]+)\"\\s*:\\s*[^\"]*$");
+        std::smatch m;
+        const std::string before = text.substr(0, at);
+        if (std::regex_search(before, m, key_re)) key = m[1];
+      }
+      throw InputError(source + ": number '" + token + "'" + (key.empty() ? "" : " in the value of key \"" + key + "\"") +
+                       " is out of the range of a double (not finite); write a finite number");
+    }
+    throw InputError(source + ": invalid JSON (" + what + "); fix the file");
   }
 }
 

@@ -213,7 +213,6 @@ namespace {
 
 void check_simple_polygon(const JsonObjectReader& r, const std::string& key,
                           const std::vector<Point2>& v) {
-  if (std::abs(polygon_signed_area(v)) <= 0) r.fail(key, "encloses zero area; give at least three non-collinear points");
   auto cross = [](const Point2& o, const Point2& a, const Point2& b) {
     return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
   };
@@ -236,6 +235,7 @@ void check_simple_polygon(const JsonObjectReader& r, const std::string& key,
       r.fail(key, "repeats vertex " + std::to_string(i) + "; remove the duplicate point");
     }
   }
+  if (std::abs(polygon_signed_area(v)) <= 0) r.fail(key, "encloses zero area; give at least three non-collinear points");
 }
 
 FilmOutline parse_outline(const JsonObjectReader& r) {
