@@ -426,7 +426,7 @@ const char* default_scene_json() {
   "name": "seed-001 membrane tactile sensor",
   "description": "25 um drawn PVDF clamped over a 90 mm hole; three 2 mm electrodes in a triangle",
   "membrane": {"shape": "circle", "radius_m": 0.045, "thickness_m": 25e-6, "pretension_N_per_m": 0.0},
-  "material": {"E1_Pa": 2.2e9, "E2_Pa": 1.8e9, "G12_Pa": 0.58e9, "nu12": 0.35, "nu21": 0.28,
+  "material": {"E1_Pa": 2.2e9, "E2_Pa": 1.8e9, "G12_Pa": 0.58e9, "nu12": 0.35,
                "draw_angle_deg": 0.0, "d31_C_per_N": 6.5e-12, "d32_C_per_N": 0.65e-12},
   "electrodes": [
     {"name": "A", "center_m": [0.0, 0.010], "size_m": [0.002, 0.002], "angle_deg": 0.0},
