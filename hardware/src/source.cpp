@@ -1,0 +1,68 @@
+// Stream info helpers, counters, and the device-specification parser that opens a Source.
+#include "pvdf/hardware/source.hpp"
+
+#include "pvdf/core/error.hpp"
+#include "pvdf/hardware/recording.hpp"
+#include "pvdf/hardware/sim_source.hpp"
+#include "pvdf/hardware/usb_source.hpp"
+
+#include <cmath>
+#include <sstream>
+
+namespace pvdf::hardware {
+
+double StreamInfo::volts_per_count() const { return full_scale_V / std::ldexp(1.0, adc_bits - 1); }
+
+std::vector<int> StreamInfo::channels() const {
+  std::vector<int> list;
+  for (int c = 0; c < protocol::max_channels; ++c)
+    if (channel_mask & (1u << c)) list.push_back(c);
+  return list;
+}
+
+const char* to_string(EndReason reason) {
+  switch (reason) {
+    case EndReason::running: return "running";
+    case EndReason::end_of_data: return "end of data";
+    case EndReason::stopped: return "stopped";
+    case EndReason::disconnected: return "device disconnected";
+    case EndReason::stalled: return "device stalled";
+    case EndReason::failed: return "transfer failure";
+  }
+  return "unknown";
+}
+
+std::string StreamCounters::summary() const {
+  std::ostringstream s;
+  s << decoder.summary() << "; transfers " << transfers << ", timeouts " << transfer_timeouts << ", transfer errors "
+    << transfer_errors;
+  return s.str();
+}
+
+std::unique_ptr<Source> open_source(const std::string& spec, const OpenOptions& options) {
+  if (spec == "usb" || spec.rfind("usb:", 0) == 0) {
+    std::uint16_t vid = 0, pid = 0;
+    parse_usb_spec(spec, vid, pid);
+    return std::make_unique<UsbSource>(vid, pid, options);
+  }
+  const auto not_for = [&](const char* kind) {
+    if (options.sample_rate_Hz > 0 || options.channel_mask != 0 || options.gain_mV_per_pC > 0)
+      throw InputError(std::string("--rate-Hz, --channels and --gain-mV-per-pC configure a USB device; ") + kind +
+                       " streams are what they are (edit the scene, or record with the settings you need)");
+  };
+  if (spec.rfind("replay:", 0) == 0) {
+    not_for("replay");
+    const std::string path = spec.substr(7);
+    if (path.empty()) throw InputError("--device replay:FILE: give the recording file, e.g. replay:run.pvdfrec");
+    return std::make_unique<ReplaySource>(path, options.realtime);
+  }
+  if (spec.rfind("sim:", 0) == 0 || spec == "sim") {
+    not_for("simulated");
+    const std::string path = spec.size() > 4 ? spec.substr(4) : std::string();
+    if (path.empty()) return std::make_unique<SimSource>(default_sim_scene(), options.realtime, "sim <built-in>");
+    return std::make_unique<SimSource>(load_sim_scene(path), options.realtime, "sim " + path);
+  }
+  throw InputError("--device " + spec + ": expected usb[:VID:PID], replay:FILE or sim:SCENE (sim: for the built-in scene)");
+}
+
+}  // namespace pvdf::hardware
