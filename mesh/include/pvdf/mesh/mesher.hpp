@@ -23,7 +23,15 @@ struct MeshReport {
   double wall_s = 0;                  ///< wall time of geometry + meshing + extraction (s)
   double target_size_min_m = 0;       ///< fine size requested from Gmsh (scene or default) (m)
   double target_size_max_m = 0;       ///< coarse size requested from Gmsh (scene or default) (m)
+  std::size_t n_probes_embedded = 0;  ///< probe footprints whose circles are mesh edges
+  std::vector<std::string> notes;     ///< remarks, e.g. a footprint left out because it would make slivers
 };
+
+/// Physical-group tags in .msh files: tag = deal.II id (film_mesh.hpp) + msh_tag_offset, because
+/// Gmsh reserves tag 0. Surfaces: "film" = 1, electrode k (its name) = k + 2; curves: "rim" = 1,
+/// embedded probe footprint j ("probe_<j>") = msh_probe_tag_base + j.
+inline constexpr int msh_tag_offset = 1;
+inline constexpr int msh_probe_tag_base = 101;
 
 /// Extra knobs beyond the scene's mesh section.
 struct MeshParameters {
@@ -63,11 +71,13 @@ FilmMesh build_film_mesh(const pvdf::Scene& scene, MeshReport* report = nullptr,
 FilmMesh build_film_mesh(const pvdf::Scene& scene, const MeshParameters& parameters, MeshReport* report = nullptr,
                          const std::vector<std::array<double, 2>>& extra_probe_positions_m = {});
 
-/// Meshes the scene and writes a Gmsh .msh (format 4.1) file atomically, with physical
-/// groups "film", one per electrode (its name), "rim" (curve) and "probe_<i>" (curves).
-void write_msh(const pvdf::Scene& scene, const std::string& path, MeshReport* report = nullptr);
+/// Meshes the scene and writes a Gmsh .msh (format 4.1, ASCII, metres) file atomically, with
+/// physical groups "film", one per electrode (its name), "rim" (curve) and "probe_<j>" (curves)
+/// tagged as above; scene.mesh.order = 2 writes 9-node quads whose rim nodes lie on the exact
+/// outline. Returns the same (first-order) FilmMesh build_film_mesh gives; throws as it does.
+FilmMesh write_msh(const pvdf::Scene& scene, const std::string& path, MeshReport* report = nullptr);
 /// Same with extra parameters.
-void write_msh(const pvdf::Scene& scene, const std::string& path, const MeshParameters& parameters,
+FilmMesh write_msh(const pvdf::Scene& scene, const std::string& path, const MeshParameters& parameters,
                MeshReport* report = nullptr);
 
 /// Quality of a quad mesh (fills n_cells, n_vertices, size_min/max, min scaled Jacobian, max

@@ -1,0 +1,374 @@
+// Geometric validation of a scene before meshing: everything Gmsh could choke on, or silently
+// mesh into something the user did not mean, is refused here with a message naming the
+// electrode or key, the value, the rule and the fix.
+#include "scene_geometry.hpp"
+
+#include "pvdf/core/error.hpp"
+#include "pvdf/mesh/mesher.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace pvdf::mesh {
+
+namespace detail {
+
+std::string fmt(double x) {
+  std::ostringstream os;
+  os.precision(6);
+  os << x;
+  return os.str();
+}
+
+planar::Region electrode_region(const pvdf::Electrode& e) {
+  planar::Region r;
+  if (e.shape == pvdf::Electrode::Shape::circle) {
+    r.is_circle = true;
+    r.center = e.center_m;
+    r.radius = e.radius_m;
+  } else {
+    r.vertices = e.outline();
+  }
+  return r;
+}
+
+double electrode_feature_size_m(const pvdf::Electrode& e) {
+  switch (e.shape) {
+    case pvdf::Electrode::Shape::rectangle: return std::min(e.size_m[0], e.size_m[1]);
+    case pvdf::Electrode::Shape::circle: return 2 * e.radius_m;
+    case pvdf::Electrode::Shape::polygon:
+      return 4 * std::abs(planar::signed_area(e.vertices_m)) / planar::perimeter(e.vertices_m);
+  }
+  return 0;
+}
+
+std::string electrode_label(const pvdf::Scene& scene, std::size_t index) {
+  return "electrodes[" + std::to_string(index) + "] (\"" + scene.electrodes[index].name + "\")";
+}
+
+namespace {
+
+/// The film outline as a region; the ellipse is sampled finely (only used for display-level
+/// decisions there; its checks go through FilmOutline::inside_distance_m).
+planar::Region film_region(const pvdf::FilmOutline& o) {
+  planar::Region r;
+  switch (o.shape) {
+    case pvdf::FilmOutline::Shape::circle:
+      r.is_circle = true;
+      r.radius = o.radius_m;
+      break;
+    case pvdf::FilmOutline::Shape::rectangle: {
+      const double hx = 0.5 * o.size_m[0], hy = 0.5 * o.size_m[1];
+      r.vertices = {{-hx, -hy}, {hx, -hy}, {hx, hy}, {-hx, hy}};
+      break;
+    }
+    case pvdf::FilmOutline::Shape::ellipse: {
+      const int n = 1024;
+      for (int i = 0; i < n; ++i) {
+        const double t = 2 * 3.14159265358979323846 * i / n;
+        r.vertices.push_back({o.semi_axes_m[0] * std::cos(t), o.semi_axes_m[1] * std::sin(t)});
+      }
+      break;
+    }
+    case pvdf::FilmOutline::Shape::polygon: r.vertices = o.vertices_m; break;
+  }
+  return r;
+}
+
+}  // namespace
+
+std::vector<Footprint> probe_footprints(const pvdf::Scene& scene, const std::vector<std::array<double, 2>>& extras,
+                                        double sliver_gap_m) {
+  std::vector<Footprint> out;
+  if (scene.mesh.embed_probes) {
+    for (std::size_t i = 0; i < scene.loads.size(); ++i) {
+      const auto& l = scene.loads[i];
+      if (l.kind != pvdf::Load::Kind::probe) continue;
+      out.push_back({l.position_m, l.radius_m > 0 ? l.radius_m : scene.probe.radius_m,
+                     "loads[" + std::to_string(i) + "]", true, ""});
+    }
+  }
+  for (std::size_t i = 0; i < extras.size(); ++i) {
+    out.push_back({extras[i], scene.probe.radius_m, "extra probe " + std::to_string(i), true, ""});
+  }
+  const auto& outline = scene.membrane.outline;
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    Footprint& f = out[i];
+    if (outline.inside_distance_m(f.center_m) - f.radius_m < sliver_gap_m) {
+      f.embed = false;
+      f.note = f.label + ": footprint not embedded: it comes within " + fmt(sliver_gap_m) + " m of the rim";
+      continue;
+    }
+    for (std::size_t k = 0; k < scene.electrodes.size() && f.embed; ++k) {
+      if (planar::tangency_gap(f.center_m, f.radius_m, electrode_region(scene.electrodes[k])) < sliver_gap_m) {
+        f.embed = false;
+        f.note = f.label + ": footprint not embedded: its circle nearly touches the outline of " +
+                 electrode_label(scene, k) + " (would make slivers)";
+      }
+    }
+    for (std::size_t j = 0; j < i && f.embed; ++j) {
+      if (!out[j].embed) continue;
+      planar::Region other;
+      other.is_circle = true;
+      other.center = out[j].center_m;
+      other.radius = out[j].radius_m;
+      if (planar::tangency_gap(f.center_m, f.radius_m, other) < sliver_gap_m) {
+        f.embed = false;
+        f.note = f.label + ": footprint not embedded: it coincides with or nearly touches " + out[j].label;
+      }
+    }
+  }
+  return out;
+}
+
+namespace {
+
+bool finite_positive(double x) { return std::isfinite(x) && x > 0; }
+bool finite_point(const std::array<double, 2>& p) { return std::isfinite(p[0]) && std::isfinite(p[1]); }
+
+[[noreturn]] void fail(const pvdf::Scene& scene, const std::string& what) {
+  throw pvdf::InputError(scene.source + ": " + what);
+}
+
+void check_sizes(const pvdf::Scene& s) {
+  const auto& o = s.membrane.outline;
+  switch (o.shape) {
+    case pvdf::FilmOutline::Shape::circle:
+      if (!finite_positive(o.radius_m)) fail(s, "membrane.radius_m = " + fmt(o.radius_m) + " must be > 0");
+      break;
+    case pvdf::FilmOutline::Shape::rectangle:
+      if (!finite_positive(o.size_m[0]) || !finite_positive(o.size_m[1])) {
+        fail(s, "membrane.size_m = [" + fmt(o.size_m[0]) + ", " + fmt(o.size_m[1]) + "] must hold two sizes > 0");
+      }
+      break;
+    case pvdf::FilmOutline::Shape::ellipse:
+      if (!finite_positive(o.semi_axes_m[0]) || !finite_positive(o.semi_axes_m[1])) {
+        fail(s, "membrane.semi_axes_m = [" + fmt(o.semi_axes_m[0]) + ", " + fmt(o.semi_axes_m[1]) +
+                    "] must hold two semi-axes > 0");
+      }
+      break;
+    case pvdf::FilmOutline::Shape::polygon: {
+      if (o.vertices_m.size() < 3) fail(s, "membrane.vertices_m needs at least 3 points");
+      for (const auto& p : o.vertices_m) {
+        if (!finite_point(p)) fail(s, "membrane.vertices_m holds a non-finite coordinate");
+      }
+      const auto bad = planar::first_self_intersection(o.vertices_m);
+      if (bad[0] >= 0) {
+        fail(s, "membrane.vertices_m is self-intersecting (edge " + std::to_string(bad[0]) + " meets edge " +
+                    std::to_string(bad[1]) + "); list the vertices in order around a simple outline");
+      }
+      if (!(std::abs(planar::signed_area(o.vertices_m)) > 0)) fail(s, "membrane.vertices_m encloses zero area");
+      if (!(o.inside_distance_m({0, 0}) > 0)) {
+        fail(s, "membrane.vertices_m must enclose the origin (0, 0), the film's reference point; shift the outline");
+      }
+      break;
+    }
+  }
+  const auto& m = s.mesh;
+  if (!(std::isfinite(m.size_min_m) && m.size_min_m >= 0)) {
+    fail(s, "mesh.size_min_m = " + fmt(m.size_min_m) + " must be > 0 (or 0 for the default)");
+  }
+  if (!(std::isfinite(m.size_max_m) && m.size_max_m >= 0)) {
+    fail(s, "mesh.size_max_m = " + fmt(m.size_max_m) + " must be > 0 (or 0 for the default)");
+  }
+  if (m.size_min_m > 0 && m.size_max_m > 0 && m.size_max_m < m.size_min_m) {
+    fail(s, "mesh.size_max_m = " + fmt(m.size_max_m) + " is smaller than mesh.size_min_m = " + fmt(m.size_min_m) +
+                "; the coarse size must be >= the fine size");
+  }
+  if (!(m.growth > 1.0 && m.growth <= 10.0)) {
+    fail(s, "mesh.growth = " + fmt(m.growth) + " must lie in (1, 10]; 1.3 is a good value");
+  }
+  if (m.order != 1 && m.order != 2) fail(s, "mesh.order = " + std::to_string(m.order) + " must be 1 or 2");
+  if (!(m.min_scaled_jacobian >= 0 && m.min_scaled_jacobian <= 1)) {
+    fail(s, "mesh.min_scaled_jacobian = " + fmt(m.min_scaled_jacobian) + " must lie in [0, 1]");
+  }
+  if (!finite_positive(s.probe.radius_m)) fail(s, "probe.radius_m = " + fmt(s.probe.radius_m) + " must be > 0");
+  for (std::size_t i = 0; i < s.loads.size(); ++i) {
+    const auto& l = s.loads[i];
+    if (l.kind != pvdf::Load::Kind::probe) continue;
+    const std::string key = "loads[" + std::to_string(i) + "]";
+    if (!finite_point(l.position_m)) fail(s, key + ".position_m holds a non-finite coordinate");
+    if (!(std::isfinite(l.radius_m) && l.radius_m >= 0)) {
+      fail(s, key + ".radius_m = " + fmt(l.radius_m) + " must be > 0 (or 0 for the scene's probe.radius_m)");
+    }
+  }
+  for (std::size_t k = 0; k < s.electrodes.size(); ++k) {
+    const auto& e = s.electrodes[k];
+    const std::string key = electrode_label(s, k);
+    switch (e.shape) {
+      case pvdf::Electrode::Shape::rectangle:
+        if (!finite_point(e.center_m)) fail(s, key + ".center_m holds a non-finite coordinate");
+        if (!finite_positive(e.size_m[0]) || !finite_positive(e.size_m[1])) {
+          fail(s, key + ".size_m = [" + fmt(e.size_m[0]) + ", " + fmt(e.size_m[1]) + "] must hold two sizes > 0");
+        }
+        if (!std::isfinite(e.angle_rad)) fail(s, key + ".angle_deg is not finite");
+        break;
+      case pvdf::Electrode::Shape::circle:
+        if (!finite_point(e.center_m)) fail(s, key + ".center_m holds a non-finite coordinate");
+        if (!finite_positive(e.radius_m)) fail(s, key + ".radius_m = " + fmt(e.radius_m) + " must be > 0");
+        break;
+      case pvdf::Electrode::Shape::polygon: {
+        if (e.vertices_m.size() < 3) fail(s, key + ".vertices_m needs at least 3 points");
+        for (const auto& p : e.vertices_m) {
+          if (!finite_point(p)) fail(s, key + ".vertices_m holds a non-finite coordinate");
+        }
+        for (std::size_t i = 0; i < e.vertices_m.size(); ++i) {
+          const auto& a = e.vertices_m[i];
+          const auto& b = e.vertices_m[(i + 1) % e.vertices_m.size()];
+          if (a == b) fail(s, key + ".vertices_m repeats vertex " + std::to_string(i) + "; remove the duplicate point");
+        }
+        const auto bad = planar::first_self_intersection(e.vertices_m);
+        if (bad[0] >= 0) {
+          fail(s, key + ".vertices_m is self-intersecting (edge " + std::to_string(bad[0]) + " meets edge " +
+                      std::to_string(bad[1]) + "); list the vertices in order around a simple outline");
+        }
+        if (!(std::abs(planar::signed_area(e.vertices_m)) > 0)) {
+          fail(s, key + ".vertices_m encloses zero area; give at least three non-collinear points");
+        }
+        break;
+      }
+    }
+  }
+}
+
+/// Where an electrode sits relative to the film: inside with a clearance, crossing, or outside.
+struct RimRelation {
+  enum class Kind { inside, crossing, outside } kind = Kind::inside;
+  double clearance_m = 0;  ///< smallest distance from the electrode outline to the rim (inside only)
+};
+
+RimRelation rim_relation(const pvdf::FilmOutline& o, const pvdf::Electrode& e) {
+  RimRelation rel;
+  if (o.shape == pvdf::FilmOutline::Shape::ellipse) {
+    // The ellipse is convex: the signed distance to its outline is concave inside, so its
+    // minimum over a polygon is at a vertex; circles are sampled and the sagitta subtracted.
+    const int n = 256;
+    const auto pts = e.outline(n);
+    const double sagitta = e.shape == pvdf::Electrode::Shape::circle
+                               ? e.radius_m * (1 - std::cos(3.14159265358979323846 / n))
+                               : 0.0;
+    double lo = 1e300, hi = -1e300;
+    for (const auto& p : pts) {
+      const double d = o.inside_distance_m(p);
+      lo = std::min(lo, d);
+      hi = std::max(hi, d);
+    }
+    lo -= sagitta;
+    if (lo > 0) {
+      rel.clearance_m = lo;
+    } else if (hi > 0) {
+      rel.kind = RimRelation::Kind::crossing;
+    } else {
+      rel.kind = RimRelation::Kind::outside;
+    }
+    return rel;
+  }
+  const planar::Region film = film_region(o);
+  const planar::Region reg = electrode_region(e);
+  const double d = planar::boundary_distance(film, reg);
+  if (d <= 0) {
+    rel.kind = RimRelation::Kind::crossing;
+  } else if (!planar::region_contains(film, planar::boundary_point(reg))) {
+    rel.kind = RimRelation::Kind::outside;
+  } else {
+    rel.clearance_m = d;
+  }
+  return rel;
+}
+
+}  // namespace
+
+void validate_geometry(const pvdf::Scene& s, const std::vector<std::array<double, 2>>& extras) {
+  check_sizes(s);
+  const auto sizes = target_sizes_m(s);
+  const double size_min = sizes[0];
+  const double clearance = 0.5 * size_min;
+  const std::string clearance_text = fmt(clearance) + " m (half the finest mesh size " + fmt(size_min) + " m)";
+
+  for (std::size_t k = 0; k < s.electrodes.size(); ++k) {
+    const auto& e = s.electrodes[k];
+    const std::string key = electrode_label(s, k);
+    const double feature = electrode_feature_size_m(e);
+    if (feature < size_min) {
+      fail(s, key + ": its size " + fmt(feature) + " m (" +
+                  (e.shape == pvdf::Electrode::Shape::rectangle ? "smaller side"
+                   : e.shape == pvdf::Electrode::Shape::circle  ? "diameter"
+                                                                : "4*area/perimeter") +
+                  ") is smaller than the finest mesh size " + fmt(size_min) +
+                  " m; enlarge the electrode or set a smaller mesh.size_min_m");
+    }
+    const RimRelation rel = rim_relation(s.membrane.outline, e);
+    if (rel.kind == RimRelation::Kind::outside) {
+      fail(s, key + " lies outside the film; move its centre/vertices inside the clamped outline");
+    }
+    if (rel.kind == RimRelation::Kind::crossing) {
+      fail(s, key + " crosses or touches the rim; move it inward or shrink it (electrodes lie inside the film)");
+    }
+    if (rel.clearance_m < clearance) {
+      fail(s, key + " touches the rim: its outline comes within " + fmt(rel.clearance_m) +
+                  " m of it; keep at least " + clearance_text + " clear, or set a smaller mesh.size_min_m");
+    }
+  }
+  for (std::size_t a = 0; a < s.electrodes.size(); ++a) {
+    const planar::Region ra = electrode_region(s.electrodes[a]);
+    for (std::size_t b = a + 1; b < s.electrodes.size(); ++b) {
+      const planar::Region rb = electrode_region(s.electrodes[b]);
+      if (planar::regions_overlap(ra, rb)) {
+        fail(s, electrode_label(s, b) + " overlaps " + electrode_label(s, a) +
+                    "; electrodes must be disjoint (each is the overlap of a top and bottom electrode)");
+      }
+      const double gap = planar::boundary_distance(ra, rb);
+      if (gap < clearance) {
+        fail(s, electrode_label(s, b) + " touches " + electrode_label(s, a) + ": gap " + fmt(gap) +
+                    " m; keep at least " + clearance_text + " between electrodes");
+      }
+    }
+  }
+  auto check_footprint = [&](const std::array<double, 2>& c, double r, const std::string& key, const std::string& fix) {
+    if (!finite_point(c)) fail(s, key + " position is not finite");
+    const double inside = s.membrane.outline.inside_distance_m(c);
+    if (inside - r < 0) {
+      fail(s, key + ": the probe footprint (centre [" + fmt(c[0]) + ", " + fmt(c[1]) + "] m, radius " + fmt(r) +
+                  " m) reaches " + fmt(r - inside) + " m outside the film; " + fix);
+    }
+  };
+  for (std::size_t i = 0; i < s.loads.size(); ++i) {
+    const auto& l = s.loads[i];
+    if (l.kind != pvdf::Load::Kind::probe) continue;
+    const double r = l.radius_m > 0 ? l.radius_m : s.probe.radius_m;
+    check_footprint(l.position_m, r, "loads[" + std::to_string(i) + "]",
+                    "move loads[" + std::to_string(i) + "].position_m inward or use a smaller " +
+                        (l.radius_m > 0 ? "loads[" + std::to_string(i) + "].radius_m" : std::string("probe.radius_m")));
+  }
+  for (std::size_t i = 0; i < extras.size(); ++i) {
+    check_footprint(extras[i], s.probe.radius_m, "extra probe position " + std::to_string(i),
+                    "keep probe positions at least probe.radius_m inside the rim");
+  }
+}
+
+}  // namespace detail
+
+std::array<double, 2> target_sizes_m(const pvdf::Scene& scene) {
+  double size_min = 0.5 * scene.probe.radius_m;
+  for (const auto& l : scene.loads) {
+    if (l.kind == pvdf::Load::Kind::probe && l.radius_m > 0) size_min = std::min(size_min, 0.5 * l.radius_m);
+  }
+  for (const auto& e : scene.electrodes) {
+    size_min = std::min(size_min, 0.25 * detail::electrode_feature_size_m(e));
+  }
+  const double radius = scene.membrane.outline.characteristic_radius_m();
+  double size_max = radius / 8;
+  size_min = std::min(size_min, size_max);
+  if (scene.mesh.size_min_m > 0) size_min = scene.mesh.size_min_m;
+  if (scene.mesh.size_max_m > 0) {
+    size_max = scene.mesh.size_max_m;
+    if (!(scene.mesh.size_min_m > 0)) size_min = std::min(size_min, size_max);
+  }
+  size_max = std::max(size_max, size_min);
+  return {size_min, size_max};
+}
+
+void validate_geometry(const pvdf::Scene& scene) { detail::validate_geometry(scene, {}); }
+
+}  // namespace pvdf::mesh
