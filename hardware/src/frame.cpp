@@ -101,7 +101,26 @@ void FrameDecoder::feed(const std::uint8_t* data, std::size_t n, std::vector<Fra
   counters_.trailing_bytes = buffer_.size() - start_;
 }
 
-void FrameDecoder::finish() { counters_.trailing_bytes = buffer_.size() - start_; }
+void FrameDecoder::finish(std::vector<Frame>& out) {
+  std::size_t trailing = 0;
+  counting_ = false;
+  while (start_ < buffer_.size()) {
+    const std::size_t frames_before = out.size();
+    const std::uint64_t duplicates_before = counters_.duplicates;
+    const std::size_t used = try_decode(out);
+    if (used == 0) {
+      ++trailing;  // an incomplete candidate: drop its first byte and look behind it
+      ++start_;
+    } else {
+      const bool was_frame = out.size() > frames_before || counters_.duplicates > duplicates_before;
+      if (!was_frame) trailing += used;
+      start_ += used;
+    }
+  }
+  counting_ = true;
+  compact();
+  counters_.trailing_bytes = trailing;
+}
 
 void FrameDecoder::compact() {
   if (start_ == 0) return;
@@ -124,7 +143,7 @@ std::size_t FrameDecoder::try_decode(std::vector<Frame>& out) {
     ++skip;
   }
   if (skip > 0) {
-    counters_.bytes_skipped += skip;
+    if (counting_) counters_.bytes_skipped += skip;
     return skip;
   }
   if (avail < header_size) return 0;
@@ -135,14 +154,14 @@ std::size_t FrameDecoder::try_decode(std::vector<Frame>& out) {
   if (p[4] != frame_version || p[7] != 0 || (p[5] & ~flag_overflow) != 0 || n_channels < 1 ||
       n_channels > max_channels || n_samples < 1 || n_samples > max_samples_per_frame ||
       popcount16(mask) != n_channels) {
-    ++counters_.bad_headers;
+    if (counting_) ++counters_.bad_headers;
     return 1;
   }
   const std::size_t size = frame_size(n_channels, n_samples);
   if (avail < size) return 0;
   // 3. CRC over header and samples.
   if (crc32(p, size - crc_size) != get_u32(p + size - crc_size)) {
-    ++counters_.crc_errors;
+    if (counting_) ++counters_.crc_errors;
     return 1;
   }
   Frame f;

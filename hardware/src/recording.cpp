@@ -158,17 +158,18 @@ bool ReplaySource::next(std::vector<SampleBlock>& out, std::chrono::milliseconds
     ++reads_;
     std::vector<Frame> frames;
     decoder_.feed(chunk_.data(), n, frames);
+    if (n < chunk_.size()) {
+      decoder_.finish(frames);
+      reason_ = EndReason::end_of_data;
+    }
     std::vector<SampleBlock> blocks;
     blocks.reserve(frames.size());
     for (auto& f : frames) blocks.push_back(SampleBlock{std::move(f)});
     pacer_.push(std::move(blocks));
-    if (n < chunk_.size()) {
-      decoder_.finish();
-      reason_ = EndReason::end_of_data;
-    }
   }
+  const std::size_t before = out.size();
   pacer_.pop_due(out, timeout);
-  return !(reason_ != EndReason::running && pacer_.empty() && out.empty());
+  return !(reason_ != EndReason::running && pacer_.empty() && out.size() == before);
 }
 
 void ReplaySource::stop() {

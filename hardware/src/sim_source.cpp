@@ -161,16 +161,17 @@ bool SimSource::next(std::vector<SampleBlock>& out, std::chrono::milliseconds ti
     for (int k = 0; k < frames_per_call && sample_index_ < n_samples_total_; ++k) produce(bytes);
     std::vector<Frame> frames;
     decoder_.feed(bytes.data(), bytes.size(), frames);
+    if (sample_index_ >= n_samples_total_) {
+      decoder_.finish(frames);
+      reason_ = EndReason::end_of_data;
+    }
     std::vector<SampleBlock> blocks;
     for (auto& f : frames) blocks.push_back(SampleBlock{std::move(f)});
     pacer_.push(std::move(blocks));
-    if (sample_index_ >= n_samples_total_) {
-      decoder_.finish();
-      reason_ = EndReason::end_of_data;
-    }
   }
+  const std::size_t before = out.size();
   pacer_.pop_due(out, timeout);
-  return !(reason_ != EndReason::running && pacer_.empty() && out.empty());
+  return !(reason_ != EndReason::running && pacer_.empty() && out.size() == before);
 }
 
 void SimSource::stop() {

@@ -308,11 +308,16 @@ bool UsbSource::next(std::vector<SampleBlock>& out, std::chrono::milliseconds ti
       abandoned_ = true;
     }
   }
+  const bool live = in_flight_ > 0 && !abandoned_;
+  if (!live && !finished_) {
+    finished_ = true;
+    decoded_.clear();
+    decoder_.finish(decoded_);
+    for (auto& f : decoded_) ready_.push_back(SampleBlock{std::move(f)});
+  }
   const bool had = !ready_.empty();
   for (auto& b : ready_) out.push_back(std::move(b));
   ready_.clear();
-  const bool live = in_flight_ > 0 && !abandoned_;
-  if (!live) decoder_.finish();
   return had || live;
 }
 

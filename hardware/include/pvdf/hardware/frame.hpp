@@ -61,8 +61,10 @@ class FrameDecoder {
  public:
   /// Feeds `n` bytes and appends every complete, valid, new frame to `out`.
   void feed(const std::uint8_t* data, std::size_t n, std::vector<Frame>& out);
-  /// End of stream: a partial frame still buffered is counted in trailing_bytes.
-  void finish();
+  /// End of stream. The buffered bytes are searched once more for complete frames (a
+  /// corrupted length field can hide good frames behind it until more data arrives, which
+  /// will not happen now); what remains is counted in trailing_bytes (a torn last frame).
+  void finish(std::vector<Frame>& out);
   /// Forgets the sequence history (after a START the device restarts at 0).
   void reset_sequence() { have_sequence_ = false; }
   const DecoderCounters& counters() const { return counters_; }
@@ -72,6 +74,7 @@ class FrameDecoder {
   std::size_t try_decode(std::vector<Frame>& out);
   void accept(Frame&& frame, std::vector<Frame>& out);
   void compact();
+  bool counting_ = true;  ///< false while finish() rescans: those bytes count as trailing
 
   std::vector<std::uint8_t> buffer_;
   std::size_t start_ = 0;

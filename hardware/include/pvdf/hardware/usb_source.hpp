@@ -58,6 +58,7 @@ class UsbSource final : public Source {
   std::vector<libusb_transfer*> transfers_;
   std::vector<std::vector<std::uint8_t>> buffers_;
   int in_flight_ = 0;
+  bool finished_ = false;  ///< decoder flushed at the end of the stream
   bool abandoned_ = false;  ///< transfers that never completed after cancel (leaked, not freed)
   bool stopping_ = false;
   EndReason reason_ = EndReason::running;
