@@ -68,6 +68,13 @@ std::string MockFrontEnd::node_path() const {
   return path;
 }
 
+std::string MockFrontEnd::sysfs_path() const {
+  gchar* root = umockdev_testbed_get_root_dir(testbed_);
+  std::string path = std::string(root) + syspath_;
+  g_free(root);
+  return path;
+}
+
 std::vector<ControlSeen> MockFrontEnd::controls() const {
   std::lock_guard<std::mutex> lock(mutex_);
   return controls_;

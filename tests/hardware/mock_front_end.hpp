@@ -43,6 +43,8 @@ class MockFrontEnd {
 
   /// Path of the emulated device node inside the testbed (for chmod in the permission test).
   std::string node_path() const;
+  /// Path of the device's sysfs folder inside the testbed.
+  std::string sysfs_path() const;
   std::vector<ControlSeen> controls() const;
   int peak_bulk_in_flight() const;
   std::size_t chunks_sent() const;

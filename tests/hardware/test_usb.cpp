@@ -169,7 +169,7 @@ TEST_CASE("usb: corrupted, duplicated and dropped frames are counted; a disconne
   }
   REQUIRE(device.disconnected());
   struct stat node {};
-  CHECK(::stat(device.node_path().c_str(), &node) != 0);  // the device node is gone (unplugged)
+  CHECK(::stat(device.sysfs_path().c_str(), &node) != 0);  // gone from sysfs, as when unplugged
   CHECK(source.end_reason() == EndReason::disconnected);
   CHECK_THAT(source.end_message(), Catch::Contains("disconnected"));
 
