@@ -34,6 +34,12 @@ struct Grid {
   double at(std::size_t i, std::size_t j) const { return values[j * nx + i]; }
 };
 
+/// Contour polylines of `grid` at `level` by marching squares on the grid cells (linear
+/// interpolation along cell edges; cells with a NaN corner are skipped; saddles resolved by the
+/// cell-centre average). Each polyline is a list of (x, y) points in data units; a closed loop
+/// repeats its first point at the end. Throws InputError if values.size() != nx * ny.
+std::vector<std::vector<std::array<double, 2>>> contour_lines(const Grid& grid, double level);
+
 /// One panel of a figure: data coordinates, axes, ticks, labels, legend.
 class Axes {
  public:
@@ -99,6 +105,9 @@ class Figure {
   Figure& suptitle(const std::string& t);
   /// Renders and writes the PNG. Throws InputError if the path cannot be written.
   void save_png(const std::string& path) const;
+  /// Where data point (x, y) of panel (row, col) lands in the saved PNG, in pixels (x right,
+  /// y down, pixel (i, j) spans [i, i+1) × [j, j+1)), with the same layout as save_png.
+  std::array<double, 2> data_to_pixel(int row, int col, double x, double y) const;
 
   struct Impl;
 

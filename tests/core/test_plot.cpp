@@ -1,0 +1,263 @@
+// PNG figures: written files are re-read with libpng and checked pixel by pixel against where the
+// data must land (Figure::data_to_pixel) and against the colour maps; contour extraction against
+// an analytic circle; degenerate data must never throw.
+#include "pvdf/core/error.hpp"
+#include "pvdf/core/plot.hpp"
+
+#include <catch2/catch.hpp>
+#include <png.h>
+
+#include <ctime>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <limits>
+
+namespace fs = std::filesystem;
+using pvdf::plot::Color;
+
+namespace {
+
+struct Png {
+  int w = 0, h = 0;
+  std::vector<unsigned char> rgb;
+  Color at(int x, int y) const {
+    const unsigned char* p = &rgb[(static_cast<std::size_t>(y) * w + x) * 3];
+    return {p[0], p[1], p[2]};
+  }
+};
+
+Png read_png(const std::string& path) {
+  png_image image;
+  std::memset(&image, 0, sizeof image);
+  image.version = PNG_IMAGE_VERSION;
+  REQUIRE(png_image_begin_read_from_file(&image, path.c_str()) != 0);
+  image.format = PNG_FORMAT_RGB;
+  Png out;
+  out.w = static_cast<int>(image.width);
+  out.h = static_cast<int>(image.height);
+  out.rgb.resize(PNG_IMAGE_SIZE(image));
+  REQUIRE(png_image_finish_read(&image, nullptr, out.rgb.data(), 0, nullptr) != 0);
+  return out;
+}
+
+fs::path temp_dir() {
+  const fs::path dir = fs::temp_directory_path() / "pvdf_test_plot";
+  fs::create_directories(dir);
+  return dir;
+}
+
+int colour_distance(Color a, Color b) {
+  return std::max({std::abs(a.r - b.r), std::abs(a.g - b.g), std::abs(a.b - b.b)});
+}
+
+bool is_red(Color c) { return c.r > 200 && c.g < 60 && c.b < 60; }
+
+}  // namespace
+
+TEST_CASE("a red line at known data coordinates colours the pixels it must, and only those", "[plot]") {
+  pvdf::plot::Figure fig(600, 400);
+  auto& ax = fig.axes();
+  // Horizontal line y = 0.25 and vertical line x = 0.75 in a [0, 1] × [0, 1] panel.
+  ax.line({0.0, 1.0}, {0.25, 0.25}, "", Color{255, 0, 0}, pvdf::plot::LineStyle::solid, pvdf::plot::Marker::none, 3)
+      .line({0.75, 0.75}, {0.0, 1.0}, "", Color{255, 0, 0}, pvdf::plot::LineStyle::solid, pvdf::plot::Marker::none, 3)
+      .line({0.05, 0.45}, {0.55, 0.95}, "", Color{255, 0, 0}, pvdf::plot::LineStyle::solid, pvdf::plot::Marker::none, 2)
+      .xlim(0, 1)
+      .ylim(0, 1)
+      .xlabel("x (m)")
+      .ylabel("y (m)")
+      .legend("none");
+  const auto path = (temp_dir() / "line.png").string();
+  fig.save_png(path);
+  const Png png = read_png(path);
+  REQUIRE(png.w == 600);
+  REQUIRE(png.h == 400);
+  const auto p_h = fig.data_to_pixel(0, 0, 0.4, 0.25);
+  const auto p_v = fig.data_to_pixel(0, 0, 0.75, 0.6);
+  const auto corner_lo = fig.data_to_pixel(0, 0, 0, 0), corner_hi = fig.data_to_pixel(0, 0, 1, 1);
+  // The panel fills a sensible part of the image.
+  CHECK(corner_hi[0] - corner_lo[0] > 350);
+  CHECK(corner_lo[1] - corner_hi[1] > 250);
+  // On the lines: pure red at the centre pixel.
+  CHECK(is_red(png.at(static_cast<int>(p_h[0]), static_cast<int>(p_h[1]))));
+  CHECK(is_red(png.at(static_cast<int>(p_v[0]), static_cast<int>(p_v[1]))));
+  // Off the lines by 4 px (line half-width 1.5 px): not red.
+  CHECK_FALSE(is_red(png.at(static_cast<int>(p_h[0]), static_cast<int>(p_h[1]) - 4)));
+  CHECK_FALSE(is_red(png.at(static_cast<int>(p_h[0]), static_cast<int>(p_h[1]) + 4)));
+  CHECK_FALSE(is_red(png.at(static_cast<int>(p_v[0]) + 4, static_cast<int>(p_v[1]))));
+  // Anti-aliased edges: across a diagonal line there are blends between red and white.
+  const auto p_d = fig.data_to_pixel(0, 0, 0.25, 0.75);
+  int blended = 0;
+  for (int dy = -5; dy <= 5; ++dy) {
+    const Color c = png.at(static_cast<int>(p_d[0]), static_cast<int>(p_d[1]) + dy);
+    if (c.r > 200 && c.g > 40 && c.g < 230) ++blended;
+  }
+  CHECK(blended >= 1);
+  // Clipping: nothing red outside the panel.
+  int red_outside = 0;
+  for (int y = 0; y < png.h; ++y)
+    for (int x = 0; x < png.w; ++x)
+      if (is_red(png.at(x, y)) && (x < corner_lo[0] - 1 || x > corner_hi[0] + 1 || y < corner_hi[1] - 1 ||
+                                   y > corner_lo[1] + 1))
+        ++red_outside;
+  CHECK(red_outside == 0);
+}
+
+TEST_CASE("a filled field shows colormap(t) at a known point", "[plot]") {
+  // f(x, y) = x on [0, 1]², so the colour at data x is colormap(x).
+  pvdf::plot::Grid g;
+  g.nx = 41, g.ny = 21;
+  g.x0 = 0, g.x1 = 1, g.y0 = 0, g.y1 = 1;
+  for (std::size_t j = 0; j < g.ny; ++j)
+    for (std::size_t i = 0; i < g.nx; ++i) g.values.push_back(static_cast<double>(i) / (g.nx - 1));
+  for (bool diverging : {false, true}) {
+    pvdf::plot::Figure fig(700, 500);
+    fig.axes().field(g, "f (-)", diverging, 0.0, 1.0).xlabel("x").ylabel("y");
+    const auto path = (temp_dir() / "field.png").string();
+    fig.save_png(path);
+    const Png png = read_png(path);
+    for (double x : {0.2, 0.5, 0.8}) {
+      const auto p = fig.data_to_pixel(0, 0, x, 0.5);
+      // The pixel centre's data x differs from `x` by at most half a pixel.
+      const auto p_next = fig.data_to_pixel(0, 0, x + 0.01, 0.5);
+      const double px_per_unit = (p_next[0] - p[0]) / 0.01;
+      const int ix = static_cast<int>(p[0]), iy = static_cast<int>(p[1]);
+      const double x_centre = x + (ix + 0.5 - p[0]) / px_per_unit;
+      const Color want = diverging ? pvdf::plot::colormap_diverging(x_centre) : pvdf::plot::colormap(x_centre);
+      CHECK(colour_distance(png.at(ix, iy), want) <= 3);
+    }
+  }
+  // The maps themselves: endpoints differ, diverging is white in the middle, viridis-like
+  // lightness grows monotonically.
+  const Color mid = pvdf::plot::colormap_diverging(0.5);
+  CHECK((mid.r == 255 && mid.g == 255 && mid.b == 255));
+  CHECK(pvdf::plot::colormap_diverging(0).b > pvdf::plot::colormap_diverging(0).r);
+  CHECK(pvdf::plot::colormap_diverging(1).r > pvdf::plot::colormap_diverging(1).b);
+  double last = -1;
+  for (int k = 0; k <= 100; ++k) {
+    const Color c = pvdf::plot::colormap(k / 100.0);
+    const double luma = 0.2126 * c.r + 0.7152 * c.g + 0.0722 * c.b;
+    CHECK(luma >= last - 0.5);
+    last = luma;
+  }
+}
+
+TEST_CASE("contour lines of x^2 + y^2 at r^2 lie on the circle of radius r", "[plot]") {
+  pvdf::plot::Grid g;
+  g.nx = 121, g.ny = 101;  // different steps in x and y
+  g.x0 = -1, g.x1 = 1, g.y0 = -1.2, g.y1 = 1.2;
+  for (std::size_t j = 0; j < g.ny; ++j) {
+    for (std::size_t i = 0; i < g.nx; ++i) {
+      const double x = g.x0 + (g.x1 - g.x0) * i / (g.nx - 1), y = g.y0 + (g.y1 - g.y0) * j / (g.ny - 1);
+      g.values.push_back(x * x + y * y);
+    }
+  }
+  // A 600 px wide panel over 2 units: half a pixel is ~1.7e-3; the interpolation error of
+  // x² + y² along an edge of length h is at most h²/(8 r).
+  pvdf::plot::Figure fig(800, 700);
+  fig.axes().contour(g, {0.25, 0.49}).equal_aspect();
+  const auto a = fig.data_to_pixel(0, 0, 0, 0), b = fig.data_to_pixel(0, 0, 1, 0);
+  const double half_pixel = 0.5 / (b[0] - a[0]);
+  for (double r : {0.5, 0.7}) {
+    const auto lines = pvdf::plot::contour_lines(g, r * r);
+    REQUIRE(lines.size() == 1);  // one closed loop
+    const auto& loop = lines[0];
+    CHECK(loop.size() > 100);
+    CHECK(std::hypot(loop.front()[0] - loop.back()[0], loop.front()[1] - loop.back()[1]) < 1e-12);
+    double worst = 0;
+    for (const auto& p : loop) worst = std::max(worst, std::abs(std::hypot(p[0], p[1]) - r));
+    CHECK(worst < half_pixel);
+    CHECK(worst < 2e-4);
+  }
+  // A level no node reaches gives no line; a NaN hole removes the cells around it.
+  CHECK(pvdf::plot::contour_lines(g, 100).empty());
+  auto holed = g;
+  holed.values[50 * g.nx + 60] = std::numeric_limits<double>::quiet_NaN();  // the origin
+  CHECK(pvdf::plot::contour_lines(holed, 0.25).size() == 1);
+  CHECK(pvdf::plot::contour_lines(holed, 1e-4).empty());
+  // Wrong value count is bad input.
+  auto broken = g;
+  broken.values.pop_back();
+  CHECK_THROWS_AS(pvdf::plot::contour_lines(broken, 0.25), pvdf::InputError);
+}
+
+TEST_CASE("degenerate data draws without throwing", "[plot]") {
+  const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+  pvdf::plot::Figure fig(900, 700, 3, 3);
+  fig.suptitle("degenerate inputs");
+  fig.axes(0, 0).line({}, {}, "empty").title("empty");
+  fig.axes(0, 1).line({1, 2, 3}, {5, 5, 5}, "flat").title("all equal");
+  fig.axes(0, 2).line({1, nan, 3, inf, 5}, {1, 2, nan, 4, -inf}, "nan/inf").title("NaN and inf");
+  fig.axes(1, 0).scatter({2}, {3}, "one point").line({4}, {4}, "one point line").title("single point");
+  fig.axes(1, 1).line({1, 2, 3}, {-1, 0, 1}).log_x().log_y().title("log of non-positive");
+  fig.axes(1, 2).line({0, 1}, {0, 1}).xlim(2, 2).ylim(5, -5).title("zero range");
+  pvdf::plot::Grid flat;
+  flat.nx = 3, flat.ny = 3;
+  flat.values.assign(9, 7.0);
+  pvdf::plot::Grid holes = flat;
+  holes.values.assign(9, nan);
+  fig.axes(2, 0).field(flat, "flat").contour(flat, {7.0, nan}, std::nullopt, 1.5, "%.1f").title("flat field");
+  fig.axes(2, 1).field(holes, "all NaN", true).contour(holes, {1}).title("NaN field");
+  pvdf::plot::Grid tiny;
+  tiny.nx = 1, tiny.ny = 0;
+  fig.axes(2, 2).field(tiny, "empty grid").polygon({}, Color{1, 2, 3}).polygon({{0, 0}, {1, 1}}, std::nullopt)
+      .error_bars({1, 2}, {1, nan}, {nan, 0.5}).text(nan, 0, "x").hline(nan).vline(inf).title("empty grid");
+  const auto path = (temp_dir() / "degenerate.png").string();
+  CHECK_NOTHROW(fig.save_png(path));
+  CHECK(read_png(path).w == 900);
+}
+
+TEST_CASE("bad plot input and unwritable paths are InputErrors", "[plot]") {
+  pvdf::plot::Figure fig(300, 200);
+  fig.axes().line({0, 1}, {0, 1});
+  CHECK_THROWS_AS(fig.save_png((temp_dir() / "no_such_folder" / "x.png").string()), pvdf::InputError);
+  CHECK_THROWS_AS(fig.save_png("/proc/pvdf_cannot_write_here.png"), pvdf::InputError);
+  CHECK_THROWS_AS(fig.axes(1, 0), pvdf::InputError);
+  CHECK_THROWS_AS(fig.axes().legend("middle"), pvdf::InputError);
+  pvdf::plot::Grid g;
+  g.nx = 2, g.ny = 2;
+  g.values = {0, 1, 2, 3};
+  CHECK_THROWS_AS(fig.axes().contour(g, {1}, std::nullopt, 1, "%s"), pvdf::InputError);
+  CHECK_THROWS_AS(fig.axes().contour(g, {1}, std::nullopt, 1, "%f %f"), pvdf::InputError);
+  CHECK_NOTHROW(fig.axes().contour(g, {1}, std::nullopt, 1, "%.0f %%"));
+  CHECK_THROWS_AS(pvdf::plot::Figure(0, 100), pvdf::InputError);
+}
+
+TEST_CASE("20k mesh polygons and a 200x200 field with contours render fast", "[plot]") {
+  const auto dir = temp_dir();
+  {
+    pvdf::plot::Figure fig(1000, 700);
+    auto& ax = fig.axes();
+    for (int j = 0; j < 100; ++j) {
+      for (int i = 0; i < 200; ++i) {
+        const double x = i, y = j + 0.3 * std::sin(i * 0.1);
+        ax.polygon({{{x, y}, {x + 1, y}, {x + 1, y + 1}, {x, y + 1}}}, pvdf::plot::colormap((i + j) / 300.0));
+      }
+    }
+    ax.equal_aspect().title("20 000 quads");
+    const std::clock_t t0 = std::clock();  // CPU time: the CI machine is shared
+    fig.save_png((dir / "mesh.png").string());
+    const double s = static_cast<double>(std::clock() - t0) / CLOCKS_PER_SEC;
+    WARN("20k polygons: " << s << " s");
+    CHECK(s < 1.0);
+  }
+  {
+    pvdf::plot::Grid g;
+    g.nx = 200, g.ny = 200;
+    g.x0 = -1, g.x1 = 1, g.y0 = -1, g.y1 = 1;
+    for (std::size_t j = 0; j < g.ny; ++j)
+      for (std::size_t i = 0; i < g.nx; ++i) {
+        const double x = -1 + 2.0 * i / 199, y = -1 + 2.0 * j / 199;
+        g.values.push_back(std::sin(3 * x) * std::cos(2 * y));
+      }
+    std::vector<double> levels;
+    for (int k = 0; k < 10; ++k) levels.push_back(-0.9 + 0.2 * k);
+    const std::clock_t t0 = std::clock();  // CPU time: the CI machine is shared
+    pvdf::plot::Figure fig(1000, 700);
+    fig.axes().field(g, "f (-)").contour(g, levels, std::nullopt, 1.2, "%.1f").xlabel("x").ylabel("y");
+    fig.save_png((dir / "field_contours.png").string());
+    const double s = static_cast<double>(std::clock() - t0) / CLOCKS_PER_SEC;
+    WARN("200x200 field + 10 contour levels: " << s << " s");
+    CHECK(s < 0.6);  // 0.3 s target on an idle core; margin for a busy shared machine
+  }
+}
