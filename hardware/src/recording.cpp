@@ -121,13 +121,14 @@ void Pacer::pop_due(std::vector<SampleBlock>& out, std::chrono::milliseconds tim
     start_ = clock::now();
   }
   const auto deadline = clock::now() + timeout;
+  const std::size_t before = out.size();
   while (!queue_.empty()) {
     const auto offset = std::chrono::microseconds(
         static_cast<std::int64_t>(queue_.front().frame.timestamp_us - first_timestamp_us_));
     const auto due = start_ + offset;
     const auto now = clock::now();
     if (due > now) {
-      if (!out.empty() || due > deadline) break;
+      if (out.size() > before || due > deadline) break;
       std::this_thread::sleep_until(due);
     }
     out.push_back(std::move(queue_.front()));

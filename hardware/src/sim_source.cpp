@@ -55,23 +55,36 @@ SimScene parse_sim_scene(const nlohmann::json& json, const std::string& source) 
   s.gain_V_per_C = r.number_or("gain_V_per_C", s.gain_V_per_C);
   s.time_constant_s = r.non_negative_or("time_constant_s", s.time_constant_s);
   s.seed = static_cast<unsigned>(r.integer_or("seed", 1, 0, 0xFFFFFFFFL));
-  for (const auto& pr : r.objects("presses")) {
-    SimPress p;
-    p.start_s = pr.non_negative_or("start_s", p.start_s);
-    p.rise_s = pr.positive_or("rise_s", p.rise_s);
-    p.hold_s = pr.non_negative_or("hold_s", p.hold_s);
-    p.force_N = pr.number_or("force_N", p.force_N);
-    if (pr.has("weights")) {
-      const auto& w = pr.json().at("weights");
-      if (!w.is_array() || w.size() != static_cast<std::size_t>(s.channels))
-        pr.fail("weights", "must be an array of " + std::to_string(s.channels) + " numbers (one per channel)");
-      for (const auto& v : w) {
-        if (!v.is_number() || !std::isfinite(v.get<double>())) pr.fail("weights", "must hold finite numbers");
-        p.weights.push_back(v.get<double>());
+  if (r.has("presses")) {
+    const auto& list = r.json().at("presses");
+    if (!list.is_array()) r.fail("presses", "must be an array of press objects");
+    (void)r.objects("presses");  // marks the key as read
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      const std::string where = "presses[" + std::to_string(i) + "]";
+      if (!list[i].is_object()) throw InputError(source + ": " + where + " must be an object");
+      // "weights" is a list of numbers, read here; the rest through the strict reader.
+      nlohmann::json rest = list[i];
+      SimPress p;
+      if (rest.contains("weights")) {
+        const auto& w = rest.at("weights");
+        if (!w.is_array() || w.size() != static_cast<std::size_t>(s.channels))
+          throw InputError(source + ": " + where + ".weights = " + json_excerpt(w) + " must be an array of " +
+                           std::to_string(s.channels) + " numbers (one per channel)");
+        for (const auto& v : w) {
+          if (!v.is_number() || !std::isfinite(v.get<double>()))
+            throw InputError(source + ": " + where + ".weights = " + json_excerpt(w) + " must hold finite numbers");
+          p.weights.push_back(v.get<double>());
+        }
+        rest.erase("weights");
       }
+      const JsonObjectReader pr(source, where, rest);
+      p.start_s = pr.non_negative_or("start_s", p.start_s);
+      p.rise_s = pr.positive_or("rise_s", p.rise_s);
+      p.hold_s = pr.non_negative_or("hold_s", p.hold_s);
+      p.force_N = pr.number_or("force_N", p.force_N);
+      pr.finish();
+      s.presses.push_back(p);
     }
-    pr.finish();
-    s.presses.push_back(p);
   }
   if (const auto f = r.object_if("faults")) {
     s.faults.drop_every = static_cast<int>(f->integer_or("drop_every", 0, 0, 1000000));
