@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -55,8 +56,9 @@ void write_plot(const std::string& path, const pvdf::Material& material, const s
       .xlabel("angle from draw direction beta (deg)")
       .ylabel("modulus (GPa)")
       .xlim(lo, hi)
+      .ylim(0.0, 1.3 * std::max(material.E1_Pa, material.E2_Pa) / 1e9)
       .grid_lines()
-      .legend("best");
+      .legend("upper right");
   auto& right = fig.axes(0, 1);
   right.line(a, nuxy, "nu_xy (tensor rotation)")
       .line(a, nuyx, "nu_yx (tensor rotation)")
@@ -65,8 +67,12 @@ void write_plot(const std::string& path, const pvdf::Material& material, const s
       .xlabel("angle from draw direction beta (deg)")
       .ylabel("Poisson ratio (-)")
       .xlim(lo, hi)
+      .ylim(std::min(0.0, *std::min_element(nuxy_printed.begin(), nuxy_printed.end())),
+            1.35 * std::max({*std::max_element(nuxy_printed.begin(), nuxy_printed.end()),
+                             *std::max_element(nuxy.begin(), nuxy.end()),
+                             *std::max_element(nuyx.begin(), nuyx.end())}))
       .grid_lines()
-      .legend("best");
+      .legend("upper right");
   fig.save_png(path);
 }
 
