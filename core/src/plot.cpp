@@ -1042,7 +1042,12 @@ void collect_limits(const Axes::Impl& a, bool x_axis, bool log, double& lo, doub
     switch (it.kind) {
       case Kind::line:
       case Kind::scatter:
-        for (double v : x_axis ? it.x : it.y) take(v);
+        // Only points that can be drawn (both coordinates usable) count.
+        for (std::size_t i = 0; i < it.x.size(); ++i) {
+          const double x = it.x[i], y = it.y[i];
+          if (!finite(x) || !finite(y) || (a.log_x && !(x > 0)) || (a.log_y && !(y > 0))) continue;
+          take(x_axis ? x : y);
+        }
         break;
       case Kind::error_bars:
         for (std::size_t i = 0; i < it.x.size(); ++i) {
@@ -1125,23 +1130,31 @@ std::vector<Tick> make_ticks(const Scale& s, int target) {
   return s.log ? log_ticks(s.lo, s.hi, target) : linear_ticks(s.lo, s.hi, target);
 }
 
-/// Picks the densest tick set whose labels do not collide along an axis of `length_px`.
+/// Picks the densest tick set whose labels do not collide along an axis of `length_px`, with at
+/// least two labelled ticks where the range allows.
 std::vector<Tick> fit_ticks(Fonts& fonts, const Scale& s, double length_px, bool horizontal) {
-  const int start = std::clamp(static_cast<int>(length_px / (horizontal ? 85.0 : 50.0)), 2, 10);
-  std::vector<Tick> best;
-  for (int target = start; target >= 1; --target) {
-    auto ticks = make_ticks(s, target);
+  auto n_labelled = [](const std::vector<Tick>& ticks) {
+    int n = 0;
+    for (const auto& t : ticks) n += t.major && !t.label.base.empty();
+    return n;
+  };
+  auto collide = [&](const std::vector<Tick>& ticks) {
     double need = 0;
-    int n_major = 0;
     for (const auto& t : ticks) {
       if (!t.major || t.label.base.empty()) continue;
       need += horizontal ? label_width(fonts, t.label, kTickPx) + 14 : kTickPx * 1.9;
-      ++n_major;
     }
-    best = ticks;
-    if (need <= std::abs(length_px) || n_major <= 2) break;
+    return need > std::abs(length_px);
+  };
+  int target = std::clamp(static_cast<int>(std::abs(length_px) / (horizontal ? 75.0 : 45.0)), 3, 12);
+  auto ticks = make_ticks(s, target);
+  while (n_labelled(ticks) < 2 && target < 12) ticks = make_ticks(s, ++target);
+  while (collide(ticks) && target > 1) {
+    auto fewer = make_ticks(s, --target);
+    if (n_labelled(fewer) < 2) break;
+    ticks = std::move(fewer);
   }
-  return best;
+  return ticks;
 }
 
 void resolve_colorbar(const Axes::Impl& a, ColorBar& cb) {
