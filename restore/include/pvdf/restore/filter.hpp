@@ -1,0 +1,110 @@
+// Identification of the 2x2 transfer matrix G (seed 000 eqs 2, 5, 6) from scans of known forces, and
+// the regularized inverse FIR filters H = (G^H G + beta I)^-1 G^H (eq. 4) with a modelling delay.
+#pragma once
+
+#include "pvdf/restore/scanner.hpp"
+
+#include <array>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace pvdf::restore {
+
+/// One identification scan: a raised edge at world position edge_x_m with known force (fx_N, fz_N).
+struct IdentificationScan {
+  Scan scan;
+  double fx_N = 0, fz_N = 0;
+  double edge_x_m = 0;
+};
+
+/// How beta is chosen. beta is relative: beta_abs(k) = beta * shape(k) * max_k s_max(G(k))^2.
+enum class BetaPolicy {
+  constant,   ///< seed 000: one beta for every frequency (shape = 1)
+  frequency,  ///< shape(k) = 1 + (k * corner_wavelength_m / 2 pi)^2: more damping at short wavelengths
+  gcv,        ///< beta chosen by generalized cross-validation on the identification scans (shape as above
+              ///< when corner_wavelength_m > 0, else 1); tends to over-regularize (docs/restore.md)
+  discrepancy ///< automatic: beta_abs = E||dG(k)||_F^2, the noise power of the identified G per frequency
+              ///< (discrepancy principle for a noisy operator): singular values below the noise floor of G
+              ///< are damped, those above are inverted
+};
+
+/// Identification and design settings (defaults reproduce the paper's choices where it made one).
+struct DesignOptions {
+  std::size_t taps = 8192;            ///< N: length of each FIR filter h11..h22
+  std::size_t g_window = 0;           ///< lags of G kept by identification (0 = taps); noise in G grows with it
+  long delay_samples = -1;            ///< modelling delay D; -1 = taps / 2 (the inverse is two-sided)
+  BetaPolicy beta_policy = BetaPolicy::constant;
+  double beta = 1e-4;                 ///< seed 000 section 5.2 (relative, see BetaPolicy)
+  double corner_wavelength_m = 0;     ///< for BetaPolicy::frequency (required > 0) and optionally gcv
+  std::string window = "tukey";       ///< taper of the FIR taps: tukey (25 %), hann, none
+  /// Target resolution (FWHM of a Gaussian, m): H = T(k) (G^H G + beta I)^-1 G^H with
+  /// T(k) = exp(-(k s)^2 / 2), s = resolution_m / 2.3548, so both forces come out with the same blur
+  /// (the target response of multichannel inversion). 0 = T = 1, seed 000's choice.
+  double resolution_m = 0;
+  double max_force_condition = 100;   ///< refuse identification force sets with cond(F) above this
+  double min_snr = 3;                 ///< refuse scans whose signal rms near the edge is below min_snr x noise rms
+  double gcv_beta_min = 1e-9, gcv_beta_max = 1.0;
+  int gcv_points = 73;
+};
+
+/// Identified transfer matrix: g[i][j][l] = response of strip i to unit force j (0 = x, 1 = z) at lag
+/// l + lag_min samples (signal sample minus force sample).
+struct TransferMatrix {
+  double sample_spacing_m = 0;
+  long lag_min = 0;
+  std::array<std::array<std::vector<double>, 2>, 2> g;
+  double force_condition_number = 0;   ///< cond of the 2 x S force matrix (eq. 6's conditioning)
+  std::array<double, 2> noise_rms_V{}; ///< per channel, from samples far from the edges
+  std::array<double, 2> noise_psd_V2{}; ///< per channel, low-frequency noise power per sample (block-sum variance)
+  double g_noise_power = 0;            ///< E||dG(k)||_F^2 per frequency bin, (V/N)^2, from the noise above
+  std::vector<double> scan_snr;        ///< per scan: signal rms near the edge / noise rms
+  std::vector<std::array<double, 3>> forces;  ///< per scan: fx_N, fz_N, edge_x_m
+  std::vector<std::string> warnings;
+};
+
+/// Conditioning of G(k) over the band where its largest singular value exceeds 1e-3 of the maximum.
+struct ConditioningSummary {
+  double min = 0, median = 0, max = 0;
+  double band_fraction = 0;  ///< fraction of the frequency bins in that band
+};
+
+/// A designed inverse filter (what `pvdfkit restore identify` writes; docs/restore.md shows the file).
+struct InverseFilter {
+  double sample_spacing_m = 0;
+  std::size_t taps = 0;
+  long delay_samples = 0;
+  std::size_t design_fft_length = 0;  ///< >= 2 taps: the frequency grid H is sampled on (no wrap-around)
+  std::string beta_policy = "constant";
+  double beta = 0;                    ///< relative beta (chosen one for gcv)
+  double beta_abs = 0;                ///< beta * max s^2, in (V/N)^2
+  double corner_wavelength_m = 0;
+  double resolution_m = 0;            ///< target Gaussian FWHM (0 = none)
+  std::string window = "tukey";
+  /// h[i][j]: restored force i (0 = f_x, 1 = f_z) from signal j (0 = m1, 1 = m2); h[0][0] is seed 000's h11.
+  std::array<std::array<std::vector<double>, 2>, 2> h;
+  TransferMatrix transfer;
+  ConditioningSummary conditioning;
+  double truncated_energy_fraction = 0;  ///< energy of the ideal delayed inverse outside the N taps
+  std::vector<std::pair<double, double>> gcv_curve;  ///< (beta, GCV) when beta_policy = gcv
+  std::string pvdfkit_version;
+};
+
+/// Identifies G from >= 2 scans by least squares (eq. 6 for exactly two). Throws InputError when fewer
+/// than two scans are given, the sample spacings differ, an edge lies outside its scan, the force
+/// vectors are (nearly) parallel (cond(F) > max_force_condition) or a scan carries no signal.
+TransferMatrix identify_transfer(const std::vector<IdentificationScan>& scans, const DesignOptions& options);
+
+/// Designs the inverse FIR filters from G (eq. 4 per frequency on a grid of >= 2 taps points, modelling
+/// delay, window). `scans` feed the GCV choice of beta (unused for the other policies).
+InverseFilter design_inverse(const TransferMatrix& transfer, const std::vector<IdentificationScan>& scans,
+                             const DesignOptions& options);
+
+/// Writes the filter as self-describing JSON, atomically.
+void save_filter(const std::string& path, const InverseFilter& filter);
+/// Reads a filter file strictly: a missing, mistyped or malformed key is an InputError naming it.
+InverseFilter load_filter(const std::string& path);
+
+std::string to_string(BetaPolicy policy);
+
+}  // namespace pvdf::restore

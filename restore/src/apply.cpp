@@ -1,0 +1,172 @@
+// Offline and streaming application of the inverse filters.
+#include "pvdf/restore/apply.hpp"
+
+#include "fft.hpp"
+#include "pvdf/core/error.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace pvdf::restore {
+
+using cd = std::complex<double>;
+
+void restore_offline(const InverseFilter& f, const std::vector<double>& m1, const std::vector<double>& m2,
+                     std::vector<double>& fx, std::vector<double>& fz) {
+  if (m1.size() != m2.size() || m1.empty()) {
+    throw InputError("restore: the two signals have " + std::to_string(m1.size()) + " and " + std::to_string(m2.size()) +
+                     " samples; they must be equal and non-empty");
+  }
+  const std::size_t n = m1.size(), N = f.taps;
+  const auto D = static_cast<std::size_t>(f.delay_samples);
+  // Linear convolution length n + N - 1 >= n + D: no circular wrap-around reaches the kept samples.
+  detail::RealFft fft(detail::good_fft_size(n + N - 1));
+  const std::size_t B = fft.bins();
+  std::vector<cd> M1(B), M2(B), H(B), Y0(B, 0.0), Y1(B, 0.0);
+  fft.forward(m1.data(), n, M1.data());
+  fft.forward(m2.data(), n, M2.data());
+  const std::vector<cd>* M[2] = {&M1, &M2};
+  std::vector<cd>* Y[2] = {&Y0, &Y1};
+  for (int i = 0; i < 2; ++i)
+    for (int j = 0; j < 2; ++j) {
+      fft.forward(f.h[i][j].data(), N, H.data());
+      for (std::size_t k = 0; k < B; ++k) (*Y[i])[k] += H[k] * (*M[j])[k];
+    }
+  std::vector<double> y(fft.size());
+  fx.resize(n);
+  fz.resize(n);
+  fft.inverse(Y0.data(), y.data());
+  std::copy(y.begin() + static_cast<long>(D), y.begin() + static_cast<long>(D + n), fx.begin());
+  fft.inverse(Y1.data(), y.data());
+  std::copy(y.begin() + static_cast<long>(D), y.begin() + static_cast<long>(D + n), fz.begin());
+}
+
+void friction_coefficient(RestoredForces& r, double threshold) {
+  r.mu_threshold_N = threshold;
+  r.mu.assign(r.fz_N.size(), 0.0);
+  r.mu_valid.assign(r.fz_N.size(), 0);
+  for (std::size_t i = 0; i < r.fz_N.size(); ++i) {
+    if (r.fz_N[i] > threshold && r.fz_N[i] > 0) {
+      r.mu[i] = r.fx_N[i] / r.fz_N[i];
+      r.mu_valid[i] = 1;
+    }
+  }
+}
+
+RestoredForces restore_scan(const InverseFilter& f, const Scan& scan, double mu_threshold_N) {
+  const double dx = scan.sample_spacing_m();
+  if (std::abs(dx - f.sample_spacing_m) > 0.01 * f.sample_spacing_m) {
+    std::ostringstream msg;
+    msg << scan.source << ": sample spacing " << dx << " m differs from the filter's " << f.sample_spacing_m
+        << " m by more than 1 %; scan at the identification speed and rate (or identify a new filter)";
+    throw InputError(msg.str());
+  }
+  RestoredForces r;
+  r.x_m = scan.x_m;
+  restore_offline(f, scan.m1_V, scan.m2_V, r.fx_N, r.fz_N);
+  if (mu_threshold_N < 0) {
+    double peak = 0;
+    for (double v : r.fz_N) peak = std::max(peak, v);
+    mu_threshold_N = 0.1 * peak;
+  }
+  friction_coefficient(r, mu_threshold_N);
+  return r;
+}
+
+struct StreamingRestorer::Impl {
+  explicit Impl(std::size_t L) : fft(L) {}
+  detail::RealFft fft;
+  std::size_t taps = 0, delay = 0;
+  std::array<std::array<std::vector<cd>, 2>, 2> H;
+  std::vector<double> in[2];  // last taps - 1 samples followed by the current block
+  std::size_t filled = 0;     // new samples in the current block
+  std::size_t to_skip = 0;    // outputs y[0..D) precede force sample 0
+  std::size_t emitted_inputs = 0, received = 0, emitted = 0;
+  std::vector<cd> X[2], Y[2];
+  std::vector<double> y;
+};
+
+StreamingRestorer::StreamingRestorer(const InverseFilter& f, std::size_t block_samples) : block_(block_samples) {
+  if (block_samples < 1 || block_samples > (1u << 24)) {
+    throw InputError("streaming block = " + std::to_string(block_samples) + " samples must be in [1, 16777216]");
+  }
+  const std::size_t L = detail::good_fft_size(f.taps + block_samples - 1);
+  impl_ = std::make_unique<Impl>(L);
+  auto& s = *impl_;
+  s.taps = f.taps;
+  s.delay = static_cast<std::size_t>(f.delay_samples);
+  s.to_skip = s.delay;
+  for (int i = 0; i < 2; ++i)
+    for (int j = 0; j < 2; ++j) {
+      s.H[i][j].resize(s.fft.bins());
+      s.fft.forward(f.h[i][j].data(), f.taps, s.H[i][j].data());
+    }
+  for (int c = 0; c < 2; ++c) {
+    s.in[c].assign(s.taps - 1 + block_, 0.0);
+    s.X[c].resize(s.fft.bins());
+    s.Y[c].resize(s.fft.bins());
+  }
+  s.y.resize(L);
+}
+
+StreamingRestorer::~StreamingRestorer() = default;
+
+std::size_t StreamingRestorer::latency_samples() const { return impl_->delay + block_ - 1; }
+
+void StreamingRestorer::process_block(std::vector<double>& fx, std::vector<double>& fz) {
+  auto& s = *impl_;
+  const std::size_t P = s.taps - 1;
+  for (int c = 0; c < 2; ++c) s.fft.forward(s.in[c].data(), P + block_, s.X[c].data());
+  for (int i = 0; i < 2; ++i)
+    for (std::size_t k = 0; k < s.fft.bins(); ++k) s.Y[i][k] = s.H[i][0][k] * s.X[0][k] + s.H[i][1][k] * s.X[1][k];
+  // Overlap-save: outputs P .. P + block - 1 of the circular convolution are the linear ones.
+  std::size_t skip = std::min(s.to_skip, s.filled);
+  const std::size_t count = s.filled - skip;
+  for (int i = 0; i < 2; ++i) {
+    s.fft.inverse(s.Y[i].data(), s.y.data());
+    auto& out = i == 0 ? fx : fz;
+    const std::size_t room = s.received > s.emitted ? s.received - s.emitted : 0;
+    const std::size_t take = std::min(count, room);
+    out.insert(out.end(), s.y.begin() + static_cast<long>(P + skip), s.y.begin() + static_cast<long>(P + skip + take));
+    if (i == 1) s.emitted += take;
+  }
+  s.to_skip -= skip;
+  // Slide: keep the last P samples of history.
+  for (int c = 0; c < 2; ++c) {
+    std::copy(s.in[c].begin() + static_cast<long>(s.filled), s.in[c].begin() + static_cast<long>(s.filled + P), s.in[c].begin());
+    std::fill(s.in[c].begin() + static_cast<long>(P), s.in[c].end(), 0.0);
+  }
+  s.filled = 0;
+}
+
+void StreamingRestorer::push(const double* m1, const double* m2, std::size_t n, std::vector<double>& fx,
+                             std::vector<double>& fz) {
+  auto& s = *impl_;
+  const std::size_t P = s.taps - 1;
+  s.received += n;
+  std::size_t i = 0;
+  while (i < n) {
+    const std::size_t take = std::min(n - i, block_ - s.filled);
+    std::copy(m1 + i, m1 + i + take, s.in[0].begin() + static_cast<long>(P + s.filled));
+    std::copy(m2 + i, m2 + i + take, s.in[1].begin() + static_cast<long>(P + s.filled));
+    s.filled += take;
+    i += take;
+    if (s.filled == block_) process_block(fx, fz);
+  }
+}
+
+void StreamingRestorer::flush(std::vector<double>& fx, std::vector<double>& fz) {
+  auto& s = *impl_;
+  // Feed zeros until every received sample has its force (D more outputs).
+  while (s.emitted < s.received) {
+    const std::size_t P = s.taps - 1;
+    const std::size_t pad = block_ - s.filled;
+    std::fill(s.in[0].begin() + static_cast<long>(P + s.filled), s.in[0].end(), 0.0);
+    std::fill(s.in[1].begin() + static_cast<long>(P + s.filled), s.in[1].end(), 0.0);
+    s.filled += pad;
+    process_block(fx, fz);
+  }
+}
+
+}  // namespace pvdf::restore
