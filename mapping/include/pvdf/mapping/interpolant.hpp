@@ -1,0 +1,65 @@
+// A smooth interpolant of a charge map in (x, y, F) with analytic gradients: bicubic Hermite in
+// position, and in force the membrane law Q = F^(2/3)·G with G linear in ln F between levels.
+#pragma once
+
+#include "pvdf/mapping/map.hpp"
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace pvdf::mapping {
+
+/// Most electrodes the runtime handles with fixed-size storage (no allocation per locate).
+inline constexpr std::size_t max_electrodes = 8;
+
+/// Interpolant of a map. For each force level f the reduced charge G_f = Q / F_f^p (p = 2/3, the
+/// pure-membrane exponent) is interpolated by bicubic Hermite patches whose node derivatives
+/// are 4th-order finite differences (or the map's derivative datasets); across levels G is
+/// linear in ln F, and constant beyond the first/last level (the scaling law, exact for a pure
+/// membrane). A cell is usable when its four nodes are inside the mask with status ok at every
+/// level. Immutable after construction: evaluate() is thread-safe and allocation-free.
+class MapInterpolant {
+ public:
+  /// Throws InputError if the map has more than max_electrodes electrodes.
+  explicit MapInterpolant(const ChargeMap& map);
+
+  /// Charges q[k] (C) and their derivatives dq[k] = {∂/∂x (C/m), ∂/∂y (C/m), ∂/∂ln F (C)} for
+  /// a press of force exp(log_force) at (x_m, y_m). Returns false (outputs untouched) when the
+  /// position is not in a usable cell. `dq` may be null.
+  bool evaluate(double x_m, double y_m, double log_force, double* q, std::array<double, 3>* dq) const;
+  /// True when (x_m, y_m) lies in a usable cell.
+  bool inside(double x_m, double y_m) const;
+  /// True when the cell (i, j) (lower-left node i, j) is usable.
+  bool cell_usable(std::size_t i, std::size_t j) const { return cell_ok_[j * (nx_ - 1) + i] != 0; }
+
+  std::size_t n_electrodes() const { return ne_; }
+  std::size_t nx() const { return nx_; }
+  std::size_t ny() const { return ny_; }
+  std::size_t n_levels() const { return nf_; }
+  double x0() const { return x0_; }
+  double y0() const { return y0_; }
+  double hx() const { return hx_; }
+  double hy() const { return hy_; }
+  double force_exponent() const { return p_; }
+  double min_log_force() const { return log_f_.front(); }
+  double max_log_force() const { return log_f_.back(); }
+  /// Reduced charge G (C/N^p) of node (i, j), level f, electrode k.
+  double node_value(std::size_t f, std::size_t i, std::size_t j, std::size_t k) const {
+    return data_[((f * ny_ + j) * nx_ + i) * ne_ * 4 + k * 4];
+  }
+  bool node_usable(std::size_t i, std::size_t j) const { return node_ok_[j * nx_ + i] != 0; }
+
+ private:
+  bool evaluate_level(std::size_t f, std::size_t i, std::size_t j, double t, double s, double* g, double* gx,
+                      double* gy) const;
+  std::size_t nx_ = 0, ny_ = 0, nf_ = 0, ne_ = 0;
+  double x0_ = 0, y0_ = 0, hx_ = 1, hy_ = 1;
+  double p_ = 2.0 / 3.0;
+  std::vector<double> log_f_;
+  std::vector<double> data_;  ///< [f][j][i][k][4]: G, hx·Gx, hy·Gy, hx·hy·Gxy
+  std::vector<std::uint8_t> node_ok_, cell_ok_;
+};
+
+}  // namespace pvdf::mapping

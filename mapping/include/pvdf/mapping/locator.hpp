@@ -1,0 +1,156 @@
+// The deployment lookup: from the charges of a pressed sensor to where and how hard it was
+// pressed, with a 1-σ uncertainty and honest flags. Links no deal.II; thread-safe; no
+// allocation in locate().
+#pragma once
+
+#include "pvdf/mapping/interpolant.hpp"
+#include "pvdf/mapping/map.hpp"
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace pvdf::mapping {
+
+/// Flags of a Location (bit mask). A result with outside_map or no_press carries no position.
+namespace flag {
+inline constexpr std::uint32_t outside_map = 1u << 0;        ///< best fit is blocked by the map's edge and does not fit within noise
+inline constexpr std::uint32_t ambiguous = 1u << 1;          ///< two distinct positions fit within noise (alternative reported)
+inline constexpr std::uint32_t no_press = 1u << 2;           ///< charges are at the noise level: nothing pressed
+inline constexpr std::uint32_t poor_fit = 1u << 3;           ///< inside the map but χ² above the limit (model/calibration mismatch?)
+inline constexpr std::uint32_t force_extrapolated = 1u << 4; ///< force outside the map's levels (scaling law F^(2/3) used)
+inline constexpr std::uint32_t scaling_assumed = 1u << 5;    ///< single-level map: force from the F^(2/3) law
+inline constexpr std::uint32_t not_converged = 1u << 6;      ///< Levenberg–Marquardt hit its iteration cap
+inline constexpr std::uint32_t ill_conditioned = 1u << 7;    ///< JᵀJ singular (e.g. on a symmetry line): σ's reported as 0
+}  // namespace flag
+
+/// "ok" or the set names joined by '|', e.g. "ambiguous|force_extrapolated".
+std::string flags_text(std::uint32_t flags);
+
+/// Settings of the lookup (public members with defaults).
+struct LocatorOptions {
+  /// 1-σ charge noise per electrode (C); empty = the map's /electrodes/noise_C. One value = all.
+  std::vector<double> noise_C;
+  bool use_calibration = true;        ///< apply the map's /calibration group when present
+  int max_iterations = 40;            ///< Levenberg–Marquardt iterations per start
+  int max_starts = 6;                 ///< LM runs from this many distinct coarse candidates at most (≤ 8)
+  /// no_press when the RMS signal-to-noise √(Σ(q_k/σ_k)²/n) is below this.
+  double no_press_snr = 3.0;
+  /// χ² = Σ((Q_k − q_k)/σ_k)² above which a fit is "not within noise"; 0 = automatic:
+  /// ν + 5·√(2·max(ν, 1)) + 4 with ν = n − 3 degrees of freedom (n − 2 with a known force),
+  /// ≈ 11 for three electrodes.
+  double chi2_limit = 0.0;
+  /// Two minima are distinct when farther apart than this × grid spacing and the misfit rises
+  /// above the χ² limit between them (a barrier), or the straight path between them leaves the map.
+  double ambiguity_separation_cells = 1.0;
+  /// Plausible force range (N): solutions outside it are not accepted (the fit is held at the
+  /// bound and then flagged outside_map if it does not fit within noise). 0 = automatic: half
+  /// the lowest to twice the highest force level of the map; unbounded for a one-level map.
+  /// With unknown force, three charges often have a second exact solution (a far press at a
+  /// high force looks like a near press at a low one, docs/lookup.md §2): the range removes
+  /// the implausible one.
+  double min_force_N = 0.0;
+  double max_force_N = 0.0;
+  /// Known force (N), e.g. from a force transducer or a fixed test load (seed 001 used 1 N):
+  /// only (x, y) are fitted, the problem is overdetermined with three electrodes and the
+  /// multiple solutions of the unknown-force case mostly disappear. 0 = force unknown.
+  double known_force_N = 0.0;
+  /// Coarse search: number of bins per axis of the charge-direction table (0 = automatic).
+  int direction_bins = 0;
+};
+
+/// A located press. Values are SI; σ's are 1-σ from the charge-noise model, (JᵀWJ)⁻¹.
+struct Location {
+  double x_m = 0, y_m = 0, force_N = 0;
+  double residual = 0;                ///< χ = √Σ((Q_k − q_k)/σ_k)² at the solution (noise units)
+  double sigma_x_m = 0, sigma_y_m = 0, sigma_F_N = 0;
+  std::uint32_t flags = 0;
+  int iterations = 0;                 ///< LM iterations of the reported solution
+  int n_starts = 0;                   ///< LM runs made
+  int n_solutions = 0;                ///< distinct positions that fit within noise (> 1: ambiguous)
+  /// With `ambiguous`: the next-best other solution that fits within noise.
+  struct Alternative {
+    double x_m = 0, y_m = 0, force_N = 0, residual = 0, sigma_x_m = 0, sigma_y_m = 0, sigma_F_N = 0;
+  } alternative;
+  bool has_position() const { return (flags & (flag::outside_map | flag::no_press)) == 0; }
+};
+
+/// Map → press lookup: coarse search in a table of charge directions, then Levenberg–Marquardt
+/// in (x, y, ln F) on the smooth interpolant, from up to max_starts distant candidates.
+///   Locator locator(map);  Location r = locator.locate(q);
+class Locator {
+ public:
+  /// Precomputes the interpolant and the coarse table. Throws InputError for < 3 electrodes,
+  /// bad noise values, or a calibration of the wrong size.
+  explicit Locator(const ChargeMap& map, const LocatorOptions& options = {});
+
+  /// Locates one press from the measured charges q[0..n_electrodes) (C). Thread-safe, no
+  /// allocation. Non-finite charges give no_press|outside_map flags, never NaN.
+  Location locate(const double* charges_C) const;
+  Location locate(const std::vector<double>& charges_C) const { return locate(charges_C.data()); }
+  /// Same with the force known (N; e.g. a force transducer reading): fits (x, y) only.
+  /// A non-positive or non-finite force gives outside_map.
+  Location locate(const double* charges_C, double known_force_N) const;
+  Location locate(const std::vector<double>& charges_C, double known_force_N) const {
+    return locate(charges_C.data(), known_force_N);
+  }
+
+  /// The map's (calibrated, if enabled) charges for a press at (x, y) with force F; false outside.
+  bool predict(double x_m, double y_m, double force_N, double* charges_C) const;
+
+  std::size_t n_electrodes() const { return ne_; }
+  const std::vector<std::string>& electrode_names() const { return names_; }
+  const std::vector<double>& noise_C() const { return noise_; }
+  const MapInterpolant& interpolant() const { return interp_; }
+  double chi2_limit() const { return chi2_limit_; }
+  bool calibrated() const { return calibrated_; }
+
+ private:
+  struct Fit {
+    double x = 0, y = 0, l = 0, chi2 = 0;
+    std::array<double, 3> sigma{0, 0, 0};
+    int iterations = 0;
+    bool converged = false, blocked = false, ok = false, singular = false;
+  };
+  Fit levenberg_marquardt(const double* q, const double* inv_sigma, double x, double y, double l, bool fixed_force,
+                          double log_lo, double log_hi) const;
+  Location locate_impl(const double* charges_C, bool fixed_force, double log_known_force) const;
+  bool distinct_minima(const double* q, const double* w, const Fit& a, const Fit& b, double separation,
+                       double limit) const;
+  struct Shortlist {
+    static constexpr int capacity = 16;
+    std::array<std::size_t, capacity> cell{};
+    std::array<double, capacity> score{};
+    int n = 0;
+  };
+  void coarse_candidates(const double* q_unit, double noise2, Shortlist& list) const;
+  void scan_cells(const std::size_t* begin, const std::size_t* end, const double* q_unit, double noise2,
+                  Shortlist& list) const;
+
+  MapInterpolant interp_;
+  std::size_t ne_ = 0;
+  std::vector<std::string> names_;
+  std::vector<double> noise_;
+  std::vector<double> gain_, offset_;
+  bool calibrated_ = false;
+  LocatorOptions options_;
+  double chi2_limit_ = 0, chi2_limit_free_ = 0, chi2_limit_fixed_ = 0;
+  bool single_level_ = false;
+  double log_force_lo_ = -69, log_force_hi_ = 69;
+  bool fixed_force_ = false;
+
+  // Coarse table: per usable cell, the unit direction of G at its centre (mean over levels),
+  // the mean |G| and the squared angular radius of the cell; bins of (φ, θ) → cell lists.
+  std::vector<std::size_t> cells_;          ///< cell index j*(nx−1)+i of usable cells
+  std::vector<double> cell_dir_;            ///< [cell][ne]
+  std::vector<double> cell_norm_;           ///< |G| at the centre (C/N^p), mean over levels
+  std::vector<double> cell_radius2_;        ///< max 1 − (ĉ·n̂)² over corners and levels
+  std::vector<std::array<double, 2>> cell_xy_;
+  int bins_ = 0;
+  double phi0_ = 0, phi1_ = 1, theta0_ = 0, theta1_ = 1;
+  std::vector<std::size_t> bin_start_;      ///< CSR: bin b holds bin_cells_[bin_start_[b] .. bin_start_[b+1])
+  std::vector<std::size_t> bin_cells_;      ///< indices into cells_
+};
+
+}  // namespace pvdf::mapping

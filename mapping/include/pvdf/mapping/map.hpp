@@ -1,0 +1,95 @@
+// A charge map: the charge of every electrode for every probe position on a regular grid and
+// every force level, with its provenance; read from and written to a self-describing HDF5 file
+// (layout in docs/mapping.md). No deal.II: deployed code reads maps with this header alone.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace pvdf::mapping {
+
+/// Outcome of one map point (one probe position at one force level). Stored as uint8 in the
+/// `status` dataset; the numbers are part of the file format.
+enum class PointStatus : std::uint8_t {
+  ok = 0,             ///< solved; charge and deflection are valid
+  not_converged = 1,  ///< the solver did not converge here; values are NaN/0 and never used
+  outside = 2,        ///< the position is outside the film or inside the rim margin (mask = 0)
+  not_computed = 3    ///< not (yet) computed, e.g. an interrupted map generation
+};
+/// "ok" | "not_converged" | "outside" | "not_computed".
+std::string status_name(PointStatus status);
+
+/// Per-electrode linear correction fitted from measurements: q_measured ≈ gain·q_map + offset.
+struct Calibration {
+  std::vector<double> gain;       ///< [n_electrodes], dimensionless
+  std::vector<double> offset_C;   ///< [n_electrodes], C
+  std::string source;             ///< measurement file it was fitted from
+  std::string report_json;        ///< fit report (leave-one-out errors, before/after), JSON text
+};
+
+/// Charge map on a regular grid. Arrays are flattened row-major in the order given with each.
+struct ChargeMap {
+  // --- provenance
+  std::string scene_json;          ///< the scene the map was computed for (JSON text)
+  std::string pvdfkit_version;     ///< version that wrote the map
+  std::string model;               ///< kinematics/model used ("von-karman", "synthetic-analytic", ...)
+  double tolerance = 0.0;          ///< requested relative error of the computed charges
+  double rim_margin_m = 0.0;       ///< positions closer than this to the rim are masked out
+  std::string description;         ///< free text
+
+  // --- grid: probe positions
+  std::vector<double> x_m;         ///< [nx] ascending, equally spaced
+  std::vector<double> y_m;         ///< [ny] ascending, equally spaced
+  std::vector<std::uint8_t> mask;  ///< [ny][nx]; 1 = inside the film minus the rim margin
+  std::vector<double> forces_N;    ///< [nf] ascending, > 0
+
+  // --- electrodes
+  std::vector<std::string> electrode_names;                ///< [ne] unique, non-empty
+  std::vector<std::array<double, 2>> electrode_centers_m;  ///< [ne] centroid of each electrode
+  std::vector<double> noise_C;     ///< [ne] default 1-σ charge noise of each channel (C), > 0
+
+  // --- results
+  std::vector<double> charge_C;               ///< [nf][ny][nx][ne]
+  std::vector<double> deflection_at_load_m;   ///< [nf][ny][nx]
+  std::vector<std::uint8_t> status;           ///< [nf][ny][nx], PointStatus values
+  /// Optional exact derivatives of the charge with respect to the probe position (C/m),
+  /// [nf][ny][nx][ne] each; empty when absent (the interpolant then uses finite differences).
+  std::vector<double> dcharge_dx_C_per_m, dcharge_dy_C_per_m;
+
+  std::optional<Calibration> calibration;     ///< fitted from measurements (pvdfkit calibrate)
+
+  std::size_t nx() const { return x_m.size(); }
+  std::size_t ny() const { return y_m.size(); }
+  std::size_t nf() const { return forces_N.size(); }
+  std::size_t ne() const { return electrode_names.size(); }
+  /// Index into status/deflection: [f][j][i].
+  std::size_t point(std::size_t f, std::size_t j, std::size_t i) const { return (f * ny() + j) * nx() + i; }
+  /// Index into charge_C: [f][j][i][k].
+  std::size_t charge_index(std::size_t f, std::size_t j, std::size_t i, std::size_t k) const {
+    return point(f, j, i) * ne() + k;
+  }
+  /// Sizes all result arrays for the current axes, forces and electrodes; status = not_computed.
+  void allocate();
+};
+
+/// Checks every array shape, axis spacing, value range and finiteness. Throws pvdf::InputError
+/// naming `source` and the dataset/attribute at fault (`map.h5: /forces_N[1] = 0.5 must be >
+/// /forces_N[0] = 1 (ascending)`).
+void validate(const ChargeMap& map, const std::string& source);
+
+/// Reads and validates a map file. Throws pvdf::InputError naming the file and the dataset or
+/// attribute when it is missing, has the wrong type/shape/units, or holds invalid values.
+ChargeMap read_map(const std::string& path);
+
+/// Validates and writes a map atomically (temporary file + rename). Throws pvdf::InputError.
+void write_map(const std::string& path, const ChargeMap& map);
+
+/// Format identification written into the root attributes.
+inline constexpr const char* map_format_name = "pvdfkit-charge-map";
+inline constexpr int map_format_version = 1;
+
+}  // namespace pvdf::mapping

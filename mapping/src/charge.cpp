@@ -1,0 +1,47 @@
+// Electrode charge formulas (seed 001 eq. 2 and its tensor-transformation correction).
+#include "pvdf/mapping/charge.hpp"
+
+#include "pvdf/core/error.hpp"
+
+#include <cmath>
+#include <string>
+
+namespace pvdf::mapping {
+
+double electrode_charge_C(const MembraneForceSample* samples, std::size_t n_samples, double thickness_m,
+                          double d31_C_per_N, double d32_C_per_N) {
+  if (!(thickness_m > 0) || !std::isfinite(thickness_m)) {
+    throw InputError("electrode charge: thickness_m = " + std::to_string(thickness_m) + " must be finite and > 0");
+  }
+  // Σ w (d31 N11 + d32 N22) / h, accumulated as two sums to keep the round-off small.
+  double sum11 = 0, sum22 = 0;
+  for (std::size_t q = 0; q < n_samples; ++q) {
+    if (!(samples[q].weight_m2 >= 0)) {
+      throw InputError("electrode charge: sample " + std::to_string(q) + " has weight " +
+                       std::to_string(samples[q].weight_m2) + " m^2; weights must be >= 0");
+    }
+    sum11 += samples[q].weight_m2 * samples[q].N11_N_per_m;
+    sum22 += samples[q].weight_m2 * samples[q].N22_N_per_m;
+  }
+  return (d31_C_per_N * sum11 + d32_C_per_N * sum22) / thickness_m;
+}
+
+double electrode_charge_C(const std::vector<MembraneForceSample>& samples, double thickness_m, double d31_C_per_N,
+                          double d32_C_per_N) {
+  return electrode_charge_C(samples.data(), samples.size(), thickness_m, d31_C_per_N, d32_C_per_N);
+}
+
+double charge_eq2_printed_C(double d31_C_per_N, double d32_C_per_N, double beta_rad, double sigma_r_Pa,
+                            double area_m2) {
+  return (d31_C_per_N * std::cos(beta_rad) + d32_C_per_N * std::sin(beta_rad)) * sigma_r_Pa * area_m2;
+}
+
+double charge_radial_tensor_C(double d31_C_per_N, double d32_C_per_N, double beta_rad, double sigma_r_Pa,
+                              double sigma_theta_Pa, double area_m2) {
+  const double c = std::cos(beta_rad), s = std::sin(beta_rad);
+  const double sigma11 = sigma_r_Pa * c * c + sigma_theta_Pa * s * s;
+  const double sigma22 = sigma_r_Pa * s * s + sigma_theta_Pa * c * c;
+  return (d31_C_per_N * sigma11 + d32_C_per_N * sigma22) * area_m2;
+}
+
+}  // namespace pvdf::mapping

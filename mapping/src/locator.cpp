@@ -1,0 +1,557 @@
+// The lookup: coarse direction table, Levenberg–Marquardt on the interpolant, flags, 1-σ.
+#include "pvdf/mapping/locator.hpp"
+
+#include "pvdf/core/error.hpp"
+
+#include <Eigen/Cholesky>
+#include <Eigen/Core>
+#include <Eigen/LU>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace pvdf::mapping {
+
+std::string flags_text(std::uint32_t flags) {
+  static const char* names[] = {"outside_map", "ambiguous", "no_press", "poor_fit", "force_extrapolated",
+                                "scaling_assumed", "not_converged", "ill_conditioned"};
+  std::string out;
+  for (int b = 0; b < 8; ++b) {
+    if (flags & (1u << b)) {
+      if (!out.empty()) out += '|';
+      out += names[b];
+    }
+  }
+  return out.empty() ? "ok" : out;
+}
+
+namespace {
+
+using Vec = std::array<double, max_electrodes>;
+
+/// (φ, θ) of a unit vector's first three components: the coarse table's key.
+inline void direction_key(const double* n, double& phi, double& theta) {
+  phi = std::atan2(n[1], n[0]);
+  theta = std::atan2(n[2], std::hypot(n[0], n[1]));
+}
+
+inline double normalize(double* v, std::size_t n) {
+  double s = 0;
+  for (std::size_t k = 0; k < n; ++k) s += v[k] * v[k];
+  s = std::sqrt(s);
+  if (s > 0) {
+    for (std::size_t k = 0; k < n; ++k) v[k] /= s;
+  }
+  return s;
+}
+
+}  // namespace
+
+Locator::Locator(const ChargeMap& map, const LocatorOptions& options)
+    : interp_(map), ne_(map.ne()), names_(map.electrode_names), options_(options) {
+  if (ne_ < 3) {
+    throw InputError("map has " + std::to_string(ne_) + " electrode(s); locating (x, y, F) needs at least 3");
+  }
+  if (options.noise_C.empty()) {
+    noise_ = map.noise_C;
+  } else if (options.noise_C.size() == 1) {
+    noise_.assign(ne_, options.noise_C[0]);
+  } else if (options.noise_C.size() == ne_) {
+    noise_ = options.noise_C;
+  } else {
+    throw InputError("--noise-C: " + std::to_string(options.noise_C.size()) + " values given; give 1 or " +
+                     std::to_string(ne_) + " (one per electrode)");
+  }
+  for (double s : noise_) {
+    if (!std::isfinite(s) || !(s > 0)) throw InputError("--noise-C: " + std::to_string(s) + " must be finite and > 0 (C)");
+  }
+  gain_.assign(ne_, 1.0);
+  offset_.assign(ne_, 0.0);
+  if (options.use_calibration && map.calibration) {
+    gain_ = map.calibration->gain;
+    offset_ = map.calibration->offset_C;
+    calibrated_ = true;
+  }
+  if (options.max_iterations < 1 || options.max_starts < 1 || options.max_starts > 8) {
+    throw InputError("locator: max_iterations must be >= 1 and max_starts in 1..8");
+  }
+  auto limit_for = [&](double dof) {
+    return options.chi2_limit > 0 ? options.chi2_limit : dof + 5.0 * std::sqrt(2.0 * std::max(dof, 1.0)) + 4.0;
+  };
+  chi2_limit_free_ = limit_for(double(ne_) - 3.0);
+  chi2_limit_fixed_ = limit_for(double(ne_) - 2.0);
+  chi2_limit_ = options.known_force_N > 0 ? chi2_limit_fixed_ : chi2_limit_free_;
+  single_level_ = map.nf() == 1;
+  // Plausible forces: what the caller says, else half the lowest to twice the highest level
+  // (unbounded for a single-level map, where the scaling law is all there is).
+  {
+    double lo = options.min_force_N, hi = options.max_force_N;
+    if (!(lo > 0)) lo = single_level_ ? 1e-30 : 0.5 * map.forces_N.front();
+    if (!(hi > 0)) hi = single_level_ ? 1e30 : 2.0 * map.forces_N.back();
+    if (!(hi > lo) || !std::isfinite(lo) || !std::isfinite(hi)) {
+      throw InputError("--force-range-N: " + std::to_string(lo) + ".." + std::to_string(hi) + " must satisfy 0 < min < max");
+    }
+    log_force_lo_ = std::log(lo);
+    log_force_hi_ = std::log(hi);
+    if (options.known_force_N != 0.0) {
+      if (!(options.known_force_N > 0) || !std::isfinite(options.known_force_N)) {
+        throw InputError("--force-N: " + std::to_string(options.known_force_N) + " must be finite and > 0 (N)");
+      }
+      fixed_force_ = true;
+      log_force_lo_ = log_force_hi_ = std::log(options.known_force_N);
+    }
+  }
+
+  // ---- coarse table
+  const std::size_t nx = interp_.nx(), ny = interp_.ny(), nf = interp_.n_levels();
+  std::vector<std::array<double, 4>> boxes;  // per usable cell: phi_lo, phi_hi, theta_lo, theta_hi
+  double phi_lo = 1e9, phi_hi = -1e9, th_lo = 1e9, th_hi = -1e9;
+  for (std::size_t j = 0; j + 1 < ny; ++j) {
+    for (std::size_t i = 0; i + 1 < nx; ++i) {
+      if (!interp_.cell_usable(i, j)) continue;
+      const double xc = interp_.x0() + (double(i) + 0.5) * interp_.hx();
+      const double yc = interp_.y0() + (double(j) + 0.5) * interp_.hy();
+      Vec centre{}, mean_dir{};
+      double mean_norm = 0;
+      std::array<Vec, 16> level_dirs{};
+      const std::size_t n_lev = std::min<std::size_t>(nf, 16);
+      for (std::size_t f = 0; f < n_lev; ++f) {
+        const double lf = nf == 1 ? 0.0 : map.forces_N[f] > 0 ? std::log(map.forces_N[f]) : 0.0;
+        interp_.evaluate(xc, yc, lf, centre.data(), nullptr);
+        const double scale = std::exp(-interp_.force_exponent() * lf);
+        for (std::size_t k = 0; k < ne_; ++k) centre[k] *= scale;
+        mean_norm += normalize(centre.data(), ne_) / double(n_lev);
+        level_dirs[f] = centre;
+        for (std::size_t k = 0; k < ne_; ++k) mean_dir[k] += centre[k];
+      }
+      normalize(mean_dir.data(), ne_);
+      std::array<double, 4> box{1e9, -1e9, 1e9, -1e9};
+      double radius2 = 0;
+      auto include = [&](const double* n) {
+        double ph, th;
+        direction_key(n, ph, th);
+        box[0] = std::min(box[0], ph);
+        box[1] = std::max(box[1], ph);
+        box[2] = std::min(box[2], th);
+        box[3] = std::max(box[3], th);
+        double dot = 0;
+        for (std::size_t k = 0; k < ne_; ++k) dot += n[k] * mean_dir[k];
+        radius2 = std::max(radius2, 1.0 - dot * dot);
+      };
+      for (std::size_t f = 0; f < n_lev; ++f) {
+        include(level_dirs[f].data());
+        for (int b = 0; b < 2; ++b) {
+          for (int a = 0; a < 2; ++a) {
+            Vec n{};
+            for (std::size_t k = 0; k < ne_; ++k) n[k] = interp_.node_value(f, i + std::size_t(a), j + std::size_t(b), k);
+            normalize(n.data(), ne_);
+            include(n.data());
+          }
+        }
+      }
+      if (!(mean_norm > 0)) continue;  // a cell with zero charge everywhere cannot be located
+      cells_.push_back(j * (nx - 1) + i);
+      cell_dir_.insert(cell_dir_.end(), mean_dir.begin(), mean_dir.begin() + long(ne_));
+      cell_norm_.push_back(mean_norm);
+      cell_radius2_.push_back(radius2);
+      cell_xy_.push_back({xc, yc});
+      // Grow the box by a quarter of its size each way: the direction inside a cell can
+      // bulge slightly beyond the corners' range.
+      const double gp = 0.25 * (box[1] - box[0]), gt = 0.25 * (box[3] - box[2]);
+      box = {box[0] - gp, box[1] + gp, box[2] - gt, box[3] + gt};
+      boxes.push_back(box);
+      phi_lo = std::min(phi_lo, box[0]);
+      phi_hi = std::max(phi_hi, box[1]);
+      th_lo = std::min(th_lo, box[2]);
+      th_hi = std::max(th_hi, box[3]);
+    }
+  }
+  if (cells_.empty()) throw InputError("map has no usable cell (four ok nodes with non-zero charge); nothing can be located");
+  bins_ = options.direction_bins > 0 ? options.direction_bins
+                                     : std::clamp(int(std::sqrt(double(cells_.size()))), 16, 256);
+  const double pad_p = 1e-9 + 1e-6 * (phi_hi - phi_lo), pad_t = 1e-9 + 1e-6 * (th_hi - th_lo);
+  phi0_ = phi_lo - pad_p;
+  phi1_ = phi_hi + pad_p;
+  theta0_ = th_lo - pad_t;
+  theta1_ = th_hi + pad_t;
+  auto bin_range = [&](const std::array<double, 4>& b, int& p0, int& p1, int& t0, int& t1) {
+    p0 = std::clamp(int((b[0] - phi0_) / (phi1_ - phi0_) * bins_), 0, bins_ - 1);
+    p1 = std::clamp(int((b[1] - phi0_) / (phi1_ - phi0_) * bins_), 0, bins_ - 1);
+    t0 = std::clamp(int((b[2] - theta0_) / (theta1_ - theta0_) * bins_), 0, bins_ - 1);
+    t1 = std::clamp(int((b[3] - theta0_) / (theta1_ - theta0_) * bins_), 0, bins_ - 1);
+  };
+  std::vector<std::size_t> counts(std::size_t(bins_) * std::size_t(bins_) + 1, 0);
+  for (const auto& b : boxes) {
+    int p0, p1, t0, t1;
+    bin_range(b, p0, p1, t0, t1);
+    for (int t = t0; t <= t1; ++t) {
+      for (int p = p0; p <= p1; ++p) ++counts[std::size_t(t * bins_ + p)];
+    }
+  }
+  bin_start_.assign(counts.size(), 0);
+  for (std::size_t b = 0; b + 1 < counts.size(); ++b) bin_start_[b + 1] = bin_start_[b] + counts[b];
+  bin_cells_.assign(bin_start_.back(), 0);
+  std::vector<std::size_t> fill(bin_start_.begin(), bin_start_.end() - 1);
+  for (std::size_t c = 0; c < boxes.size(); ++c) {
+    int p0, p1, t0, t1;
+    bin_range(boxes[c], p0, p1, t0, t1);
+    for (int t = t0; t <= t1; ++t) {
+      for (int p = p0; p <= p1; ++p) bin_cells_[fill[std::size_t(t * bins_ + p)]++] = c;
+    }
+  }
+}
+
+bool Locator::predict(double x_m, double y_m, double force_N, double* charges_C) const {
+  if (!(force_N > 0)) return false;
+  if (!interp_.evaluate(x_m, y_m, std::log(force_N), charges_C, nullptr)) return false;
+  for (std::size_t k = 0; k < ne_; ++k) charges_C[k] = gain_[k] * charges_C[k] + offset_[k];
+  return true;
+}
+
+void Locator::scan_cells(const std::size_t* begin, const std::size_t* end, const double* q_unit, double noise2,
+                         Shortlist& list) const {
+  for (const std::size_t* it = begin; it != end; ++it) {
+    const std::size_t c = *it;
+    const double* d = &cell_dir_[c * ne_];
+    double dot = 0;
+    for (std::size_t k = 0; k < ne_; ++k) dot += d[k] * q_unit[k];
+    if (dot <= 0) continue;
+    // Angular misfit in units of what the cell can explain (its own angular radius, plus the
+    // noise): ≤ 1 means the query direction plausibly comes from inside this cell. Scoring
+    // relative to the cell size keeps small cells near electrodes (where the direction turns
+    // fast) from being crowded out by big-looking matches far away.
+    const double misfit = (1.0 - dot * dot) / (4.0 * cell_radius2_[c] + 9.0 * std::max(noise2, 0.0) + 1e-14);
+    if (noise2 >= 0 && misfit > 1.0) continue;
+    bool dup = false;
+    for (int m = 0; m < list.n; ++m) dup = dup || list.cell[std::size_t(m)] == c;
+    if (dup) continue;
+    int pos = list.n;
+    while (pos > 0 && list.score[std::size_t(pos - 1)] > misfit) --pos;
+    if (pos >= Shortlist::capacity) continue;
+    for (int m = std::min(list.n, Shortlist::capacity - 1); m > pos; --m) {
+      list.cell[std::size_t(m)] = list.cell[std::size_t(m - 1)];
+      list.score[std::size_t(m)] = list.score[std::size_t(m - 1)];
+    }
+    list.cell[std::size_t(pos)] = c;
+    list.score[std::size_t(pos)] = misfit;
+    list.n = std::min(list.n + 1, Shortlist::capacity);
+  }
+}
+
+void Locator::coarse_candidates(const double* q_unit, double noise2, Shortlist& list) const {
+  list.n = 0;
+  double phi, theta;
+  direction_key(q_unit, phi, theta);
+  const int p = int(std::floor((phi - phi0_) / (phi1_ - phi0_) * bins_));
+  const int t = int(std::floor((theta - theta0_) / (theta1_ - theta0_) * bins_));
+  for (int ring = 0; ring <= 1 && list.n == 0; ++ring) {
+    for (int tt = t - ring; tt <= t + ring; ++tt) {
+      for (int pp = p - ring; pp <= p + ring; ++pp) {
+        if (pp < 0 || tt < 0 || pp >= bins_ || tt >= bins_) continue;
+        if (ring == 1 && tt != t - 1 && tt != t + 1 && pp != p - 1 && pp != p + 1) continue;
+        const std::size_t b = std::size_t(tt * bins_ + pp);
+        scan_cells(bin_cells_.data() + bin_start_[b], bin_cells_.data() + bin_start_[b + 1], q_unit, noise2, list);
+      }
+    }
+  }
+  if (list.n == 0) {
+    // Last resort (a direction no cell produces: outside the map or far off the model): the
+    // best-matching cells anywhere, so that the fit can say how far off it is.
+    for (std::size_t c = 0; c < cells_.size(); ++c) scan_cells(&c, &c + 1, q_unit, -1.0, list);
+  }
+}
+
+Locator::Fit Locator::levenberg_marquardt(const double* q, const double* w, double x, double y, double l, bool fixed_force,
+                                          double log_lo, double log_hi) const {
+  Fit fit;
+  Vec model{};
+  std::array<std::array<double, 3>, max_electrodes> grad{};
+  if (!interp_.evaluate(x, y, l, model.data(), grad.data())) return fit;
+  auto chi2_of = [&](const Vec& m) {
+    double s = 0;
+    for (std::size_t k = 0; k < ne_; ++k) {
+      const double r = (m[k] - q[k]) * w[k];
+      s += r * r;
+    }
+    return s;
+  };
+  double chi2 = chi2_of(model);
+  double lambda = 1e-3;
+  Eigen::Matrix3d JtJ;
+  Eigen::Vector3d Jtr;
+  auto normal_equations = [&]() {
+    JtJ.setZero();
+    Jtr.setZero();
+    for (std::size_t k = 0; k < ne_; ++k) {
+      const Eigen::Vector3d g(grad[k][0] * w[k], grad[k][1] * w[k], grad[k][2] * w[k]);
+      JtJ.noalias() += g * g.transpose();
+      Jtr += g * ((model[k] - q[k]) * w[k]);
+    }
+  };
+  if (fixed_force) {  // only (x, y) move: drop the ln F column
+    for (std::size_t k = 0; k < ne_; ++k) grad[k][2] = 0;
+  }
+  normal_equations();
+  const double hx = interp_.hx(), hy = interp_.hy();
+  int it = 0;
+  for (; it < options_.max_iterations; ++it) {
+    Eigen::Matrix3d A = JtJ;
+    for (int d = 0; d < 3; ++d) A(d, d) += lambda * JtJ(d, d) + 1e-300;
+    if (fixed_force) A(2, 2) = 1.0;
+    const Eigen::Vector3d step = A.ldlt().solve(-Jtr);
+    if (!step.allFinite()) {
+      lambda *= 10;
+      if (lambda > 1e12) break;
+      continue;
+    }
+    // Keep steps within a few cells: the interpolant is only trusted where it is defined.
+    double limit = 1.0;
+    limit = std::min(limit, 4.0 * hx / std::max(std::abs(step[0]), 1e-300));
+    limit = std::min(limit, 4.0 * hy / std::max(std::abs(step[1]), 1e-300));
+    limit = std::min(limit, 1.0 / std::max(std::abs(step[2]), 1e-300));
+    const double nx = x + limit * step[0], ny = y + limit * step[1], nl = l + limit * step[2];
+    Vec trial{};
+    std::array<std::array<double, 3>, max_electrodes> trial_grad{};
+    if (nl < log_lo || nl > log_hi || !interp_.evaluate(nx, ny, nl, trial.data(), trial_grad.data())) {
+      fit.blocked = true;
+      lambda *= 10;
+      if (lambda > 1e12) {
+        fit.converged = true;
+        break;
+      }
+      continue;
+    }
+    const double trial_chi2 = chi2_of(trial);
+    if (trial_chi2 <= chi2) {
+      const bool small = std::abs(limit * step[0]) < 1e-7 * hx && std::abs(limit * step[1]) < 1e-7 * hy &&
+                         std::abs(limit * step[2]) < 1e-9;
+      x = nx;
+      y = ny;
+      l = nl;
+      model = trial;
+      grad = trial_grad;
+      if (fixed_force) {
+        for (std::size_t k = 0; k < ne_; ++k) grad[k][2] = 0;
+      }
+      const bool tiny_gain = chi2 - trial_chi2 <= 1e-12 * (chi2 + 1e-30);
+      chi2 = trial_chi2;
+      normal_equations();
+      lambda = std::max(lambda * 0.2, 1e-9);
+      fit.blocked = false;
+      if (small || chi2 < 1e-24 || (tiny_gain && lambda <= 1e-6)) {
+        fit.converged = true;
+        ++it;
+        break;
+      }
+    } else {
+      lambda *= 8;
+      if (lambda > 1e12) {  // no descent left: a minimum (possibly on the map's edge)
+        fit.converged = true;
+        break;
+      }
+    }
+  }
+  // Is the minimum held by the map's edge? Test the undamped Gauss–Newton step.
+  {
+    Eigen::Matrix3d A = JtJ;
+    for (int d = 0; d < 3; ++d) A(d, d) *= 1.0 + 1e-9;
+    if (fixed_force) A(2, 2) = 1.0;
+    const Eigen::Vector3d step = A.ldlt().solve(-Jtr);
+    if (step.allFinite() && (!interp_.inside(x + step[0], y + step[1]) || l + step[2] < log_lo ||
+                             l + step[2] > log_hi)) {
+      fit.blocked = true;
+    }
+  }
+  fit.x = x;
+  fit.y = y;
+  fit.l = l;
+  fit.chi2 = chi2;
+  fit.iterations = it;
+  // Covariance of (x, y, ln F): (JᵀWJ)⁻¹ with the weights already in J.
+  // Equilibrate first: the x, y columns (C/m) and the ln F column (C) differ by ~1e3.
+  Eigen::Vector3d d = JtJ.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
+  Eigen::Matrix3d S = d.asDiagonal() * JtJ * d.asDiagonal();
+  if (fixed_force) {  // σ of (x, y) only; the force is given
+    S(2, 2) = 1.0;
+    d[2] = 0.0;
+  }
+  Eigen::FullPivLU<Eigen::Matrix3d> lu(S);
+  lu.setThreshold(1e-12);
+  if (lu.isInvertible()) {
+    const Eigen::Matrix3d C = d.asDiagonal() * lu.inverse() * d.asDiagonal();
+    for (int d = 0; d < 3; ++d) fit.sigma[std::size_t(d)] = C(d, d) > 0 ? std::sqrt(C(d, d)) : 0.0;
+    fit.singular = !(std::isfinite(fit.sigma[0]) && std::isfinite(fit.sigma[1]) && std::isfinite(fit.sigma[2]));
+  } else {
+    fit.singular = true;
+  }
+  if (fit.singular) fit.sigma = {0, 0, 0};
+  if (fixed_force) fit.sigma[2] = 0;
+  fit.ok = std::isfinite(chi2) && std::isfinite(x) && std::isfinite(y) && std::isfinite(l);
+  return fit;
+}
+
+bool Locator::distinct_minima(const double* q, const double* w, const Fit& a, const Fit& b, double separation,
+                              double limit) const {
+  if (std::hypot(a.x - b.x, a.y - b.y) <= separation) return false;
+  // Two LM end points are different solutions when the misfit rises above the noise limit
+  // somewhere between them (a barrier), or the straight path leaves the map.
+  Vec model{};
+  for (int m = 1; m <= 3; ++m) {
+    const double t = 0.25 * m;
+    const double x = a.x + t * (b.x - a.x), y = a.y + t * (b.y - a.y), l = a.l + t * (b.l - a.l);
+    if (!interp_.evaluate(x, y, l, model.data(), nullptr)) return true;
+    // Best force at this position (the misfit is nearly quadratic in the amplitude).
+    double mq = 0, mm = 0;
+    for (std::size_t k = 0; k < ne_; ++k) {
+      mq += model[k] * q[k] * w[k] * w[k];
+      mm += model[k] * model[k] * w[k] * w[k];
+    }
+    const double s = mm > 0 ? mq / mm : 1.0;
+    double chi2 = 0;
+    for (std::size_t k = 0; k < ne_; ++k) {
+      const double r = (s * model[k] - q[k]) * w[k];
+      chi2 += r * r;
+    }
+    if (chi2 > limit) return true;
+  }
+  return false;
+}
+
+Location Locator::locate(const double* charges_C) const {
+  return fixed_force_ ? locate_impl(charges_C, true, log_force_lo_) : locate_impl(charges_C, false, 0.0);
+}
+
+Location Locator::locate(const double* charges_C, double known_force_N) const {
+  if (!(known_force_N > 0) || !std::isfinite(known_force_N)) {
+    Location out;
+    out.flags = flag::outside_map;
+    return out;
+  }
+  return locate_impl(charges_C, true, std::log(known_force_N));
+}
+
+Location Locator::locate_impl(const double* charges_C, bool fixed_force, double log_known_force) const {
+  const double log_lo = fixed_force ? log_known_force : log_force_lo_;
+  const double log_hi = fixed_force ? log_known_force : log_force_hi_;
+  const double limit = fixed_force ? chi2_limit_fixed_ : chi2_limit_free_;
+  Location out;
+  Vec q{}, w{}, q_unit{};
+  double snr2 = 0, noise_norm2 = 0;
+  for (std::size_t k = 0; k < ne_; ++k) {
+    if (!std::isfinite(charges_C[k])) {
+      out.flags = flag::outside_map | flag::no_press;
+      return out;
+    }
+    q[k] = (charges_C[k] - offset_[k]) / gain_[k];
+    const double sigma = noise_[k] / std::abs(gain_[k]);
+    w[k] = 1.0 / sigma;
+    snr2 += (q[k] * w[k]) * (q[k] * w[k]);
+    noise_norm2 += sigma * sigma;
+    q_unit[k] = q[k];
+  }
+  if (std::sqrt(snr2 / double(ne_)) < options_.no_press_snr) {
+    out.flags = flag::no_press;
+    return out;
+  }
+  const double q_norm = normalize(q_unit.data(), ne_);
+  const double noise2 = noise_norm2 / (q_norm * q_norm);
+
+  Shortlist list;
+  coarse_candidates(q_unit.data(), noise2, list);
+
+  // Distinct starts: the best candidates at least a few cells apart.
+  const double cluster_distance = 3.0 * std::max(interp_.hx(), interp_.hy());
+  std::array<std::size_t, 8> starts{};
+  int n_starts = 0;
+  for (int c = 0; c < list.n && n_starts < options_.max_starts; ++c) {
+    const auto& p = cell_xy_[list.cell[std::size_t(c)]];
+    bool far = true;
+    for (int s = 0; s < n_starts; ++s) {
+      const auto& o = cell_xy_[starts[std::size_t(s)]];
+      far = far && std::hypot(p[0] - o[0], p[1] - o[1]) > cluster_distance;
+    }
+    if (far) starts[std::size_t(n_starts++)] = list.cell[std::size_t(c)];
+  }
+
+  std::array<Fit, 8> fits{};
+  const double p_exp = interp_.force_exponent();
+  for (int s = 0; s < n_starts; ++s) {
+    const std::size_t c = starts[std::size_t(s)];
+    double dot = 0;
+    for (std::size_t k = 0; k < ne_; ++k) dot += cell_dir_[c * ne_ + k] * q[k];
+    const double amplitude = dot > 0 ? dot / cell_norm_[c] : 1.0;
+    const double l0 = std::clamp(std::log(amplitude) / p_exp, log_lo, log_hi);
+    fits[std::size_t(s)] = levenberg_marquardt(q.data(), w.data(), cell_xy_[c][0], cell_xy_[c][1], l0, fixed_force, log_lo, log_hi);
+  }
+  out.n_starts = n_starts;
+  // Rank: fits within noise first, among them forces inside the map's levels first, then χ².
+  auto extrapolated = [&](const Fit& f) {
+    return f.l < interp_.min_log_force() - 1e-9 || f.l > interp_.max_log_force() + 1e-9;
+  };
+  auto better = [&](const Fit& a, const Fit& b) {
+    const bool wa = a.chi2 <= limit, wb = b.chi2 <= limit;
+    if (wa != wb) return wa;
+    if (wa && extrapolated(a) != extrapolated(b)) return !extrapolated(a);
+    return a.chi2 < b.chi2;
+  };
+  int best = -1;
+  for (int s = 0; s < n_starts; ++s) {
+    if (fits[std::size_t(s)].ok && (best < 0 || better(fits[std::size_t(s)], fits[std::size_t(best)]))) best = s;
+  }
+  if (best < 0) {
+    out.flags = flag::outside_map;
+    return out;
+  }
+  const Fit& b = fits[std::size_t(best)];
+  out.x_m = b.x;
+  out.y_m = b.y;
+  out.force_N = std::exp(b.l);
+  out.residual = std::sqrt(b.chi2);
+  out.sigma_x_m = b.sigma[0];
+  out.sigma_y_m = b.sigma[1];
+  out.sigma_F_N = out.force_N * b.sigma[2];
+  out.iterations = b.iterations;
+  out.n_solutions = 1;
+  if (!b.converged) out.flags |= flag::not_converged;
+  if (b.singular) out.flags |= flag::ill_conditioned;
+  if (single_level_) out.flags |= flag::scaling_assumed;
+  if (extrapolated(b)) out.flags |= flag::force_extrapolated;
+  if (b.chi2 > limit) {
+    if (b.blocked) {
+      out = Location{};
+      out.n_starts = n_starts;
+      out.flags = flag::outside_map;
+      return out;
+    }
+    out.flags |= flag::poor_fit;
+    return out;
+  }
+  // Other minima that also fit within noise and lie elsewhere: ambiguous.
+  const double sigma_pos = std::hypot(b.sigma[0], b.sigma[1]);
+  (void)sigma_pos;
+  const double separation = options_.ambiguity_separation_cells * std::max(interp_.hx(), interp_.hy());
+  std::array<int, 8> distinct{};
+  int n_distinct = 0;
+  for (int s = 0; s < n_starts; ++s) {
+    const Fit& f = fits[std::size_t(s)];
+    if (s == best || !f.ok || f.chi2 > limit) continue;
+    if (!distinct_minima(q.data(), w.data(), b, f, separation, limit)) continue;
+    bool is_new = true;
+    for (int d = 0; d < n_distinct; ++d) {
+      is_new = is_new && distinct_minima(q.data(), w.data(), fits[std::size_t(distinct[std::size_t(d)])], f, separation, limit);
+    }
+    if (!is_new) continue;
+    if (n_distinct == 0 || better(f, fits[std::size_t(distinct[0])])) {
+      out.alternative = {f.x, f.y, std::exp(f.l), std::sqrt(f.chi2), f.sigma[0], f.sigma[1], std::exp(f.l) * f.sigma[2]};
+    }
+    distinct[std::size_t(n_distinct++)] = s;
+  }
+  if (n_distinct > 0) {
+    out.flags |= flag::ambiguous;
+    out.n_solutions = 1 + n_distinct;
+  }
+  return out;
+}
+
+}  // namespace pvdf::mapping

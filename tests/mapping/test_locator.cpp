@@ -1,0 +1,312 @@
+// The lookup against the analytic model: accuracy between grid nodes, noise coverage, flags.
+#include "fixture.hpp"
+
+#include "pvdf/core/error.hpp"
+#include "pvdf/mapping/locator.hpp"
+#include "pvdf/mapping/synthetic.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <algorithm>
+#include <thread>
+
+using namespace pvdf::mapping;
+using pvdf_test::Press;
+
+namespace {
+
+SyntheticModel skewed_model() {
+  SyntheticModel m;          // seed-001 triangle, anisotropic, decaying like d^-0.8
+  m.force_skew = 0.05;       // force exponent 2/3 ± 0.05 across the film: levels matter
+  return m;
+}
+
+const std::vector<double> levels{0.25, 0.5, 1.0, 2.0, 4.0};
+
+}  // namespace
+
+/// The reported answer nearest the truth: the position itself, or, for an ambiguous result,
+/// the better of it and its alternative (the user is told both fit).
+Location::Alternative nearest_answer(const Location& r, const Press& p) {
+  Location::Alternative a{r.x_m, r.y_m, r.force_N, r.residual, r.sigma_x_m, r.sigma_y_m, r.sigma_F_N};
+  if ((r.flags & flag::ambiguous) &&
+      std::hypot(r.alternative.x_m - p.x_m, r.alternative.y_m - p.y_m) < std::hypot(r.x_m - p.x_m, r.y_m - p.y_m)) {
+    a = r.alternative;
+  }
+  return a;
+}
+
+double nearest_answer_error(const Location& r, const Press& p, double* force_error) {
+  const auto a = nearest_answer(r, p);
+  if (force_error) *force_error = std::abs(a.force_N - p.force_N) / p.force_N;
+  return std::hypot(a.x_m - p.x_m, a.y_m - p.y_m);
+}
+
+TEST_CASE("noise-free presses between grid nodes are located far below the grid spacing", "[mapping][locator]") {
+  const SyntheticModel model = skewed_model();
+  const double spacing = 1e-3;
+  const ChargeMap map = build_synthetic_map(model, spacing, 3e-3, levels, 0.05e-12);
+  LocatorOptions options;
+  options.min_force_N = levels.front();  // the deployment's force range: the map's levels
+  options.max_force_N = levels.back();
+  const Locator locator(map, options);
+  // Random positions (never on nodes) around the electrode triangle, forces 0.3–3 N between levels.
+  const auto presses = pvdf_test::random_presses(600, 0.015, 0.3, 3.0, 7);
+  std::vector<double> pos_err, force_err, unambiguous_err;
+  int flagged = 0, ambiguous = 0, silent_wrong = 0;
+  for (const auto& p : presses) {
+    const Location r = locator.locate(pvdf_test::charges(model, p));
+    if (!r.has_position()) {
+      ++flagged;
+      continue;
+    }
+    double fe = 0;
+    pos_err.push_back(nearest_answer_error(r, p, &fe));
+    force_err.push_back(fe);
+    if (r.flags & flag::ambiguous) {
+      ++ambiguous;
+    } else {
+      const double e = std::hypot(r.x_m - p.x_m, r.y_m - p.y_m);
+      unambiguous_err.push_back(e);
+      silent_wrong += e > 0.2 * spacing && e > 3 * std::hypot(r.sigma_x_m, r.sigma_y_m);
+    }
+  }
+  const double med_pos = pvdf_test::median(pos_err), med_force = pvdf_test::median(force_err);
+  INFO("median position error " << med_pos * 1e3 << " mm (unambiguous only: " << pvdf_test::median(unambiguous_err) * 1e3
+                                << " mm), median force error " << med_force * 100 << " %, flagged " << flagged
+                                << ", ambiguous " << ambiguous << " of " << presses.size()
+                                << ", unflagged answers off by > 0.2 mm and > 3 sigma: " << silent_wrong);
+  CHECK(flagged == 0);
+  CHECK(med_pos < 0.05e-3);                       // issue 6: < 0.05 mm (grid spacing 1 mm)
+  CHECK(med_force < 0.005);                       // issue 6: < 0.5 %
+  // Known limitation (docs/lookup.md §2): near an electrode the map folds and the
+  // interpolation error (~1 sigma here) can move the fit to the other side of the fold.
+  CHECK(silent_wrong < int(presses.size()) / 10);
+  // Three electrodes and an unknown force: a second exact solution is common (docs/lookup.md §2).
+  CHECK(ambiguous > 0);
+}
+
+TEST_CASE("with a known force three electrodes locate presses without ambiguity", "[mapping][locator]") {
+  const SyntheticModel model = skewed_model();
+  const ChargeMap map = build_synthetic_map(model, 1e-3, 3e-3, levels, 0.05e-12);
+  const auto presses = pvdf_test::random_presses(300, 0.015, 0.3, 3.0, 17);
+  std::vector<double> err;
+  int ambiguous = 0, silent_wrong = 0;
+  const Locator locator(map);
+  LocatorOptions fixed;
+  fixed.known_force_N = 1.0;
+  const Locator at_one_newton(map, fixed);  // the option and the per-call force agree
+  const Press one{0.0031, -0.0042, 1.0};
+  CHECK(at_one_newton.locate(pvdf_test::charges(model, one)).x_m == locator.locate(pvdf_test::charges(model, one), 1.0).x_m);
+  for (const auto& p : presses) {
+    const Location r = locator.locate(pvdf_test::charges(model, p), p.force_N);
+    REQUIRE(r.has_position());
+    CHECK(r.force_N == Approx(p.force_N).epsilon(1e-12));
+    ambiguous += (r.flags & flag::ambiguous) != 0;
+    const double e = std::hypot(r.x_m - p.x_m, r.y_m - p.y_m);
+    err.push_back(e);
+    silent_wrong += !(r.flags & flag::ambiguous) && e > 0.2e-3 && e > 3 * std::hypot(r.sigma_x_m, r.sigma_y_m);
+  }
+  INFO("known force: ambiguous " << ambiguous << " of " << presses.size() << ", median error "
+                                 << pvdf_test::median(err) * 1e3 << " mm, silently wrong " << silent_wrong);
+  CHECK(pvdf_test::median(err) < 0.05e-3);
+  CHECK(ambiguous < int(presses.size()) / 6);
+  CHECK(silent_wrong < int(presses.size()) / 50);
+}
+
+TEST_CASE("a fourth electrode removes most ambiguity", "[mapping][locator]") {
+  SyntheticModel model = skewed_model();
+  model.names.push_back("D");
+  model.centers_m.push_back({0.0, -0.02});
+  LocatorOptions options;
+  options.min_force_N = levels.front();
+  options.max_force_N = levels.back();
+  const Locator locator(build_synthetic_map(model, 1e-3, 3e-3, levels, 0.05e-12), options);
+  const auto presses = pvdf_test::random_presses(300, 0.015, 0.3, 3.0, 8);
+  std::vector<double> err;
+  int ambiguous = 0;
+  for (const auto& p : presses) {
+    const Location r = locator.locate(pvdf_test::charges(model, p));
+    REQUIRE(r.has_position());
+    ambiguous += (r.flags & flag::ambiguous) != 0;
+    err.push_back(std::hypot(r.x_m - p.x_m, r.y_m - p.y_m));
+  }
+  INFO("four electrodes: ambiguous " << ambiguous << " of " << presses.size() << ", median error "
+                                     << pvdf_test::median(err) * 1e3 << " mm");
+  CHECK(ambiguous < int(presses.size()) / 4);
+  CHECK(pvdf_test::median(err) < 0.05e-3);
+}
+
+void check_coverage(const SyntheticModel& model, bool known_force, const char* what) {
+  const double sigma_q = 0.2e-12;  // 0.2 pC on charges of ~5-100 pC
+  const ChargeMap map = build_synthetic_map(model, 1e-3, 3e-3, levels, sigma_q);
+  const auto presses = pvdf_test::random_presses(1200, 0.015, 0.5, 2.0, 3);
+  std::mt19937 rng(5);
+  std::normal_distribution<double> noise(0.0, sigma_q);
+  int n = 0, in_x = 0, in_y = 0, in_f = 0;
+  LocatorOptions options;
+  options.min_force_N = levels.front();
+  options.max_force_N = levels.back();
+  const Locator unknown_force(map, options);
+  for (const auto& p : presses) {
+    auto q = pvdf_test::charges(model, p);
+    for (auto& v : q) v += noise(rng);
+    const Location r = known_force ? unknown_force.locate(q, p.force_N) : unknown_force.locate(q);
+    if (!r.has_position()) continue;
+    const auto a = nearest_answer(r, p);  // for an ambiguous result: the solution near the truth
+    ++n;
+    in_x += std::abs(a.x_m - p.x_m) <= a.sigma_x_m;
+    in_y += std::abs(a.y_m - p.y_m) <= a.sigma_y_m;
+    in_f += known_force || std::abs(a.force_N - p.force_N) <= a.sigma_F_N;
+  }
+  const double fx = double(in_x) / n, fy = double(in_y) / n, ff = double(in_f) / n;
+  INFO(what << ": located " << n << " of " << presses.size() << "; within 1 sigma: x " << fx << ", y " << fy << ", F " << ff);
+  CHECK(n > int(presses.size()) * 95 / 100);
+  // Binomial 1-sigma for n = 1200 at p = 0.683 is 0.013; allow ±0.06 for the linearization
+  // and for the few presses on folds of the map (docs/lookup.md §2).
+  CHECK(std::abs(fx - 0.683) < 0.06);
+  CHECK(std::abs(fy - 0.683) < 0.06);
+  if (!known_force) CHECK(std::abs(ff - 0.683) < 0.06);
+}
+
+TEST_CASE("reported 1-sigma uncertainty covers about 68 % of the errors under charge noise", "[mapping][locator]") {
+  // Three electrodes (seed 001) with the force known: (x, y) from three charges.
+  check_coverage(skewed_model(), true, "three electrodes, known force");
+  // Four electrodes, force unknown: (x, y, F) from four charges.
+  SyntheticModel four = skewed_model();
+  four.names.push_back("D");
+  four.centers_m.push_back({0.0, -0.02});
+  check_coverage(four, false, "four electrodes, unknown force");
+  // (Three electrodes with unknown force: up to four exact solutions; the coverage of the
+  // nearest reported one is measured in docs/lookup.md, not asserted.)
+}
+
+TEST_CASE("a symmetric layout is flagged ambiguous with the mirror position as alternative", "[mapping][locator]") {
+  // Three electrodes on the x axis: the charges are even in y, so (x, y) and (x, −y) coincide.
+  SyntheticModel model;
+  model.centers_m = {{-0.012, 0.0}, {0.0, 0.0}, {0.012, 0.0}};
+  const ChargeMap map = build_synthetic_map(model, 1e-3, 3e-3, {0.5, 1.0, 2.0}, 0.05e-12);
+  const Locator locator(map);
+  const Press p{0.0053, 0.0081, 1.3};
+  const Location r = locator.locate(pvdf_test::charges(model, p));
+  REQUIRE(r.has_position());
+  CHECK((r.flags & flag::ambiguous) != 0);
+  // One of the two answers is the truth, the other its mirror image.
+  const bool first_true = std::abs(r.y_m - p.y_m) < 1e-4;
+  const double other_y = first_true ? r.alternative.y_m : r.y_m;
+  CHECK(std::abs(std::abs(r.y_m) - p.y_m) < 1e-4);
+  CHECK(std::abs(other_y + p.y_m) < 1e-4);
+  CHECK(std::abs(r.alternative.x_m - p.x_m) < 1e-4);
+  CHECK(std::abs(r.alternative.force_N - p.force_N) / p.force_N < 1e-3);
+}
+
+TEST_CASE("presses outside the mapped area are flagged or matched by a press inside", "[mapping][locator]") {
+  const SyntheticModel model = skewed_model();
+  const double sigma_q = 0.02e-12;
+  const ChargeMap map = build_synthetic_map(model, 1e-3, 8e-3, levels, sigma_q);  // mapped r <= 37 mm
+  const Locator locator(map);
+  int outside = 0, total = 0;
+  for (double angle = 0.1; angle < 6.28; angle += 0.5) {
+    const Press p{0.0435 * std::cos(angle), 0.0435 * std::sin(angle), 1.0};  // in the rim margin
+    const auto q = pvdf_test::charges(model, p);
+    const Location r = locator.locate(q);
+    ++total;
+    if (r.flags & flag::outside_map) {
+      ++outside;
+      CHECK_FALSE(r.has_position());
+      CHECK(r.x_m == 0.0);
+      continue;
+    }
+    // Not flagged: then a press inside the map really produces these charges (an exact twin,
+    // docs/lookup.md §2) — checked against the analytic model, not against the map.
+    REQUIRE(r.has_position());
+    CHECK(std::hypot(r.x_m, r.y_m) < 0.037 + 1e-3);
+    for (std::size_t k = 0; k < 3; ++k) CHECK(std::abs(model.charge_C(r.x_m, r.y_m, r.force_N, k) - q[k]) < 5 * sigma_q);
+  }
+  INFO(outside << " of " << total << " rim presses flagged outside_map");
+  CHECK(outside > 0);
+  // Charges no mapped press can produce (A much larger than anywhere in the map relative to
+  // B and C) are always outside the map.
+  const std::vector<double> impossible{200e-12, 0.5e-12, 0.5e-12};
+  const Location r = locator.locate(impossible);
+  CHECK((r.flags & flag::outside_map) != 0);
+  CHECK_FALSE(r.has_position());
+}
+
+TEST_CASE("charges at the noise level are flagged no_press", "[mapping][locator]") {
+  const SyntheticModel model = skewed_model();
+  const Locator locator(build_synthetic_map(model, 2e-3, 3e-3, levels, 0.5e-12));
+  std::mt19937 rng(1);
+  std::normal_distribution<double> noise(0.0, 0.5e-12);
+  for (int i = 0; i < 50; ++i) {
+    const std::vector<double> q{noise(rng), noise(rng), noise(rng)};
+    CHECK((locator.locate(q).flags & flag::no_press) != 0);
+  }
+  const double nan = std::nan("");
+  const std::vector<double> bad{nan, 1e-11, 1e-11};
+  CHECK_FALSE(locator.locate(bad).has_position());
+  // A real press at 1 N is not.
+  CHECK((locator.locate(pvdf_test::charges(model, {0.004, -0.002, 1.0})).flags & flag::no_press) == 0);
+}
+
+TEST_CASE("a single-level map uses the F^(2/3) law and says so", "[mapping][locator]") {
+  SyntheticModel model;  // pure membrane scaling: exact
+  const Locator locator(build_synthetic_map(model, 1e-3, 3e-3, {1.0}, 0.05e-12));
+  const Press p{-0.0071, 0.0123, 2.7};
+  const Location r = locator.locate(pvdf_test::charges(model, p));
+  REQUIRE(r.has_position());
+  CHECK((r.flags & flag::scaling_assumed) != 0);
+  double force_error = 0;
+  const double error = nearest_answer_error(r, p, &force_error);
+  CHECK(force_error < 1e-3);
+  CHECK(error < 0.05e-3);
+}
+
+TEST_CASE("calibration stored in the map is applied to measured charges", "[mapping][locator]") {
+  SyntheticModel model = skewed_model();
+  ChargeMap map = build_synthetic_map(model, 1e-3, 3e-3, levels, 0.05e-12);
+  map.calibration = Calibration{{1.25, 0.8, 1.1}, {2e-12, -1e-12, 0.5e-12}, "test", "{}"};
+  const Locator calibrated(map);
+  const Press p{0.0021, 0.0152, 0.9};
+  auto q = pvdf_test::charges(model, p);
+  for (std::size_t k = 0; k < 3; ++k) q[k] = map.calibration->gain[k] * q[k] + map.calibration->offset_C[k];
+  const Location r = calibrated.locate(q);
+  REQUIRE(r.has_position());
+  CHECK(std::hypot(r.x_m - p.x_m, r.y_m - p.y_m) < 0.05e-3);
+  CHECK(std::abs(r.force_N - p.force_N) / p.force_N < 0.005);
+  LocatorOptions raw;
+  raw.use_calibration = false;
+  const Location u = Locator(map, raw).locate(q);
+  CHECK((!u.has_position() || std::hypot(u.x_m - p.x_m, u.y_m - p.y_m) > 0.5e-3));
+}
+
+TEST_CASE("locate is thread-safe: concurrent calls give the sequential answers", "[mapping][locator]") {
+  const SyntheticModel model = skewed_model();
+  const Locator locator(build_synthetic_map(model, 1e-3, 3e-3, levels, 0.05e-12));
+  const auto presses = pvdf_test::random_presses(200, 0.03, 0.5, 2.0, 9);
+  std::vector<Location> seq(presses.size()), par(presses.size());
+  for (std::size_t i = 0; i < presses.size(); ++i) seq[i] = locator.locate(pvdf_test::charges(model, presses[i]));
+  auto work = [&](std::size_t first) {
+    for (std::size_t i = first; i < presses.size(); i += 2) par[i] = locator.locate(pvdf_test::charges(model, presses[i]));
+  };
+  std::thread a(work, 0), b(work, 1);
+  a.join();
+  b.join();
+  for (std::size_t i = 0; i < presses.size(); ++i) {
+    CHECK(par[i].x_m == seq[i].x_m);
+    CHECK(par[i].force_N == seq[i].force_N);
+  }
+}
+
+TEST_CASE("bad locator input is refused with a message", "[mapping][locator]") {
+  SyntheticModel two;
+  two.names = {"A", "B"};
+  two.centers_m = {{0.0, 0.01}, {0.0, -0.01}};
+  CHECK_THROWS_AS(Locator(build_synthetic_map(two, 3e-3, 3e-3, {1.0}, 1e-13)), pvdf::InputError);
+  const ChargeMap map = build_synthetic_map(SyntheticModel{}, 3e-3, 3e-3, {1.0}, 1e-13);
+  LocatorOptions o;
+  o.noise_C = {1e-13, 1e-13};
+  CHECK_THROWS_WITH(Locator(map, o), Catch::Contains("--noise-C"));
+  o.noise_C = {-1.0};
+  CHECK_THROWS_AS(Locator(map, o), pvdf::InputError);
+}
