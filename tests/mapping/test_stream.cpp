@@ -1,0 +1,121 @@
+// The streaming lookup: documented columns, malformed rows reported by line number and
+// skipped (or refused with strict), never a crash.
+#include "fixture.hpp"
+
+#include "pvdf/core/error.hpp"
+#include "pvdf/core/io.hpp"
+#include "pvdf/mapping/stream.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <sstream>
+
+using namespace pvdf::mapping;
+
+namespace {
+
+const Locator& shared_locator() {
+  static const Locator locator(build_synthetic_map(SyntheticModel{}, 1e-3, 3e-3, {0.5, 1.0, 2.0}, 0.05e-12));
+  return locator;
+}
+
+std::string row(double t, const pvdf_test::Press& p) {
+  const SyntheticModel model;
+  const auto q = pvdf_test::charges(model, p);
+  std::ostringstream os;
+  os.precision(17);
+  os << t << ',' << q[0] << ',' << q[1] << ',' << q[2];
+  return os.str();
+}
+
+}  // namespace
+
+std::vector<std::vector<std::string>> lines_of(const std::string& text) {
+  std::vector<std::vector<std::string>> out;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) out.push_back(pvdf::split_csv_line(line));
+  return out;
+}
+
+TEST_CASE("a stream of charges becomes a stream of positions", "[mapping][stream]") {
+  const pvdf_test::Press a{0.002, 0.003, 1.0}, b{-0.004, -0.001, 0.7};
+  std::istringstream in("# a comment line\nt_s,charge_A_C,charge_B_C,charge_C_C\n" + row(0.0001, a) + "\n\n" +
+                        row(0.0002, b) + "\n0.0003,1e-16,-1e-16,2e-16\n");
+  std::ostringstream out, warnings;
+  const StreamSummary s = locate_stream(shared_locator(), in, out, warnings);
+  CHECK(s.rows == 3);
+  CHECK(s.located == 2);
+  CHECK(s.skipped == 0);
+  CHECK(warnings.str().empty());
+  const auto lines = lines_of(out.str());
+  REQUIRE(lines.size() == 4);
+  CHECK(lines[0] == pvdf::split_csv_line(stream_output_header()));
+  CHECK(lines[1][0] == "0.0001");
+  double x = 0, y = 0, f = 0;
+  REQUIRE(pvdf::parse_finite(lines[1][1], x));
+  REQUIRE(pvdf::parse_finite(lines[1][2], y));
+  REQUIRE(pvdf::parse_finite(lines[1][3], f));
+  // A press near the centre of the triangle can have an exact twin; accept either answer.
+  const Location r = shared_locator().locate(pvdf_test::charges(SyntheticModel{}, a));
+  CHECK(x == Approx(r.x_m).epsilon(1e-6));
+  CHECK(y == Approx(r.y_m).epsilon(1e-6));
+  // The no-press row has empty numbers and the flag.
+  REQUIRE(lines[3].size() == 9);
+  CHECK(lines[3][1].empty());
+  CHECK(lines[3][3].empty());
+  CHECK(lines[3][8] == "no_press");
+}
+
+TEST_CASE("malformed rows are skipped with their line numbers, or refused with strict", "[mapping][stream]") {
+  const pvdf_test::Press a{0.002, 0.003, 1.0};
+  const std::string text = "charge_C_C,t_s,charge_A_C,charge_B_C,extra\n"   // any column order, extra ignored
+                           "1e-11,0.1,2e-11\n"                                // line 2: too few fields
+                           "abc,0.2,1e-11,1e-11,0\n"                          // line 3: not a number
+                           "nan,0.3,1e-11,1e-11,0\n"                          // line 4: not finite
+                           "1e-11,0.4,1e-11,inf,0\n"                          // line 5: not finite
+                           "1e-11,,1e-11,1e-11,0\n";                          // line 6: empty time
+  std::istringstream in(text);
+  std::ostringstream out, warnings;
+  const StreamSummary s = locate_stream(shared_locator(), in, out, warnings);
+  CHECK(s.rows == 5);
+  CHECK(s.skipped == 5);
+  for (const char* where : {"<stdin>:2:", "<stdin>:3:", "<stdin>:4:", "<stdin>:5:", "<stdin>:6:"}) {
+    INFO(where);
+    CHECK(warnings.str().find(where) != std::string::npos);
+  }
+  CHECK(lines_of(out.str()).size() == 1);  // the header only
+
+  StreamOptions strict;
+  strict.strict = true;
+  strict.source = "presses.csv";
+  std::istringstream in2("t_s,charge_A_C,charge_B_C,charge_C_C\n" + row(0.1, a) + "\n0.2,1e-11,x,1e-11\n");
+  std::ostringstream out2, warnings2;
+  CHECK_THROWS_WITH(locate_stream(shared_locator(), in2, out2, warnings2, strict), Catch::Contains("presses.csv:3:"));
+  CHECK(lines_of(out2.str()).size() == 2);  // the good row before it was written
+
+  // A header without the map's electrodes is refused up front.
+  std::istringstream in3("t_s,charge_A_C,charge_B_C\n0,1,2\n");
+  CHECK_THROWS_WITH(locate_stream(shared_locator(), in3, out2, warnings2), Catch::Contains("charge_C_C"));
+  std::istringstream empty("");
+  CHECK_THROWS_AS(locate_stream(shared_locator(), empty, out2, warnings2), pvdf::InputError);
+}
+
+TEST_CASE("random garbage never crashes the stream", "[mapping][stream]") {
+  std::mt19937 rng(12);
+  std::uniform_int_distribution<int> byte(0, 127);
+  std::string text = "t_s,charge_A_C,charge_B_C,charge_C_C\n";
+  for (int i = 0; i < 2000; ++i) {
+    char c = char(byte(rng));
+    if (c == 0) c = ',';
+    text += c;
+    if (i % 37 == 0) text += "\n0.1,2e-11,3e-11,1e-11\n";
+  }
+  std::istringstream in(text);
+  std::ostringstream out, warnings;
+  StreamOptions o;
+  o.max_warnings = 3;
+  const StreamSummary s = locate_stream(shared_locator(), in, out, warnings, o);
+  CHECK(s.rows == s.skipped + (lines_of(out.str()).size() - 1));
+  CHECK(s.located > 0);
+  CHECK(out.str().find("nan") == std::string::npos);
+}
