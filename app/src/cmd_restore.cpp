@@ -31,8 +31,8 @@ struct IdentifyOptions {
   std::vector<std::string> scans, forces;
   std::vector<double> edges;
   std::string output, plot_dir, beta = "1e-4", policy, window = "tukey";
-  double speed = 0, corner = 0;
-  std::size_t taps = 8192;
+  double speed = 0, corner = 0, resolution = 0;
+  std::size_t taps = 8192, g_window = 0;
   long delay = -1;
 };
 
@@ -83,9 +83,12 @@ int run_identify(const IdentifyOptions& o) {
   d.window = o.window;
   d.corner_wavelength_m = o.corner;
   std::string policy = o.policy;
+  d.resolution_m = o.resolution;
+  d.g_window = o.g_window;
   if (o.beta == "auto" || o.beta == "gcv") {
-    if (!policy.empty() && policy != "gcv") throw pvdf::InputError("--beta auto contradicts --beta-policy " + policy);
-    policy = "gcv";
+    const std::string chosen = o.beta == "auto" ? "discrepancy" : "gcv";
+    if (!policy.empty() && policy != chosen) throw pvdf::InputError("--beta " + o.beta + " contradicts --beta-policy " + policy);
+    policy = chosen;
   } else {
     double b = 0;
     if (!pvdf::parse_finite(o.beta, b) || !(b > 0)) {
@@ -97,7 +100,8 @@ int run_identify(const IdentifyOptions& o) {
   if (policy == "constant") d.beta_policy = r::BetaPolicy::constant;
   else if (policy == "frequency") d.beta_policy = r::BetaPolicy::frequency;
   else if (policy == "gcv") d.beta_policy = r::BetaPolicy::gcv;
-  else throw pvdf::InputError("--beta-policy = " + policy + " must be constant, frequency or gcv");
+  else if (policy == "discrepancy") d.beta_policy = r::BetaPolicy::discrepancy;
+  else throw pvdf::InputError("--beta-policy = " + policy + " must be constant, frequency, gcv or discrepancy");
 
   std::vector<r::IdentificationScan> scans;
   for (std::size_t i = 0; i < o.scans.size(); ++i) {
@@ -122,8 +126,8 @@ int run_identify(const IdentifyOptions& o) {
               "truncated energy %.2e -> %s\n",
               f.beta_policy.c_str(), f.beta, f.beta_abs, f.taps, f.delay_samples, f.delay_samples * f.sample_spacing_m * 1e3,
               f.design_fft_length, f.truncated_energy_fraction, o.output.c_str());
-  if (f.truncated_energy_fraction > 1e-2) {
-    pvdf::app::warn("more than 1 % of the inverse filter's energy lies outside its taps; raise --taps or beta");
+  if (f.truncated_energy_fraction > 0.1) {
+    pvdf::app::warn("more than 10 % of the inverse filter's energy lies outside its taps; raise --taps or beta");
   }
   if (!o.plot_dir.empty()) {
     pvdf::make_directories(o.plot_dir);
@@ -160,8 +164,8 @@ int run_apply(const ApplyOptions& o) {
     forces.fx_N = fx;
     forces.fz_N = fz;
     r::friction_coefficient(forces, forces.mu_threshold_N);
-    std::printf("streaming: block %zu samples, latency %zu samples (%.4g ms at this spacing and 10 kHz-class rates)\n",
-                o.block, s.latency_samples(), 0.0);
+    std::printf("streaming: block %zu samples, latency %zu samples = %.4g mm of scan\n", o.block, s.latency_samples(),
+                s.latency_samples() * f.sample_spacing_m * 1e3);
   } else {
     forces = r::restore_scan(f, scan, o.mu_threshold);
   }
@@ -205,8 +209,13 @@ PVDF_COMMAND(60, [](CLI::App& root) {
   id->add_option("-o,--output", io->output, "Filter file to write (JSON)")->required();
   id->add_option("--taps", io->taps, "FIR length N of h11..h22 and of the G window")->capture_default_str();
   id->add_option("--delay-samples", io->delay, "Modelling delay D in samples (default taps/2)");
-  id->add_option("--beta", io->beta, "Regularization: relative beta (seed 000: 1e-4) or 'auto' (GCV)")->capture_default_str();
-  id->add_option("--beta-policy", io->policy, "constant | frequency | gcv (default: constant, or frequency with --beta-corner-m)");
+  id->add_option("--beta", io->beta, "Regularization: relative beta (seed 000: 1e-4), 'auto' (noise floor of G, "
+                                     "discrepancy principle) or 'gcv'")->capture_default_str();
+  id->add_option("--beta-policy", io->policy, "constant | frequency | gcv | discrepancy (default: constant, or frequency "
+                                              "with --beta-corner-m)");
+  id->add_option("--resolution-m", io->resolution, "Target resolution (Gaussian FWHM, m) applied to both forces; 0 = none "
+                                                   "(seed 000). 1e-3 suits 1 mm deep strips");
+  id->add_option("--g-window", io->g_window, "Lags of G kept by identification (default = --taps)");
   id->add_option("--beta-corner-m", io->corner, "Wavelength in m for beta(k) = beta (1 + (k L/2pi)^2)");
   id->add_option("--window", io->window, "Taper of the FIR taps: tukey, hann, none")->capture_default_str();
   id->add_option("--plot-dir", io->plot_dir, "Write Fig 11-14 analogues (signals, filters, |G|, restored) as PNG here");

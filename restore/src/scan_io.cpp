@@ -4,6 +4,7 @@
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <ostream>
@@ -39,13 +40,17 @@ Scan read_scan_csv(const std::string& path, double speed_m_per_s) {
       scan.fz_N.push_back(row[t.column("fz_ref_N")]);
     }
   }
-  const double dx = scan.sample_spacing_m();
+  // Reference step: the median step (robust to the one bad step being reported).
+  std::vector<double> steps;
+  for (std::size_t i = 1; i < scan.x_m.size(); ++i) steps.push_back(scan.x_m[i] - scan.x_m[i - 1]);
+  std::nth_element(steps.begin(), steps.begin() + static_cast<long>(steps.size() / 2), steps.end());
+  const double dx = steps[steps.size() / 2];
   if (!(dx > 0)) throw InputError(path + ": positions do not increase; x_m (or t_s) must increase down the file");
   for (std::size_t i = 1; i < scan.x_m.size(); ++i) {
     const double step = scan.x_m[i] - scan.x_m[i - 1];
     if (std::abs(step - dx) > 0.01 * dx) {
       std::ostringstream msg;
-      msg << path << ":" << t.line_numbers[i] << ": position step " << step << " m differs from the mean step " << dx
+      msg << path << ":" << t.line_numbers[i] << ": position step " << step << " m differs from the median step " << dx
           << " m by more than 1 %; a scan must be uniformly sampled (resample it first)";
       throw InputError(msg.str());
     }
