@@ -17,7 +17,7 @@ double SyntheticModel::charge_C(double x_m, double y_m, double force_N, std::siz
   const double a = std::sqrt(anisotropy);
   const double rho2 = (u / a) * (u / a) + (v * a) * (v * a);
   const double R = film_radius_m;
-  const double rim = 1.0 - 0.5 * (x_m * x_m + y_m * y_m) / (R * R);
+  const double rim = 1.0 - rim_strength * (x_m * x_m + y_m * y_m) / (R * R);
   const double c2 = core_m * core_m;
   const double piezo = (u * u + d32_over_d31 * v * v + 0.5 * (1.0 + d32_over_d31) * c2) / (u * u + v * v + c2);
   return scale_C * std::pow(force_N, force_exponent + force_skew * x_m / R) * rim * piezo *
@@ -46,7 +46,7 @@ ChargeMap build_synthetic_map(const SyntheticModel& model, double spacing_m, dou
                            {{"scale_C", model.scale_C}, {"core_m", model.core_m}, {"exponent", model.exponent},
                             {"anisotropy", model.anisotropy}, {"draw_angle_rad", model.draw_angle_rad},
                             {"force_exponent", model.force_exponent}, {"force_skew", model.force_skew},
-                            {"d32_over_d31", model.d32_over_d31}}}};
+                            {"d32_over_d31", model.d32_over_d31}, {"rim_strength", model.rim_strength}}}};
   for (std::size_t k = 0; k < model.n_electrodes(); ++k) {
     scene["electrodes"].push_back({{"name", model.names[k]}, {"center_m", {model.centers_m[k][0], model.centers_m[k][1]}}});
   }

@@ -10,7 +10,7 @@
 
 namespace pvdf::mapping {
 
-/// Q_k(p, F) = scale·(F/1 N)^(force_exponent + force_skew·x/R)·(1 − ½|p|²/R²)
+/// Q_k(p, F) = scale·(F/1 N)^(force_exponent + force_skew·x/R)·(1 − rim_strength·|p|²/R²)
 ///            ·P_k·(ρ_k² + core²)^(−exponent/2),
 /// ρ_k² = (u/a)² + (v·a)², (u, v) = p − e_k in the film's material axes (draw direction at
 /// draw_angle_rad), a = √anisotropy, and the piezoelectric direction factor
@@ -31,6 +31,7 @@ struct SyntheticModel {
   double force_exponent = 2.0 / 3.0;
   double force_skew = 0.0;
   double d32_over_d31 = 0.1;   ///< seed 001: 0.65 / 6.5 pC/N
+  double rim_strength = 0.5;   ///< 0: no rim term (a pure power law when also core→0, r = 1, a = 1)
 
   /// Charge of electrode k for a press of force_N at (x_m, y_m) (C).
   double charge_C(double x_m, double y_m, double force_N, std::size_t k) const;
