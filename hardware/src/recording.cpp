@@ -25,7 +25,8 @@ nlohmann::json info_to_json(const StreamInfo& info) {
           {"sample_rate_Hz", info.sample_rate_Hz},
           {"channel_mask", info.channel_mask},
           {"adc_bits", info.adc_bits},
-          {"full_scale_V", info.full_scale_V}};
+          {"full_scale_V", info.full_scale_V},
+          {"gain_V_per_C", info.gain_V_per_C}};
 }
 
 StreamInfo read_header(std::FILE* f, const std::string& path) {
@@ -55,11 +56,12 @@ StreamInfo read_header(std::FILE* f, const std::string& path) {
     info.channel_mask = j.at("channel_mask").get<std::uint16_t>();
     info.adc_bits = j.at("adc_bits").get<int>();
     info.full_scale_V = j.at("full_scale_V").get<double>();
+    info.gain_V_per_C = j.value("gain_V_per_C", 0.0);
   } catch (const nlohmann::json::exception& e) {
     throw InputError(path + ": recording header is not valid (" + std::string(e.what()) + "); the file is damaged");
   }
   if (!(info.sample_rate_Hz > 0) || info.channel_mask == 0 || info.adc_bits < 2 || info.adc_bits > 16 ||
-      !(info.full_scale_V > 0))
+      !(info.full_scale_V > 0) || !(info.gain_V_per_C >= 0))
     throw InputError(path + ": recording header has sample_rate_Hz, channel_mask, adc_bits or full_scale_V out of range");
   return info;
 }

@@ -106,6 +106,7 @@ SimSource::SimSource(SimScene scene, bool realtime, const std::string& descripti
   info_.channel_mask = static_cast<std::uint16_t>((1u << scene_.channels) - 1u);
   info_.adc_bits = scene_.adc_bits;
   info_.full_scale_V = scene_.full_scale_V;
+  info_.gain_V_per_C = scene_.gain_V_per_C;
   n_samples_total_ = static_cast<std::int64_t>(std::llround(scene_.duration_s * scene_.sample_rate_Hz));
   amp_state_V_.assign(static_cast<std::size_t>(scene_.channels), 0.0);
   previous_charge_C_.assign(static_cast<std::size_t>(scene_.channels), 0.0);

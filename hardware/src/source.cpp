@@ -39,6 +39,33 @@ std::string StreamCounters::summary() const {
   return s.str();
 }
 
+namespace {
+
+/// Applies a gain given on the command line to a source that does not configure hardware.
+class GainOverride final : public Source {
+ public:
+  GainOverride(std::unique_ptr<Source> inner, double gain_V_per_C) : inner_(std::move(inner)), info_(inner_->info()) {
+    info_.gain_V_per_C = gain_V_per_C;
+  }
+  const StreamInfo& info() const override { return info_; }
+  bool next(std::vector<SampleBlock>& out, std::chrono::milliseconds timeout) override { return inner_->next(out, timeout); }
+  void stop() override { inner_->stop(); }
+  EndReason end_reason() const override { return inner_->end_reason(); }
+  std::string end_message() const override { return inner_->end_message(); }
+  StreamCounters counters() const override { return inner_->counters(); }
+
+ private:
+  std::unique_ptr<Source> inner_;
+  StreamInfo info_;
+};
+
+std::unique_ptr<Source> with_gain(std::unique_ptr<Source> source, double gain_mV_per_pC) {
+  if (gain_mV_per_pC <= 0) return source;
+  return std::make_unique<GainOverride>(std::move(source), gain_mV_per_pC * 1e9);  // mV/pC = 1e9 V/C
+}
+
+}  // namespace
+
 std::unique_ptr<Source> open_source(const std::string& spec, const OpenOptions& options) {
   if (spec == "usb" || spec.rfind("usb:", 0) == 0) {
     std::uint16_t vid = 0, pid = 0;
@@ -46,21 +73,22 @@ std::unique_ptr<Source> open_source(const std::string& spec, const OpenOptions& 
     return std::make_unique<UsbSource>(vid, pid, options);
   }
   const auto not_for = [&](const char* kind) {
-    if (options.sample_rate_Hz > 0 || options.channel_mask != 0 || options.gain_mV_per_pC > 0)
-      throw InputError(std::string("--rate-Hz, --channels and --gain-mV-per-pC configure a USB device; ") + kind +
+    if (options.sample_rate_Hz > 0 || options.channel_mask != 0)
+      throw InputError(std::string("--rate-Hz and --channels configure a USB device; ") + kind +
                        " streams are what they are (edit the scene, or record with the settings you need)");
   };
   if (spec.rfind("replay:", 0) == 0) {
     not_for("replay");
     const std::string path = spec.substr(7);
     if (path.empty()) throw InputError("--device replay:FILE: give the recording file, e.g. replay:run.pvdfrec");
-    return std::make_unique<ReplaySource>(path, options.realtime);
+    return with_gain(std::make_unique<ReplaySource>(path, options.realtime), options.gain_mV_per_pC);
   }
   if (spec.rfind("sim:", 0) == 0 || spec == "sim") {
     not_for("simulated");
     const std::string path = spec.size() > 4 ? spec.substr(4) : std::string();
-    if (path.empty()) return std::make_unique<SimSource>(default_sim_scene(), options.realtime, "sim <built-in>");
-    return std::make_unique<SimSource>(load_sim_scene(path), options.realtime, "sim " + path);
+    if (path.empty())
+      return with_gain(std::make_unique<SimSource>(default_sim_scene(), options.realtime, "sim <built-in>"), options.gain_mV_per_pC);
+    return with_gain(std::make_unique<SimSource>(load_sim_scene(path), options.realtime, "sim " + path), options.gain_mV_per_pC);
   }
   throw InputError("--device " + spec + ": expected usb[:VID:PID], replay:FILE or sim:SCENE (sim: for the built-in scene)");
 }

@@ -162,6 +162,7 @@ UsbSource::UsbSource(std::uint16_t vendor_id, std::uint16_t product_id, const Op
   info_.channel_mask = status.channel_mask;
   info_.adc_bits = dev.adc_bits;
   info_.full_scale_V = dev.full_scale_V;
+  info_.gain_V_per_C = options.gain_mV_per_pC > 0 ? options.gain_mV_per_pC * 1e9 : 0.0;  // mV/pC = 1e9 V/C
 
   // 4. Start and queue the bulk transfers.
   control_out(protocol::request_start, 0, 0, nullptr, 0, "START");

@@ -11,7 +11,9 @@
 #include <catch2/catch.hpp>
 
 #include <sys/stat.h>
+#include <sys/wait.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <cstdio>
@@ -254,3 +256,67 @@ TEST_CASE("usb: no device, busy and permission denied are one-line InputErrors",
     CHECK_THROWS_WITH(open_source("serial:/dev/ttyUSB0"), Catch::Contains("expected usb"));
   }
 }
+
+#ifdef PVDFKIT_EXE
+namespace {
+/// Runs a shell command (it inherits the testbed: LD_PRELOAD and UMOCKDEV_DIR) and returns its exit code.
+int shell(const std::string& command) {
+  const int status = std::system(command.c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+std::string read_text(const std::string& path) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (f == nullptr) return {};
+  std::string text;
+  char buffer[4096];
+  std::size_t n;
+  while ((n = std::fread(buffer, 1, sizeof buffer, f)) > 0) text.append(buffer, n);
+  std::fclose(f);
+  return text;
+}
+}  // namespace
+
+TEST_CASE("pvdfkit acquire: a disconnect saves what arrived, prints the counters and exits 2", "[hardware][usb][cli]") {
+  std::mt19937 rng(13);
+  std::vector<std::uint8_t> stream;
+  for (std::uint32_t s = 0; s < 20; ++s) encode_frame(make_frame(s, rng), stream);
+  MockScript script;
+  script.chunks = split(stream, rng, 4000);
+  script.disconnect_after_chunks = true;
+  MockFrontEnd device(script);
+  const std::string record = temp_path("cli_disconnect.pvdfrec"), csv = temp_path("cli_disconnect.csv"),
+                    err = temp_path("cli_disconnect.err");
+  const int code = shell(std::string(PVDFKIT_EXE) + " acquire --device usb:1209:0001 --record " + record + " --output " +
+                         csv + " 2> " + err);
+  const std::string messages = read_text(err);
+  INFO(messages);
+  CHECK(code == 2);
+  CHECK_THAT(messages, Catch::Contains("error: usb:1209:0001: device disconnected mid-stream"));
+  CHECK_THAT(messages, Catch::Contains("frames 20, missing 0"));
+  CHECK_THAT(messages, Catch::Contains("20 frames in"));
+  const std::string rows = read_text(csv);
+  CHECK(std::count(rows.begin(), rows.end(), '\n') == 1 + 20 * 100);
+  ReplaySource replay(record, false);
+  CHECK(drain(replay).size() == 20);
+}
+
+TEST_CASE("pvdfkit acquire: no device and busy exit 2 with one line", "[hardware][usb][cli]") {
+  const std::string err = temp_path("cli_errors.err");
+  {
+    MockScript script;
+    script.product_id = 0x0002;
+    MockFrontEnd device(script);
+    CHECK(shell(std::string(PVDFKIT_EXE) + " acquire --device usb:1209:0001 2> " + err) == 2);
+    CHECK_THAT(read_text(err), Catch::StartsWith("error: usb:1209:0001: no device with VID:PID 1209:0001"));
+  }
+  {
+    MockScript script;
+    script.claim_busy = true;
+    MockFrontEnd device(script);
+    CHECK(shell(std::string(PVDFKIT_EXE) + " acquire --device usb 2> " + err) == 2);
+    const std::string text = read_text(err);
+    CHECK_THAT(text, Catch::StartsWith("error: usb:1209:0001: device busy"));
+    CHECK(std::count(text.begin(), text.end(), '\n') == 1);
+  }
+}
+#endif

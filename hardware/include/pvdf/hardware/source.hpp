@@ -19,6 +19,7 @@ struct StreamInfo {
   std::uint16_t channel_mask = 0x7; ///< channels streamed (bit i = channel i)
   int adc_bits = 12;
   double full_scale_V = 2.5;        ///< amplifier output at ADC code 2^(adc_bits-1)
+  double gain_V_per_C = 0;          ///< charge-amplifier gain (output V per input C); 0 = unknown
   /// Volts per ADC count: full_scale_V / 2^(adc_bits-1).
   double volts_per_count() const;
   /// Indices of the streamed channels, increasing.
@@ -79,7 +80,8 @@ class Source {
 struct OpenOptions {
   double sample_rate_Hz = 0;        ///< 0 = the device's or file's own
   std::uint16_t channel_mask = 0;   ///< 0 = the device's default (all channels)
-  double gain_mV_per_pC = 0;        ///< 0 = leave the amplifier as it is
+  double gain_mV_per_pC = 0;        ///< usb: set the amplifier gain (0 = leave it); any source: the gain used
+                                    ///< to convert volts to charge (overrides the file's or scene's)
   bool realtime = false;            ///< replay/sim: pace blocks by their timestamps
   int transfers_in_flight = 8;      ///< usb: bulk transfers queued at once
   double stall_timeout_s = 2.0;     ///< usb: end the stream when nothing arrives for this long
