@@ -130,7 +130,7 @@ class Fonts {
   /// counter-clockwise by angle_deg about the anchor.
   void draw(Image& img, double x, double y, const std::string& s, double px, Color c, double angle_deg = 0,
             double halign = 0, VAlign valign = VAlign::baseline, bool bold = false) {
-    if (s.empty() || !finite(x) || !finite(y)) return;
+    if (s.empty() || !(std::abs(x) < 1e6) || !(std::abs(y) < 1e6)) return;
     const double w = width(s, px, bold);
     FT_Face f = face(bold);
     set_size(f, px);
@@ -1348,12 +1348,18 @@ class Renderer {
         case Kind::polygon: draw_polygon(it, p, data_points); break;
         case Kind::hline: {
           const double y = p.ys.to_px(it.y[0]);
-          if (finite(y)) r_.stroke_polyline({{L, y}, {R, y}}, it.width, it.color, it.style);
+          if (finite(y)) {
+            r_.stroke_polyline({{L, y}, {R, y}}, it.width, it.color, it.style);
+            sample_polyline({{L, y}, {R, y}}, data_points);
+          }
           break;
         }
         case Kind::vline: {
           const double x = p.xs.to_px(it.x[0]);
-          if (finite(x)) r_.stroke_polyline({{x, T}, {x, B}}, it.width, it.color, it.style);
+          if (finite(x)) {
+            r_.stroke_polyline({{x, T}, {x, B}}, it.width, it.color, it.style);
+            sample_polyline({{x, T}, {x, B}}, data_points);
+          }
           break;
         }
         case Kind::text: {
@@ -1401,8 +1407,8 @@ class Renderer {
     const double px0 = finite(gx0) ? gx0 : p.L, px1 = finite(gx1) ? gx1 : p.R;
     const double py0 = finite(gy0) ? gy0 : p.T, py1 = finite(gy1) ? gy1 : p.B;
     // Fractional grid index of every sample column / row (the axes are separable).
-    const int W = static_cast<int>(std::ceil(std::max(px1, p.R * 1.0) * ss)) + 2;
-    const int H = static_cast<int>(std::ceil(std::max(py1, p.B * 1.0) * ss)) + 2;
+    // Only samples inside the plot rectangle are ever shaded.
+    const int W = (p.R + 1) * ss + 2, H = (p.B + 1) * ss + 2;
     std::vector<double> fi(static_cast<std::size_t>(std::max(W, 0)), kNaN), fj(static_cast<std::size_t>(std::max(H, 0)), kNaN);
     for (int i = std::max(0, p.L * ss - 1); i < W && i <= p.R * ss + 1; ++i) {
       const double x = p.xs.from_px((i + 0.5) / ss);
@@ -1457,10 +1463,25 @@ class Renderer {
       if (run.size() == 1 && it.marker == Marker::none && it.style != LineStyle::none)
         r_.fill_circle(run[0], it.width, it.color);  // a lone point stays visible
       r_.stroke_polyline(run, it.width, it.color, it.style);
-      for (const auto& q : run) {
-        r_.marker(q, it.marker, it.size, it.color);
-        pts.push_back(q);
+      for (const auto& q : run) r_.marker(q, it.marker, it.size, it.color);
+      if (it.style == LineStyle::none) pts.insert(pts.end(), run.begin(), run.end());
+      else sample_polyline(run, pts);
+    }
+  }
+
+  // Points every few pixels along a polyline, so that "best" legend placement avoids lines
+  // between sparse data points too.
+  static void sample_polyline(const std::vector<P2>& run, std::vector<P2>& pts) {
+    if (run.empty()) return;
+    pts.push_back(run[0]);
+    for (std::size_t i = 1; i < run.size(); ++i) {
+      const double len = std::hypot(run[i][0] - run[i - 1][0], run[i][1] - run[i - 1][1]);
+      const int n = std::min(2000, static_cast<int>(len / 6));
+      for (int k = 1; k <= n; ++k) {
+        const double t = static_cast<double>(k) / (n + 1);
+        pts.push_back({run[i - 1][0] + t * (run[i][0] - run[i - 1][0]), run[i - 1][1] + t * (run[i][1] - run[i - 1][1])});
       }
+      pts.push_back(run[i]);
     }
   }
 
@@ -1620,11 +1641,15 @@ class Renderer {
     for (const auto& e : entries) tw = std::max(tw, fonts_.width(e.label, kLegendPx));
     const double bw = pad + handle + gap + tw + pad, bh = pad + row * static_cast<double>(entries.size()) + pad - 4;
     const double inset = 8;
-    const char* const order[] = {"upper right", "upper left", "lower left", "lower right"};
+    // "best" tries the corners first (ties keep this order), then the edge centres.
+    const char* const order[] = {"upper right", "upper left",  "lower left",   "lower right",
+                                 "center right", "center left", "upper center", "lower center"};
     std::string where = a.legend_where;
     auto box_at = [&](const std::string& w) {
-      const double x0 = w.find("left") != std::string::npos ? p.L + inset : p.R - inset - bw;
-      const double y0 = w.find("upper") != std::string::npos ? p.T + inset : p.B - inset - bh;
+      const bool left = w.find("left") != std::string::npos, right = w.find("right") != std::string::npos;
+      const bool upper = w.find("upper") != std::string::npos, lower = w.find("lower") != std::string::npos;
+      const double x0 = left ? p.L + inset : right ? p.R - inset - bw : (p.L + p.R - bw) / 2;
+      const double y0 = upper ? p.T + inset : lower ? p.B - inset - bh : (p.T + p.B - bh) / 2;
       return std::array<double, 2>{x0, y0};
     };
     if (where == "best") {

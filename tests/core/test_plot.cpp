@@ -205,6 +205,18 @@ TEST_CASE("degenerate data draws without throwing", "[plot]") {
   const auto path = (temp_dir() / "degenerate.png").string();
   CHECK_NOTHROW(fig.save_png(path));
   CHECK(read_png(path).w == 900);
+  // Huge coordinates far outside the limits, and a field much larger than the view.
+  pvdf::plot::Figure big(400, 300);
+  pvdf::plot::Grid wide;
+  wide.nx = 4, wide.ny = 4;
+  wide.x0 = -1e300, wide.x1 = 1e300, wide.y0 = -1e300, wide.y1 = 1e300;
+  wide.values.assign(16, 1.0);
+  big.axes().field(wide, "wide").line({0, 1e300, -1e300}, {0, 1e300, 1e-300}).polygon({{0, 0}, {1e250, 0}, {0, -1e250}},
+      Color{0, 0, 255}).text(1e300, 1e300, "far").xlim(-1, 1).ylim(-1, 1);
+  CHECK_NOTHROW(big.save_png((temp_dir() / "huge.png").string()));
+  pvdf::plot::Figure huge_auto(400, 300);
+  huge_auto.axes().line({-1e308, 1e308}, {-1e308, 1e308}).scatter({1e-308, 2e-308}, {1, 1});
+  CHECK_NOTHROW(huge_auto.save_png((temp_dir() / "huge_auto.png").string()));
 }
 
 TEST_CASE("bad plot input and unwritable paths are InputErrors", "[plot]") {
