@@ -140,7 +140,7 @@ int run_identify(const IdentifyOptions& o) {
     for (std::size_t i = 0; i < scans.size(); ++i) {
       const auto forces = r::restore_scan(f, scans[i].scan);
       r::plot_restored(o.plot_dir + "/fig14_restored" + std::to_string(i + 1) + ".png", forces, scans[i].scan,
-                       "Restored forces, identification scan " + std::to_string(i + 1));
+                       "Restored forces, identification scan " + std::to_string(i + 1), f.resolution_m);
     }
     std::printf("plots written to %s\n", o.plot_dir.c_str());
   }
@@ -179,7 +179,7 @@ int run_apply(const ApplyOptions& o) {
   std::printf("restored %zu samples: max f_z = %.4g N/sample, sum f_x = %.4g N, sum f_z = %.4g N, mu threshold %.3g N -> %s\n",
               forces.x_m.size(), fz_max, sum_x, sum_z, forces.mu_threshold_N, o.output.c_str());
   if (!o.plot.empty()) {
-    r::plot_restored(o.plot, forces, scan, "Restored forces: " + o.scan);
+    r::plot_restored(o.plot, forces, scan, "Restored forces: " + o.scan, f.resolution_m);
     std::printf("plot written to %s\n", o.plot.c_str());
   }
   return pvdf::exit_code::success;
@@ -226,7 +226,7 @@ PVDF_COMMAND(60, [](CLI::App& root) {
   ap->add_option("SCAN", ao->scan, "Scan CSV x_m,m1_V,m2_V (or t_s with --speed-m-per-s)")->required();
   ap->add_option("-o,--output", ao->output, "Forces CSV to write")->required();
   ap->add_option("--speed-m-per-s", ao->speed, "Scan speed, needed for scans given in t_s");
-  ap->add_option("--mu-threshold-N", ao->mu_threshold, "mu where f_z exceeds this (N per sample; default 10 % of max f_z)");
+  ap->add_option("--mu-threshold-N", ao->mu_threshold, "mu where f_z exceeds this (N per sample; default 30 % of max f_z)");
   ap->add_option("--block", ao->block, "Use the streaming restorer with blocks of this many samples (same result)");
   ap->add_option("--plot", ao->plot, "Also write the restored forces as PNG (seed 000 Fig. 14)");
 

@@ -68,7 +68,7 @@ RestoredForces restore_scan(const InverseFilter& f, const Scan& scan, double mu_
   if (mu_threshold_N < 0) {
     double peak = 0;
     for (double v : r.fz_N) peak = std::max(peak, v);
-    mu_threshold_N = 0.1 * peak;
+    mu_threshold_N = 0.3 * peak;
   }
   friction_coefficient(r, mu_threshold_N);
   return r;

@@ -16,6 +16,22 @@ std::vector<double> mm(const std::vector<double>& x) {
   for (std::size_t i = 0; i < x.size(); ++i) out[i] = x[i] * 1e3;
   return out;
 }
+std::vector<double> gaussian_blur(const std::vector<double>& f, double resolution_m, double dx) {
+  if (resolution_m <= 0 || f.empty()) return f;
+  detail::RealFft fft(detail::good_fft_size(2 * f.size()));
+  std::vector<std::complex<double>> F(fft.bins());
+  fft.forward(f.data(), f.size(), F.data());
+  const double s = resolution_m / 2.3548200450309493;
+  for (std::size_t k = 0; k < F.size(); ++k) {
+    const double w = 2 * 3.14159265358979323846 * static_cast<double>(k) / (static_cast<double>(fft.size()) * dx);
+    F[k] *= std::exp(-0.5 * w * w * s * s);
+  }
+  std::vector<double> out(fft.size());
+  fft.inverse(F.data(), out.data());
+  out.resize(f.size());
+  return out;
+}
+
 }  // namespace
 
 void plot_scan(const std::string& path, const Scan& scan, const std::string& title) {
@@ -95,15 +111,18 @@ void plot_transfer(const std::string& path, const InverseFilter& f) {
   fig.save_png(path);
 }
 
-void plot_restored(const std::string& path, const RestoredForces& r, const Scan& scan, const std::string& title) {
+void plot_restored(const std::string& path, const RestoredForces& r, const Scan& scan, const std::string& title,
+                   double resolution_m) {
   plot::Figure fig(1200, 900, 2, 1);
   fig.suptitle(title);
   const auto x = mm(r.x_m);
   auto& ax = fig.axes(0, 0);
   ax.line(x, r.fx_N, "f_x restored").line(x, r.fz_N, "f_z restored");
   if (scan.fx_N.size() == r.x_m.size()) {
-    ax.line(x, scan.fx_N, "f_x reference", std::nullopt, plot::LineStyle::dashed);
-    ax.line(x, scan.fz_N, "f_z reference", std::nullopt, plot::LineStyle::dashed);
+    const double dx = scan.sample_spacing_m();
+    const std::string what = resolution_m > 0 ? " reference at the target resolution" : " reference";
+    ax.line(x, gaussian_blur(scan.fx_N, resolution_m, dx), "f_x" + what, std::nullopt, plot::LineStyle::dashed);
+    ax.line(x, gaussian_blur(scan.fz_N, resolution_m, dx), "f_z" + what, std::nullopt, plot::LineStyle::dashed);
   }
   ax.title("Restored forces (seed 000 Fig. 14)").xlabel("surface position x (mm)").ylabel("force per sample (N)").grid_lines().legend("best");
   std::vector<double> xm, mu;

@@ -18,7 +18,7 @@ void restore_offline(const InverseFilter& filter, const std::vector<double>& m1_
                      std::vector<double>& fx_N, std::vector<double>& fz_N);
 
 /// Restores a scan (checks its sample spacing against the filter's to 1 %) and computes mu where
-/// f_z > threshold; `mu_threshold_N` < 0 means 10 % of the largest restored f_z.
+/// f_z > threshold; `mu_threshold_N` < 0 means 30 % of the largest restored f_z.
 RestoredForces restore_scan(const InverseFilter& filter, const Scan& scan, double mu_threshold_N = -1);
 
 /// mu = f_x / f_z where f_z > threshold (mu_valid = 1), else mu = 0, mu_valid = 0.

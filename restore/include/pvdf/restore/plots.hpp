@@ -14,7 +14,9 @@ void plot_scan(const std::string& path, const Scan& scan, const std::string& tit
 void plot_filters(const std::string& path, const InverseFilter& filter);
 /// |G_ij| against spatial frequency and the GCV curve when present.
 void plot_transfer(const std::string& path, const InverseFilter& filter);
-/// Fig. 14: restored f_x, f_z (and mu) against x, with the reference forces when `scan` has them.
-void plot_restored(const std::string& path, const RestoredForces& forces, const Scan& scan, const std::string& title);
+/// Fig. 14: restored f_x, f_z (and mu) against x, with the reference forces when `scan` has them
+/// (blurred by the filter's target Gaussian when resolution_m > 0, so both are on the same scale).
+void plot_restored(const std::string& path, const RestoredForces& forces, const Scan& scan, const std::string& title,
+                   double resolution_m = 0);
 
 }  // namespace pvdf::restore
