@@ -565,7 +565,10 @@ double nice_step(double range, int target) {
 }
 
 /// 1-2-5 ticks within [lo, hi], about `target` of them, labelled with just enough decimals.
-std::vector<Tick> linear_ticks(double lo, double hi, int target) {
+/// Very large or small values are labelled by mantissas and one common `multiplier` ("×10^k",
+/// empty otherwise); without a `multiplier` to fill, each label carries its own power of ten.
+std::vector<Tick> linear_ticks(double lo, double hi, int target, Label* multiplier = nullptr) {
+  if (multiplier) *multiplier = Label{};
   std::vector<Tick> ticks;
   const double step = nice_step(hi - lo, target);
   if (!(step > 0)) return ticks;
@@ -587,7 +590,10 @@ std::vector<Tick> linear_ticks(double lo, double hi, int target) {
     std::snprintf(buf, sizeof buf, "%.*f", decimals, v / unit);
     Tick t;
     t.value = v;
-    if (sci && v != 0) {
+    if (sci && multiplier) {
+      t.label.base = v == 0 ? "0" : with_minus_sign(buf);
+      *multiplier = Label{"\xC3\x97" "10", with_minus_sign(std::to_string(exponent))};  // ×10^k
+    } else if (sci && v != 0) {
       t.label.base = with_minus_sign(buf) + "\xC3\x97" "10";  // ×10
       t.label.sup = with_minus_sign(std::to_string(exponent));
     } else {
@@ -1018,6 +1024,7 @@ struct ColorBar {
   std::string label;
   Scale scale;
   std::vector<Tick> ticks;
+  Label mult;  // common "×10^k" of the tick labels, if any
   int L = 0, T = 0, R = 0, B = 0;
 };
 
@@ -1026,6 +1033,7 @@ struct PanelLayout {
   int L = 0, T = 0, R = 0, B = 0;  // plot rectangle [L, R) × [T, B) in final pixels
   Scale xs, ys;
   std::vector<Tick> xt, yt;
+  Label xmult, ymult;  // common "×10^k" of the tick labels, if any
   ColorBar cbar;
   double ytick_w = 0;
 };
@@ -1126,13 +1134,17 @@ void resolve_range(const Axes::Impl& a, bool x_axis, Scale& s) {
   s.hi = hi;
 }
 
-std::vector<Tick> make_ticks(const Scale& s, int target) {
-  return s.log ? log_ticks(s.lo, s.hi, target) : linear_ticks(s.lo, s.hi, target);
+std::vector<Tick> make_ticks(const Scale& s, int target, Label* multiplier) {
+  if (s.log) {
+    *multiplier = Label{};
+    return log_ticks(s.lo, s.hi, target);
+  }
+  return linear_ticks(s.lo, s.hi, target, multiplier);
 }
 
 /// Picks the densest tick set whose labels do not collide along an axis of `length_px`, with at
 /// least two labelled ticks where the range allows.
-std::vector<Tick> fit_ticks(Fonts& fonts, const Scale& s, double length_px, bool horizontal) {
+std::vector<Tick> fit_ticks(Fonts& fonts, const Scale& s, double length_px, bool horizontal, Label* multiplier) {
   auto n_labelled = [](const std::vector<Tick>& ticks) {
     int n = 0;
     for (const auto& t : ticks) n += t.major && !t.label.base.empty();
@@ -1147,12 +1159,14 @@ std::vector<Tick> fit_ticks(Fonts& fonts, const Scale& s, double length_px, bool
     return need > std::abs(length_px);
   };
   int target = std::clamp(static_cast<int>(std::abs(length_px) / (horizontal ? 75.0 : 45.0)), 3, 12);
-  auto ticks = make_ticks(s, target);
-  while (n_labelled(ticks) < 2 && target < 12) ticks = make_ticks(s, ++target);
+  auto ticks = make_ticks(s, target, multiplier);
+  while (n_labelled(ticks) < 2 && target < 12) ticks = make_ticks(s, ++target, multiplier);
   while (collide(ticks) && target > 1) {
-    auto fewer = make_ticks(s, --target);
+    Label m;
+    auto fewer = make_ticks(s, --target, &m);
     if (n_labelled(fewer) < 2) break;
     ticks = std::move(fewer);
+    *multiplier = m;
   }
   return ticks;
 }
@@ -1222,8 +1236,8 @@ PanelLayout layout_panel(Fonts& fonts, const Axes::Impl& a, int cx0, int cy0, in
       }
       p.xs.lo = xs.lo, p.xs.hi = xs.hi, p.ys.lo = ys.lo, p.ys.hi = ys.hi;
     }
-    p.xt = fit_ticks(fonts, p.xs, w, true);
-    p.yt = fit_ticks(fonts, p.ys, h, false);
+    p.xt = fit_ticks(fonts, p.xs, w, true, &p.xmult);
+    p.yt = fit_ticks(fonts, p.ys, h, false, &p.ymult);
     p.ytick_w = max_tick_width(fonts, p.yt);
     double right = pad;
     if (!p.xt.empty()) {
@@ -1235,15 +1249,20 @@ PanelLayout layout_panel(Fonts& fonts, const Axes::Impl& a, int cx0, int cy0, in
       }
     }
     if (p.cbar.on) {
-      p.cbar.ticks = linear_ticks(p.cbar.vmin, p.cbar.vmax, std::clamp(static_cast<int>(h / 50), 2, 10));
+      p.cbar.ticks = linear_ticks(p.cbar.vmin, p.cbar.vmax, std::clamp(static_cast<int>(h / 50), 2, 10), &p.cbar.mult);
       right = 16 + 18 + kTickLen + 4 + max_tick_width(fonts, p.cbar.ticks) +
               (p.cbar.label.empty() ? 0 : 10 + kLabelPx) + pad;
     }
     const double left = pad + (a.ylabel.empty() ? 0 : kLabelPx + 10) + p.ytick_w + 4 + kTickLen;
+    // Room for a "×10^k" above the y axis or colour bar, and below the x tick labels.
+    const bool mult_above = !p.ymult.base.empty() || (p.cbar.on && !p.cbar.mult.base.empty());
+    const double top_now = std::max(top, mult_above ? pad + kTickPx + 8 : 0.0);
+    const double bottom_now =
+        a.xlabel.empty() && !p.xmult.base.empty() ? bottom + 10 + kTickPx : bottom;
     L = cx0 + left;
     R = cx1 - right;
-    T = cy0 + top;
-    B = cy1 - bottom;
+    T = cy0 + top_now;
+    B = cy1 - bottom_now;
     if (R - L < 20) R = L + 20;
     if (B - T < 20) B = T + 20;
   }
@@ -1596,11 +1615,19 @@ class Renderer {
     }
     if (!a.xlabel.empty())
       texts.push_back({(L + R) / 2, B + kTickLen + 5 + kTickPx + 9, a.xlabel, kLabelPx, kBlack, 0, 0.5, VAlign::top});
+    if (!p.xmult.base.empty()) rich_text(R, B + kTickLen + 5 + kTickPx + 9, p.xmult, 1, VAlign::top);
+    if (!p.ymult.base.empty()) rich_text(L, T - 6, p.ymult, 0, VAlign::bottom);
     if (!a.ylabel.empty()) {
       const double x = L - kTickLen - 5 - p.ytick_w - 9;
       texts.push_back({x, (T + B) / 2, a.ylabel, kLabelPx, kBlack, 90, 0.5, VAlign::bottom});
     }
     if (!a.title.empty()) texts.push_back({(L + R) / 2, T - 9, a.title, kTitlePx, kBlack, 0, 0.5, VAlign::bottom});
+  }
+
+  void rich_text(double x, double y, const Label& l, double halign, VAlign valign) {
+    TextJob j{x, y, "", kTickPx, kBlack, 0, halign, valign};
+    j.rich = true, j.label = l;
+    texts.push_back(j);
   }
 
   void draw_colorbar(const PanelLayout& p) {
@@ -1627,6 +1654,7 @@ class Renderer {
       texts.push_back(j);
       w = std::max(w, label_width(fonts_, t.label, kTickPx));
     }
+    if (!cb.mult.base.empty()) rich_text(cb.L, cb.T - 6, cb.mult, 0, VAlign::bottom);
     if (!cb.label.empty())
       texts.push_back({cb.R + kTickLen + 5 + w + 9, (top + bottom) / 2, cb.label, kLabelPx, kBlack, 90, 0.5,
                        VAlign::top});
