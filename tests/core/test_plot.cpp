@@ -273,3 +273,74 @@ TEST_CASE("20k mesh polygons and a 200x200 field with contours render fast", "[p
     CHECK(s < 0.6);  // 0.3 s target on an idle core; margin for a busy shared machine
   }
 }
+
+TEST_CASE("log axes, equal aspect and panels map data where they must", "[plot]") {
+  pvdf::plot::Figure fig(1000, 500, 1, 2);
+  fig.axes(0, 0).line({1, 10, 100, 1000}, {1e-3, 1e-1, 1e1, 1e3}).log_x().log_y();
+  fig.axes(0, 1).line({0, 4}, {0, 1}).equal_aspect();
+  // Log axes: equal ratios are equal distances.
+  const auto a = fig.data_to_pixel(0, 0, 1, 1e-3), b = fig.data_to_pixel(0, 0, 10, 1e-2),
+             c = fig.data_to_pixel(0, 0, 100, 1e-1);
+  CHECK(b[0] - a[0] == Approx(c[0] - b[0]).epsilon(1e-9));
+  CHECK(b[1] - a[1] == Approx(c[1] - b[1]).epsilon(1e-9));
+  CHECK(b[1] < a[1]);  // y grows upwards
+  // Equal aspect: one data unit is as many pixels along x as along y.
+  const auto o = fig.data_to_pixel(0, 1, 0, 0), ex = fig.data_to_pixel(0, 1, 1, 0), ey = fig.data_to_pixel(0, 1, 0, 1);
+  CHECK(ex[0] - o[0] == Approx(o[1] - ey[1]).epsilon(1e-9));
+  // The second panel is to the right of the first.
+  CHECK(o[0] > 500);
+  CHECK(a[0] < 500);
+}
+
+TEST_CASE("best legend avoids the data; the y label is rotated; text lands at its data point", "[plot]") {
+  // Data only in the upper right: the legend must go to another corner.
+  pvdf::plot::Figure fig(600, 400);
+  std::vector<double> x, y;
+  for (int i = 0; i <= 50; ++i) {
+    x.push_back(0.6 + 0.4 * i / 50.0);
+    y.push_back(0.6 + 0.4 * std::sqrt(i / 50.0));
+  }
+  fig.axes()
+      .scatter(x, y, "measured", Color{0, 0, 255})  // its anti-aliased edges are not grey
+      .line({0, 0.05}, {0, 0.05}, "", Color{0, 0, 0})
+      .xlim(0, 1)
+      .ylim(0, 1)
+      .ylabel("WWWWWWWWWWWW")
+      .text(0.3, 0.5, "TT", Color{255, 0, 0}, 14)
+      .legend("best");
+  const auto path = (temp_dir() / "legend.png").string();
+  fig.save_png(path);
+  const Png png = read_png(path);
+  const auto lo = fig.data_to_pixel(0, 0, 0, 0), hi = fig.data_to_pixel(0, 0, 1, 1);
+  // Legend frame colour (200, 200, 200) appears in the upper-left quarter, not the upper right.
+  auto count_frame = [&](double x0, double x1, double y0, double y1) {
+    int n = 0;
+    for (int py = static_cast<int>(y0); py < static_cast<int>(y1); ++py)
+      for (int px = static_cast<int>(x0); px < static_cast<int>(x1); ++px)
+        if (colour_distance(png.at(px, py), Color{200, 200, 200}) <= 2) ++n;
+    return n;
+  };
+  const double mx = (lo[0] + hi[0]) / 2, my = (lo[1] + hi[1]) / 2;
+  CHECK(count_frame(lo[0], mx, hi[1], my) > 50);
+  CHECK(count_frame(mx, hi[0], hi[1], my) == 0);
+  // The y label: dark pixels left of the tick labels form a tall, narrow block.
+  int minx = png.w, maxx = -1, miny = png.h, maxy = -1;
+  for (int py = 0; py < png.h; ++py) {
+    for (int px = 0; px < static_cast<int>(lo[0]) - 40; ++px) {
+      const Color c = png.at(px, py);
+      if (c.r < 100 && c.g < 100 && c.b < 100) {
+        minx = std::min(minx, px), maxx = std::max(maxx, px);
+        miny = std::min(miny, py), maxy = std::max(maxy, py);
+      }
+    }
+  }
+  REQUIRE(maxx >= 0);
+  CHECK(maxy - miny > 5 * (maxx - minx));
+  CHECK(maxy - miny > 100);  // twelve W at 13 px
+  // Red text starts at its data point (left end, baseline): red pixels just up-right of it.
+  const auto t = fig.data_to_pixel(0, 0, 0.3, 0.5);
+  int red = 0;
+  for (int py = static_cast<int>(t[1]) - 14; py <= static_cast<int>(t[1]); ++py)
+    for (int px = static_cast<int>(t[0]); px <= static_cast<int>(t[0]) + 20; ++px) red += is_red(png.at(px, py));
+  CHECK(red > 10);
+}
