@@ -75,7 +75,7 @@ RestoredForces restore_scan(const InverseFilter& f, const Scan& scan, double mu_
 }
 
 struct StreamingRestorer::Impl {
-  explicit Impl(std::size_t L) : fft(L) {}
+  explicit Impl(std::size_t L) : fft(L, true) {}
   detail::RealFft fft;
   std::size_t taps = 0, delay = 0;
   std::array<std::array<std::vector<cd>, 2>, 2> H;

@@ -17,14 +17,15 @@ std::mutex& planner_mutex() {
 }
 }  // namespace
 
-RealFft::RealFft(std::size_t n) : n_(n) {
+RealFft::RealFft(std::size_t n, bool measure) : n_(n) {
   real_ = fftw_alloc_real(n);
   auto* c = fftw_alloc_complex(n / 2 + 1);
   complex_ = c;
   if (real_ == nullptr || c == nullptr) throw std::bad_alloc();
   std::lock_guard<std::mutex> lock(planner_mutex());
-  plan_forward_ = fftw_plan_dft_r2c_1d(static_cast<int>(n), real_, c, FFTW_ESTIMATE);
-  plan_inverse_ = fftw_plan_dft_c2r_1d(static_cast<int>(n), c, real_, FFTW_ESTIMATE);
+  const unsigned flags = measure ? FFTW_MEASURE : FFTW_ESTIMATE;  // MEASURE overwrites the buffers: none yet
+  plan_forward_ = fftw_plan_dft_r2c_1d(static_cast<int>(n), real_, c, flags);
+  plan_inverse_ = fftw_plan_dft_c2r_1d(static_cast<int>(n), c, real_, flags);
 }
 
 RealFft::~RealFft() {

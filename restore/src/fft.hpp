@@ -11,7 +11,8 @@ namespace pvdf::restore::detail {
 /// inverse: n/2+1 bins -> n reals, normalized (inverse(forward(x)) == x).
 class RealFft {
  public:
-  explicit RealFft(std::size_t n);
+  /// `measure`: let FFTW time candidate algorithms once (slower to build, faster to run; for streaming).
+  explicit RealFft(std::size_t n, bool measure = false);
   ~RealFft();
   RealFft(const RealFft&) = delete;
   RealFft& operator=(const RealFft&) = delete;

@@ -1,0 +1,121 @@
+// Benchmark of pvdf::restore on one core: (1) identification + inverse design time against the FIR
+// length N, with the restoration error it buys (mu at the f_z peak, edge position); (2) streaming
+// throughput against block size, in samples/s and multiples of real time at 10 kHz, with the
+// difference to the offline result. Run: build/bench/restore/bench_restore
+#include "pvdf/restore/apply.hpp"
+#include "pvdf/restore/filter.hpp"
+#include "pvdf/restore/scanner.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+using namespace pvdf::restore;
+using clock_type = std::chrono::steady_clock;
+
+namespace {
+double seconds_since(clock_type::time_point t0) {
+  return std::chrono::duration<double>(clock_type::now() - t0).count();
+}
+
+ScannerScene scene(const std::string& name) {
+  return load_scanner_scene(std::string(PVDF_SOURCE_DIR) + "/examples/restore/" + name);
+}
+
+// Largest |mu error| at the f_z peaks and largest |shift| (samples) of the f_z main lobes.
+void edge_errors(const RestoredForces& r, const ScannerScene& s, double& mu_err, double& shift) {
+  mu_err = shift = 0;
+  const double dx = s.sample_spacing_m();
+  for (const auto& e : s.edges) {
+    std::size_t ip = 0;
+    double pk = -1;
+    for (std::size_t i = 0; i < r.x_m.size(); ++i)
+      if (std::abs(r.x_m[i] - e.x_m) < 1e-3 && r.fz_N[i] > pk) pk = r.fz_N[ip = i];
+    std::size_t lo = ip, hi = ip;
+    while (lo > 0 && r.fz_N[lo - 1] > 0.5 * pk) --lo;
+    while (hi + 1 < r.fz_N.size() && r.fz_N[hi + 1] > 0.5 * pk) ++hi;
+    double c0 = 0, c1 = 0;
+    for (std::size_t i = lo; i <= hi; ++i) {
+      c0 += r.fz_N[i];
+      c1 += r.fz_N[i] * r.x_m[i];
+    }
+    mu_err = std::max(mu_err, std::abs(r.fx_N[ip] / r.fz_N[ip] - e.fx_N / e.fz_N));
+    shift = std::max(shift, std::abs((c1 / c0 - e.x_m) / dx));
+  }
+}
+}  // namespace
+
+int main() {
+  std::vector<IdentificationScan> ids(2);
+  const char* names[2] = {"edge_a.json", "edge_b.json"};
+  for (int i = 0; i < 2; ++i) {
+    const auto s = scene(names[i]);
+    ids[i].scan = simulate_scan(s);
+    ids[i].fx_N = s.edges[0].fx_N;
+    ids[i].fz_N = s.edges[0].fz_N;
+    ids[i].edge_x_m = s.edges[0].x_m;
+  }
+  ScannerScene test = scene("edge_a.json");
+  test.seed = 99;
+  test.edges = {{-0.03, 0.45, 0.9}, {0.015, 0.15, 1.0}};
+  const Scan scan = simulate_scan(test);
+
+  std::printf("(1) identification + design, 2 scans of %zu samples, automatic beta, 1.5 mm target\n", ids[0].scan.size());
+  std::printf("%8s %12s %12s %12s %14s %14s\n", "N", "identify_ms", "design_ms", "beta_rel", "max|mu err|", "max|shift|smp");
+  InverseFilter kept;
+  for (std::size_t N : {2048u, 4096u, 8192u, 16384u}) {
+    DesignOptions o;
+    o.taps = N;
+    o.beta_policy = BetaPolicy::discrepancy;
+    o.resolution_m = 1.5e-3;
+    const int reps = 5;
+    auto t0 = clock_type::now();
+    TransferMatrix t;
+    for (int r = 0; r < reps; ++r) t = identify_transfer(ids, o);
+    const double t_id = seconds_since(t0) / reps;
+    t0 = clock_type::now();
+    InverseFilter f;
+    for (int r = 0; r < reps; ++r) f = design_inverse(t, ids, o);
+    const double t_design = seconds_since(t0) / reps;
+    double mu_err = 0, shift = 0;
+    edge_errors(restore_scan(f, scan), test, mu_err, shift);
+    std::printf("%8zu %12.2f %12.2f %12.3g %14.4f %14.2f\n", N, 1e3 * t_id, 1e3 * t_design, f.beta, mu_err, shift);
+    if (N == 8192) kept = f;
+  }
+
+  std::vector<double> ox, oz;
+  auto t0 = clock_type::now();
+  restore_offline(kept, scan.m1_V, scan.m2_V, ox, oz);
+  const double t_off = seconds_since(t0);
+  std::printf("\n(2) applying the N = 8192 filters to %zu samples (one core)\n", scan.size());
+  std::printf("%10s %14s %14s %14s %16s\n", "block", "samples/s", "x real time", "latency_ms", "max|stream-off|");
+  std::printf("%10s %14.3g %14.0f %14s %16s\n", "offline", scan.size() / t_off, scan.size() / t_off / 1e4, "-", "-");
+  // Repeat the scan to get a long stream (60 s of scanning at 10 kHz).
+  const std::size_t repeat = 30;
+  for (std::size_t block : {256u, 1024u, 4096u, 8192u, 32768u}) {
+    StreamingRestorer s(kept, block);
+    std::vector<double> fx, fz;
+    fx.reserve(scan.size() * repeat + block);
+    fz.reserve(scan.size() * repeat + block);
+    t0 = clock_type::now();
+    for (std::size_t r = 0; r < repeat; ++r) {
+      for (std::size_t i = 0; i < scan.size(); i += block) {
+        const std::size_t n = std::min(block, scan.size() - i);
+        s.push(scan.m1_V.data() + i, scan.m2_V.data() + i, n, fx, fz);
+      }
+    }
+    s.flush(fx, fz);
+    const double t = seconds_since(t0);
+    double diff = 0;
+    for (std::size_t i = 0; i + kept.taps < scan.size(); ++i) {  // first copy: equals the offline restoration
+      diff = std::max(diff, std::abs(fz[i] - oz[i]) + std::abs(fx[i] - ox[i]));
+    }
+    const double rate = static_cast<double>(scan.size() * repeat) / t;
+    std::printf("%10zu %14.3g %14.0f %14.1f %16.2e\n", block, rate, rate / 1e4, 1e3 * s.latency_samples() / 1e4, diff);
+  }
+  std::printf("\nlatency = (delay D + block - 1) samples at 10 kHz; target: >= 1000x real time (1e7 samples/s)\n");
+  return 0;
+}
