@@ -119,10 +119,10 @@ class Fonts {
   Fonts(const Fonts&) = delete;
   Fonts& operator=(const Fonts&) = delete;
 
-  /// Width of `s` at `px` pixels, unrotated.
+  /// Width of `s` (which may hold $...$ math, see parse_math) at `px` pixels, unrotated.
   double width(const std::string& s, double px, bool bold = false) {
     double w = 0;
-    for (char32_t cp : utf8_decode(s)) w += advance(cp, px, bold);
+    for (const auto& run : parse_math(s)) w += plain_width(run.text, px * run.scale, bold);
     return w;
   }
 
@@ -131,9 +131,9 @@ class Fonts {
   void draw(Image& img, double x, double y, const std::string& s, double px, Color c, double angle_deg = 0,
             double halign = 0, VAlign valign = VAlign::baseline, bool bold = false) {
     if (s.empty() || !(std::abs(x) < 1e6) || !(std::abs(y) < 1e6)) return;
-    const double w = width(s, px, bold);
-    FT_Face f = face(bold);
-    set_size(f, px);
+    const auto runs = parse_math(s);
+    double w = 0;
+    for (const auto& run : runs) w += plain_width(run.text, px * run.scale, bold);
     double v = 0;
     switch (valign) {
       case VAlign::top: v = 0.73 * px; break;
@@ -142,13 +142,134 @@ class Fonts {
       case VAlign::bottom: v = -0.236 * px; break;
     }
     const double th = angle_deg * kPi / 180, cs = std::cos(th), sn = std::sin(th);
-    const double u = halign * w;
-    double penx = x - (u * cs - v * sn), peny = y + (u * sn + v * cs);
-    const bool upright = angle_deg == 0;
-    if (upright) {
-      penx = std::round(penx);
-      peny = std::round(peny);
+    // Text-frame point (u along the baseline, v up) → screen offset from the anchor.
+    auto screen = [&](double u, double vv) { return P2{u * cs - vv * sn, -(u * sn + vv * cs)}; };
+    const P2 origin = screen(-halign * w, -v);
+    double u = 0;
+    for (const auto& run : runs) {
+      const P2 o = screen(u, run.shift_em * px);
+      draw_run(img, x + origin[0] + o[0], y + origin[1] + o[1], run.text, px * run.scale, c, angle_deg, bold);
+      u += plain_width(run.text, px * run.scale, bold);
     }
+  }
+
+ private:
+  /// A piece of text at one size and baseline: plain text, a subscript or a superscript.
+  struct Run {
+    std::string text;
+    double scale = 1, shift_em = 0;
+  };
+
+  /// Minimal math markup inside $...$: x_i, x_{ij}, x^2, x^{-1}, and \name for Greek letters and
+  /// a few symbols (\nu, \sigma, \mu, \Delta, \times, \pm, \cdot, \circ ...). Text outside
+  /// $...$, or with an unpaired $, is drawn as it is.
+  static std::vector<Run> parse_math(const std::string& s) {
+    const auto n_dollar = std::count(s.begin(), s.end(), '$');
+    if (n_dollar == 0 || n_dollar % 2 != 0) return {Run{s}};
+    std::vector<Run> runs;
+    auto add = [&](const std::string& text, double scale, double shift) {
+      if (text.empty()) return;
+      if (!runs.empty() && runs.back().scale == scale && runs.back().shift_em == shift) runs.back().text += text;
+      else runs.push_back({text, scale, shift});
+    };
+    bool math = false;
+    for (std::size_t i = 0; i < s.size();) {
+      if (s[i] == '$') {
+        math = !math;
+        ++i;
+        continue;
+      }
+      if (!math) {
+        add(std::string(1, s[i]), 1, 0);
+        ++i;
+        continue;
+      }
+      if (s[i] == '_' || s[i] == '^') {
+        const bool sub = s[i] == '_';
+        ++i;
+        std::string body;
+        if (i < s.size() && s[i] == '{') {
+          const std::size_t close = s.find('}', i);
+          const std::size_t end = close == std::string::npos ? s.size() : close;
+          body = s.substr(i + 1, end - i - 1);
+          i = end == s.size() ? end : end + 1;
+        } else if (i < s.size() && s[i] == '\\') {
+          std::size_t k = i + 1;
+          while (k < s.size() && std::isalpha(static_cast<unsigned char>(s[k]))) ++k;
+          body = s.substr(i, k - i);
+          i = k;
+        } else if (i < s.size() && s[i] != '$') {
+          std::size_t k = i + 1;  // one UTF-8 code point
+          while (k < s.size() && (static_cast<unsigned char>(s[k]) & 0xC0) == 0x80) ++k;
+          body = s.substr(i, k - i);
+          i = k;
+        }
+        add(symbols(body), 0.7, sub ? -0.2 : 0.42);
+        continue;
+      }
+      if (s[i] == '\\') {
+        std::size_t k = i + 1;
+        while (k < s.size() && std::isalpha(static_cast<unsigned char>(s[k]))) ++k;
+        if (k == i + 1 && k < s.size()) ++k;  // \$ or \\ and the like
+        add(symbols(s.substr(i, k - i)), 1, 0);
+        i = k;
+        continue;
+      }
+      add(std::string(1, s[i]), 1, 0);
+      ++i;
+    }
+    if (runs.empty()) runs.push_back(Run{});
+    return runs;
+  }
+
+  /// Replaces \name commands by their Unicode characters; unknown names stay as written.
+  static std::string symbols(const std::string& t) {
+    static const std::map<std::string, std::string> table = {
+        {"alpha", "\u03B1"},   {"beta", "\u03B2"},    {"gamma", "\u03B3"},  {"delta", "\u03B4"},
+        {"epsilon", "\u03B5"}, {"varepsilon", "\u03B5"}, {"zeta", "\u03B6"}, {"eta", "\u03B7"},
+        {"theta", "\u03B8"},   {"kappa", "\u03BA"},   {"lambda", "\u03BB"}, {"mu", "\u03BC"},
+        {"nu", "\u03BD"},      {"xi", "\u03BE"},      {"pi", "\u03C0"},     {"rho", "\u03C1"},
+        {"sigma", "\u03C3"},   {"tau", "\u03C4"},     {"phi", "\u03C6"},    {"varphi", "\u03C6"},
+        {"chi", "\u03C7"},     {"psi", "\u03C8"},     {"omega", "\u03C9"},  {"Gamma", "\u0393"},
+        {"Delta", "\u0394"},   {"Theta", "\u0398"},   {"Lambda", "\u039B"}, {"Pi", "\u03A0"},
+        {"Sigma", "\u03A3"},   {"Phi", "\u03A6"},     {"Psi", "\u03A8"},    {"Omega", "\u03A9"},
+        {"times", "\u00D7"},   {"cdot", "\u00B7"},    {"pm", "\u00B1"},     {"circ", "\u00B0"},
+        {"infty", "\u221E"},   {"partial", "\u2202"}, {"approx", "\u2248"}, {"le", "\u2264"},
+        {"leq", "\u2264"},     {"ge", "\u2265"},      {"geq", "\u2265"},    {"sqrt", "\u221A"},
+        {"nabla", "\u2207"},   {"$", "$"},             {"\\", "\\"},         {"_", "_"},
+        {"%", "%"},             {"{", "{"},             {"}", "}"},
+        {",", "\u2009"},       {";", " "},             {"!", ""},             {" ", " "}};
+    std::string out;
+    for (std::size_t i = 0; i < t.size();) {
+      if (t[i] != '\\') {
+        out += t[i++];
+        continue;
+      }
+      std::size_t k = i + 1;
+      while (k < t.size() && std::isalpha(static_cast<unsigned char>(t[k]))) ++k;
+      if (k == i + 1 && k < t.size()) ++k;
+      const auto it = table.find(t.substr(i + 1, k - i - 1));
+      out += it != table.end() ? it->second : t.substr(i, k - i);
+      i = k;
+    }
+    return out;
+  }
+
+  double plain_width(const std::string& s, double px, bool bold) {
+    double w = 0;
+    for (char32_t cp : utf8_decode(s)) w += advance(cp, px, bold);
+    return w;
+  }
+
+  /// Glyphs of `s` from the pen position (x, y) on the baseline, rotated by angle_deg.
+  void draw_run(Image& img, double x, double y, const std::string& s, double px, Color c, double angle_deg,
+                bool bold) {
+    if (s.empty()) return;
+    FT_Face f = face(bold);
+    set_size(f, px);
+    const double th = angle_deg * kPi / 180, cs = std::cos(th), sn = std::sin(th);
+    const bool upright = angle_deg == 0;
+    double penx = upright ? std::round(x) : x, peny = upright ? std::round(y) : y;
     const bool hint = upright || angle_deg == 90;
     FT_Matrix m;
     m.xx = static_cast<FT_Fixed>(std::lround(cs * 65536));
@@ -181,7 +302,6 @@ class Fonts {
     FT_Set_Transform(f, nullptr, nullptr);
   }
 
- private:
   FT_Face face(bool bold) const { return bold && bold_ ? bold_ : regular_; }
   static void set_size(FT_Face f, double px) {
     FT_Set_Char_Size(f, 0, static_cast<FT_F26Dot6>(std::lround(px * 64)), 72, 72);

@@ -344,3 +344,17 @@ TEST_CASE("best legend avoids the data; the y label is rotated; text lands at it
     for (int px = static_cast<int>(t[0]); px <= static_cast<int>(t[0]) + 20; ++px) red += is_red(png.at(px, py));
   CHECK(red > 10);
 }
+
+TEST_CASE("math markup: $\\sigma$ draws the same pixels as σ, and odd markup does not throw", "[plot]") {
+  auto render = [](const std::string& label) {
+    pvdf::plot::Figure fig(300, 200);
+    fig.axes().line({0, 1}, {0, 1}).title(label).legend("none");
+    const auto path = (temp_dir() / "math.png").string();
+    fig.save_png(path);
+    return read_png(path).rgb;
+  };
+  CHECK(render("stress $\\sigma_{xx}$ and $\\nu$") == render("stress $σ_{xx}$ and $ν$"));
+  CHECK(render("stress $\\sigma_{xx}$") != render("stress σxx"));  // the subscript is smaller and lower
+  for (const char* odd : {"$x_{ab$", "$\\$", "$^$", "\\", "$\\unknown_\\$", "$a$ $b", "$_{}^{}$", "$\xff$"})
+    CHECK_NOTHROW(render(odd));
+}

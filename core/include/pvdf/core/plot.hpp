@@ -41,6 +41,8 @@ struct Grid {
 std::vector<std::vector<std::array<double, 2>>> contour_lines(const Grid& grid, double level);
 
 /// One panel of a figure: data coordinates, axes, ticks, labels, legend.
+/// Every label and text is UTF-8 ("µm", "β") and may hold math between dollars: "$E_x$",
+/// "$\\nu_{xy}$", "m$^2$", "$\\sigma$ (MPa)" give sub/superscripts and Greek letters.
 class Axes {
  public:
   /// Line and/or markers through points (NaN breaks the line).
