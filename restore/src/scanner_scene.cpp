@@ -16,8 +16,13 @@ ScannerScene default_scanner_scene() {
   ScannerScene s;
   s.sensor.strips[0].depth_m = 1.0e-3;
   s.sensor.strips[0].offset_m = 0.0;
-  s.sensor.strips[1].depth_m = 2.0e-3;
+  // Strip 2 stands vertically (poled along x): a different (k1', k3') pair makes G invertible
+  // (docs/restore.md section 1); a lateral offset alone would not.
+  s.sensor.strips[1].depth_m = 1.0e-3;
   s.sensor.strips[1].offset_m = 1.5e-3;
+  s.sensor.strips[1].k1_C_per_N = -33e-12;
+  s.sensor.strips[1].k2_C_per_N = 23e-12;
+  s.sensor.strips[1].k3_C_per_N = 3e-12;
   return s;
 }
 

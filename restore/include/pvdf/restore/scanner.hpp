@@ -50,8 +50,8 @@ struct ScannerScene {
   std::size_t n_samples() const;
 };
 
-/// The built-in scene: seed 000 Table 1 defaults, two strips at 1.0 and 2.0 mm depth, 1.5 mm apart,
-/// no surface loads.
+/// The built-in scene: seed 000 Table 1 defaults, a horizontal strip (k = 23, 3, -33 pC/N) and a
+/// vertical one (k = -33, 23, 3 pC/N), both 1 mm deep, 1.5 mm apart; no surface loads.
 ScannerScene default_scanner_scene();
 /// Parses a scene strictly (unknown keys, wrong types, out-of-range values throw InputError naming the key).
 ScannerScene parse_scanner_scene(const nlohmann::json& json, const std::string& source);
