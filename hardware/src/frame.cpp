@@ -3,6 +3,7 @@
 
 #include "pvdf/core/error.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cstring>
 #include <sstream>
@@ -67,7 +68,9 @@ void encode_frame(const Frame& frame, std::vector<std::uint8_t>& out) {
     throw InputError("frame: " + std::to_string(frame.counts.size()) + " counts must equal n_samples × n_channels = " +
                      std::to_string(frame.n_samples * frame.n_channels));
   const std::size_t begin = out.size();
-  out.reserve(begin + frame_size(frame.n_channels, frame.n_samples));
+  // Grow geometrically: an exact reserve per frame would copy the whole buffer every time.
+  const std::size_t needed = begin + frame_size(frame.n_channels, frame.n_samples);
+  if (needed > out.capacity()) out.reserve(std::max(needed, 2 * out.capacity()));
   put_u32(out, frame_magic);
   out.push_back(frame_version);
   out.push_back(frame.overflow ? flag_overflow : 0);

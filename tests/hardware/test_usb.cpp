@@ -320,3 +320,29 @@ TEST_CASE("pvdfkit acquire: no device and busy exit 2 with one line", "[hardware
   }
 }
 #endif
+
+#ifdef PVDFKIT_EXE
+TEST_CASE("pvdfkit acquire: Ctrl-C stops the device and writes out everything received", "[hardware][usb][cli]") {
+  std::mt19937 rng(14);
+  std::vector<std::uint8_t> stream;
+  for (std::uint32_t s = 0; s < 30; ++s) encode_frame(make_frame(s, rng), stream);
+  MockScript script;
+  script.chunks = split(stream, rng, 3000);  // then the device keeps its transfers pending
+  MockFrontEnd device(script);
+  const std::string record = temp_path("cli_sigint.pvdfrec"), csv = temp_path("cli_sigint.csv"),
+                    err = temp_path("cli_sigint.err");
+  const int code = shell(std::string(PVDFKIT_EXE) + " acquire --device usb --stall-timeout-s 20 --record " + record +
+                         " --output " + csv + " 2> " + err + " & pid=$!; sleep 1; kill -INT $pid; wait $pid");
+  const std::string messages = read_text(err);
+  INFO(messages);
+  CHECK(code == 130);
+  CHECK_THAT(messages, Catch::Contains("stopped after 3000 samples per channel; frames 30, missing 0"));
+  const std::string rows = read_text(csv);
+  CHECK(std::count(rows.begin(), rows.end(), '\n') == 1 + 30 * 100);
+  ReplaySource replay(record, false);
+  CHECK(drain(replay).size() == 30);
+  const auto controls = device.controls();
+  REQUIRE_FALSE(controls.empty());
+  CHECK(controls.back().request == protocol::request_stop);
+}
+#endif
