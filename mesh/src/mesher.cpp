@@ -119,6 +119,11 @@ int add_electrode(const pvdf::Electrode& e, double scale) {
 
 struct Model {
   FilmMesh mesh;
+  bool accepted = false;            ///< quality at or above the threshold
+  double min_scaled_jacobian = 0;   ///< of `mesh`
+  std::string algorithm;            ///< Gmsh configuration that made `mesh`
+  std::size_t n_attempts = 0;
+  std::string failures;             ///< why earlier configurations were not accepted
   std::vector<std::string> notes;
   std::size_t n_probes_embedded = 0;
   double scale_m = 1;  ///< metres per model unit
@@ -127,13 +132,14 @@ struct Model {
 /// Builds and meshes the scene in the current Gmsh session (lock held by the caller), and
 /// extracts the FilmMesh. Leaves the meshed model loaded for the caller (e.g. to write it).
 Model mesh_scene(const pvdf::Scene& scene, const MeshParameters& params,
-                 const std::vector<std::array<double, 2>>& extras, const std::array<double, 2>& sizes_m) {
+                 const std::vector<std::array<double, 2>>& extras, const std::array<double, 2>& sizes_m,
+                 double min_scaled_jacobian) {
   Model model;
   const double length_m = scene.membrane.outline.characteristic_radius_m();
   model.scale_m = length_m;
   const double s = 1.0 / length_m;
   const double size_min = sizes_m[0] * s, size_max = sizes_m[1] * s;
-  const auto footprints = detail::probe_footprints(scene, extras, 0.5 * sizes_m[0]);
+  const auto footprints = detail::probe_footprints(scene, extras, sizes_m[0]);
 
   gmsh::clear();
   gmsh::model::add("pvdf_film");
@@ -141,12 +147,9 @@ Model mesh_scene(const pvdf::Scene& scene, const MeshParameters& params,
   gmsh::option::setNumber("General.Verbosity", params.verbose ? 5 : 0);
   gmsh::option::setNumber("General.NumThreads", 1);
   gmsh::option::setNumber("Geometry.OCCBooleanPreserveNumbering", 1);
-  // Frontal-Delaunay triangles, recombined into quads and subdivided to an all-quad mesh
-  // ("simple full-quad"; Blossom full-quad leaves worse corners here; Gmsh 4.8's
-  // quad algorithm 8 can crash on these geometries, docs/mesh.md).
-  gmsh::option::setNumber("Mesh.Algorithm", 6);
+  // Triangles recombined into quads and subdivided to an all-quad mesh (the algorithms are
+  // chosen per attempt below; Gmsh 4.8's quad algorithm 8 can crash here, docs/mesh.md).
   gmsh::option::setNumber("Mesh.RecombineAll", 1);
-  gmsh::option::setNumber("Mesh.RecombinationAlgorithm", 2);
   gmsh::option::setNumber("Mesh.SubdivisionAlgorithm", 0);
   gmsh::option::setNumber("Mesh.ElementOrder", 1);
   gmsh::option::setNumber("Mesh.MeshSizeFromPoints", 0);
@@ -266,66 +269,117 @@ Model mesh_scene(const pvdf::Scene& scene, const MeshParameters& params,
     gmsh::model::mesh::field::setAsBackgroundMesh(threshold);
   });
 
-  guarded("meshing", [&] { gmsh::model::mesh::generate(2); });
-
   // Extraction: vertices (metres), quads counter-clockwise, material ids, rim edges.
-  FilmMesh& mesh = model.mesh;
-  guarded("reading the mesh back", [&] {
-    std::vector<std::size_t> node_tags;
-    std::vector<double> coords, parametric;
-    gmsh::model::mesh::getNodes(node_tags, coords, parametric, -1, -1, false, false);
-    std::unordered_map<std::size_t, unsigned int> index;
-    index.reserve(node_tags.size());
-    std::vector<std::size_t> order(node_tags.size());
-    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return node_tags[a] < node_tags[b]; });
-    for (std::size_t i : order) {
-      index[node_tags[i]] = static_cast<unsigned int>(mesh.vertices.size());
-      mesh.vertices.push_back({coords[3 * i] * length_m, coords[3 * i + 1] * length_m});
-    }
-    std::size_t n_other = 0;
-    for (const auto& fm : face_material) {
-      std::vector<int> types;
-      std::vector<std::vector<std::size_t>> element_tags, element_nodes;
-      gmsh::model::mesh::getElements(types, element_tags, element_nodes, 2, fm.first);
-      for (std::size_t t = 0; t < types.size(); ++t) {
-        if (types[t] != 3) {  // 3 = 4-node quadrangle
-          n_other += element_tags[t].size();
-          continue;
-        }
-        const auto& nodes = element_nodes[t];
-        for (std::size_t q = 0; q + 3 < nodes.size(); q += 4) {
-          std::array<unsigned int, 4> quad{index.at(nodes[q]), index.at(nodes[q + 1]), index.at(nodes[q + 2]),
-                                           index.at(nodes[q + 3])};
-          double area2 = 0;
-          for (int c = 0; c < 4; ++c) {
-            const auto& p = mesh.vertices[quad[c]];
-            const auto& r = mesh.vertices[quad[(c + 1) % 4]];
-            area2 += p[0] * r[1] - r[0] * p[1];
+  auto extract = [&]() {
+    FilmMesh mesh;
+    guarded("reading the mesh back", [&] {
+      std::vector<std::size_t> node_tags;
+      std::vector<double> coords, parametric;
+      gmsh::model::mesh::getNodes(node_tags, coords, parametric, -1, -1, false, false);
+      std::unordered_map<std::size_t, unsigned int> index;
+      index.reserve(node_tags.size());
+      std::vector<std::size_t> order(node_tags.size());
+      for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+      std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return node_tags[a] < node_tags[b]; });
+      for (std::size_t i : order) {
+        index[node_tags[i]] = static_cast<unsigned int>(mesh.vertices.size());
+        mesh.vertices.push_back({coords[3 * i] * length_m, coords[3 * i + 1] * length_m});
+      }
+      std::size_t n_other = 0;
+      for (const auto& fm : face_material) {
+        std::vector<int> types;
+        std::vector<std::vector<std::size_t>> element_tags, element_nodes;
+        gmsh::model::mesh::getElements(types, element_tags, element_nodes, 2, fm.first);
+        for (std::size_t t = 0; t < types.size(); ++t) {
+          if (types[t] != 3) {  // 3 = 4-node quadrangle
+            n_other += element_tags[t].size();
+            continue;
           }
-          if (area2 < 0) std::swap(quad[1], quad[3]);
-          mesh.quads.push_back(quad);
-          mesh.material_ids.push_back(static_cast<std::uint8_t>(fm.second));
+          const auto& nodes = element_nodes[t];
+          for (std::size_t q = 0; q + 3 < nodes.size(); q += 4) {
+            std::array<unsigned int, 4> quad{index.at(nodes[q]), index.at(nodes[q + 1]), index.at(nodes[q + 2]),
+                                             index.at(nodes[q + 3])};
+            double area2 = 0;
+            for (int c = 0; c < 4; ++c) {
+              const auto& p = mesh.vertices[quad[c]];
+              const auto& r = mesh.vertices[quad[(c + 1) % 4]];
+              area2 += p[0] * r[1] - r[0] * p[1];
+            }
+            if (area2 < 0) std::swap(quad[1], quad[3]);
+            mesh.quads.push_back(quad);
+            mesh.material_ids.push_back(static_cast<std::uint8_t>(fm.second));
+          }
         }
       }
-    }
-    if (n_other > 0) {
-      throw pvdf::NumericalError("Gmsh left " + std::to_string(n_other) +
-                                 " non-quadrilateral elements after recombination; the fem needs quads only");
-    }
-    for (int curve : rim_curves) {
-      std::vector<int> types;
-      std::vector<std::vector<std::size_t>> element_tags, element_nodes;
-      gmsh::model::mesh::getElements(types, element_tags, element_nodes, 1, curve);
-      for (std::size_t t = 0; t < types.size(); ++t) {
-        if (types[t] != 1) continue;  // 1 = 2-node line
-        const auto& nodes = element_nodes[t];
-        for (std::size_t q = 0; q + 1 < nodes.size(); q += 2) {
-          mesh.rim_edges.push_back({index.at(nodes[q]), index.at(nodes[q + 1])});
+      if (n_other > 0) {
+        throw pvdf::NumericalError("Gmsh left " + std::to_string(n_other) +
+                                   " non-quadrilateral elements after recombination; the fem needs quads only");
+      }
+      for (int curve : rim_curves) {
+        std::vector<int> types;
+        std::vector<std::vector<std::size_t>> element_tags, element_nodes;
+        gmsh::model::mesh::getElements(types, element_tags, element_nodes, 1, curve);
+        for (std::size_t t = 0; t < types.size(); ++t) {
+          if (types[t] != 1) continue;  // 1 = 2-node line
+          const auto& nodes = element_nodes[t];
+          for (std::size_t q = 0; q + 1 < nodes.size(); q += 2) {
+            mesh.rim_edges.push_back({index.at(nodes[q]), index.at(nodes[q + 1])});
+          }
         }
       }
+    });
+    return mesh;
+  };
+
+  // Meshing: the first configuration that gives an all-quad mesh above the quality threshold
+  // wins; the others are fall-backs for geometries where it fails (a fixed order, so the
+  // result stays deterministic).
+  struct Configuration {
+    int algorithm, recombination;
+    const char* name;
+  };
+  const Configuration configurations[] = {
+      {6, 2, "Frontal-Delaunay + simple full-quad"},
+      {5, 2, "Delaunay + simple full-quad"},
+      {6, 3, "Frontal-Delaunay + Blossom full-quad"},
+      {1, 2, "MeshAdapt + simple full-quad"},
+  };
+  std::string failures;
+  bool have_best = false;
+  for (const auto& c : configurations) {
+    ++model.n_attempts;
+    std::string failure;
+    try {
+      guarded("meshing", [&] {
+        gmsh::option::setNumber("Mesh.Algorithm", c.algorithm);
+        gmsh::option::setNumber("Mesh.RecombinationAlgorithm", c.recombination);
+        gmsh::model::mesh::clear();
+        gmsh::model::mesh::generate(2);
+      });
+      FilmMesh candidate = extract();
+      MeshReport quality;
+      measure_quality(candidate, quality);
+      if (!have_best || quality.min_scaled_jacobian > model.min_scaled_jacobian) {
+        model.mesh = std::move(candidate);
+        model.min_scaled_jacobian = quality.min_scaled_jacobian;
+        model.algorithm = c.name;
+        have_best = true;
+      }
+      if (quality.min_scaled_jacobian >= min_scaled_jacobian) {
+        model.accepted = true;
+        // The loaded Gmsh model must be the accepted one (write_msh writes it).
+        if (model.algorithm != c.name) throw pvdf::NumericalError("internal: accepted mesh is not the loaded one");
+        break;
+      }
+      failure = "worst scaled Jacobian " + detail::fmt(quality.min_scaled_jacobian);
+    } catch (const pvdf::NumericalError& e) {
+      failure = e.what();
     }
-  });
+    failures += std::string(failures.empty() ? "" : "; ") + c.name + ": " + failure;
+  }
+  model.failures = failures;
+  if (!have_best) throw pvdf::NumericalError("Gmsh could not make an all-quad mesh of " + scene.source + " (" + failures + ")");
+  FilmMesh& mesh = model.mesh;
   for (const auto& e : scene.electrodes) mesh.electrode_names.push_back(e.name);
   const auto& o = scene.membrane.outline;
   if (o.shape == pvdf::FilmOutline::Shape::circle) {
@@ -354,7 +408,7 @@ FilmMesh run(const pvdf::Scene& scene, const MeshParameters& params, MeshReport*
 
   GmshSession& session = GmshSession::instance();
   std::lock_guard<std::mutex> lock(session.mutex());
-  Model model = mesh_scene(scene, params, extras, sizes);
+  Model model = mesh_scene(scene, params, extras, sizes, scene.mesh.min_scaled_jacobian);
 
   MeshReport r;
   r.target_size_min_m = sizes[0];
@@ -362,14 +416,17 @@ FilmMesh run(const pvdf::Scene& scene, const MeshParameters& params, MeshReport*
   measure_quality(model.mesh, r);
   r.n_probes_embedded = model.n_probes_embedded;
   r.notes = model.notes;
-  if (!(r.min_scaled_jacobian >= scene.mesh.min_scaled_jacobian)) {
+  r.algorithm = model.algorithm;
+  r.n_attempts = model.n_attempts;
+  if (!model.accepted || !(r.min_scaled_jacobian >= scene.mesh.min_scaled_jacobian)) {
     r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (report) *report = r;
     throw pvdf::NumericalError(scene.source + ": the mesh's worst element has scaled Jacobian " +
                                detail::fmt(r.min_scaled_jacobian) + " < mesh.min_scaled_jacobian = " +
                                detail::fmt(scene.mesh.min_scaled_jacobian) +
-                               "; the mesh is refused. Move outlines that nearly touch apart, or change "
-                               "mesh.size_min_m / mesh.growth");
+                               " (best of " + std::to_string(model.n_attempts) + " Gmsh configurations: " +
+                               model.failures + "); the mesh is refused. Move outlines that nearly touch apart, "
+                               "or change mesh.size_min_m / mesh.growth (pvdfkit mesh --size-factor)");
   }
   if (after) after(model);
   r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

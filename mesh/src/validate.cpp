@@ -328,6 +328,9 @@ void validate_geometry(const pvdf::Scene& s, const std::vector<std::array<double
   auto check_footprint = [&](const std::array<double, 2>& c, double r, const std::string& key, const std::string& fix) {
     if (!finite_point(c)) fail(s, key + " position is not finite");
     const double inside = s.membrane.outline.inside_distance_m(c);
+    if (inside <= 0) {
+      fail(s, key + ": the probe centre [" + fmt(c[0]) + ", " + fmt(c[1]) + "] m lies outside the film; " + fix);
+    }
     if (inside - r < 0) {
       fail(s, key + ": the probe footprint (centre [" + fmt(c[0]) + ", " + fmt(c[1]) + "] m, radius " + fmt(r) +
                   " m) reaches " + fmt(r - inside) + " m outside the film; " + fix);

@@ -326,7 +326,8 @@ TEST_CASE("probe footprints that would make slivers are left out, with a note", 
   CHECK(on_extra >= 8);
   // A probe crossing an electrode edge transversally is embedded, and the electrode area stays exact.
   auto t = pvdf::default_scene();
-  t.loads[0].position_m = {0.0012, 0.0103};  // crosses A's right and top edges, misses its corners
+  t.loads[0].position_m = {0.001, 0.010};  // a 0.4 mm disk centred on A's right edge
+  t.loads[0].radius_m = 0.0004;
   const FilmMesh mt = pvdf::mesh::build_film_mesh(t, &report);
   CHECK(report.n_probes_embedded == 1);
   CHECK(std::abs(pvdf::mesh::material_area_m2(mt, 1) / 4e-6 - 1) < 1e-9);

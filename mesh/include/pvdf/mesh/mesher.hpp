@@ -25,6 +25,8 @@ struct MeshReport {
   double target_size_max_m = 0;       ///< coarse size requested from Gmsh (scene or default) (m)
   std::size_t n_probes_embedded = 0;  ///< probe footprints whose circles are mesh edges
   std::vector<std::string> notes;     ///< remarks, e.g. a footprint left out because it would make slivers
+  std::string algorithm;              ///< Gmsh configuration that made the mesh (2-D algorithm + recombination)
+  std::size_t n_attempts = 0;         ///< configurations tried (the first all-quad one above the threshold wins)
 };
 
 /// Physical-group tags in .msh files: tag = deal.II id (film_mesh.hpp) + msh_tag_offset, because
