@@ -74,16 +74,22 @@ RestoredForces restore_scan(const InverseFilter& f, const Scan& scan, double mu_
   return r;
 }
 
+// Uniformly partitioned overlap-save: the N taps are cut into P = ceil(N / B) partitions of B taps; each
+// block of B new samples costs two FFTs of 2B points (one per channel), 4 P spectrum products and two
+// inverse FFTs, instead of FFTs of >= N + B points. A frequency-domain delay line keeps the last P input
+// spectra of each channel.
 struct StreamingRestorer::Impl {
-  explicit Impl(std::size_t L) : fft(L, true) {}
+  explicit Impl(std::size_t B) : fft(2 * B, true) {}
   detail::RealFft fft;
-  std::size_t taps = 0, delay = 0;
-  std::array<std::array<std::vector<cd>, 2>, 2> H;
-  std::vector<double> in[2];  // last taps - 1 samples followed by the current block
-  std::size_t filled = 0;     // new samples in the current block
-  std::size_t to_skip = 0;    // outputs y[0..D) precede force sample 0
-  std::size_t emitted_inputs = 0, received = 0, emitted = 0;
-  std::vector<cd> X[2], Y[2];
+  std::size_t taps = 0, delay = 0, parts = 0;
+  std::vector<std::vector<cd>> H[2][2];  // [force][signal][partition] spectra
+  std::vector<std::vector<cd>> fdl[2];   // [signal][slot] input spectra
+  std::size_t slot = 0;
+  std::vector<double> in[2];             // previous block followed by the current block (2B)
+  std::size_t filled = 0;                // new samples in the current block
+  std::size_t to_skip = 0;               // outputs y[0..D) precede force sample 0
+  std::size_t received = 0, emitted = 0;
+  std::vector<cd> Y[2];
   std::vector<double> y;
 };
 
@@ -91,23 +97,33 @@ StreamingRestorer::StreamingRestorer(const InverseFilter& f, std::size_t block_s
   if (block_samples < 1 || block_samples > (1u << 24)) {
     throw InputError("streaming block = " + std::to_string(block_samples) + " samples must be in [1, 16777216]");
   }
-  const std::size_t L = detail::good_fft_size(f.taps + block_samples - 1);
-  impl_ = std::make_unique<Impl>(L);
+  if (f.taps < 1 || f.delay_samples < 0 || static_cast<std::size_t>(f.delay_samples) >= f.taps) {
+    throw InputError("streaming: the filter has " + std::to_string(f.taps) + " taps and delay " +
+                     std::to_string(f.delay_samples) + "; the delay must be in [0, taps)");
+  }
+  impl_ = std::make_unique<Impl>(block_);
   auto& s = *impl_;
+  const std::size_t B = block_;
   s.taps = f.taps;
   s.delay = static_cast<std::size_t>(f.delay_samples);
   s.to_skip = s.delay;
+  s.parts = (f.taps + B - 1) / B;
+  const std::size_t bins = s.fft.bins();
   for (int i = 0; i < 2; ++i)
     for (int j = 0; j < 2; ++j) {
-      s.H[i][j].resize(s.fft.bins());
-      s.fft.forward(f.h[i][j].data(), f.taps, s.H[i][j].data());
+      s.H[i][j].assign(s.parts, std::vector<cd>(bins));
+      for (std::size_t p = 0; p < s.parts; ++p) {
+        const std::size_t start = p * B;
+        const std::size_t count = std::min(B, f.taps - start);
+        s.fft.forward(f.h[i][j].data() + start, count, s.H[i][j][p].data());
+      }
     }
   for (int c = 0; c < 2; ++c) {
-    s.in[c].assign(s.taps - 1 + block_, 0.0);
-    s.X[c].resize(s.fft.bins());
-    s.Y[c].resize(s.fft.bins());
+    s.fdl[c].assign(s.parts, std::vector<cd>(bins, 0.0));
+    s.in[c].assign(2 * B, 0.0);
+    s.Y[c].resize(bins);
   }
-  s.y.resize(L);
+  s.y.resize(2 * B);
 }
 
 StreamingRestorer::~StreamingRestorer() = default;
@@ -116,26 +132,40 @@ std::size_t StreamingRestorer::latency_samples() const { return impl_->delay + b
 
 void StreamingRestorer::process_block(std::vector<double>& fx, std::vector<double>& fz) {
   auto& s = *impl_;
-  const std::size_t P = s.taps - 1;
-  for (int c = 0; c < 2; ++c) s.fft.forward(s.in[c].data(), P + block_, s.X[c].data());
-  for (int i = 0; i < 2; ++i)
-    for (std::size_t k = 0; k < s.fft.bins(); ++k) s.Y[i][k] = s.H[i][0][k] * s.X[0][k] + s.H[i][1][k] * s.X[1][k];
-  // Overlap-save: outputs P .. P + block - 1 of the circular convolution are the linear ones.
-  std::size_t skip = std::min(s.to_skip, s.filled);
+  const std::size_t B = block_, bins = s.fft.bins();
+  for (int c = 0; c < 2; ++c) s.fft.forward(s.in[c].data(), 2 * B, s.fdl[c][s.slot].data());
+  for (int i = 0; i < 2; ++i) {
+    std::fill(s.Y[i].begin(), s.Y[i].end(), cd(0.0, 0.0));
+    for (std::size_t p = 0; p < s.parts; ++p) {
+      const std::size_t q = (s.slot + s.parts - p) % s.parts;  // input spectrum p blocks ago
+      // Spelled out in real arithmetic: std::complex's operator* goes through the NaN-safe __muldc3.
+      const double* h0 = reinterpret_cast<const double*>(s.H[i][0][p].data());
+      const double* h1 = reinterpret_cast<const double*>(s.H[i][1][p].data());
+      const double* x0 = reinterpret_cast<const double*>(s.fdl[0][q].data());
+      const double* x1 = reinterpret_cast<const double*>(s.fdl[1][q].data());
+      double* acc = reinterpret_cast<double*>(s.Y[i].data());
+      for (std::size_t k = 0; k < 2 * bins; k += 2) {
+        acc[k] += h0[k] * x0[k] - h0[k + 1] * x0[k + 1] + h1[k] * x1[k] - h1[k + 1] * x1[k + 1];
+        acc[k + 1] += h0[k] * x0[k + 1] + h0[k + 1] * x0[k] + h1[k] * x1[k + 1] + h1[k + 1] * x1[k];
+      }
+    }
+  }
+  s.slot = (s.slot + 1) % s.parts;
+  // The last B samples of each 2B-point inverse are the linear-convolution outputs of this block.
+  const std::size_t skip = std::min(s.to_skip, s.filled);
   const std::size_t count = s.filled - skip;
+  const std::size_t room = s.received > s.emitted ? s.received - s.emitted : 0;
+  const std::size_t take = std::min(count, room);
   for (int i = 0; i < 2; ++i) {
     s.fft.inverse(s.Y[i].data(), s.y.data());
     auto& out = i == 0 ? fx : fz;
-    const std::size_t room = s.received > s.emitted ? s.received - s.emitted : 0;
-    const std::size_t take = std::min(count, room);
-    out.insert(out.end(), s.y.begin() + static_cast<long>(P + skip), s.y.begin() + static_cast<long>(P + skip + take));
-    if (i == 1) s.emitted += take;
+    out.insert(out.end(), s.y.begin() + static_cast<long>(B + skip), s.y.begin() + static_cast<long>(B + skip + take));
   }
+  s.emitted += take;
   s.to_skip -= skip;
-  // Slide: keep the last P samples of history.
   for (int c = 0; c < 2; ++c) {
-    std::copy(s.in[c].begin() + static_cast<long>(s.filled), s.in[c].begin() + static_cast<long>(s.filled + P), s.in[c].begin());
-    std::fill(s.in[c].begin() + static_cast<long>(P), s.in[c].end(), 0.0);
+    std::copy(s.in[c].begin() + static_cast<long>(B), s.in[c].end(), s.in[c].begin());
+    std::fill(s.in[c].begin() + static_cast<long>(B), s.in[c].end(), 0.0);
   }
   s.filled = 0;
 }
@@ -143,28 +173,24 @@ void StreamingRestorer::process_block(std::vector<double>& fx, std::vector<doubl
 void StreamingRestorer::push(const double* m1, const double* m2, std::size_t n, std::vector<double>& fx,
                              std::vector<double>& fz) {
   auto& s = *impl_;
-  const std::size_t P = s.taps - 1;
+  const std::size_t B = block_;
   s.received += n;
   std::size_t i = 0;
   while (i < n) {
-    const std::size_t take = std::min(n - i, block_ - s.filled);
-    std::copy(m1 + i, m1 + i + take, s.in[0].begin() + static_cast<long>(P + s.filled));
-    std::copy(m2 + i, m2 + i + take, s.in[1].begin() + static_cast<long>(P + s.filled));
+    const std::size_t take = std::min(n - i, B - s.filled);
+    std::copy(m1 + i, m1 + i + take, s.in[0].begin() + static_cast<long>(B + s.filled));
+    std::copy(m2 + i, m2 + i + take, s.in[1].begin() + static_cast<long>(B + s.filled));
     s.filled += take;
     i += take;
-    if (s.filled == block_) process_block(fx, fz);
+    if (s.filled == B) process_block(fx, fz);
   }
 }
 
 void StreamingRestorer::flush(std::vector<double>& fx, std::vector<double>& fz) {
   auto& s = *impl_;
-  // Feed zeros until every received sample has its force (D more outputs).
+  // Feed zeros (the block tail is already zero) until every received sample has its force.
   while (s.emitted < s.received) {
-    const std::size_t P = s.taps - 1;
-    const std::size_t pad = block_ - s.filled;
-    std::fill(s.in[0].begin() + static_cast<long>(P + s.filled), s.in[0].end(), 0.0);
-    std::fill(s.in[1].begin() + static_cast<long>(P + s.filled), s.in[1].end(), 0.0);
-    s.filled += pad;
+    s.filled = block_;
     process_block(fx, fz);
   }
 }

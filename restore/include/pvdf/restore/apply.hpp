@@ -25,7 +25,8 @@ RestoredForces restore_scan(const InverseFilter& filter, const Scan& scan, doubl
 void friction_coefficient(RestoredForces& forces, double mu_threshold_N);
 
 /// Real-time restoration: push blocks of any size, get the restored forces in order. Internally
-/// overlap-save with blocks of `block_samples` and an FFT of >= taps + block - 1 points.
+/// uniformly partitioned overlap-save: blocks of `block_samples` B, FFTs of 2B points, the taps cut
+/// into ceil(taps / B) partitions.
 /// Latency: the force at sample n is emitted once input sample n + D has arrived and its block is
 /// complete, i.e. at most D + block_samples - 1 samples (latency_samples()) after it was scanned.
 /// After flush() the output equals restore_offline() up to round-off.
