@@ -1291,30 +1291,38 @@ std::vector<Tick> fit_ticks(Fonts& fonts, const Scale& s, double length_px, bool
   return ticks;
 }
 
+/// Colour range of a field: its finite values (symmetric about 0 when diverging), or the
+/// caller's vmin/vmax; never zero-size.
+std::array<double, 2> field_range(const Item& it) {
+  double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+  for (double v : it.grid->values) {
+    if (!finite(v)) continue;
+    lo = std::min(lo, v), hi = std::max(hi, v);
+  }
+  if (!(lo <= hi)) lo = 0, hi = 1;
+  if (it.diverging && !it.vmin && !it.vmax) {
+    const double m = std::max(std::abs(lo), std::abs(hi));
+    lo = -m, hi = m;
+  }
+  if (it.vmin) lo = *it.vmin;
+  if (it.vmax) hi = *it.vmax;
+  if (lo > hi) std::swap(lo, hi);
+  const double mag = std::max(std::abs(lo), std::abs(hi));
+  if (!(hi - lo > 1e-12 * mag) || !(hi - lo > 1e-300)) {
+    const double d = mag > 0 ? 0.1 * mag : 1.0;
+    lo -= d, hi += d;
+  }
+  return {lo, hi};
+}
+
+/// The colour bar shows the last field of the panel (each field keeps its own range).
 void resolve_colorbar(const Axes::Impl& a, ColorBar& cb) {
   for (const auto& it : a.items) {
     if (it.kind != Kind::field) continue;
-    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
-    for (double v : it.grid->values) {
-      if (!finite(v)) continue;
-      lo = std::min(lo, v), hi = std::max(hi, v);
-    }
-    if (!(lo <= hi)) lo = 0, hi = 1;
-    if (it.diverging && !it.vmin && !it.vmax) {
-      const double m = std::max(std::abs(lo), std::abs(hi));
-      lo = -m, hi = m;
-    }
-    if (it.vmin) lo = *it.vmin;
-    if (it.vmax) hi = *it.vmax;
-    if (lo > hi) std::swap(lo, hi);
-    const double mag = std::max(std::abs(lo), std::abs(hi));
-    if (!(hi - lo > 1e-12 * mag) || !(hi - lo > 1e-300)) {
-      const double d = mag > 0 ? 0.1 * mag : 1.0;
-      lo -= d, hi += d;
-    }
+    const auto range = field_range(it);
     cb.on = true;
-    cb.vmin = lo;
-    cb.vmax = hi;
+    cb.vmin = range[0];
+    cb.vmax = range[1];
     cb.diverging = it.diverging;
     cb.label = it.label;
   }
@@ -1524,15 +1532,8 @@ class Renderer {
   void draw_field(const Item& it, const PanelLayout& p) {
     const Grid& g = *it.grid;
     if (g.nx < 2 || g.ny < 2 || !(g.x1 != g.x0) || !(g.y1 != g.y0)) return;
-    double lo = p.cbar.vmin, hi = p.cbar.vmax;
-    // This field's own range (when several fields share a panel, the last one owns the bar).
-    {
-      ColorBar own;
-      Axes::Impl tmp;
-      tmp.items.push_back(it);
-      resolve_colorbar(tmp, own);
-      lo = own.vmin, hi = own.vmax;
-    }
+    const auto range = field_range(it);
+    const double lo = range[0], hi = range[1];
     const int ss = r_.ss();
     // Colour look-up table (1024 steps) keeps the per-sample cost to a table read.
     static constexpr int kLut = 1024;
