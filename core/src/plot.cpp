@@ -1520,7 +1520,7 @@ class Renderer {
     }
     r_.reset_clip();
     draw_frame_and_ticks(a, p);
-    if (p.cbar.on) draw_colorbar(p);
+    if (p.cbar.on) draw_colorbar(a, p);
     draw_legend(a, p, data_points);
   }
 
@@ -1751,7 +1751,7 @@ class Renderer {
     texts.push_back(j);
   }
 
-  void draw_colorbar(const PanelLayout& p) {
+  void draw_colorbar(const Axes::Impl& a, const PanelLayout& p) {
     const ColorBar& cb = p.cbar;
     const int ss = r_.ss();
     const double top = cb.T, bottom = cb.B;
@@ -1761,6 +1761,14 @@ class Renderer {
       c = cb.diverging ? colormap_diverging(t) : colormap(t);
       return true;
     });
+    // Contour levels of the panel, marked across the bar in their colour.
+    for (const auto& it : a.items) {
+      if (it.kind != Kind::contour) continue;
+      for (double level : it.levels) {
+        const double y = cb.scale.to_px(level);
+        if (finite(y) && y >= cb.T && y <= cb.B) r_.stroke_segment({cb.L * 1.0, y}, {cb.R * 1.0, y}, 1.2, it.color);
+      }
+    }
     r_.fill_rect(cb.L - 1, cb.T - 1, cb.R + 1, cb.T, kFrame);
     r_.fill_rect(cb.L - 1, cb.B, cb.R + 1, cb.B + 1, kFrame);
     r_.fill_rect(cb.L - 1, cb.T - 1, cb.L, cb.B + 1, kFrame);
