@@ -121,7 +121,7 @@ InverseFilter load_filter(const std::string& path) {
     static const std::set<std::string> known = {"h11", "h12", "h21", "h22"};
     if (!known.count(it.key())) filters.fail(it.key(), "is an unknown key; filters holds h11, h12, h21, h22");
   }
-  if (top.has("identification")) {
+  if (top.has("identification")) try {
     const auto& id = j.at("identification");
     top.object("identification");  // marks it used; its contents are informative
     if (!id.is_object()) top.fail("identification", "must be an object");
@@ -141,6 +141,9 @@ InverseFilter load_filter(const std::string& path) {
         }
       }
     }
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(path + ": identification has a value of the wrong type (" + e.what() +
+                     "); regenerate the filter with 'pvdfkit restore identify'");
   }
   top.finish();
   f.transfer.sample_spacing_m = f.sample_spacing_m;

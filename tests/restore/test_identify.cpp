@@ -124,3 +124,25 @@ TEST_CASE("Design reports the conditioning and a filter that inverts G in its ba
     CHECK(fs.h[1][0][l] == Approx(1e3 * f.h[1][0][l]).margin(1e-9 * std::abs(1e3 * f.h[1][0][f.taps / 2])));
   }
 }
+
+TEST_CASE("The frequency-dependent beta needs its corner and damps short wavelengths more", "[restore][identify]") {
+  const auto ids = restore_test::paper_identification(false);
+  DesignOptions o;
+  o.beta_policy = BetaPolicy::frequency;
+  const auto t = identify_transfer(ids, o);
+  CHECK_THROWS_WITH(design_inverse(t, ids, o), Catch::Contains("corner"));
+  o.corner_wavelength_m = 1e-3;
+  const auto f = design_inverse(t, ids, o);
+  DesignOptions c;  // the same beta, constant
+  const auto g = design_inverse(t, ids, c);
+  // More damping at high spatial frequency: the frequency-dependent filters have less energy.
+  double ef = 0, eg = 0;
+  for (int i = 0; i < 2; ++i)
+    for (int j = 0; j < 2; ++j)
+      for (std::size_t l = 0; l < f.taps; ++l) {
+        ef += f.h[i][j][l] * f.h[i][j][l];
+        eg += g.h[i][j][l] * g.h[i][j][l];
+      }
+  CHECK(ef < eg);
+  CHECK(f.beta_policy == "frequency");
+}
