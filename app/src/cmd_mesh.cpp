@@ -57,6 +57,9 @@ int run_mesh(const MeshCommandOptions& o) {
                         {"min_scaled_jacobian", report.min_scaled_jacobian},
                         {"max_aspect_ratio", report.max_aspect_ratio},
                         {"n_probes_embedded", report.n_probes_embedded},
+                        {"gmsh_configuration", report.algorithm},
+                        {"n_attempts", report.n_attempts},
+                        {"notes", report.notes},
                         {"wall_s", report.wall_s},
                         {"electrodes", mesh.electrode_names}};
     if (!preview.empty()) j["preview_png"] = preview;
@@ -69,7 +72,8 @@ int run_mesh(const MeshCommandOptions& o) {
                 report.size_max_m * 1e3, report.target_size_min_m * 1e3, report.target_size_max_m * 1e3);
     std::printf("  minimum scaled Jacobian %.3f (threshold %.3f), worst aspect ratio %.2f\n",
                 report.min_scaled_jacobian, scene.mesh.min_scaled_jacobian, report.max_aspect_ratio);
-    std::printf("  meshed in %.3f s\n", report.wall_s);
+    std::printf("  meshed in %.3f s by Gmsh (%s, attempt %zu)\n", report.wall_s, report.algorithm.c_str(),
+                report.n_attempts);
     if (!preview.empty()) std::printf("preview written to %s\n", preview.c_str());
   }
   return pvdf::exit_code::success;

@@ -13,6 +13,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <fstream>
 #include <functional>
 #include <map>
 #include <mutex>
@@ -478,6 +479,132 @@ FilmMesh write_msh(const pvdf::Scene& scene, const std::string& path, const Mesh
 
 FilmMesh write_msh(const pvdf::Scene& scene, const std::string& path, MeshReport* report) {
   return write_msh(scene, path, MeshParameters{}, report);
+}
+
+FilmMesh read_msh(const std::string& path) {
+  {
+    std::ifstream probe(path);
+    if (!probe) throw pvdf::InputError(path + ": cannot open the mesh file; check the path");
+  }
+  GmshSession& session = GmshSession::instance();
+  std::lock_guard<std::mutex> lock(session.mutex());
+  FilmMesh mesh;
+  try {
+    gmsh::clear();
+    gmsh::option::setNumber("General.Terminal", 0);
+    gmsh::open(path);
+  } catch (...) {
+    throw pvdf::InputError(path + ": Gmsh cannot read it as a mesh (" + gmsh_error_text() + ")");
+  }
+  guarded("reading " + path, [&] {
+    gmsh::vectorpair groups;
+    gmsh::model::getPhysicalGroups(groups);
+    int rim_tag = -1;
+    std::vector<std::pair<int, std::string>> surfaces;  // (tag, name)
+    for (const auto& g : groups) {
+      std::string name;
+      gmsh::model::getPhysicalName(g.first, g.second, name);
+      if (g.first == 1 && name == "rim") rim_tag = g.second;
+      if (g.first == 2) surfaces.push_back({g.second, name});
+    }
+    if (rim_tag < 0) throw pvdf::InputError(path + ": has no physical curve named \"rim\"; write it with pvdfkit mesh");
+    std::sort(surfaces.begin(), surfaces.end());
+    std::vector<std::size_t> node_tags;
+    std::vector<double> coords, parametric;
+    gmsh::model::mesh::getNodes(node_tags, coords, parametric, -1, -1, false, false);
+    std::unordered_map<std::size_t, std::size_t> position;
+    for (std::size_t i = 0; i < node_tags.size(); ++i) position[node_tags[i]] = i;
+    // First pass: elements by group; second: number the corner nodes in tag order.
+    struct RawQuad {
+      std::array<std::size_t, 4> tags;
+      std::uint8_t material;
+    };
+    std::vector<RawQuad> raw;
+    std::vector<std::array<std::size_t, 2>> raw_rim;
+    std::uint8_t next_electrode = 1;
+    for (const auto& [tag, name] : surfaces) {
+      std::uint8_t material = film_material_id;
+      if (name != "film") {
+        material = next_electrode++;
+        mesh.electrode_names.push_back(name);
+      }
+      std::vector<int> entities;
+      gmsh::model::getEntitiesForPhysicalGroup(2, tag, entities);
+      for (int entity : entities) {
+        std::vector<int> types;
+        std::vector<std::vector<std::size_t>> element_tags, element_nodes;
+        gmsh::model::mesh::getElements(types, element_tags, element_nodes, 2, entity);
+        for (std::size_t t = 0; t < types.size(); ++t) {
+          const std::size_t per = types[t] == 3 ? 4 : types[t] == 16 ? 8 : types[t] == 10 ? 9 : 0;
+          if (per == 0) {
+            throw pvdf::InputError(path + ": surface \"" + name + "\" holds Gmsh elements of type " +
+                                   std::to_string(types[t]) + "; only quadrilaterals (types 3, 10, 16) are accepted");
+          }
+          const auto& nodes = element_nodes[t];
+          for (std::size_t q = 0; q + per <= nodes.size(); q += per) {
+            raw.push_back({{nodes[q], nodes[q + 1], nodes[q + 2], nodes[q + 3]}, material});
+          }
+        }
+      }
+    }
+    std::vector<int> rim_entities;
+    gmsh::model::getEntitiesForPhysicalGroup(1, rim_tag, rim_entities);
+    for (int entity : rim_entities) {
+      std::vector<int> types;
+      std::vector<std::vector<std::size_t>> element_tags, element_nodes;
+      gmsh::model::mesh::getElements(types, element_tags, element_nodes, 1, entity);
+      for (std::size_t t = 0; t < types.size(); ++t) {
+        const std::size_t per = types[t] == 1 ? 2 : types[t] == 8 ? 3 : 0;
+        if (per == 0) continue;
+        const auto& nodes = element_nodes[t];
+        for (std::size_t q = 0; q + per <= nodes.size(); q += per) raw_rim.push_back({nodes[q], nodes[q + 1]});
+      }
+    }
+    if (raw.empty()) throw pvdf::InputError(path + ": holds no quadrilaterals in named physical surfaces");
+    std::vector<std::size_t> corner_tags;
+    for (const auto& q : raw) corner_tags.insert(corner_tags.end(), q.tags.begin(), q.tags.end());
+    std::sort(corner_tags.begin(), corner_tags.end());
+    corner_tags.erase(std::unique(corner_tags.begin(), corner_tags.end()), corner_tags.end());
+    std::unordered_map<std::size_t, unsigned int> index;
+    for (std::size_t tag : corner_tags) {
+      const auto it = position.find(tag);
+      if (it == position.end()) throw pvdf::InputError(path + ": an element refers to a missing node");
+      index[tag] = static_cast<unsigned int>(mesh.vertices.size());
+      mesh.vertices.push_back({coords[3 * it->second], coords[3 * it->second + 1]});
+    }
+    for (const auto& q : raw) {
+      std::array<unsigned int, 4> quad{index.at(q.tags[0]), index.at(q.tags[1]), index.at(q.tags[2]),
+                                       index.at(q.tags[3])};
+      double area2 = 0;
+      for (int c = 0; c < 4; ++c) {
+        const auto& p = mesh.vertices[quad[c]];
+        const auto& r = mesh.vertices[quad[(c + 1) % 4]];
+        area2 += p[0] * r[1] - r[0] * p[1];
+      }
+      if (area2 < 0) std::swap(quad[1], quad[3]);
+      mesh.quads.push_back(quad);
+      mesh.material_ids.push_back(q.material);
+    }
+    for (const auto& e : raw_rim) {
+      const auto a = index.find(e[0]), b = index.find(e[1]);
+      if (a == index.end() || b == index.end()) throw pvdf::InputError(path + ": a rim edge is not on a quadrilateral");
+      mesh.rim_edges.push_back({a->second, b->second});
+    }
+    double r_min = 1e300, r_max = 0;
+    for (const auto& e : mesh.rim_edges) {
+      for (unsigned int v : e) {
+        const double r = std::hypot(mesh.vertices[v][0], mesh.vertices[v][1]);
+        r_min = std::min(r_min, r);
+        r_max = std::max(r_max, r);
+      }
+    }
+    if (!mesh.rim_edges.empty() && r_max > 0 && (r_max - r_min) < 1e-9 * r_max) {
+      mesh.rim_shape = FilmMesh::RimShape::circle;
+      mesh.rim_radius_m = 0.5 * (r_min + r_max);
+    }
+  });
+  gmsh::clear();
+  return mesh;
 }
 
 }  // namespace pvdf::mesh

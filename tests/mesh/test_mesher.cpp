@@ -367,3 +367,53 @@ TEST_CASE("write_msh writes a mesh Gmsh reopens, with the physical groups", "[me
   std::remove(path.c_str());
   std::remove(path2.c_str());
 }
+
+TEST_CASE("read_msh gives back the mesh write_msh wrote", "[mesh]") {
+  auto scene = mixed_scene();
+  const std::string path = std::string(PVDF_BINARY_DIR) + "/test_mesh_roundtrip.msh";
+  const FilmMesh written = pvdf::mesh::write_msh(scene, path);
+  const FilmMesh read = pvdf::mesh::read_msh(path);
+  CHECK(read.electrode_names == written.electrode_names);
+  REQUIRE(read.vertices.size() == written.vertices.size());
+  REQUIRE(read.n_cells() == written.n_cells());
+  CHECK(read.rim_edges.size() == written.rim_edges.size());
+  CHECK(read.rim_shape == FilmMesh::RimShape::circle);
+  CHECK(read.rim_radius_m == Approx(0.045).epsilon(1e-12));
+  // Same vertices (ASCII round trip) and the same cells with the same materials, as sets.
+  double worst = 0;
+  for (std::size_t i = 0; i < read.vertices.size(); ++i) {
+    worst = std::max({worst, std::abs(read.vertices[i][0] - written.vertices[i][0]),
+                      std::abs(read.vertices[i][1] - written.vertices[i][1])});
+  }
+  CHECK(worst < 1e-15);
+  auto canonical = [](const FilmMesh& m) {
+    std::vector<std::array<unsigned int, 5>> cells;
+    for (std::size_t i = 0; i < m.quads.size(); ++i) {
+      auto q = m.quads[i];
+      std::rotate(q.begin(), std::min_element(q.begin(), q.end()), q.end());
+      cells.push_back({q[0], q[1], q[2], q[3], m.material_ids[i]});
+    }
+    std::sort(cells.begin(), cells.end());
+    return cells;
+  };
+  CHECK(canonical(read) == canonical(written));
+  for (std::size_t k = 0; k < 3; ++k) {
+    const auto id = pvdf::mesh::electrode_material_id(k);
+    CHECK(pvdf::mesh::material_area_m2(read, id) == Approx(pvdf::mesh::material_area_m2(written, id)).epsilon(1e-14));
+  }
+  // A second-order file reads back to the same corner mesh.
+  scene.mesh.order = 2;
+  pvdf::mesh::write_msh(scene, path);
+  const FilmMesh read2 = pvdf::mesh::read_msh(path);
+  CHECK(canonical(read2) == canonical(written));
+  std::remove(path.c_str());
+  // Bad files are input errors naming the file.
+  CHECK_THROWS_WITH(pvdf::mesh::read_msh(path), Catch::Contains(path));
+  const std::string junk = std::string(PVDF_BINARY_DIR) + "/test_mesh_junk.msh";
+  {
+    std::ofstream out(junk);
+    out << "$MeshFormat\n4.1 0 8\n$EndMeshFormat\n";
+  }
+  CHECK_THROWS_AS(pvdf::mesh::read_msh(junk), pvdf::InputError);
+  std::remove(junk.c_str());
+}

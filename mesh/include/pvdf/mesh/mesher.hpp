@@ -82,6 +82,15 @@ FilmMesh write_msh(const pvdf::Scene& scene, const std::string& path, MeshReport
 FilmMesh write_msh(const pvdf::Scene& scene, const std::string& path, const MeshParameters& parameters,
                MeshReport* report = nullptr);
 
+/// Reads a .msh file written by write_msh (or any Gmsh quad mesh with the same physical-group
+/// names: surface "film", one surface per electrode in tag order, curve "rim") back into a
+/// FilmMesh: corner vertices only (second-order nodes dropped), quads counter-clockwise,
+/// material ids and electrode names from the groups. The rim is reported as a circle when all
+/// rim vertices lie on one circle about the origin (relative spread < 1e-9), else polygonal.
+/// Throws pvdf::InputError naming the file when it cannot be read, has no "rim" group, or
+/// holds elements other than quadrilaterals in its surfaces.
+FilmMesh read_msh(const std::string& path);
+
 /// Quality of a quad mesh (fills n_cells, n_vertices, size_min/max, min scaled Jacobian, max
 /// aspect ratio; leaves wall_s and target sizes alone).
 void measure_quality(const FilmMesh& mesh, MeshReport& report);
