@@ -690,8 +690,15 @@ double nice_step(double range, int target) {
 std::vector<Tick> linear_ticks(double lo, double hi, int target, Label* multiplier = nullptr) {
   if (multiplier) *multiplier = Label{};
   std::vector<Tick> ticks;
-  const double step = nice_step(hi - lo, target);
+  // The smallest 1-2-5 step that leaves at most `target` intervals between the ticks inside.
+  double step = nice_step(hi - lo, target);
   if (!(step > 0)) return ticks;
+  for (int k = 0; k < 3; ++k) {
+    const double m = step / std::pow(10.0, std::floor(std::log10(step) + 1e-9));
+    const double smaller = step * (m < 1.5 ? 0.5 : m < 3 ? 0.5 : 0.4);  // 1→0.5, 2→1, 5→2
+    if (std::floor(hi / smaller + 1e-9) - std::ceil(lo / smaller - 1e-9) > target) break;
+    step = smaller;
+  }
   const double k0 = std::ceil(lo / step - 1e-9), k1 = std::floor(hi / step + 1e-9);
   if (!finite(k0) || !finite(k1) || k1 - k0 > 200) return ticks;
   const double maxabs = std::max(std::abs(lo), std::abs(hi));
