@@ -4,6 +4,7 @@
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 
@@ -63,6 +64,8 @@ nlohmann::json errors_json(const CalibrationErrors& e, const std::vector<std::st
   for (std::size_t k = 0; k < names.size(); ++k) j["rms_charge_C"][names[k]] = e.rms_charge_C[k];
   j["rms_position_m"] = e.rms_position_m;
   j["rms_force_relative"] = e.rms_force_relative;
+  j["median_position_m"] = e.median_position_m;
+  j["median_force_relative"] = e.median_force_relative;
   j["n_located"] = e.n_located;
   j["n_presses"] = n;
   return j;
@@ -128,6 +131,7 @@ CalibrationReport fit_calibration(const ChargeMap& map, const std::vector<Measur
     CalibrationErrors e;
     e.rms_charge_C.assign(ne, 0.0);
     double pos2 = 0, force2 = 0;
+    std::vector<double> positions, forces;
     for (std::size_t i : inside) {
       std::array<double, max_electrodes> corrected{};
       for (std::size_t k = 0; k < ne; ++k) {
@@ -140,16 +144,27 @@ CalibrationReport fit_calibration(const ChargeMap& map, const std::vector<Measur
       const Location free = raw.locate(corrected.data());
       if (known.has_position()) {
         ++e.n_located;
-        pos2 += std::pow(known.x_m - presses[i].x_m, 2) + std::pow(known.y_m - presses[i].y_m, 2);
-      } else {
-        pos2 += 0;  // counted by n_located
+        const double d2 = std::pow(known.x_m - presses[i].x_m, 2) + std::pow(known.y_m - presses[i].y_m, 2);
+        pos2 += d2;
+        positions.push_back(std::sqrt(d2));
       }
-      if (free.has_position()) force2 += std::pow((free.force_N - presses[i].force_N) / presses[i].force_N, 2);
+      if (free.has_position()) {
+        const double rel = (free.force_N - presses[i].force_N) / presses[i].force_N;
+        force2 += rel * rel;
+        forces.push_back(std::abs(rel));
+      }
     }
     const double n = double(inside.size());
     for (auto& v : e.rms_charge_C) v = std::sqrt(v / n);
     e.rms_position_m = e.n_located > 0 ? std::sqrt(pos2 / e.n_located) : 0.0;
-    e.rms_force_relative = std::sqrt(force2 / n);
+    e.rms_force_relative = forces.empty() ? 0.0 : std::sqrt(force2 / double(forces.size()));
+    auto median = [](std::vector<double> v) {
+      if (v.empty()) return 0.0;
+      std::sort(v.begin(), v.end());
+      return v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
+    };
+    e.median_position_m = median(positions);
+    e.median_force_relative = median(forces);
     return e;
   };
   report.before = evaluate([](std::size_t, std::size_t) { return LineFit{1.0, 0.0, true}; });

@@ -27,7 +27,9 @@ std::vector<Measurement> read_measurements(const std::string& path, const std::v
 struct CalibrationErrors {
   std::vector<double> rms_charge_C;   ///< per electrode: RMS(measured − predicted)
   double rms_position_m = 0;          ///< locating the measured charges with the known force
+  double median_position_m = 0;       ///< same, median (robust to the few presses on map folds)
   double rms_force_relative = 0;      ///< locating with unknown force: RMS of (F − F_true)/F_true
+  double median_force_relative = 0;   ///< same, median (an ambiguous press may pick the other solution)
   int n_located = 0;                  ///< presses that got a position (of n_presses)
 };
 

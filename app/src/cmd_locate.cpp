@@ -1,0 +1,181 @@
+// `pvdfkit locate`: where was the sensor pressed and how hard, from its electrode charges and a
+// charge map (issue 6): one press (--charges-C), a CSV stream, or pictures of the map.
+#include "command.hpp"
+
+#include "pvdf/core/error.hpp"
+#include "pvdf/core/io.hpp"
+#include "pvdf/mapping/locator.hpp"
+#include "pvdf/mapping/map.hpp"
+#include "pvdf/mapping/pictures.hpp"
+#include "pvdf/mapping/stream.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <memory>
+
+namespace {
+
+struct LocateOptions {
+  std::string map_path;
+  std::string charges;
+  std::string noise;
+  double force_N = 0;
+  std::string force_range;
+  bool no_calibration = false;
+  bool json = false;
+  bool stream = false;
+  std::string input;
+  bool strict = false;
+  std::string plot_path;
+  std::string pictures_dir;
+};
+
+nlohmann::json flags_json(std::uint32_t flags) {
+  nlohmann::json a = nlohmann::json::array();
+  const std::string text = pvdf::mapping::flags_text(flags);
+  if (text == "ok") return a;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t bar = text.find('|', start);
+    a.push_back(text.substr(start, bar - start));
+    if (bar == std::string::npos) break;
+    start = bar + 1;
+  }
+  return a;
+}
+
+int run_locate(const LocateOptions& o) {
+  using namespace pvdf::mapping;
+  const ChargeMap map = read_map(o.map_path);
+  LocatorOptions options;
+  if (!o.noise.empty()) options.noise_C = pvdf::parse_number_list(o.noise, "--noise-C");
+  options.use_calibration = !o.no_calibration;
+  if (!o.force_range.empty()) {
+    const auto r = pvdf::parse_number_list(o.force_range, "--force-range-N", 2);
+    options.min_force_N = r[0];
+    options.max_force_N = r[1];
+    if (!(r[0] > 0) || !(r[1] > r[0])) throw pvdf::InputError("--force-range-N " + o.force_range + ": need 0 < MIN < MAX (N)");
+  }
+  if (o.force_N != 0 && !(o.force_N > 0)) throw pvdf::InputError("--force-N " + std::to_string(o.force_N) + ": must be > 0 (N)");
+  options.known_force_N = o.force_N;
+  const Locator locator(map, options);
+
+  if (!o.pictures_dir.empty()) {
+    pvdf::make_directories(o.pictures_dir);
+    double force = o.force_N;
+    if (!(force > 0)) {  // the level nearest 1 N
+      force = map.forces_N.front();
+      for (double f : map.forces_N) {
+        if (std::abs(std::log(f)) < std::abs(std::log(force))) force = f;
+      }
+    }
+    for (std::size_t k = 0; k < map.ne(); ++k) {
+      const std::string path = o.pictures_dir + "/isocharge_" + map.electrode_names[k] + ".png";
+      write_isocharge_png(locator, map, k, force, path);
+      std::printf("wrote %s\n", path.c_str());
+    }
+    const std::string vtk = o.pictures_dir + "/charges.vtk";
+    write_charge_vtk(map, vtk);
+    std::printf("wrote %s\n", vtk.c_str());
+    if (o.charges.empty() && !o.stream && o.input.empty()) return pvdf::exit_code::success;
+  }
+
+  if (!o.charges.empty()) {
+    if (o.stream || !o.input.empty()) throw pvdf::InputError("--charges-C and --stream/--input: choose one press or a stream");
+    const auto q = pvdf::parse_number_list(o.charges, "--charges-C", map.ne());
+    const Location r = locator.locate(q.data());
+    if (o.json) {
+      nlohmann::json j;
+      j["flags"] = flags_json(r.flags);
+      if (r.has_position()) {
+        j["x_m"] = r.x_m;
+        j["y_m"] = r.y_m;
+        j["force_N"] = r.force_N;
+        j["residual"] = r.residual;
+        j["sigma_x_m"] = r.sigma_x_m;
+        j["sigma_y_m"] = r.sigma_y_m;
+        j["sigma_F_N"] = r.sigma_F_N;
+        j["n_solutions"] = r.n_solutions;
+        j["calibrated"] = locator.calibrated();
+        if (r.flags & flag::ambiguous) {
+          j["alternative"] = {{"x_m", r.alternative.x_m}, {"y_m", r.alternative.y_m}, {"force_N", r.alternative.force_N},
+                              {"residual", r.alternative.residual}, {"sigma_x_m", r.alternative.sigma_x_m},
+                              {"sigma_y_m", r.alternative.sigma_y_m}, {"sigma_F_N", r.alternative.sigma_F_N}};
+        }
+      }
+      std::cout << j.dump(2) << '\n';
+    } else if (r.has_position()) {
+      std::printf("x = %.4f mm +- %.4f mm\ny = %.4f mm +- %.4f mm\nF = %.5g N +- %.3g N%s\n", r.x_m * 1e3,
+                  r.sigma_x_m * 1e3, r.y_m * 1e3, r.sigma_y_m * 1e3, r.force_N, r.sigma_F_N,
+                  o.force_N > 0 ? " (given)" : "");
+      std::printf("residual = %.3g (noise units)\nflags: %s\n", r.residual, flags_text(r.flags).c_str());
+      if (r.flags & flag::ambiguous) {
+        std::printf("also fits: x = %.4f mm, y = %.4f mm, F = %.5g N, residual %.3g (%d solutions in all)\n",
+                    r.alternative.x_m * 1e3, r.alternative.y_m * 1e3, r.alternative.force_N, r.alternative.residual,
+                    r.n_solutions);
+      }
+    } else {
+      std::printf("flags: %s\n", flags_text(r.flags).c_str());
+    }
+    if (!o.plot_path.empty()) {
+      if (!r.has_position()) {
+        std::cerr << "warning: no picture: the press has no position\n";
+      } else {
+        write_intersection_png(locator, map, q.data(), r, o.plot_path);
+        if (!o.json) std::printf("plot written to %s\n", o.plot_path.c_str());
+      }
+    }
+    // Numerical honesty: a press outside the map or at the noise level is not a result.
+    return r.has_position() ? pvdf::exit_code::success : pvdf::exit_code::numerical;
+  }
+
+  if (o.stream || !o.input.empty()) {
+    if (!o.plot_path.empty() || o.json) throw pvdf::InputError("--plot and --json apply to a single press (--charges-C), not to a stream");
+    StreamOptions so;
+    so.strict = o.strict;
+    std::ifstream file;
+    std::istream* in = &std::cin;
+    if (!o.input.empty() && o.input != "-") {
+      file.open(o.input);
+      if (!file) throw pvdf::InputError(o.input + ": cannot open; check the path");
+      in = &file;
+      so.source = o.input;
+    }
+    const StreamSummary s = locate_stream(locator, *in, std::cout, std::cerr, so);
+    std::cerr << "located " << s.located << " of " << s.rows << " rows (" << s.flagged << " flagged, " << s.skipped
+              << " malformed rows skipped)\n";
+    return pvdf::exit_code::success;
+  }
+  if (o.pictures_dir.empty()) {
+    throw pvdf::InputError("nothing to do: give --charges-C Q1,Q2,... for one press, --stream (CSV on stdin) or "
+                           "--input FILE for many, or --pictures DIR");
+  }
+  return pvdf::exit_code::success;
+}
+
+}  // namespace
+
+PVDF_COMMAND(60, [](CLI::App& root) {
+  auto* sub = root.add_subcommand(
+      "locate",
+      "Locate a press (position, force, 1-sigma, flags) from electrode charges with a charge map; "
+      "one press, a CSV stream, or pictures of the map (docs/lookup.md)");
+  auto o = std::make_shared<LocateOptions>();
+  sub->add_option("MAP", o->map_path, "Charge map (HDF5 from `pvdfkit map` or `pvdfkit calibrate`)")->required();
+  sub->add_option("--charges-C", o->charges, "One press: the charges of the map's electrodes, in its order (C), e.g. 4e-11,2e-11,1.5e-11");
+  sub->add_flag("--json", o->json, "Print the single result as JSON");
+  sub->add_option("--noise-C", o->noise, "1-sigma charge noise, one value or one per electrode (C); default: the map's");
+  sub->add_option("--force-N", o->force_N, "Known force (N): fit the position only (and the force of --pictures)");
+  sub->add_option("--force-range-N", o->force_range, "Plausible forces MIN,MAX (N); default: half the lowest to twice the highest map level");
+  sub->add_flag("--no-calibration", o->no_calibration, "Ignore the map's calibration group");
+  sub->add_flag("--stream", o->stream, "Read CSV rows (t_s,charge_<name>_C,...) on stdin, write located rows on stdout");
+  sub->add_option("--input", o->input, "Read the CSV rows from this file instead of stdin (implies --stream)");
+  sub->add_flag("--strict", o->strict, "Stream: refuse a malformed row (exit 2) instead of skipping it with a warning");
+  sub->add_option("--plot", o->plot_path, "Single press: PNG of the isocharge contours of the charges and their intersection");
+  sub->add_option("--pictures", o->pictures_dir, "Write isocharge_<name>.png per electrode and charges.vtk of the map here");
+  return pvdf::app::Subcommand{sub, [o] { return run_locate(*o); }};
+});
