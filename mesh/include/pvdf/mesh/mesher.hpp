@@ -42,8 +42,6 @@ struct MeshParameters {
   double size_factor = 1.0;
   /// Print Gmsh's own log to stdout.
   bool verbose = false;
-  /// Number of points per circle used by the geometric checks (not the mesh).
-  int check_circle_points = 256;
 };
 
 /// Fine and coarse target sizes (m) for a scene: the scene's mesh.size_min_m / size_max_m
