@@ -31,7 +31,7 @@ struct IdentifyOptions {
   std::vector<std::string> scans, forces;
   std::vector<double> edges;
   std::string output, plot_dir, beta = "1e-4", policy, window = "tukey";
-  double speed = 0, corner = 0, resolution = 0;
+  double speed = 0, corner = 0, resolution = 0, low_cut = 0;
   std::size_t taps = 8192, g_window = 0;
   long delay = -1;
 };
@@ -84,6 +84,7 @@ int run_identify(const IdentifyOptions& o) {
   d.corner_wavelength_m = o.corner;
   std::string policy = o.policy;
   d.resolution_m = o.resolution;
+  d.low_cut_wavelength_m = o.low_cut;
   d.g_window = o.g_window;
   if (o.beta == "auto" || o.beta == "gcv") {
     const std::string chosen = o.beta == "auto" ? "discrepancy" : "gcv";
@@ -215,6 +216,8 @@ PVDF_COMMAND(60, [](CLI::App& root) {
                                               "with --beta-corner-m)");
   id->add_option("--resolution-m", io->resolution, "Target resolution (Gaussian FWHM, m) applied to both forces; 0 = none "
                                                    "(seed 000). 1e-3 suits 1 mm deep strips");
+  id->add_option("--low-cut-m", io->low_cut, "Damp wavelengths beyond this (m): beta(k) *= 1 + (k_low/k)^2; the sensor "
+                                            "cannot see the mean load. 0 = off (seed 000); 0.01 suits the example");
   id->add_option("--g-window", io->g_window, "Lags of G kept by identification (default = --taps)");
   id->add_option("--beta-corner-m", io->corner, "Wavelength in m for beta(k) = beta (1 + (k L/2pi)^2)");
   id->add_option("--window", io->window, "Taper of the FIR taps: tukey, hann, none")->capture_default_str();

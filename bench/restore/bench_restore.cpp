@@ -66,7 +66,7 @@ int main() {
   test.edges = {{-0.03, 0.45, 0.9}, {0.015, 0.15, 1.0}};
   const Scan scan = simulate_scan(test);
 
-  std::printf("(1) identification + design (CPU time), 2 scans of %zu samples, automatic beta, 1.5 mm target\n", ids[0].scan.size());
+  std::printf("(1) identification + design (CPU time), 2 scans of %zu samples, automatic beta, 1.5 mm target, 10 mm low cut\n", ids[0].scan.size());
   std::printf("%8s %12s %12s %12s %14s %14s\n", "N", "identify_ms", "design_ms", "beta_rel", "max|mu err|", "max|shift|smp");
   InverseFilter kept;
   for (std::size_t N : {2048u, 4096u, 8192u, 16384u}) {
@@ -74,6 +74,7 @@ int main() {
     o.taps = N;
     o.beta_policy = BetaPolicy::discrepancy;
     o.resolution_m = 1.5e-3;
+    o.low_cut_wavelength_m = 0.01;
     const int reps = 5;
     auto t0 = clock_type::now();
     TransferMatrix t;
@@ -133,19 +134,20 @@ int main() {
   struct Case {
     const char* name;
     BetaPolicy policy;
-    double beta, resolution;
+    double beta, resolution, low_cut;
   };
-  for (const Case& c : {Case{"constant 1e-4, no target (paper)", BetaPolicy::constant, 1e-4, 0.0},
-                        Case{"constant 1e-8, 1.5 mm target", BetaPolicy::constant, 1e-8, 1.5e-3},
-                        Case{"constant 1e-4, 1.5 mm target", BetaPolicy::constant, 1e-4, 1.5e-3},
-                        Case{"constant 10, 1.5 mm target", BetaPolicy::constant, 10.0, 1.5e-3},
-                        Case{"gcv, 1.5 mm target", BetaPolicy::gcv, 0.0, 1.5e-3},
-                        Case{"auto (discrepancy), 1.5 mm target", BetaPolicy::discrepancy, 0.0, 1.5e-3},
-                        Case{"auto (discrepancy), no target", BetaPolicy::discrepancy, 0.0, 0.0}}) {
+  for (const Case& c : {Case{"constant 1e-4, no target (paper)", BetaPolicy::constant, 1e-4, 0.0, 0.0},
+                        Case{"constant 1e-8, target, low cut", BetaPolicy::constant, 1e-8, 1.5e-3, 0.01},
+                        Case{"constant 1e-4, target, low cut", BetaPolicy::constant, 1e-4, 1.5e-3, 0.01},
+                        Case{"constant 10, target, low cut", BetaPolicy::constant, 10.0, 1.5e-3, 0.01},
+                        Case{"gcv, target, low cut", BetaPolicy::gcv, 0.0, 1.5e-3, 0.01},
+                        Case{"auto, target, no low cut", BetaPolicy::discrepancy, 0.0, 1.5e-3, 0.0},
+                        Case{"auto, target, low cut (recommended)", BetaPolicy::discrepancy, 0.0, 1.5e-3, 0.01}}) {
     DesignOptions o;
     o.beta_policy = c.policy;
     o.beta = c.beta;
     o.resolution_m = c.resolution;
+    o.low_cut_wavelength_m = c.low_cut;
     const auto f = design_inverse(identify_transfer(ids, o), ids, o);
     double mu_err = 0, shift = 0;
     edge_errors(restore_scan(f, scan), test, mu_err, shift);

@@ -7,7 +7,7 @@
 # identified from those two scans (eq. 6) and inverted with regularization (eq. 4) into four FIR
 # filters (Fig. 13); the filters then restore f_x, f_z and mu from a new scan of a surface with two
 # edges and a ridged texture whose friction rises from 0.2 to 0.8 (Fig. 14). Once with the paper's
-# constant beta = 1e-4, once with the automatic beta and a 1.5 mm target resolution.
+# constant beta = 1e-4, once with the automatic beta, a 1.5 mm target resolution and a 10 mm low cut.
 #
 # Run:     examples/restore/run.sh [PVDFKIT] [OUTDIR]
 #          (defaults: pvdfkit from PATH, ./restore-example). About 2 s.
@@ -29,10 +29,10 @@ echo "== 2. Identify G and design the inverse filters as in the paper (constant 
   --scan "$OUT/edge_b.csv" --force 0.2,1.0 --edge-x-m -0.0125 \
   --beta 1e-4 -o "$OUT/filter_paper.json" --plot-dir "$OUT/plots_paper"
 
-echo "== 3. The same with the automatic beta (noise floor of G) and a 1.5 mm target resolution"
+echo "== 3. The same with the automatic beta (noise floor of G), a 1.5 mm target resolution and a 10 mm low cut"
 "$PVDFKIT" restore identify --scan "$OUT/edge_a.csv" --force 0.6,0.9 --edge-x-m -0.0125 \
   --scan "$OUT/edge_b.csv" --force 0.2,1.0 --edge-x-m -0.0125 \
-  --beta auto --resolution-m 1.5e-3 -o "$OUT/filter.json" --plot-dir "$OUT/plots"
+  --beta auto --resolution-m 1.5e-3 --low-cut-m 0.01 -o "$OUT/filter.json" --plot-dir "$OUT/plots"
 
 echo "== 4. Scan a new surface: edges at -30 mm (mu 0.375) and -15 mm (mu 0.786), texture 0-30 mm"
 "$PVDFKIT" restore simulate "$HERE/scanner.json" -o "$OUT/surface.csv" --plot "$OUT/surface_signals.png"

@@ -50,7 +50,7 @@ void save_filter(const std::string& path, const InverseFilter& f) {
   j["window"] = f.window;
   j["resolution_m"] = f.resolution_m;
   j["beta"] = {{"policy", f.beta_policy}, {"relative", f.beta}, {"absolute_V2_per_N2", f.beta_abs},
-               {"corner_wavelength_m", f.corner_wavelength_m}};
+               {"corner_wavelength_m", f.corner_wavelength_m}, {"low_cut_wavelength_m", f.low_cut_wavelength_m}};
   nlohmann::json gcv = nlohmann::json::array();
   for (const auto& [b, v] : f.gcv_curve) gcv.push_back({b, v});
   j["beta"]["gcv_curve"] = gcv;
@@ -100,6 +100,7 @@ InverseFilter load_filter(const std::string& path) {
   f.beta = beta.non_negative_or("relative", 0);
   f.beta_abs = beta.non_negative_or("absolute_V2_per_N2", 0);
   f.corner_wavelength_m = beta.non_negative_or("corner_wavelength_m", 0);
+  f.low_cut_wavelength_m = beta.non_negative_or("low_cut_wavelength_m", 0);
   if (beta.has("gcv_curve")) {
     for (const auto& p : beta.points("gcv_curve", 0)) f.gcv_curve.emplace_back(p[0], p[1]);
   }

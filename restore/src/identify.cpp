@@ -77,9 +77,18 @@ double target(const DesignOptions& o, std::size_t bin, std::size_t L, double dx)
 }
 
 double shape(const DesignOptions& o, std::size_t bin, std::size_t L, double dx) {
-  if (o.corner_wavelength_m <= 0) return 1.0;
-  const double r = static_cast<double>(bin) * o.corner_wavelength_m / (static_cast<double>(L) * dx);
-  return 1.0 + r * r;
+  double s = 1.0;
+  if (o.corner_wavelength_m > 0) {
+    const double r = static_cast<double>(bin) * o.corner_wavelength_m / (static_cast<double>(L) * dx);
+    s *= 1.0 + r * r;
+  }
+  if (o.low_cut_wavelength_m > 0) {
+    // k_low / k = (L dx / lambda_low) / bin; at bin 0 the factor is infinite (H(0) = 0 anyway: G(0) = 0).
+    if (bin == 0) return 1e300;
+    const double r = static_cast<double>(L) * dx / (o.low_cut_wavelength_m * static_cast<double>(bin));
+    s *= 1.0 + r * r;
+  }
+  return s;
 }
 
 }  // namespace
@@ -292,6 +301,7 @@ InverseFilter design_inverse(const TransferMatrix& t, const std::vector<Identifi
   f.beta_policy = to_string(o.beta_policy);
   f.corner_wavelength_m = o.corner_wavelength_m;
   f.resolution_m = o.resolution_m;
+  f.low_cut_wavelength_m = o.low_cut_wavelength_m;
   if (o.resolution_m < 0) throw InputError("--resolution-m = " + num(o.resolution_m) + " must be >= 0");
   f.window = o.window;
   f.transfer = t;

@@ -37,6 +37,10 @@ struct DesignOptions {
   BetaPolicy beta_policy = BetaPolicy::constant;
   double beta = 1e-4;                 ///< seed 000 section 5.2 (relative, see BetaPolicy)
   double corner_wavelength_m = 0;     ///< for BetaPolicy::frequency (required > 0) and optionally gcv
+  /// Low-frequency damping (any policy): beta(k) *= 1 + (k_low / k)^2, k_low = 2 pi / low_cut_wavelength_m.
+  /// A stress-rate sensor cannot see the mean load; its inverse integrates white noise into a random
+  /// walk, which this cuts at wavelengths beyond low_cut_wavelength_m. 0 = off (seed 000).
+  double low_cut_wavelength_m = 0;
   std::string window = "tukey";       ///< taper of the FIR taps: tukey (25 %), hann, none
   /// Target resolution (FWHM of a Gaussian, m): H = T(k) (G^H G + beta I)^-1 G^H with
   /// T(k) = exp(-(k s)^2 / 2), s = resolution_m / 2.3548, so both forces come out with the same blur
@@ -80,6 +84,7 @@ struct InverseFilter {
   double beta_abs = 0;                ///< beta * max s^2, in (V/N)^2
   double corner_wavelength_m = 0;
   double resolution_m = 0;            ///< target Gaussian FWHM (0 = none)
+  double low_cut_wavelength_m = 0;    ///< low-frequency damping wavelength (0 = none)
   std::string window = "tukey";
   /// h[i][j]: restored force i (0 = f_x, 1 = f_z) from signal j (0 = m1, 1 = m2); h[0][0] is seed 000's h11.
   std::array<std::array<std::vector<double>, 2>, 2> h;
