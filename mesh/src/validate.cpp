@@ -183,6 +183,10 @@ void check_sizes(const pvdf::Scene& s) {
   if (!(m.min_scaled_jacobian >= 0 && m.min_scaled_jacobian <= 1)) {
     fail(s, "mesh.min_scaled_jacobian = " + fmt(m.min_scaled_jacobian) + " must lie in [0, 1]");
   }
+  if (s.electrodes.size() > 254) {
+    fail(s, "electrodes lists " + std::to_string(s.electrodes.size()) +
+                " electrodes; at most 254 fit the 8-bit material ids of the mesh (film 0, electrode k -> k+1)");
+  }
   if (!finite_positive(s.probe.radius_m)) fail(s, "probe.radius_m = " + fmt(s.probe.radius_m) + " must be > 0");
   for (std::size_t i = 0; i < s.loads.size(); ++i) {
     const auto& l = s.loads[i];

@@ -109,6 +109,9 @@ TEST_CASE("zero or negative sizes are refused, naming the key", "[mesh][validate
   auto probe = seed();
   probe.probe.radius_m = 0;
   CHECK_THAT(rejection(probe), Catch::Contains("probe.radius_m"));
+  auto many = seed();
+  many.electrodes.resize(255, many.electrodes[0]);
+  CHECK_THAT(rejection(many), Catch::Contains("at most 254"));
   auto nan = seed();
   nan.electrodes[0].center_m = {std::nan(""), 0.0};
   CHECK_THAT(rejection(nan), Catch::Contains("\"A\"") && Catch::Contains("center_m"));
