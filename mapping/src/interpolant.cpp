@@ -116,9 +116,15 @@ bool MapInterpolant::inside(double x_m, double y_m) const {
   return cell_ok_[j * (nx_ - 1) + i] != 0;
 }
 
-bool MapInterpolant::evaluate_level(std::size_t f, std::size_t i, std::size_t j, double t, double s, double* g,
-                                    double* gx, double* gy) const {
-  // Cubic Hermite basis on [0, 1]: values (A) and slopes (C) at the two ends, and derivatives.
+namespace {
+
+/// Bicubic Hermite value and gradient (in cell units) of NE electrodes at (t, s) in a cell
+/// whose four corner records start at c00, c10, c01, c11 (each NE × {G, hx·Gx, hy·Gy, hx·hy·Gxy}).
+/// NE = 0 means "runtime ne".
+template <std::size_t NE>
+inline void hermite_cell(const double* const corner[4], std::size_t ne_runtime, double t, double s, double* g,
+                         double* gt, double* gs) {
+  const std::size_t ne = NE > 0 ? NE : ne_runtime;
   const double t2 = t * t, t3 = t2 * t, s2 = s * s, s3 = s2 * s;
   const double A[2] = {2 * t3 - 3 * t2 + 1, -2 * t3 + 3 * t2};
   const double C[2] = {t3 - 2 * t2 + t, t3 - t2};
@@ -128,26 +134,39 @@ bool MapInterpolant::evaluate_level(std::size_t f, std::size_t i, std::size_t j,
   const double D[2] = {s3 - 2 * s2 + s, s3 - s2};
   const double dB[2] = {6 * s2 - 6 * s, -6 * s2 + 6 * s};
   const double dD[2] = {3 * s2 - 4 * s + 1, 3 * s2 - 2 * s};
-  for (std::size_t k = 0; k < ne_; ++k) {
-    g[k] = gx[k] = gy[k] = 0;
-  }
+  for (std::size_t k = 0; k < ne; ++k) g[k] = gt[k] = gs[k] = 0;
   for (int b = 0; b < 2; ++b) {
     for (int a = 0; a < 2; ++a) {
-      const double* n = &data_[((f * ny_ + j + std::size_t(b)) * nx_ + i + std::size_t(a)) * ne_ * 4];
+      const double* n = corner[b * 2 + a];
       const double w0 = A[a] * B[b], w1 = C[a] * B[b], w2 = A[a] * D[b], w3 = C[a] * D[b];
       const double x0 = dA[a] * B[b], x1 = dC[a] * B[b], x2 = dA[a] * D[b], x3 = dC[a] * D[b];
       const double y0 = A[a] * dB[b], y1 = C[a] * dB[b], y2 = A[a] * dD[b], y3 = C[a] * dD[b];
-      for (std::size_t k = 0; k < ne_; ++k) {
+      for (std::size_t k = 0; k < ne; ++k) {
         const double* c = n + 4 * k;
         g[k] += w0 * c[0] + w1 * c[1] + w2 * c[2] + w3 * c[3];
-        gx[k] += x0 * c[0] + x1 * c[1] + x2 * c[2] + x3 * c[3];
-        gy[k] += y0 * c[0] + y1 * c[1] + y2 * c[2] + y3 * c[3];
+        gt[k] += x0 * c[0] + x1 * c[1] + x2 * c[2] + x3 * c[3];
+        gs[k] += y0 * c[0] + y1 * c[1] + y2 * c[2] + y3 * c[3];
       }
     }
   }
+}
+
+}  // namespace
+
+bool MapInterpolant::evaluate_level(std::size_t f, std::size_t i, std::size_t j, double t, double s, double* g,
+                                    double* gx, double* gy) const {
+  const std::size_t stride = ne_ * 4;
+  const double* base = &data_[((f * ny_ + j) * nx_ + i) * stride];
+  const double* const corner[4] = {base, base + stride, base + nx_ * stride, base + (nx_ + 1) * stride};
+  switch (ne_) {
+    case 3: hermite_cell<3>(corner, ne_, t, s, g, gx, gy); break;
+    case 4: hermite_cell<4>(corner, ne_, t, s, g, gx, gy); break;
+    default: hermite_cell<0>(corner, ne_, t, s, g, gx, gy); break;
+  }
+  const double ihx = 1.0 / hx_, ihy = 1.0 / hy_;
   for (std::size_t k = 0; k < ne_; ++k) {
-    gx[k] /= hx_;
-    gy[k] /= hy_;
+    gx[k] *= ihx;
+    gy[k] *= ihy;
   }
   return true;
 }
@@ -175,10 +194,23 @@ bool MapInterpolant::evaluate(double x_m, double y_m, double log_force, double* 
       dw = 1.0 / span;
     }
   }
-  std::array<double, max_electrodes> g0{}, gx0{}, gy0{};
-  evaluate_level(f0, i, j, t, s, g0.data(), gx0.data(), gy0.data());
+  std::array<double, max_electrodes> g0, gx0, gy0;
+  if (w < 1) {
+    evaluate_level(f0, i, j, t, s, g0.data(), gx0.data(), gy0.data());
+  }
   std::array<double, max_electrodes> g1{}, gx1{}, gy1{};
-  if (nf_ > 1) evaluate_level(f0 + 1, i, j, t, s, g1.data(), gx1.data(), gy1.data());
+  if (nf_ > 1 && w > 0) {
+    evaluate_level(f0 + 1, i, j, t, s, g1.data(), gx1.data(), gy1.data());
+    if (w >= 1) {
+      g0 = g1;
+      gx0 = gx1;
+      gy0 = gy1;
+    }
+  } else {
+    g1 = g0;  // w = 0 (or one level): only level f0 contributes
+    gx1 = gx0;
+    gy1 = gy0;
+  }
   const double amplitude = std::exp(p_ * log_force);
   for (std::size_t k = 0; k < ne_; ++k) {
     const double g = (1 - w) * g0[k] + w * g1[k];

@@ -324,8 +324,10 @@ Locator::Fit Locator::levenberg_marquardt(const double* q, const double* w, doub
     }
     const double trial_chi2 = chi2_of(trial);
     if (trial_chi2 <= chi2) {
-      const bool small = std::abs(limit * step[0]) < 1e-7 * hx && std::abs(limit * step[1]) < 1e-7 * hy &&
-                         std::abs(limit * step[2]) < 1e-9;
+      // Converged when the step is far below any useful resolution (1e-5 of a cell, 1e-7 in
+      // ln F) or the misfit no longer drops (relative 1e-8).
+      const bool small = std::abs(limit * step[0]) < 1e-5 * hx && std::abs(limit * step[1]) < 1e-5 * hy &&
+                         std::abs(limit * step[2]) < 1e-7;
       x = nx;
       y = ny;
       l = nl;
@@ -334,12 +336,12 @@ Locator::Fit Locator::levenberg_marquardt(const double* q, const double* w, doub
       if (fixed_force) {
         for (std::size_t k = 0; k < ne_; ++k) grad[k][2] = 0;
       }
-      const bool tiny_gain = chi2 - trial_chi2 <= 1e-12 * (chi2 + 1e-30);
+      const bool tiny_gain = chi2 - trial_chi2 <= 1e-8 * (chi2 + 1e-30);
       chi2 = trial_chi2;
       normal_equations();
       lambda = std::max(lambda * 0.2, 1e-9);
       fit.blocked = false;
-      if (small || chi2 < 1e-24 || (tiny_gain && lambda <= 1e-6)) {
+      if (small || chi2 < 1e-20 || tiny_gain) {
         fit.converged = true;
         ++it;
         break;
