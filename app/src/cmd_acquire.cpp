@@ -5,7 +5,9 @@
 #include "command.hpp"
 
 #include "pvdf/core/error.hpp"
+#include "pvdf/core/io.hpp"
 #include "pvdf/hardware/recording.hpp"
+#include "pvdf/hardware/sim_source.hpp"
 #include "pvdf/hardware/source.hpp"
 
 #if __has_include("pvdf/mapping/locator.hpp") && __has_include("pvdf/mapping/map.hpp")
@@ -44,6 +46,7 @@ struct AcquireOptions {
   std::string restore_filter;
   std::string output_path;
   std::string channels;
+  std::string force_range;
   double rate_Hz = 0;
   double gain_mV_per_pC = 0;
   double duration_s = 0;
@@ -123,8 +126,8 @@ double charge_gain_V_per_C(const StreamInfo& info, const char* flag) {
 /// taken as the map's electrode k.
 class LocateStage final : public Stage {
  public:
-  LocateStage(const StreamInfo& info, const std::string& map_path)
-      : info_(info), map_(pvdf::mapping::read_map(map_path)), locator_(map_),
+  LocateStage(const StreamInfo& info, const std::string& map_path, const pvdf::mapping::LocatorOptions& options)
+      : info_(info), map_(pvdf::mapping::read_map(map_path)), locator_(map_, options),
         gain_V_per_C_(charge_gain_V_per_C(info, "--locate")) {
     if (info.channels().size() != locator_.n_electrodes())
       throw pvdf::InputError("--locate " + map_path + ": the map has " + std::to_string(locator_.n_electrodes()) +
@@ -215,11 +218,20 @@ std::unique_ptr<Stage> make_stage(const AcquireOptions& o, const StreamInfo& inf
     throw pvdf::InputError("--locate and --restore: choose one stage");
   if (!o.locate_map.empty()) {
 #ifdef PVDF_ACQUIRE_HAVE_MAPPING
-    return std::make_unique<LocateStage>(info, o.locate_map);
+    pvdf::mapping::LocatorOptions options;
+    if (!o.force_range.empty()) {
+      const auto range = pvdf::parse_number_list(o.force_range, "--force-range-N", 2);
+      if (!(range[0] > 0 && range[1] > range[0]))
+        throw pvdf::InputError("--force-range-N " + o.force_range + ": expected MIN,MAX with 0 < MIN < MAX (N)");
+      options.min_force_N = range[0];
+      options.max_force_N = range[1];
+    }
+    return std::make_unique<LocateStage>(info, o.locate_map, options);
 #else
     throw pvdf::InputError("--locate: not available in this build (the mapping module, pvdf::mapping, was not built)");
 #endif
   }
+  if (!o.force_range.empty()) throw pvdf::InputError("--force-range-N applies to --locate; add --locate MAP");
   if (!o.restore_filter.empty()) {
 #ifdef PVDF_ACQUIRE_HAVE_RESTORE
     return std::make_unique<RestoreStage>(info, o.restore_filter);
@@ -228,6 +240,37 @@ std::unique_ptr<Stage> make_stage(const AcquireOptions& o, const StreamInfo& inf
 #endif
   }
   return std::make_unique<SamplesStage>(info);
+}
+
+/// Opens the source; a simulated scene that names a charge map gets its press charges from
+/// the map here (the hardware module does not read maps): Q at each press's position and force.
+std::unique_ptr<pvdf::hardware::Source> open_any_source(const std::string& device, const pvdf::hardware::OpenOptions& open) {
+  if (device.rfind("sim:", 0) != 0 || device.size() == 4) return pvdf::hardware::open_source(device, open);
+  const std::string path = device.substr(4);
+  pvdf::hardware::SimScene scene = pvdf::hardware::load_sim_scene(path);
+  if (scene.map_path.empty()) return pvdf::hardware::open_source(device, open);
+  if (open.sample_rate_Hz > 0 || open.channel_mask != 0)
+    throw pvdf::InputError("--rate-Hz and --channels configure a USB device; simulated streams are what the scene says");
+#ifdef PVDF_ACQUIRE_HAVE_MAPPING
+  const pvdf::mapping::ChargeMap map = pvdf::mapping::read_map(scene.map_path);
+  const pvdf::mapping::Locator model(map);
+  if (model.n_electrodes() != static_cast<std::size_t>(scene.channels))
+    throw pvdf::InputError(path + ": channels = " + std::to_string(scene.channels) + " but the map " + scene.map_path +
+                           " has " + std::to_string(model.n_electrodes()) + " electrodes; make them equal");
+  for (std::size_t i = 0; i < scene.presses.size(); ++i) {
+    auto& p = scene.presses[i];
+    p.charges_C.assign(model.n_electrodes(), 0.0);
+    if (!model.predict((*p.position_m)[0], (*p.position_m)[1], p.force_N, p.charges_C.data()))
+      throw pvdf::InputError(path + ": presses[" + std::to_string(i) + "].position_m = [" +
+                             std::to_string((*p.position_m)[0]) + ", " + std::to_string((*p.position_m)[1]) +
+                             "] with force_N = " + std::to_string(p.force_N) + " is outside the map " + scene.map_path +
+                             "; move it inside the film (away from the rim)");
+  }
+  return pvdf::hardware::open_sim(scene, "sim " + path + " (map " + scene.map_path + ")", open);
+#else
+  throw pvdf::InputError(path + ": map-driven simulation is not available in this build (the mapping module, "
+                         "pvdf::mapping, was not built)");
+#endif
 }
 
 std::uint16_t parse_channels(const std::string& text) {
@@ -256,7 +299,7 @@ int run_acquire(const AcquireOptions& o) {
   open.stall_timeout_s = o.stall_timeout_s;
   if (o.transfers < 1 || o.transfers > 64) throw pvdf::InputError("--transfers " + std::to_string(o.transfers) + " must be in 1..64");
 
-  auto source = pvdf::hardware::open_source(o.device, open);
+  auto source = open_any_source(o.device, open);
   const StreamInfo info = source->info();
   auto stage = make_stage(o, info);
   std::optional<pvdf::hardware::Recorder> recorder;
@@ -337,6 +380,8 @@ PVDF_COMMAND(70, [](CLI::App& root) {
   sub->add_option("--record", o->record_path, "Also record the stream to FILE (.pvdfrec, replay with --device replay:FILE)");
   sub->add_option("--locate", o->locate_map, "Locate presses with this charge map (one row per frame)");
   sub->add_option("--restore", o->restore_filter, "Restore forces f_x, f_z with this inverse filter (channels 1-2 = m1, m2)");
+  sub->add_option("--force-range-N", o->force_range,
+                  "--locate: plausible forces MIN,MAX (N), removes the second solution three electrodes often have");
   sub->add_option("--output", o->output_path, "Write the CSV to FILE instead of stdout (rows flushed per frame)");
   sub->add_option("--rate-Hz", o->rate_Hz, "usb: sample rate per channel (default: the device's)");
   sub->add_option("--channels", o->channels, "usb: channels to stream, e.g. 0,1,2 (default: the device's)");

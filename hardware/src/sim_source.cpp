@@ -23,14 +23,23 @@ double SimPress::force_at(double t_s) const {
   return 0.0;
 }
 
-double SimScene::ideal_output_V(int channel, double t_s) const {
-  double force = 0;
+double SimScene::charge_C(int channel, double t_s) const {
+  double charge = 0;
   for (const auto& p : presses) {
+    const double force = p.force_at(t_s);
+    if (!p.charges_C.empty()) {
+      // Map-driven: Q(F) = Q(F_press)·(F/F_press)^(2/3), exact for the pure membrane (docs/hardware.md).
+      if (force > 0 && p.force_N > 0)
+        charge += p.charges_C[static_cast<std::size_t>(channel)] * std::cbrt(std::pow(force / p.force_N, 2.0));
+      continue;
+    }
     const double w = p.weights.empty() ? 1.0 : p.weights[static_cast<std::size_t>(channel)];
-    force += w * p.force_at(t_s);
+    charge += w * sensitivity_C_per_N * force;
   }
-  return gain_V_per_C * sensitivity_C_per_N * force;
+  return charge;
 }
+
+double SimScene::ideal_output_V(int channel, double t_s) const { return gain_V_per_C * charge_C(channel, t_s); }
 
 SimScene default_sim_scene() {
   SimScene s;
@@ -78,6 +87,7 @@ SimScene parse_sim_scene(const nlohmann::json& json, const std::string& source) 
         rest.erase("weights");
       }
       const JsonObjectReader pr(source, where, rest);
+      if (pr.has("position_m")) p.position_m = pr.pair("position_m");
       p.start_s = pr.non_negative_or("start_s", p.start_s);
       p.rise_s = pr.positive_or("rise_s", p.rise_s);
       p.hold_s = pr.non_negative_or("hold_s", p.hold_s);
@@ -85,6 +95,21 @@ SimScene parse_sim_scene(const nlohmann::json& json, const std::string& source) 
       pr.finish();
       s.presses.push_back(p);
     }
+  }
+  s.map_path = r.string_or("map", "");
+  if (!s.map_path.empty() && s.map_path.front() != '/') {
+    const auto slash = source.find_last_of('/');
+    if (slash != std::string::npos) s.map_path = source.substr(0, slash + 1) + s.map_path;
+  }
+  for (std::size_t i = 0; i < s.presses.size(); ++i) {
+    const auto& p = s.presses[i];
+    const std::string where = source + ": presses[" + std::to_string(i) + "]";
+    if (!s.map_path.empty() && !p.position_m)
+      throw InputError(where + " needs position_m = [x, y] (m) because the scene names a map");
+    if (!s.map_path.empty() && !p.weights.empty())
+      throw InputError(where + ".weights: with a map the charges come from the map; remove weights");
+    if (s.map_path.empty() && p.position_m)
+      throw InputError(where + ".position_m needs a charge map: add \"map\": \"FILE.h5\" to the scene, or use weights");
   }
   if (const auto f = r.object_if("faults")) {
     s.faults.drop_every = static_cast<int>(f->integer_or("drop_every", 0, 0, 1000000));
@@ -101,6 +126,12 @@ SimScene load_sim_scene(const std::string& path) { return parse_sim_scene(read_j
 
 SimSource::SimSource(SimScene scene, bool realtime, const std::string& description)
     : scene_(std::move(scene)), pacer_(realtime), rng_(scene_.seed) {
+  for (std::size_t i = 0; i < scene_.presses.size(); ++i) {
+    const auto& p = scene_.presses[i];
+    if (p.position_m && p.charges_C.size() != static_cast<std::size_t>(scene_.channels))
+      throw InputError(description + ": presses[" + std::to_string(i) + "] at a position needs its charges from the map " +
+                       scene_.map_path + " (" + std::to_string(scene_.channels) + " channels)");
+  }
   info_.description = description;
   info_.sample_rate_Hz = scene_.sample_rate_Hz;
   info_.channel_mask = static_cast<std::uint16_t>((1u << scene_.channels) - 1u);
@@ -131,7 +162,7 @@ void SimSource::produce(std::vector<std::uint8_t>& bytes) {
     for (int c = 0; c < nc; ++c) {
       // Charge amplifier: v = -q/C_f ideally (sign kept positive here); with a feedback
       // resistor it is a first-order high-pass, v[n] = a·(v[n-1] + G·(q[n] - q[n-1])), a = exp(-dt/τ).
-      const double charge = scene_.ideal_output_V(c, t) / scene_.gain_V_per_C;
+      const double charge = scene_.charge_C(c, t);
       double v;
       if (scene_.time_constant_s > 0) {
         const auto k = static_cast<std::size_t>(c);

@@ -86,11 +86,14 @@ std::unique_ptr<Source> open_source(const std::string& spec, const OpenOptions& 
   if (spec.rfind("sim:", 0) == 0 || spec == "sim") {
     not_for("simulated");
     const std::string path = spec.size() > 4 ? spec.substr(4) : std::string();
-    if (path.empty())
-      return with_gain(std::make_unique<SimSource>(default_sim_scene(), options.realtime, "sim <built-in>"), options.gain_mV_per_pC);
-    return with_gain(std::make_unique<SimSource>(load_sim_scene(path), options.realtime, "sim " + path), options.gain_mV_per_pC);
+    if (path.empty()) return open_sim(default_sim_scene(), "sim <built-in>", options);
+    return open_sim(load_sim_scene(path), "sim " + path, options);
   }
   throw InputError("--device " + spec + ": expected usb[:VID:PID], replay:FILE or sim:SCENE (sim: for the built-in scene)");
+}
+
+std::unique_ptr<Source> open_sim(const SimScene& scene, const std::string& description, const OpenOptions& options) {
+  return with_gain(std::make_unique<SimSource>(scene, options.realtime, description), options.gain_mV_per_pC);
 }
 
 }  // namespace pvdf::hardware

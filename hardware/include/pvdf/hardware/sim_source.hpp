@@ -9,6 +9,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include <array>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -22,6 +24,12 @@ struct SimPress {
   double hold_s = 0.2;
   double force_N = 1.0;
   std::vector<double> weights;  ///< share of the force seen by each channel (default 1 for all)
+  /// Map-driven scenes: where the probe presses (m). The charges it produces come from a charge
+  /// map, which this module does not read: the caller fills `charges_C` (see SimScene::map_path).
+  std::optional<std::array<double, 2>> position_m;
+  /// Charge of each channel (C) at the full force_N; when set it replaces weights × sensitivity,
+  /// and the charge follows the press as (F(t)/force_N)^(2/3) (the membrane scaling law, docs/hardware.md).
+  std::vector<double> charges_C;
   /// Force (N) at time t (s).
   double force_at(double t_s) const;
 };
@@ -49,9 +57,14 @@ struct SimScene {
   unsigned seed = 1;
   std::vector<SimPress> presses;
   SimFaults faults;
+  /// Charge map driving the presses (scene key "map", resolved against the scene's folder);
+  /// empty = weights × sensitivity. The application reads the map and fills every press's charges_C.
+  std::string map_path;
   /// Ideal amplifier output (V) of channel c at time t, before noise and quantization,
   /// for time_constant_s = 0.
   double ideal_output_V(int channel, double t_s) const;
+  /// Charge (C) into channel c at time t.
+  double charge_C(int channel, double t_s) const;
 };
 
 /// Reads a scene (strict: unknown keys are errors); `source` names it in messages.

@@ -88,4 +88,9 @@ struct OpenOptions {
 };
 std::unique_ptr<Source> open_source(const std::string& spec, const OpenOptions& options = {});
 
+struct SimScene;
+/// Opens the simulator on a scene already read (e.g. after the application filled map-driven
+/// charges); `description` names it. Applies options.gain_mV_per_pC and options.realtime.
+std::unique_ptr<Source> open_sim(const SimScene& scene, const std::string& description, const OpenOptions& options = {});
+
 }  // namespace pvdf::hardware
