@@ -15,10 +15,12 @@
 #include "pvdf/mapping/locator.hpp"
 #include "pvdf/mapping/map.hpp"
 #endif
-#if __has_include("pvdf/restore/apply.hpp") && __has_include("pvdf/restore/filter.hpp")
+#if __has_include("pvdf/restore/apply.hpp") && __has_include("pvdf/restore/filter.hpp") && \
+    __has_include("pvdf/restore/scan_io.hpp")
 #define PVDF_ACQUIRE_HAVE_RESTORE 1
 #include "pvdf/restore/apply.hpp"
 #include "pvdf/restore/filter.hpp"
+#include "pvdf/restore/scan_io.hpp"
 #endif
 
 #include <atomic>
@@ -248,9 +250,22 @@ std::unique_ptr<pvdf::hardware::Source> open_any_source(const std::string& devic
   if (device.rfind("sim:", 0) != 0 || device.size() == 4) return pvdf::hardware::open_source(device, open);
   const std::string path = device.substr(4);
   pvdf::hardware::SimScene scene = pvdf::hardware::load_sim_scene(path);
-  if (scene.map_path.empty()) return pvdf::hardware::open_source(device, open);
+  if (scene.map_path.empty() && scene.scan_path.empty()) return pvdf::hardware::open_source(device, open);
   if (open.sample_rate_Hz > 0 || open.channel_mask != 0)
     throw pvdf::InputError("--rate-Hz and --channels configure a USB device; simulated streams are what the scene says");
+  if (!scene.scan_path.empty()) {
+#ifdef PVDF_ACQUIRE_HAVE_RESTORE
+    // The scanner simulator's (or a measured) scan, played sample by sample as m1, m2.
+    const auto scan = pvdf::restore::read_scan_csv(scene.scan_path);
+    if (scene.channels != 2)
+      throw pvdf::InputError(path + ": channels = " + std::to_string(scene.channels) + " but a scan has two signals (m1, m2); set channels to 2");
+    scene.waveforms_V = {scan.m1_V, scan.m2_V};
+    return pvdf::hardware::open_sim(scene, "sim " + path + " (scan " + scene.scan_path + ")", open);
+#else
+    throw pvdf::InputError(path + ": scan playback is not available in this build (the restore module, pvdf::restore, "
+                           "was not built)");
+#endif
+  }
 #ifdef PVDF_ACQUIRE_HAVE_MAPPING
   const pvdf::mapping::ChargeMap map = pvdf::mapping::read_map(scene.map_path);
   const pvdf::mapping::Locator model(map);

@@ -96,11 +96,15 @@ SimScene parse_sim_scene(const nlohmann::json& json, const std::string& source) 
       s.presses.push_back(p);
     }
   }
-  s.map_path = r.string_or("map", "");
-  if (!s.map_path.empty() && s.map_path.front() != '/') {
+  const auto beside_scene = [&source](std::string path) {
     const auto slash = source.find_last_of('/');
-    if (slash != std::string::npos) s.map_path = source.substr(0, slash + 1) + s.map_path;
-  }
+    if (!path.empty() && path.front() != '/' && slash != std::string::npos) path = source.substr(0, slash + 1) + path;
+    return path;
+  };
+  s.map_path = beside_scene(r.string_or("map", ""));
+  s.scan_path = beside_scene(r.string_or("scan", ""));
+  if (!s.scan_path.empty() && (!s.presses.empty() || !s.map_path.empty()))
+    throw InputError(source + ": scan plays recorded signals; remove presses and map (or the scan)");
   for (std::size_t i = 0; i < s.presses.size(); ++i) {
     const auto& p = s.presses[i];
     const std::string where = source + ": presses[" + std::to_string(i) + "]";
@@ -132,6 +136,15 @@ SimSource::SimSource(SimScene scene, bool realtime, const std::string& descripti
       throw InputError(description + ": presses[" + std::to_string(i) + "] at a position needs its charges from the map " +
                        scene_.map_path + " (" + std::to_string(scene_.channels) + " channels)");
   }
+  if (!scene_.scan_path.empty() || !scene_.waveforms_V.empty()) {
+    if (scene_.waveforms_V.size() != static_cast<std::size_t>(scene_.channels))
+      throw InputError(description + ": the scan " + scene_.scan_path + " must give one signal per channel (" +
+                       std::to_string(scene_.channels) + ")");
+    for (const auto& w : scene_.waveforms_V)
+      if (w.size() != scene_.waveforms_V.front().size())
+        throw InputError(description + ": the scan's signals must have equal lengths");
+    scene_.duration_s = static_cast<double>(scene_.waveforms_V.front().size()) / scene_.sample_rate_Hz;
+  }
   info_.description = description;
   info_.sample_rate_Hz = scene_.sample_rate_Hz;
   info_.channel_mask = static_cast<std::uint16_t>((1u << scene_.channels) - 1u);
@@ -162,7 +175,10 @@ void SimSource::produce(std::vector<std::uint8_t>& bytes) {
     for (int c = 0; c < nc; ++c) {
       // Charge amplifier: v = -q/C_f ideally (sign kept positive here); with a feedback
       // resistor it is a first-order high-pass, v[n] = a·(v[n-1] + G·(q[n] - q[n-1])), a = exp(-dt/τ).
-      const double charge = scene_.charge_C(c, t);
+      const double charge =
+          scene_.waveforms_V.empty()
+              ? scene_.charge_C(c, t)
+              : scene_.waveforms_V[static_cast<std::size_t>(c)][static_cast<std::size_t>(sample_index_ + i)] / scene_.gain_V_per_C;
       double v;
       if (scene_.time_constant_s > 0) {
         const auto k = static_cast<std::size_t>(c);

@@ -60,6 +60,11 @@ struct SimScene {
   /// Charge map driving the presses (scene key "map", resolved against the scene's folder);
   /// empty = weights × sensitivity. The application reads the map and fills every press's charges_C.
   std::string map_path;
+  /// Recorded or simulated signals to play instead of presses (scene key "scan": a restore scan
+  /// CSV `x_m,m1_V,m2_V`, resolved against the scene's folder); the application reads it and
+  /// fills waveforms_V[channel][sample] (V at the amplifier output). Noise and the ADC still apply.
+  std::string scan_path;
+  std::vector<std::vector<double>> waveforms_V;
   /// Ideal amplifier output (V) of channel c at time t, before noise and quantization,
   /// for time_constant_s = 0.
   double ideal_output_V(int channel, double t_s) const;

@@ -1,0 +1,155 @@
+// `pvdfkit acquire` end to end against the front end emulated by umockdev (mock_front_end.hpp):
+// the command, spawned from the test, inherits the testbed (LD_PRELOAD, UMOCKDEV_DIR) and drives
+// the emulated device through libusb. A disconnect saves what arrived and exits 2 with the
+// counters; no device and busy exit 2 with one line; Ctrl-C stops the device and exits 130.
+#include "mock_front_end.hpp"
+
+#include "pvdf/core/error.hpp"
+#include "pvdf/hardware/recording.hpp"
+#include "pvdf/hardware/usb_source.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <sys/stat.h>
+#include <sys/wait.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdlib>
+#include <cstdio>
+#include <map>
+#include <random>
+#include <set>
+
+using namespace pvdf::hardware;
+using pvdf_test::MockFrontEnd;
+using pvdf_test::MockScript;
+
+namespace {
+
+Frame make_frame(std::uint32_t sequence, std::mt19937& rng) {
+  Frame f;
+  f.sequence = sequence;
+  f.n_channels = 3;
+  f.n_samples = 100;
+  f.channel_mask = 0x7;
+  f.timestamp_us = 10000ull * sequence;
+  std::uniform_int_distribution<int> code(-2048, 2047);
+  for (int i = 0; i < 300; ++i) f.counts.push_back(static_cast<std::int16_t>(code(rng)));
+  return f;
+}
+
+/// Splits a byte stream into chunks of random sizes (1..max), as bulk transfers would carry it.
+std::vector<std::vector<std::uint8_t>> split(const std::vector<std::uint8_t>& stream, std::mt19937& rng, std::size_t max) {
+  std::vector<std::vector<std::uint8_t>> chunks;
+  for (std::size_t pos = 0; pos < stream.size();) {
+    const std::size_t n = std::min<std::size_t>(stream.size() - pos, 1 + rng() % max);
+    chunks.emplace_back(stream.begin() + static_cast<std::ptrdiff_t>(pos), stream.begin() + static_cast<std::ptrdiff_t>(pos + n));
+    pos += n;
+  }
+  return chunks;
+}
+
+std::vector<SampleBlock> drain(Source& source, std::size_t stop_after = 0) {
+  std::vector<SampleBlock> all;
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  bool stopped = false;
+  while (std::chrono::steady_clock::now() < give_up) {
+    if (!source.next(all, std::chrono::milliseconds(50))) break;
+    if (stop_after > 0 && !stopped && all.size() >= stop_after) {
+      source.stop();
+      stopped = true;
+    }
+  }
+  return all;
+}
+
+std::string temp_path(const char* name) { return std::string(PVDF_BINARY_DIR) + "/tests/hardware/" + name; }
+
+}  // namespace
+
+namespace {
+/// Runs a shell command (it inherits the testbed: LD_PRELOAD and UMOCKDEV_DIR) and returns its exit code.
+int shell(const std::string& command) {
+  const int status = std::system(command.c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+std::string read_text(const std::string& path) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (f == nullptr) return {};
+  std::string text;
+  char buffer[4096];
+  std::size_t n;
+  while ((n = std::fread(buffer, 1, sizeof buffer, f)) > 0) text.append(buffer, n);
+  std::fclose(f);
+  return text;
+}
+}  // namespace
+
+TEST_CASE("pvdfkit acquire: a disconnect saves what arrived, prints the counters and exits 2", "[hardware][usb][cli]") {
+  std::mt19937 rng(13);
+  std::vector<std::uint8_t> stream;
+  for (std::uint32_t s = 0; s < 20; ++s) encode_frame(make_frame(s, rng), stream);
+  MockScript script;
+  script.chunks = split(stream, rng, 4000);
+  script.disconnect_after_chunks = true;
+  MockFrontEnd device(script);
+  const std::string record = temp_path("cli_disconnect.pvdfrec"), csv = temp_path("cli_disconnect.csv"),
+                    err = temp_path("cli_disconnect.err");
+  const int code = shell(std::string(PVDFKIT_EXE) + " acquire --device usb:1209:0001 --record " + record + " --output " +
+                         csv + " 2> " + err);
+  const std::string messages = read_text(err);
+  INFO(messages);
+  CHECK(code == 2);
+  CHECK_THAT(messages, Catch::Contains("error: usb:1209:0001: device disconnected mid-stream"));
+  CHECK_THAT(messages, Catch::Contains("frames 20, missing 0"));
+  CHECK_THAT(messages, Catch::Contains("20 frames in"));
+  const std::string rows = read_text(csv);
+  CHECK(std::count(rows.begin(), rows.end(), '\n') == 1 + 20 * 100);
+  ReplaySource replay(record, false);
+  CHECK(drain(replay).size() == 20);
+}
+
+TEST_CASE("pvdfkit acquire: no device and busy exit 2 with one line", "[hardware][usb][cli]") {
+  const std::string err = temp_path("cli_errors.err");
+  {
+    MockScript script;
+    script.product_id = 0x0002;
+    MockFrontEnd device(script);
+    CHECK(shell(std::string(PVDFKIT_EXE) + " acquire --device usb:1209:0001 2> " + err) == 2);
+    CHECK_THAT(read_text(err), Catch::StartsWith("error: usb:1209:0001: no device with VID:PID 1209:0001"));
+  }
+  {
+    MockScript script;
+    script.claim_busy = true;
+    MockFrontEnd device(script);
+    CHECK(shell(std::string(PVDFKIT_EXE) + " acquire --device usb 2> " + err) == 2);
+    const std::string text = read_text(err);
+    CHECK_THAT(text, Catch::StartsWith("error: usb:1209:0001: device busy"));
+    CHECK(std::count(text.begin(), text.end(), '\n') == 1);
+  }
+}
+
+TEST_CASE("pvdfkit acquire: Ctrl-C stops the device and writes out everything received", "[hardware][usb][cli]") {
+  std::mt19937 rng(14);
+  std::vector<std::uint8_t> stream;
+  for (std::uint32_t s = 0; s < 30; ++s) encode_frame(make_frame(s, rng), stream);
+  MockScript script;
+  script.chunks = split(stream, rng, 3000);  // then the device keeps its transfers pending
+  MockFrontEnd device(script);
+  const std::string record = temp_path("cli_sigint.pvdfrec"), csv = temp_path("cli_sigint.csv"),
+                    err = temp_path("cli_sigint.err");
+  const int code = shell(std::string(PVDFKIT_EXE) + " acquire --device usb --stall-timeout-s 20 --record " + record +
+                         " --output " + csv + " 2> " + err + " & pid=$!; sleep 1; kill -INT $pid; wait $pid");
+  const std::string messages = read_text(err);
+  INFO(messages);
+  CHECK(code == 130);
+  CHECK_THAT(messages, Catch::Contains("stopped after 3000 samples per channel; frames 30, missing 0"));
+  const std::string rows = read_text(csv);
+  CHECK(std::count(rows.begin(), rows.end(), '\n') == 1 + 30 * 100);
+  ReplaySource replay(record, false);
+  CHECK(drain(replay).size() == 30);
+  const auto controls = device.controls();
+  REQUIRE_FALSE(controls.empty());
+  CHECK(controls.back().request == protocol::request_stop);
+}
