@@ -36,6 +36,19 @@ inline void direction_key(const double* n, double& phi, double& theta) {
   theta = std::atan2(n[2], std::hypot(n[0], n[1]));
 }
 
+/// Solves the symmetric positive definite 3×3 system A x = b by Cholesky (closed form, no
+/// pivoting: the damped normal equations are SPD). Returns a non-finite x if A is not SPD.
+inline Eigen::Vector3d solve_spd3(const Eigen::Matrix3d& A, const Eigen::Vector3d& b) {
+  const double l00 = std::sqrt(A(0, 0));
+  const double l10 = A(1, 0) / l00, l20 = A(2, 0) / l00;
+  const double l11 = std::sqrt(A(1, 1) - l10 * l10);
+  const double l21 = (A(2, 1) - l20 * l10) / l11;
+  const double l22 = std::sqrt(A(2, 2) - l20 * l20 - l21 * l21);
+  const double y0 = b[0] / l00, y1 = (b[1] - l10 * y0) / l11, y2 = (b[2] - l20 * y0 - l21 * y1) / l22;
+  const double x2 = y2 / l22, x1 = (y1 - l21 * x2) / l11, x0 = (y0 - l10 * x1 - l20 * x2) / l00;
+  return Eigen::Vector3d(x0, x1, x2);
+}
+
 inline double normalize(double* v, std::size_t n) {
   double s = 0;
   for (std::size_t k = 0; k < n; ++k) s += v[k] * v[k];
@@ -263,7 +276,7 @@ void Locator::coarse_candidates(const double* q_unit, double noise2, Shortlist& 
 }
 
 Locator::Fit Locator::levenberg_marquardt(const double* q, const double* w, double x, double y, double l, bool fixed_force,
-                                          double log_lo, double log_hi) const {
+                                          double log_lo, double log_hi, const Fit* found, int n_found) const {
   Fit fit;
   Vec model{};
   std::array<std::array<double, 3>, max_electrodes> grad{};
@@ -299,7 +312,7 @@ Locator::Fit Locator::levenberg_marquardt(const double* q, const double* w, doub
     Eigen::Matrix3d A = JtJ;
     for (int d = 0; d < 3; ++d) A(d, d) += lambda * JtJ(d, d) + 1e-300;
     if (fixed_force) A(2, 2) = 1.0;
-    const Eigen::Vector3d step = A.ldlt().solve(-Jtr);
+    const Eigen::Vector3d step = solve_spd3(A, -Jtr);
     if (!step.allFinite()) {
       lambda *= 10;
       if (lambda > 1e12) break;
@@ -341,6 +354,15 @@ Locator::Fit Locator::levenberg_marquardt(const double* q, const double* w, doub
       normal_equations();
       lambda = std::max(lambda * 0.2, 1e-9);
       fit.blocked = false;
+      // Heading into a solution an earlier start already found: stop, it adds nothing (two
+      // end points closer than a cell are never distinct solutions).
+      for (int d = 0; d < n_found; ++d) {
+        if (found[d].ok && std::abs(x - found[d].x) < 0.25 * hx && std::abs(y - found[d].y) < 0.25 * hy &&
+            std::abs(l - found[d].l) < 0.05) {
+          fit.duplicate = true;
+          return fit;
+        }
+      }
       if (small || chi2 < 1e-20 || tiny_gain) {
         fit.converged = true;
         ++it;
@@ -359,7 +381,7 @@ Locator::Fit Locator::levenberg_marquardt(const double* q, const double* w, doub
     Eigen::Matrix3d A = JtJ;
     for (int d = 0; d < 3; ++d) A(d, d) *= 1.0 + 1e-9;
     if (fixed_force) A(2, 2) = 1.0;
-    const Eigen::Vector3d step = A.ldlt().solve(-Jtr);
+    const Eigen::Vector3d step = solve_spd3(A, -Jtr);
     if (step.allFinite() && (!interp_.inside(x + step[0], y + step[1]) || l + step[2] < log_lo ||
                              l + step[2] > log_hi)) {
       fit.blocked = true;
@@ -484,7 +506,8 @@ Location Locator::locate_impl(const double* charges_C, bool fixed_force, double 
     for (std::size_t k = 0; k < ne_; ++k) dot += cell_dir_[c * ne_ + k] * q[k];
     const double amplitude = dot > 0 ? dot / cell_norm_[c] : 1.0;
     const double l0 = std::clamp(std::log(amplitude) / p_exp, log_lo, log_hi);
-    fits[std::size_t(s)] = levenberg_marquardt(q.data(), w.data(), cell_xy_[c][0], cell_xy_[c][1], l0, fixed_force, log_lo, log_hi);
+    fits[std::size_t(s)] = levenberg_marquardt(q.data(), w.data(), cell_xy_[c][0], cell_xy_[c][1], l0, fixed_force, log_lo,
+                                               log_hi, fits.data(), s);
   }
   out.n_starts = n_starts;
   // Rank: fits within noise first, among them forces inside the map's levels first, then χ².

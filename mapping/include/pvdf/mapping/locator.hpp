@@ -111,10 +111,10 @@ class Locator {
     double x = 0, y = 0, l = 0, chi2 = 0;
     std::array<double, 3> sigma{0, 0, 0};
     int iterations = 0;
-    bool converged = false, blocked = false, ok = false, singular = false;
+    bool converged = false, blocked = false, ok = false, singular = false, duplicate = false;
   };
   Fit levenberg_marquardt(const double* q, const double* inv_sigma, double x, double y, double l, bool fixed_force,
-                          double log_lo, double log_hi) const;
+                          double log_lo, double log_hi, const Fit* found, int n_found) const;
   Location locate_impl(const double* charges_C, bool fixed_force, double log_known_force) const;
   bool distinct_minima(const double* q, const double* w, const Fit& a, const Fit& b, double separation,
                        double limit) const;
