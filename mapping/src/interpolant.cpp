@@ -116,38 +116,50 @@ bool MapInterpolant::inside(double x_m, double y_m) const {
   return cell_ok_[j * (nx_ - 1) + i] != 0;
 }
 
-namespace {
-
-/// Bicubic Hermite value and gradient (in cell units) of NE electrodes at (t, s) in a cell
-/// whose four corner records start at c00, c10, c01, c11 (each NE × {G, hx·Gx, hy·Gy, hx·hy·Gxy}).
-/// NE = 0 means "runtime ne".
-template <std::size_t NE>
-inline void hermite_cell(const double* const corner[4], std::size_t ne_runtime, double t, double s, double* g,
-                         double* gt, double* gs) {
-  const std::size_t ne = NE > 0 ? NE : ne_runtime;
-  const double t2 = t * t, t3 = t2 * t, s2 = s * s, s3 = s2 * s;
-  const double A[2] = {2 * t3 - 3 * t2 + 1, -2 * t3 + 3 * t2};
-  const double C[2] = {t3 - 2 * t2 + t, t3 - t2};
-  const double dA[2] = {6 * t2 - 6 * t, -6 * t2 + 6 * t};
-  const double dC[2] = {3 * t2 - 4 * t + 1, 3 * t2 - 2 * t};
-  const double B[2] = {2 * s3 - 3 * s2 + 1, -2 * s3 + 3 * s2};
-  const double D[2] = {s3 - 2 * s2 + s, s3 - s2};
-  const double dB[2] = {6 * s2 - 6 * s, -6 * s2 + 6 * s};
-  const double dD[2] = {3 * s2 - 4 * s + 1, 3 * s2 - 2 * s};
-  for (std::size_t k = 0; k < ne; ++k) g[k] = gt[k] = gs[k] = 0;
-  for (int b = 0; b < 2; ++b) {
-    for (int a = 0; a < 2; ++a) {
-      const double* n = corner[b * 2 + a];
-      const double w0 = A[a] * B[b], w1 = C[a] * B[b], w2 = A[a] * D[b], w3 = C[a] * D[b];
-      const double x0 = dA[a] * B[b], x1 = dC[a] * B[b], x2 = dA[a] * D[b], x3 = dC[a] * D[b];
-      const double y0 = A[a] * dB[b], y1 = C[a] * dB[b], y2 = A[a] * dD[b], y3 = C[a] * dD[b];
-      for (std::size_t k = 0; k < ne; ++k) {
-        const double* c = n + 4 * k;
-        g[k] += w0 * c[0] + w1 * c[1] + w2 * c[2] + w3 * c[3];
-        gt[k] += x0 * c[0] + x1 * c[1] + x2 * c[2] + x3 * c[3];
-        gs[k] += y0 * c[0] + y1 * c[1] + y2 * c[2] + y3 * c[3];
+/// Tensor-product cubic Hermite weights at (t, s) for the 4 corners × {G, Gt, Gs, Gts}: value
+/// weights w, and their t- and s-derivatives wt, ws. Corner order (a, b) = (0,0), (1,0), (0,1), (1,1).
+struct HermiteBasis {
+  double w[4][4], wt[4][4], ws[4][4];
+  HermiteBasis(double t, double s) {
+    const double t2 = t * t, t3 = t2 * t, s2 = s * s, s3 = s2 * s;
+    const double A[2] = {2 * t3 - 3 * t2 + 1, -2 * t3 + 3 * t2};
+    const double C[2] = {t3 - 2 * t2 + t, t3 - t2};
+    const double dA[2] = {6 * t2 - 6 * t, -6 * t2 + 6 * t};
+    const double dC[2] = {3 * t2 - 4 * t + 1, 3 * t2 - 2 * t};
+    const double B[2] = {2 * s3 - 3 * s2 + 1, -2 * s3 + 3 * s2};
+    const double D[2] = {s3 - 2 * s2 + s, s3 - s2};
+    const double dB[2] = {6 * s2 - 6 * s, -6 * s2 + 6 * s};
+    const double dD[2] = {3 * s2 - 4 * s + 1, 3 * s2 - 2 * s};
+    for (int b = 0; b < 2; ++b) {
+      for (int a = 0; a < 2; ++a) {
+        const int c = b * 2 + a;
+        w[c][0] = A[a] * B[b], w[c][1] = C[a] * B[b], w[c][2] = A[a] * D[b], w[c][3] = C[a] * D[b];
+        wt[c][0] = dA[a] * B[b], wt[c][1] = dC[a] * B[b], wt[c][2] = dA[a] * D[b], wt[c][3] = dC[a] * D[b];
+        ws[c][0] = A[a] * dB[b], ws[c][1] = C[a] * dB[b], ws[c][2] = A[a] * dD[b], ws[c][3] = C[a] * dD[b];
       }
     }
+  }
+};
+
+namespace {
+
+/// Value and gradient (in cell units) of NE electrodes (NE = 0: runtime ne) in a cell whose
+/// four corner records (NE × {G, hx·Gx, hy·Gy, hx·hy·Gxy} each) start at `corner`.
+template <std::size_t NE>
+inline void hermite_cell(const HermiteBasis& h, const double* const corner[4], std::size_t ne_runtime, double* g,
+                         double* gt, double* gs) {
+  const std::size_t ne = NE > 0 ? NE : ne_runtime;
+  for (std::size_t k = 0; k < ne; ++k) {
+    double v = 0, vt = 0, vs = 0;
+    for (int c = 0; c < 4; ++c) {
+      const double* n = corner[c] + 4 * k;
+      v += h.w[c][0] * n[0] + h.w[c][1] * n[1] + h.w[c][2] * n[2] + h.w[c][3] * n[3];
+      vt += h.wt[c][0] * n[0] + h.wt[c][1] * n[1] + h.wt[c][2] * n[2] + h.wt[c][3] * n[3];
+      vs += h.ws[c][0] * n[0] + h.ws[c][1] * n[1] + h.ws[c][2] * n[2] + h.ws[c][3] * n[3];
+    }
+    g[k] = v;
+    gt[k] = vt;
+    gs[k] = vs;
   }
 }
 
@@ -155,13 +167,18 @@ inline void hermite_cell(const double* const corner[4], std::size_t ne_runtime, 
 
 bool MapInterpolant::evaluate_level(std::size_t f, std::size_t i, std::size_t j, double t, double s, double* g,
                                     double* gx, double* gy) const {
+  return evaluate_level(f, i, j, HermiteBasis(t, s), g, gx, gy);
+}
+
+bool MapInterpolant::evaluate_level(std::size_t f, std::size_t i, std::size_t j, const HermiteBasis& h, double* g,
+                                    double* gx, double* gy) const {
   const std::size_t stride = ne_ * 4;
   const double* base = &data_[((f * ny_ + j) * nx_ + i) * stride];
   const double* const corner[4] = {base, base + stride, base + nx_ * stride, base + (nx_ + 1) * stride};
   switch (ne_) {
-    case 3: hermite_cell<3>(corner, ne_, t, s, g, gx, gy); break;
-    case 4: hermite_cell<4>(corner, ne_, t, s, g, gx, gy); break;
-    default: hermite_cell<0>(corner, ne_, t, s, g, gx, gy); break;
+    case 3: hermite_cell<3>(h, corner, ne_, g, gx, gy); break;
+    case 4: hermite_cell<4>(h, corner, ne_, g, gx, gy); break;
+    default: hermite_cell<0>(h, corner, ne_, g, gx, gy); break;
   }
   const double ihx = 1.0 / hx_, ihy = 1.0 / hy_;
   for (std::size_t k = 0; k < ne_; ++k) {
@@ -194,13 +211,14 @@ bool MapInterpolant::evaluate(double x_m, double y_m, double log_force, double* 
       dw = 1.0 / span;
     }
   }
+  const HermiteBasis basis(t, s);
   std::array<double, max_electrodes> g0, gx0, gy0;
   if (w < 1) {
-    evaluate_level(f0, i, j, t, s, g0.data(), gx0.data(), gy0.data());
+    evaluate_level(f0, i, j, basis, g0.data(), gx0.data(), gy0.data());
   }
   std::array<double, max_electrodes> g1{}, gx1{}, gy1{};
   if (nf_ > 1 && w > 0) {
-    evaluate_level(f0 + 1, i, j, t, s, g1.data(), gx1.data(), gy1.data());
+    evaluate_level(f0 + 1, i, j, basis, g1.data(), gx1.data(), gy1.data());
     if (w >= 1) {
       g0 = g1;
       gx0 = gx1;

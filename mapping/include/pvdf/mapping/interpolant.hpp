@@ -11,6 +11,8 @@
 
 namespace pvdf::mapping {
 
+struct HermiteBasis;
+
 /// Most electrodes the runtime handles with fixed-size storage (no allocation per locate).
 inline constexpr std::size_t max_electrodes = 8;
 
@@ -53,6 +55,8 @@ class MapInterpolant {
 
  private:
   bool evaluate_level(std::size_t f, std::size_t i, std::size_t j, double t, double s, double* g, double* gx,
+                      double* gy) const;
+  bool evaluate_level(std::size_t f, std::size_t i, std::size_t j, const HermiteBasis& basis, double* g, double* gx,
                       double* gy) const;
   std::size_t nx_ = 0, ny_ = 0, nf_ = 0, ne_ = 0;
   double x0_ = 0, y0_ = 0, hx_ = 1, hy_ = 1;
