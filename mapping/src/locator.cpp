@@ -33,7 +33,7 @@ using Vec = std::array<double, max_electrodes>;
 /// (φ, θ) of a unit vector's first three components: the coarse table's key.
 inline void direction_key(const double* n, double& phi, double& theta) {
   phi = std::atan2(n[1], n[0]);
-  theta = std::atan2(n[2], std::hypot(n[0], n[1]));
+  theta = std::atan2(n[2], std::sqrt(n[0] * n[0] + n[1] * n[1]));  // (std::hypot is slow)
 }
 
 /// Solves the symmetric positive definite 3×3 system A x = b by Cholesky (closed form, no
@@ -417,7 +417,7 @@ Locator::Fit Locator::levenberg_marquardt(const double* q, const double* w, doub
 
 bool Locator::distinct_minima(const double* q, const double* w, const Fit& a, const Fit& b, double separation,
                               double limit) const {
-  if (std::hypot(a.x - b.x, a.y - b.y) <= separation) return false;
+  if ((a.x - b.x) * (a.x - b.x) + (a.y - b.y) * (a.y - b.y) <= separation * separation) return false;
   // Two LM end points are different solutions when the misfit rises above the noise limit
   // somewhere between them (a barrier), or the straight path leaves the map.
   Vec model{};
@@ -493,7 +493,7 @@ Location Locator::locate_impl(const double* charges_C, bool fixed_force, double 
     bool far = true;
     for (int s = 0; s < n_starts; ++s) {
       const auto& o = cell_xy_[starts[std::size_t(s)]];
-      far = far && std::hypot(p[0] - o[0], p[1] - o[1]) > cluster_distance;
+      far = far && (p[0] - o[0]) * (p[0] - o[0]) + (p[1] - o[1]) * (p[1] - o[1]) > cluster_distance * cluster_distance;
     }
     if (far) starts[std::size_t(n_starts++)] = list.cell[std::size_t(c)];
   }
