@@ -394,7 +394,7 @@ PVDF_COMMAND(70, [](CLI::App& root) {
       ->capture_default_str();
   sub->add_option("--record", o->record_path, "Also record the stream to FILE (.pvdfrec, replay with --device replay:FILE)");
   sub->add_option("--locate", o->locate_map, "Locate presses with this charge map (one row per frame)");
-  sub->add_option("--restore", o->restore_filter, "Restore forces f_x, f_z with this inverse filter (channels 1-2 = m1, m2)");
+  sub->add_option("--restore", o->restore_filter, "Restore forces f_x, f_z with this inverse filter (first two streamed channels = m1, m2)");
   sub->add_option("--force-range-N", o->force_range,
                   "--locate: plausible forces MIN,MAX (N), removes the second solution three electrodes often have");
   sub->add_option("--output", o->output_path, "Write the CSV to FILE instead of stdout (rows flushed per frame)");
