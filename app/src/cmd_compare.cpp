@@ -96,9 +96,10 @@ int run_compare(const CompareOptions& o) {
       const Location r = locator.locate(q[i].data());
       if (!r.has_position()) continue;
       double e = std::hypot(r.x_m - presses[i].x, r.y_m - presses[i].y);
-      if (r.flags & flag::ambiguous) {
-        ++ambiguous;
-        e = std::min(e, std::hypot(r.alternative.x_m - presses[i].x, r.alternative.y_m - presses[i].y));
+      if (r.flags & flag::ambiguous) ++ambiguous;
+      for (int k = 0; k < r.n_alternatives; ++k) {
+        const auto& alt = r.alternatives[std::size_t(k)];
+        e = std::min(e, std::hypot(alt.x_m - presses[i].x, alt.y_m - presses[i].y));
       }
       b.push_back(e);
     }

@@ -102,9 +102,13 @@ int run_locate(const LocateOptions& o) {
         j["n_solutions"] = r.n_solutions;
         j["calibrated"] = locator.calibrated();
         if (r.flags & flag::ambiguous) {
-          j["alternative"] = {{"x_m", r.alternative.x_m}, {"y_m", r.alternative.y_m}, {"force_N", r.alternative.force_N},
-                              {"residual", r.alternative.residual}, {"sigma_x_m", r.alternative.sigma_x_m},
-                              {"sigma_y_m", r.alternative.sigma_y_m}, {"sigma_F_N", r.alternative.sigma_F_N}};
+          nlohmann::json others = nlohmann::json::array();
+          for (int a = 0; a < r.n_alternatives; ++a) {
+            const auto& alt = r.alternatives[std::size_t(a)];
+            others.push_back({{"x_m", alt.x_m}, {"y_m", alt.y_m}, {"force_N", alt.force_N}, {"residual", alt.residual},
+                              {"sigma_x_m", alt.sigma_x_m}, {"sigma_y_m", alt.sigma_y_m}, {"sigma_F_N", alt.sigma_F_N}});
+          }
+          j["alternatives"] = others;
         }
       }
       std::cout << j.dump(2) << '\n';
@@ -113,11 +117,12 @@ int run_locate(const LocateOptions& o) {
                   r.sigma_x_m * 1e3, r.y_m * 1e3, r.sigma_y_m * 1e3, r.force_N, r.sigma_F_N,
                   o.force_N > 0 ? " (given)" : "");
       std::printf("residual = %.3g (noise units)\nflags: %s\n", r.residual, flags_text(r.flags).c_str());
-      if (r.flags & flag::ambiguous) {
-        std::printf("also fits: x = %.4f mm, y = %.4f mm, F = %.5g N, residual %.3g (%d solutions in all)\n",
-                    r.alternative.x_m * 1e3, r.alternative.y_m * 1e3, r.alternative.force_N, r.alternative.residual,
-                    r.n_solutions);
+      for (int a = 0; a < r.n_alternatives; ++a) {
+        const auto& alt = r.alternatives[std::size_t(a)];
+        std::printf("also fits: x = %.4f mm, y = %.4f mm, F = %.5g N, residual %.3g\n", alt.x_m * 1e3, alt.y_m * 1e3,
+                    alt.force_N, alt.residual);
       }
+      if (r.flags & flag::ambiguous) std::printf("%d solutions fit within noise in all\n", r.n_solutions);
     } else {
       std::printf("flags: %s\n", flags_text(r.flags).c_str());
     }

@@ -69,10 +69,13 @@ Row run(const std::string& name, const std::vector<Press>& presses, const std::v
     double ex = std::hypot(r.x_m - presses[i].x, r.y_m - presses[i].y), fx = std::abs(r.force_N / presses[i].F - 1);
     if (r.flags & flag::ambiguous) {
       ++amb;
-      const double ea = std::hypot(r.alternative.x_m - presses[i].x, r.alternative.y_m - presses[i].y);
-      if (ea < ex) {  // the answer nearest the truth among those reported
-        ex = ea;
-        fx = std::abs(r.alternative.force_N / presses[i].F - 1);
+      for (int a = 0; a < r.n_alternatives; ++a) {  // the answer nearest the truth among those reported
+        const auto& alt = r.alternatives[std::size_t(a)];
+        const double ea = std::hypot(alt.x_m - presses[i].x, alt.y_m - presses[i].y);
+        if (ea < ex) {
+          ex = ea;
+          fx = std::abs(alt.force_N / presses[i].F - 1);
+        }
       }
     }
     e.push_back(ex);
@@ -169,7 +172,10 @@ int main(int argc, char** argv) {
       const Location r2 = noisy.locate(qn.data());
       if (r2.has_position()) {
         double e = std::hypot(r2.x_m - presses[i].x, r2.y_m - presses[i].y);
-        if (r2.flags & flag::ambiguous) e = std::min(e, std::hypot(r2.alternative.x_m - presses[i].x, r2.alternative.y_m - presses[i].y));
+        for (int k = 0; k < r2.n_alternatives; ++k) {
+          const auto& alt = r2.alternatives[std::size_t(k)];
+          e = std::min(e, std::hypot(alt.x_m - presses[i].x, alt.y_m - presses[i].y));
+        }
         b.push_back(e);
       }
       const Location r3 = tri.locate(qn.data(), presses[i].F);

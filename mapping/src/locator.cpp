@@ -553,8 +553,6 @@ Location Locator::locate_impl(const double* charges_C, bool fixed_force, double 
     return out;
   }
   // Other minima that also fit within noise and lie elsewhere: ambiguous.
-  const double sigma_pos = std::hypot(b.sigma[0], b.sigma[1]);
-  (void)sigma_pos;
   const double separation = options_.ambiguity_separation_cells * std::max(interp_.hx(), interp_.hy());
   std::array<int, 8> distinct{};
   int n_distinct = 0;
@@ -567,14 +565,24 @@ Location Locator::locate_impl(const double* charges_C, bool fixed_force, double 
       is_new = is_new && distinct_minima(q.data(), w.data(), fits[std::size_t(distinct[std::size_t(d)])], f, separation, limit);
     }
     if (!is_new) continue;
-    if (n_distinct == 0 || better(f, fits[std::size_t(distinct[0])])) {
-      out.alternative = {f.x, f.y, std::exp(f.l), std::sqrt(f.chi2), f.sigma[0], f.sigma[1], std::exp(f.l) * f.sigma[2]};
-    }
     distinct[std::size_t(n_distinct++)] = s;
   }
   if (n_distinct > 0) {
     out.flags |= flag::ambiguous;
     out.n_solutions = 1 + n_distinct;
+    // Report the others best first (insertion sort of a handful).
+    for (int a = 1; a < n_distinct; ++a) {
+      for (int c = a; c > 0 && better(fits[std::size_t(distinct[std::size_t(c)])], fits[std::size_t(distinct[std::size_t(c - 1)])]); --c) {
+        std::swap(distinct[std::size_t(c)], distinct[std::size_t(c - 1)]);
+      }
+    }
+    out.n_alternatives = std::min(n_distinct, int(out.alternatives.size()));
+    for (int a = 0; a < out.n_alternatives; ++a) {
+      const Fit& f = fits[std::size_t(distinct[std::size_t(a)])];
+      out.alternatives[std::size_t(a)] = {f.x, f.y, std::exp(f.l), std::sqrt(f.chi2), f.sigma[0], f.sigma[1],
+                                          std::exp(f.l) * f.sigma[2]};
+    }
+    out.alternative = out.alternatives[0];
   }
   return out;
 }

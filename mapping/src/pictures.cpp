@@ -116,9 +116,9 @@ void write_intersection_png(const Locator& locator, const ChargeMap& map, const 
                                                          format_number("%.2f", result.y_m * 1e3) + ") mm, " +
                                                          format_number("%.3g", result.force_N) + " N",
              plot::Color{0, 0, 0}, plot::Marker::cross, 14);
-  if (result.flags & flag::ambiguous) {
-    ax.scatter({result.alternative.x_m * 1e3}, {result.alternative.y_m * 1e3},
-               "also fits (ambiguous): " + format_number("%.3g", result.alternative.force_N) + " N",
+  for (int a = 0; a < result.n_alternatives; ++a) {
+    const auto& alt = result.alternatives[std::size_t(a)];
+    ax.scatter({alt.x_m * 1e3}, {alt.y_m * 1e3}, "also fits (ambiguous): " + format_number("%.3g", alt.force_N) + " N",
                plot::Color{200, 0, 0}, plot::Marker::plus, 14);
   }
   mark_electrodes(ax, map);

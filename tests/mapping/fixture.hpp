@@ -77,10 +77,13 @@ inline Accuracy measure_accuracy(const pvdf::mapping::Locator& locator, const Ch
     double e = std::hypot(r.x_m - p.x_m, r.y_m - p.y_m), f = std::abs(r.force_N - p.force_N) / p.force_N;
     if (r.flags & flag::ambiguous) {
       ++a.ambiguous;
-      const double ea = std::hypot(r.alternative.x_m - p.x_m, r.alternative.y_m - p.y_m);
-      if (ea < e) {
-        e = ea;
-        f = std::abs(r.alternative.force_N - p.force_N) / p.force_N;
+      for (int k = 0; k < r.n_alternatives; ++k) {
+        const auto& alt = r.alternatives[std::size_t(k)];
+        const double ea = std::hypot(alt.x_m - p.x_m, alt.y_m - p.y_m);
+        if (ea < e) {
+          e = ea;
+          f = std::abs(alt.force_N - p.force_N) / p.force_N;
+        }
       }
     } else {
       a.silent_wrong += e > 0.2e-3 && e > 3 * std::hypot(r.sigma_x_m, r.sigma_y_m);

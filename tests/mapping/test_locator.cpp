@@ -29,9 +29,9 @@ const std::vector<double> levels{0.25, 0.5, 1.0, 2.0, 4.0};
 /// the better of it and its alternative (the user is told both fit).
 Location::Alternative nearest_answer(const Location& r, const Press& p) {
   Location::Alternative a{r.x_m, r.y_m, r.force_N, r.residual, r.sigma_x_m, r.sigma_y_m, r.sigma_F_N};
-  if ((r.flags & flag::ambiguous) &&
-      std::hypot(r.alternative.x_m - p.x_m, r.alternative.y_m - p.y_m) < std::hypot(r.x_m - p.x_m, r.y_m - p.y_m)) {
-    a = r.alternative;
+  for (int k = 0; k < r.n_alternatives; ++k) {
+    const auto& alt = r.alternatives[std::size_t(k)];
+    if (std::hypot(alt.x_m - p.x_m, alt.y_m - p.y_m) < std::hypot(a.x_m - p.x_m, a.y_m - p.y_m)) a = alt;
   }
   return a;
 }

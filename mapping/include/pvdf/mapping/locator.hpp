@@ -69,10 +69,13 @@ struct Location {
   int iterations = 0;                 ///< LM iterations of the reported solution
   int n_starts = 0;                   ///< LM runs made
   int n_solutions = 0;                ///< distinct positions that fit within noise (> 1: ambiguous)
-  /// With `ambiguous`: the next-best other solution that fits within noise.
+  /// With `ambiguous`: the next-best other solution that fits within noise (= alternatives[0]).
   struct Alternative {
     double x_m = 0, y_m = 0, force_N = 0, residual = 0, sigma_x_m = 0, sigma_y_m = 0, sigma_F_N = 0;
   } alternative;
+  /// With `ambiguous`: up to three other solutions, best first (n_solutions − 1 may be larger).
+  std::array<Alternative, 3> alternatives{};
+  int n_alternatives = 0;
   bool has_position() const { return (flags & (flag::outside_map | flag::no_press)) == 0; }
 };
 
