@@ -15,7 +15,7 @@ namespace pvdf::mapping {
 
 /// Flags of a Location (bit mask). A result with outside_map or no_press carries no position.
 namespace flag {
-inline constexpr std::uint32_t outside_map = 1u << 0;        ///< best fit is blocked by the map's edge and does not fit within noise
+inline constexpr std::uint32_t outside_map = 1u << 0;        ///< best fit is held by the map's edge or force range and does not fit within noise
 inline constexpr std::uint32_t ambiguous = 1u << 1;          ///< two distinct positions fit within noise (alternative reported)
 inline constexpr std::uint32_t no_press = 1u << 2;           ///< charges are at the noise level: nothing pressed
 inline constexpr std::uint32_t poor_fit = 1u << 3;           ///< inside the map but χ² above the limit (model/calibration mismatch?)
