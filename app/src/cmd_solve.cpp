@@ -1,0 +1,163 @@
+// `pvdfkit solve`: deflection, membrane forces and electrode charges of the clamped film under
+// probe and pressure loads (pvdf::fem; docs/fem.md). Exit 3 when the solve does not converge.
+#include "command.hpp"
+
+#include "pvdf/core/error.hpp"
+#include "pvdf/core/io.hpp"
+#include "pvdf/core/scene.hpp"
+#include "pvdf/fem/solver.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+
+namespace {
+
+struct SolveOptions {
+  std::string scene_path;
+  std::vector<std::string> loads;
+  std::vector<std::string> samples;
+  std::string model;
+  double tolerance = 0;
+  std::string vtu_dir;
+  bool json = false;
+  bool verbose = false;
+  int max_refinements = -1;
+};
+
+nlohmann::json arr(const std::array<double, 3>& a) { return nlohmann::json::array({a[0], a[1], a[2]}); }
+
+int run_solve(const SolveOptions& o) {
+  pvdf::Scene scene = pvdf::load_scene(o.scene_path);
+  for (const auto& w : scene.warnings) pvdf::app::warn(w);
+  if (!o.loads.empty()) {
+    scene.loads.clear();
+    for (const auto& text : o.loads) {
+      const auto v = pvdf::parse_number_list(text, "--load X_M,Y_M,F_N", 3);
+      pvdf::Load l;
+      l.kind = pvdf::Load::Kind::probe;
+      l.position_m = {v[0], v[1]};
+      l.force_N = v[2];
+      scene.loads.push_back(l);
+    }
+  }
+  pvdf::fem::Options options = pvdf::fem::options_from_scene(scene);
+  if (!o.model.empty()) options.model = pvdf::fem::parse_model(o.model, "--model");
+  if (o.tolerance != 0) {
+    if (!(o.tolerance > 0 && o.tolerance < 1)) {
+      throw pvdf::InputError("--tolerance " + std::to_string(o.tolerance) + " must be in (0, 1), e.g. 0.01");
+    }
+    options.tolerance = o.tolerance;
+  }
+  if (o.max_refinements >= 0) options.max_refinements = o.max_refinements;
+  for (const auto& text : o.samples) {
+    const auto v = pvdf::parse_number_list(text, "--sample X_M,Y_M", 2);
+    options.sample_points_m.push_back({v[0], v[1]});
+  }
+  options.vtu_directory = o.vtu_dir;
+  options.verbose = o.verbose;
+
+  const pvdf::fem::Result r = pvdf::fem::solve(scene, options);
+  const auto& s = r.summary;
+  const bool ok = pvdf::fem::usable(s.status);
+
+  if (o.json) {
+    nlohmann::json j;
+    j["status"] = pvdf::fem::status_name(s.status);
+    j["message"] = s.message;
+    j["model"] = pvdf::fem::model_name(s.model);
+    j["model_reason"] = s.model_reason;
+    j["n_dofs"] = s.n_dofs;
+    j["n_cells"] = s.n_cells;
+    j["newton_iterations"] = s.newton_iterations;
+    j["load_steps"] = s.load_steps;
+    j["refinement_cycles"] = s.refinement_cycles;
+    j["wall_s"] = s.wall_s;
+    j["time_breakdown_s"] = {{"setup", s.setup_s}, {"assembly", s.assembly_s}, {"linear_solve", s.linear_solve_s}};
+    j["estimated_relative_error"] = s.estimated_relative_error;
+    j["error_estimator"] = s.error_estimator;
+    j["stress_measure"] = "second Piola-Kirchhoff membrane resultant (N/m), undeformed axes";
+    if (ok) {
+      j["max_deflection_m"] = r.max_deflection_m;
+      j["deflection_at_load_m"] = r.deflection_at_load_m;
+      j["rim_reaction_N"] = r.rim_reaction_N;
+      j["strain_energy_J"] = r.strain_energy_J;
+      j["loads"] = nlohmann::json::array();
+      for (const auto& l : r.loads) {
+        j["loads"].push_back({{"x_m", l.x_m}, {"y_m", l.y_m}, {"force_N", l.force_N}, {"deflection_m", l.deflection_m}});
+      }
+      j["electrodes"] = nlohmann::json::array();
+      for (const auto& e : r.electrodes) {
+        j["electrodes"].push_back({{"name", e.name},
+                                   {"area_m2", e.area_m2},
+                                   {"mean_membrane_force_material_N_per_m", arr(e.mean_membrane_force_material_N_per_m)},
+                                   {"mean_membrane_force_global_N_per_m", arr(e.mean_membrane_force_global_N_per_m)},
+                                   {"charge_C", e.charge_C}});
+      }
+      j["samples"] = nlohmann::json::array();
+      for (const auto& p : r.samples) {
+        j["samples"].push_back({{"x_m", p.x_m},
+                                {"y_m", p.y_m},
+                                {"w_m", p.w_m},
+                                {"ux_m", p.ux_m},
+                                {"uy_m", p.uy_m},
+                                {"membrane_force_global_N_per_m", arr(p.membrane_force.global)},
+                                {"membrane_force_material_N_per_m", arr(p.membrane_force.material)},
+                                {"membrane_force_polar_N_per_m", arr(p.membrane_force.polar)},
+                                {"charge_density_C_per_m2", p.charge_density_C_per_m2}});
+      }
+      if (!r.vtu_files.empty()) j["vtu_files"] = r.vtu_files;
+    }
+    std::cout << j.dump(2) << '\n';
+  } else {
+    std::printf("%s: %s (%s)\n", scene.source.c_str(), pvdf::fem::status_name(s.status).c_str(), s.message.c_str());
+    std::printf("model %s: %s\n", pvdf::fem::model_name(s.model).c_str(), s.model_reason.c_str());
+    std::printf("%zu DOFs, %zu cells, %d Newton iterations, %d load steps, %d refinements, %.3f s "
+                "(assembly %.3f s, linear solves %.3f s, setup %.3f s)\n",
+                s.n_dofs, s.n_cells, s.newton_iterations, s.load_steps, s.refinement_cycles, s.wall_s, s.assembly_s,
+                s.linear_solve_s, s.setup_s);
+    std::printf("estimated relative error %.3g (%s)\n", s.estimated_relative_error, s.error_estimator.c_str());
+    if (ok) {
+      std::printf("max deflection %.4f mm, deflection at load %.4f mm, rim reaction %.6g N\n",
+                  r.max_deflection_m * 1e3, r.deflection_at_load_m * 1e3, r.rim_reaction_N);
+      for (const auto& e : r.electrodes) {
+        const auto& n = e.mean_membrane_force_material_N_per_m;
+        std::printf("electrode %-8s N11 %10.4f  N22 %10.4f  N12 %10.4f N/m  charge %.4g pC\n", e.name.c_str(), n[0],
+                    n[1], n[2], e.charge_C * 1e12);
+      }
+      for (const auto& p : r.samples) {
+        const auto& n = p.membrane_force.global;
+        std::printf("sample (%.4g, %.4g) mm: w %.5f mm  Nxx %.4f  Nyy %.4f  Nxy %.4f N/m\n", p.x_m * 1e3, p.y_m * 1e3,
+                    p.w_m * 1e3, n[0], n[1], n[2]);
+      }
+      for (const auto& f : r.vtu_files) std::printf("wrote %s\n", f.c_str());
+    }
+  }
+  if (!ok) {
+    std::cerr << "error: " << scene.source << ": the film solve did not converge (" << pvdf::fem::status_name(s.status)
+              << "): " << s.message << "\n";
+    return pvdf::exit_code::numerical;
+  }
+  return pvdf::exit_code::success;
+}
+
+}  // namespace
+
+PVDF_COMMAND(30, [](CLI::App& root) {
+  auto* sub = root.add_subcommand("solve", "Deflection, membrane forces and electrode charges of the clamped film "
+                                           "under probe loads (nonlinear membrane-plate FEM)");
+  auto o = std::make_shared<SolveOptions>();
+  sub->add_option("scene", o->scene_path, "Scene file (JSON)")->required();
+  sub->add_option("--load", o->loads, "Probe load X_M,Y_M,F_N (repeatable; replaces the scene's loads)");
+  sub->add_option("--sample", o->samples, "Evaluate the fields at X_M,Y_M (repeatable)");
+  sub->add_option("--model", o->model, "Kinematics: auto|linear|von-karman|large-rotation (default: scene)");
+  sub->add_option("--tolerance", o->tolerance, "Requested relative error of the outputs (default: scene, 0.01)");
+  sub->add_option("--max-refinements", o->max_refinements, "Cap on adaptive refinement cycles (default: scene)");
+  sub->add_option("--vtu", o->vtu_dir, "Write VTU files (one per mesh) and film.pvd into this folder");
+  sub->add_flag("--json", o->json, "Print one JSON object (status, model, n_dofs, electrodes, samples, ...)");
+  sub->add_flag("--verbose", o->verbose, "Print Newton progress");
+  return pvdf::app::Subcommand{sub, [o] { return run_solve(*o); }};
+});

@@ -1,0 +1,166 @@
+// Anisotropic, geometrically nonlinear membrane–plate solver for a clamped PVDF film (deal.II
+// inside, std/Eigen/pvdf types outside): solve(scene, options) -> Result{Summary, fields}.
+#pragma once
+
+#include "pvdf/core/scene.hpp"
+#include "pvdf/mesh/film_mesh.hpp"
+
+#include <Eigen/Core>
+
+#include <array>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace pvdf::fem {
+
+/// Kinematics of the mid-surface (docs/fem.md §2).
+enum class Model {
+  automatic,      ///< pick the cheapest of the three below whose output error stays within the tolerance
+  linear,         ///< linear plate + linear membrane (uncoupled except through pretension)
+  von_karman,     ///< E = sym∇u + ½∇w⊗∇w (moderate rotations) + Kirchhoff bending
+  large_rotation  ///< E = ½(FᵀF − I) + ½∇w⊗∇w (full Green–Lagrange mid-surface strain) + bending
+};
+
+/// "auto" | "linear" | "von-karman" | "large-rotation" → Model; throws pvdf::InputError naming `what`.
+Model parse_model(const std::string& text, const std::string& what);
+/// Model → the same names.
+std::string model_name(Model model);
+
+/// Outcome of a solve. The stopping rules are stated per value.
+enum class Status {
+  converged,          ///< every Newton solve met ‖r‖ ≤ rtol·‖f‖ + atol AND ‖Δu‖ ≤ increment_tol·‖u‖ (or hit the
+                      ///< round-off floor: ‖Δu‖ ≤ 1e-11‖u‖ with ‖r‖ ≤ 1e-6‖f‖), and the
+                      ///< estimated output error ≤ tolerance (or no refinement was requested)
+  tolerance_not_met,  ///< the Newton solves converged but the refinement cap was reached with the estimated
+                      ///< output error still above the tolerance; the fields are usable, the error is reported
+  no_convergence,     ///< Newton did not converge within max_newton_iterations even after the smallest
+                      ///< continuation step (max_cutbacks halvings); no fields are returned
+  not_finite,         ///< a NaN/Inf appeared in the residual or the update; no fields are returned
+  linear_solver_failed  ///< the sparse factorization or iterative solve failed (singular tangent)
+};
+/// Status → "converged", "tolerance-not-met", "no-convergence", "not-finite", "linear-solver-failed".
+std::string status_name(Status status);
+/// True for the statuses whose fields may be used (converged, tolerance_not_met).
+inline bool usable(Status status) { return status == Status::converged || status == Status::tolerance_not_met; }
+
+/// Solver settings (public members with defaults, DOLFINx style).
+struct Options {
+  Model model = Model::automatic;       ///< kinematics; automatic = choose (Summary::model_reason says why)
+  double tolerance = 0.01;              ///< requested relative error of the outputs (electrode forces, deflection)
+  int max_refinements = 4;              ///< cap on adaptive refinement cycles after the first mesh
+  int fe_degree = 2;                    ///< polynomial degree of FE_Q for u_x, u_y, w (2 or 3)
+  bool include_bending = true;          ///< false: pure membrane (for oracle tests; singular flat tangent)
+  /// Initial mesh: target cell size far from loads and electrodes (m); 0 = radius/6.
+  double coarse_size_m = 0.0;
+  /// Target cell size under a probe footprint (m); 0 = probe radius / 2.
+  double probe_size_m = 0.0;
+  /// Target cell size on electrodes (m); 0 = smallest electrode side / 4.
+  double electrode_size_m = 0.0;
+  /// Extra uniform refinements of the initial mesh (for convergence studies).
+  int initial_global_refinements = 0;
+  bool adaptive = true;                 ///< refine until the output error estimate meets `tolerance`
+
+  // Newton–Raphson.
+  int max_newton_iterations = 40;       ///< per continuation stage
+  double residual_rtol = 1e-9;          ///< ‖r‖ ≤ rtol·‖f_ext‖ + atol
+  double residual_atol = 1e-14;         ///< (N)
+  double increment_tol = 1e-8;          ///< ‖Δu‖ ≤ increment_tol·‖u‖
+  int max_cutbacks = 12;                ///< halvings of a failed continuation step before giving up
+  bool iterative_solver = false;        ///< GMRES + ILU instead of the sparse direct solver (big meshes)
+  /// Use the dense-enough direct solver below this many DOFs even if iterative_solver is set.
+  unsigned int direct_solver_max_dofs = 400000;
+  bool verbose = false;                 ///< print Newton progress to stdout
+
+  /// Extra evaluation points (m) whose fields are returned in Result::samples.
+  std::vector<std::array<double, 2>> sample_points_m;
+  /// Write VTU files (one per refinement cycle) and a PVD series here when non-empty.
+  std::string vtu_directory;
+};
+
+/// What happened (Ceres-style Summary).
+struct Summary {
+  Status status = Status::no_convergence;
+  std::string message;                  ///< one line: why the status (diagnostic when not usable)
+  Model model = Model::linear;          ///< the kinematics actually used
+  std::string model_reason;             ///< why that model (for automatic: the measured criterion)
+  std::size_t n_dofs = 0;               ///< on the final mesh
+  std::size_t n_cells = 0;              ///< on the final mesh
+  int newton_iterations = 0;            ///< total over all stages, models and meshes
+  int load_steps = 0;                   ///< continuation stages (artificial-pretension steps) in total
+  int refinement_cycles = 0;            ///< meshes solved after the first
+  double final_residual_norm = 0;       ///< ‖r‖ of the last Newton solve (N)
+  double estimated_relative_error = 0;  ///< of the outputs (docs/fem.md §6); NaN-free, 1 if unknown
+  std::string error_estimator;          ///< how estimated_relative_error was obtained
+  double wall_s = 0;                    ///< total
+  double assembly_s = 0;                ///< residual + tangent assembly
+  double linear_solve_s = 0;            ///< factorization + back substitution
+  double setup_s = 0;                   ///< mesh, DOFs, sparsity, bending matrix
+};
+
+/// Membrane force resultants (N/m) — 2nd Piola–Kirchhoff stress × thickness, in undeformed axes.
+struct MembraneForce {
+  std::array<double, 3> global{0, 0, 0};    ///< [Nxx, Nyy, Nxy]
+  std::array<double, 3> material{0, 0, 0};  ///< [N11, N22, N12], 1 = draw direction
+  std::array<double, 3> polar{0, 0, 0};     ///< [Nr, Nθ, Nrθ] about the first load position
+};
+
+struct ElectrodeResult {
+  std::string name;
+  double area_m2 = 0;                       ///< nominal area of the electrode outline
+  std::array<double, 3> mean_membrane_force_material_N_per_m{0, 0, 0};  ///< ∫N dA / area, material axes
+  std::array<double, 3> mean_membrane_force_global_N_per_m{0, 0, 0};
+  /// Charge ∫ (d31 σ11 + d32 σ22) dA with σ = N/h the through-thickness mean stress (C), sign by d31.
+  double charge_C = 0;
+};
+
+struct SampleResult {
+  double x_m = 0, y_m = 0;
+  double ux_m = 0, uy_m = 0, w_m = 0;       ///< displacement (m)
+  MembraneForce membrane_force;             ///< N/m
+  double charge_density_C_per_m2 = 0;       ///< d31 σ11 + d32 σ22 (σ = N/h)
+};
+
+struct LoadResult {
+  double x_m = 0, y_m = 0;
+  double force_N = 0;                       ///< total vertical force applied (probe: exact; pressure: p·area)
+  double deflection_m = 0;                  ///< w at the load position (pressure: at the film centre)
+};
+
+/// Fields for the caller; empty unless usable(summary.status).
+struct Result {
+  Summary summary;
+  double max_deflection_m = 0;              ///< max |w| over the film (signed value of that extremum)
+  double deflection_at_load_m = 0;          ///< w at the first load position
+  double rim_reaction_N = 0;                ///< total vertical reaction of the clamped rim (= Σ F at equilibrium)
+  double strain_energy_J = 0;               ///< membrane + bending (without pretension work)
+  std::vector<LoadResult> loads;
+  std::vector<ElectrodeResult> electrodes;
+  std::vector<SampleResult> samples;
+  std::vector<std::string> vtu_files;       ///< written VTU files (and the PVD last)
+};
+
+/// Solves the scene's loads (all applied at once) with the scene's membrane, material,
+/// electrodes and probe. Meshes circles and rectangles itself (deal.II grid, refined around
+/// probes and electrodes); other outlines need the FilmMesh overload. Bad input throws
+/// pvdf::InputError; numerical failure is a Summary status (never NaN fields).
+Result solve(const pvdf::Scene& scene, const Options& options = {});
+
+/// Same on a mesh from pvdf::mesh (quads, material ids, rim edges, rim manifold).
+Result solve(const pvdf::Scene& scene, const pvdf::mesh::FilmMesh& mesh, const Options& options = {});
+
+/// Options from a scene's model section (kinematics, tolerance, max_refinements).
+Options options_from_scene(const pvdf::Scene& scene);
+
+/// Solver internals exposed for tests (finite-difference check of the tangent).
+struct JacobianCheck {
+  double max_relative_difference = 0;  ///< max |K·v − (r(u+εv) − r(u−εv))/2ε| / max|K·v|
+  std::size_t n_dofs = 0;
+};
+/// Builds the scene's initial mesh, sets a random smooth state (u, w scaled by `amplitude_m`),
+/// and compares the assembled tangent against central differences of the residual along
+/// `n_directions` random directions.
+JacobianCheck check_jacobian(const pvdf::Scene& scene, const Options& options, double amplitude_m,
+                             int n_directions = 3, unsigned int seed = 1);
+
+}  // namespace pvdf::fem
