@@ -139,8 +139,8 @@ TEST_CASE("calibrate writes a calibrated map that locate uses", "[mapping][cli]"
   CHECK(r.err.find("measured.csv:22") != std::string::npos);
 }
 
-TEST_CASE("compare reports lookup and triangulation errors growing with noise", "[mapping][cli]") {
-  const auto r = run_pvdfkit("compare " + map_path() + " --presses 60 --noise-C 0.01e-12,1e-12 --json");
+TEST_CASE("lookup-accuracy reports lookup and triangulation errors growing with noise", "[mapping][cli]") {
+  const auto r = run_pvdfkit("lookup-accuracy " + map_path() + " --presses 60 --noise-C 0.01e-12,1e-12 --json");
   INFO(r.err);
   REQUIRE(r.exit_code == 0);
   const auto j = nlohmann::json::parse(r.out);
@@ -149,5 +149,5 @@ TEST_CASE("compare reports lookup and triangulation errors growing with noise", 
   const auto& noisy = j["rows"][1];
   CHECK(noisy["median_error_force_known_m"].get<double>() > 10 * quiet["median_error_force_known_m"].get<double>());
   CHECK(quiet["median_error_triangulation_m"].get<double>() > 10 * quiet["median_error_force_known_m"].get<double>());
-  CHECK(run_pvdfkit("compare " + map_path() + " --noise-C -1").exit_code == 2);
+  CHECK(run_pvdfkit("lookup-accuracy " + map_path() + " --noise-C -1").exit_code == 2);
 }

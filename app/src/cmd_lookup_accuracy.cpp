@@ -1,4 +1,4 @@
-// `pvdfkit compare`: on a given charge map, the lookup against the seed-001 triangulation —
+// `pvdfkit lookup-accuracy`: on a given charge map, the lookup against the seed-001 triangulation —
 // median position error against charge noise and locates per second — by Monte Carlo presses
 // whose true charges are the map's own interpolant (a self-consistency check: it measures
 // noise sensitivity and the triangulation's model error, not the map's interpolation error).
@@ -159,7 +159,7 @@ int run_compare(const CompareOptions& o) {
 }  // namespace
 
 PVDF_COMMAND(62, [](CLI::App& root) {
-  auto* sub = root.add_subcommand("compare",
+  auto* sub = root.add_subcommand("lookup-accuracy",
                                   "On a charge map: lookup against the seed-001 triangulation, position error "
                                   "against charge noise and speed (Monte Carlo; docs/lookup.md)");
   auto o = std::make_shared<CompareOptions>();
