@@ -296,7 +296,13 @@ bool UsbSource::next(std::vector<SampleBlock>& out, std::chrono::milliseconds ti
     const auto us = std::chrono::duration_cast<std::chrono::microseconds>(timeout).count();
     timeval tv{static_cast<time_t>(us / 1000000), static_cast<suseconds_t>(us % 1000000)};
     const int r = libusb_handle_events_timeout_completed(context_, &tv, nullptr);
-    if (r != 0 && r != LIBUSB_ERROR_INTERRUPTED) end(EndReason::failed, name_ + ": USB event handling failed (libusb: " + usb_error(r) + ")");
+    // A signal (Ctrl-C) that lands inside poll() can surface as INTERRUPTED or, through some
+    // preload layers, as IO: one failed wait is not a broken device. Only repeated failures are.
+    if (r == 0 || r == LIBUSB_ERROR_INTERRUPTED) {
+      event_errors_ = 0;
+    } else if (++event_errors_ >= 3) {
+      end(EndReason::failed, name_ + ": USB event handling failed (libusb: " + usb_error(r) + ")");
+    }
     const auto now = std::chrono::steady_clock::now();
     if (reason_ == EndReason::running && std::chrono::duration<double>(now - last_data_).count() > stall_timeout_s_) {
       std::ostringstream m;

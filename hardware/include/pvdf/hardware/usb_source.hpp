@@ -60,6 +60,7 @@ class UsbSource final : public Source {
   int in_flight_ = 0;
   bool finished_ = false;  ///< decoder flushed at the end of the stream
   bool abandoned_ = false;  ///< transfers that never completed after cancel (leaked, not freed)
+  int event_errors_ = 0;     ///< consecutive failed libusb event waits (3 in a row end the stream)
   bool stopping_ = false;
   EndReason reason_ = EndReason::running;
   std::string end_message_;
