@@ -3,7 +3,7 @@
 // seed-001 film (isotropic stand-in E = 2 GPa, ν = 0.3, as in the paper's own check).
 //
 // Run:  build/bench/fem/fem_paper_numbers        (prints a markdown table; ~1 s for the oracle part,
-//       then, when pvdf::fem is built, pvdfkit's default solve of the seed-001 scene, ~1 min)
+//       then, when pvdf::fem is built, pvdfkit's solves of the seed-001 scene with bending: minutes)
 #include "axisymmetric_plate.hpp"
 #include "hencky.hpp"
 #include "linear_plate.hpp"
