@@ -284,6 +284,7 @@ class FilmSolver {
   std::unique_ptr<FESystem<dim>> fe_;
   DoFHandler<dim> dof_handler_;
   AffineConstraints<double> constraints_;
+  AffineConstraints<double> hanging_constraints_;  // hanging nodes only (for the rim reaction)
   SparsityPattern sparsity_;
   SparseMatrix<double> tangent_;
   SparseMatrix<double> bending_;      // condensed
@@ -302,6 +303,7 @@ class FilmSolver {
   bool ldlt_analyzed_ = false;
 
   Model current_model_ = Model::linear;
+  double last_energy_ = 0;  // potential Π of the last assemble() call (J)
   Summary summary_;
   std::vector<std::pair<double, std::string>> pvd_records_;
   std::vector<std::string> vtu_files_;
@@ -465,7 +467,7 @@ void FilmSolver::refine_initial_mesh() {
     else elec_side = std::min(elec_side, std::sqrt(e.area_m2()));
   }
   const double elec_size = options_.electrode_size_m > 0 ? options_.electrode_size_m : 0.5 * elec_side;
-  const double grading = 0.8;
+  const double grading = options_.grading;
   for (int pass = 0; pass < 30; ++pass) {
     bool marked = false;
     for (const auto& cell : triangulation_.active_cell_iterators()) {
@@ -514,6 +516,9 @@ void FilmSolver::setup_system() {
   }
   dof_handler_.distribute_dofs(*fe_);
   constraints_.clear();
+  hanging_constraints_.clear();
+  DoFTools::make_hanging_node_constraints(dof_handler_, hanging_constraints_);
+  hanging_constraints_.close();
   DoFTools::make_hanging_node_constraints(dof_handler_, constraints_);
   VectorTools::interpolate_boundary_values(*mapping_, dof_handler_, pvdf::mesh::rim_boundary_id,
                                            Functions::ZeroFunction<dim>(3), constraints_);
@@ -764,6 +769,7 @@ void FilmSolver::assemble(const Vector<double>& u, Model model, double artificia
   residual.reinit(dof_handler_.n_dofs());
   membrane_raw_ = 0;
   if (want_matrix) tangent_ = 0;
+  double energy = 0;
 
   for (const auto& cell : dof_handler_.active_cell_iterators()) {
     fe_values.reinit(cell);
@@ -779,6 +785,8 @@ void FilmSolver::assemble(const Vector<double>& u, Model model, double artificia
       }
       const std::array<double, 3> E = membrane_strain(k, model);
       std::array<double, 3> S = membrane_C_.apply(E);
+      energy += (0.5 * (S[0] * E[0] + S[1] * E[1] + S[2] * E[2]) + N_tot * (E[0] + E[1])) * fe_values.JxW(q);
+      if (model == Model::linear) energy += 0.5 * N_tot * (k.g[0] * k.g[0] + k.g[1] * k.g[1]) * fe_values.JxW(q);
       S[0] += N_tot;
       S[1] += N_tot;
       const double jxw = fe_values.JxW(q);
@@ -829,8 +837,11 @@ void FilmSolver::assemble(const Vector<double>& u, Model model, double artificia
     Vector<double> bu(u.size());
     bending_.vmult(bu, u);
     residual += bu;
+    energy += 0.5 * bending_raw_.matrix_norm_square(u);  // raw: the condensed matrix has diagonals on constrained rows
     if (want_matrix) tangent_.add(1.0, bending_);
   }
+  energy -= load_ * u;
+  last_energy_ = energy;
   residual -= load_;
   constraints_.set_zero(residual);
   summary_.assembly_s += seconds_since(t0);
@@ -934,47 +945,28 @@ NewtonOutcome FilmSolver::newton(Model model, double artificial_tension, Vector<
     }
     constraints_.distribute(du);
     ++out.iterations;
-    // Line search. The problem is the minimum of the potential Π (r = ∇Π), so along du the
-    // slope is s(α) = r(u + α du)·du with s(0) = −du·K du < 0 when K is positive definite:
-    // accept α = 1 when |s(1)| ≤ 0.8|s(0)| or s(1) < 0, otherwise regula falsi on s over [0, 1]
-    // (Crisfield's line search). If K is indefinite (s(0) ≥ 0), backtrack on ‖r‖ instead.
+    // Line search on the potential Π (r = ∇Π; Π = membrane + bending energy − load work):
+    // Armijo backtracking Π(u + α du) ≤ Π(u) + 1e-4·α·(r·du), halving α. The slope r·du is
+    // negative whenever the tangent is positive definite (tension); otherwise (compressed,
+    // indefinite tangent) backtrack on ‖r‖ instead.
     double best_alpha = 1.0, best_norm = std::numeric_limits<double>::max();
+    const double energy0 = last_energy_;
     const double s0 = r * du;
-    auto slope_at = [&](double alpha, double& norm) {
-      trial = u;
-      trial.add(alpha, du);
-      assemble(trial, model, artificial_tension, false, r_trial);
-      norm = r_trial.l2_norm();
-      return r_trial * du;
-    };
     if (s0 < 0) {
-      double norm1 = 0;
-      const double s1 = slope_at(1.0, norm1);
-      best_alpha = 1.0;
-      best_norm = norm1;
-      // A straight line is a poor path for a membrane (u should move like α², w like α), so
-      // partial steps are only taken when the full Newton step is clearly bad.
-      const bool full_step_ok = std::isfinite(norm1) && norm1 <= 10 * r_norm;
-      if (!full_step_ok && std::isfinite(s1) && s1 > 0 && std::abs(s1) > 0.8 * std::abs(s0)) {
-        double a_lo = 0, s_lo = s0, a_hi = 1, s_hi = s1;
-        for (int ls = 0; ls < 8; ++ls) {
-          double alpha = a_lo - s_lo * (a_hi - a_lo) / (s_hi - s_lo);
-          alpha = std::clamp(alpha, a_lo + 0.02 * (a_hi - a_lo), a_hi - 0.02 * (a_hi - a_lo));
-          double norm = 0;
-          const double sa = slope_at(alpha, norm);
+      double alpha = 1.0, best_energy = std::numeric_limits<double>::max();
+      for (int ls = 0; ls < 16; ++ls) {
+        trial = u;
+        trial.add(alpha, du);
+        assemble(trial, model, artificial_tension, false, r_trial);
+        const double e = last_energy_;
+        const double tn = r_trial.l2_norm();
+        if (std::isfinite(e) && std::isfinite(tn) && e < best_energy) {
+          best_energy = e;
           best_alpha = alpha;
-          best_norm = norm;
-          if (!std::isfinite(sa) || std::abs(sa) <= 0.8 * std::abs(s0)) break;
-          if (sa > 0) {
-            a_hi = alpha;
-            s_hi = sa;
-          } else {
-            a_lo = alpha;
-            s_lo = sa;
-          }
+          best_norm = tn;
         }
-      } else if (!std::isfinite(s1)) {
-        best_norm = std::numeric_limits<double>::max();
+        if (std::isfinite(e) && e <= energy0 + 1e-4 * alpha * s0) break;
+        alpha *= 0.5;
       }
     }
     if (s0 >= 0 || !(best_norm < std::numeric_limits<double>::max())) {
@@ -1000,6 +992,9 @@ NewtonOutcome FilmSolver::newton(Model model, double artificial_tension, Vector<
     }
     u.add(best_alpha, du);
     last_increment = best_alpha * du.l2_norm();
+    if (options_.verbose) {
+      std::printf("      step alpha = %.3g, |du| = %.3e, slope r.du = %.3e\n", best_alpha, du.l2_norm(), s0);
+    }
   }
   out.status = Status::no_convergence;
   out.message = "Newton did not converge in " + std::to_string(options_.max_newton_iterations) +
@@ -1175,10 +1170,13 @@ double FilmSolver::rim_reaction(const Vector<double>& u, Model model) {
     bending_raw_.vmult(bu, u);
     internal += bu;
   }
-  // Force transmitted to the rim = Σ over rim w-DOFs of (internal − external) nodal forces.
+  // Force transmitted to the rim = Σ over rim w-DOFs of (internal − external) nodal forces,
+  // after moving the forces of hanging DOFs onto their masters (some masters lie on the rim).
+  internal -= load_raw_;
+  hanging_constraints_.condense(internal);
   double reaction = 0;
   for (types::global_dof_index i = 0; i < u.size(); ++i) {
-    if (rim_w_dof_[i]) reaction += internal(i) - load_raw_(i);
+    if (rim_w_dof_[i] && !hanging_constraints_.is_constrained(i)) reaction += internal(i);
   }
   return -reaction;
 }

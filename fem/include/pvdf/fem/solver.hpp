@@ -57,6 +57,9 @@ struct Options {
   double probe_size_m = 0.0;
   /// Target cell size on electrodes (m); 0 = smallest electrode side / 4.
   double electrode_size_m = 0.0;
+  /// Initial-mesh grading: away from probes and electrodes the cell size is at most
+  /// grading × distance (smaller = finer far field).
+  double grading = 0.8;
   /// Extra uniform refinements of the initial mesh (for convergence studies).
   int initial_global_refinements = 0;
   bool adaptive = true;                 ///< refine until the output error estimate meets `tolerance`
