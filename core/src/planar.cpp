@@ -1,11 +1,11 @@
 // Planar geometry for the scene checks: exact predicates are not needed here because every
 // check carries a clearance of a fraction of the mesh size.
-#include "planar.hpp"
+#include "pvdf/core/planar.hpp"
 
 #include <algorithm>
 #include <cmath>
 
-namespace pvdf::mesh::planar {
+namespace pvdf::planar {
 
 namespace {
 
@@ -163,4 +163,4 @@ double tangency_gap(const Point& c, double radius, const Region& r) {
   return best;
 }
 
-}  // namespace pvdf::mesh::planar
+}  // namespace pvdf::planar

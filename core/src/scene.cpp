@@ -4,6 +4,7 @@
 
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/json_reader.hpp"
+#include "pvdf/core/planar.hpp"
 
 #include <cmath>
 #include <set>
@@ -16,15 +17,7 @@ namespace {
 constexpr double pi = 3.14159265358979323846;
 constexpr double deg = pi / 180.0;
 
-double polygon_signed_area(const std::vector<Point2>& v) {
-  double a = 0;
-  for (std::size_t i = 0; i < v.size(); ++i) {
-    const auto& p = v[i];
-    const auto& q = v[(i + 1) % v.size()];
-    a += p[0] * q[1] - q[0] * p[1];
-  }
-  return 0.5 * a;
-}
+double polygon_signed_area(const std::vector<Point2>& v) { return planar::signed_area(v); }
 
 Point2 polygon_centroid(const std::vector<Point2>& v) {
   double cx = 0, cy = 0;
@@ -37,26 +30,6 @@ Point2 polygon_centroid(const std::vector<Point2>& v) {
     cy += (p[1] + q[1]) * cross;
   }
   return {cx / (6 * a), cy / (6 * a)};
-}
-
-double segment_distance(const Point2& p, const Point2& a, const Point2& b) {
-  const double dx = b[0] - a[0], dy = b[1] - a[1];
-  const double len2 = dx * dx + dy * dy;
-  double t = len2 > 0 ? ((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2 : 0.0;
-  t = std::max(0.0, std::min(1.0, t));
-  const double ex = a[0] + t * dx - p[0], ey = a[1] + t * dy - p[1];
-  return std::sqrt(ex * ex + ey * ey);
-}
-
-bool polygon_contains(const std::vector<Point2>& v, const Point2& p) {
-  bool inside = false;
-  for (std::size_t i = 0, j = v.size() - 1; i < v.size(); j = i++) {
-    if (((v[i][1] > p[1]) != (v[j][1] > p[1])) &&
-        (p[0] < (v[j][0] - v[i][0]) * (p[1] - v[i][1]) / (v[j][1] - v[i][1]) + v[i][0])) {
-      inside = !inside;
-    }
-  }
-  return inside;
 }
 
 std::string fmt(double x) {
@@ -140,9 +113,9 @@ double FilmOutline::inside_distance_m(const Point2& p) const {
     case Shape::polygon: {
       double d = 1e300;
       for (std::size_t i = 0; i < vertices_m.size(); ++i) {
-        d = std::min(d, segment_distance(p, vertices_m[i], vertices_m[(i + 1) % vertices_m.size()]));
+        d = std::min(d, planar::point_segment_distance(p, vertices_m[i], vertices_m[(i + 1) % vertices_m.size()]));
       }
-      return polygon_contains(vertices_m, p) ? d : -d;
+      return planar::polygon_contains(vertices_m, p) ? d : -d;
     }
   }
   return 0;
@@ -213,20 +186,11 @@ namespace {
 
 void check_simple_polygon(const JsonObjectReader& r, const std::string& key,
                           const std::vector<Point2>& v) {
-  auto cross = [](const Point2& o, const Point2& a, const Point2& b) {
-    return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
-  };
   const std::size_t n = v.size();
-  for (std::size_t i = 0; i < n; ++i) {
-    for (std::size_t j = i + 1; j < n; ++j) {
-      if (j == i + 1 || (i == 0 && j == n - 1)) continue;  // adjacent edges share a vertex
-      const Point2 &a = v[i], &b = v[(i + 1) % n], &c = v[j], &d = v[(j + 1) % n];
-      const double d1 = cross(c, d, a), d2 = cross(c, d, b), d3 = cross(a, b, c), d4 = cross(a, b, d);
-      if (((d1 > 0) != (d2 > 0)) && ((d3 > 0) != (d4 > 0)) && d1 != 0 && d2 != 0 && d3 != 0 && d4 != 0) {
-        r.fail(key, "is self-intersecting (edge " + std::to_string(i) + " crosses edge " +
-                        std::to_string(j) + "); list the vertices in order around a simple outline");
-      }
-    }
+  const auto crossing = planar::first_self_intersection(v);
+  if (crossing[0] >= 0) {
+    r.fail(key, "is self-intersecting (edge " + std::to_string(crossing[0]) + " crosses edge " +
+                    std::to_string(crossing[1]) + "); list the vertices in order around a simple outline");
   }
   for (std::size_t i = 0; i < n; ++i) {
     const auto& a = v[i];

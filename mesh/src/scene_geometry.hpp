@@ -2,7 +2,7 @@
 // feature sizes, and the probe footprints to embed (with the reason when one is left out).
 #pragma once
 
-#include "planar.hpp"
+#include "pvdf/core/planar.hpp"
 #include "pvdf/core/scene.hpp"
 
 #include <string>

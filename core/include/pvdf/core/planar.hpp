@@ -1,12 +1,12 @@
-// Small planar-geometry helpers for the scene checks (private to pvdf::mesh): points, segments,
-// polygons and circles, with distances between outlines. Lengths in the caller's unit.
+// Planar geometry shared by the scene reader (core) and the geometric checks (mesh): points,
+// segments, polygons and circles, with distances between outlines. Lengths in the caller's unit.
 #pragma once
 
 #include <array>
 #include <cstddef>
 #include <vector>
 
-namespace pvdf::mesh::planar {
+namespace pvdf::planar {
 
 using Point = std::array<double, 2>;
 
@@ -45,4 +45,4 @@ bool regions_overlap(const Region& a, const Region& b);
 /// the circle itself. Small values mean slivers if both outlines become mesh edges.
 double tangency_gap(const Point& c, double radius, const Region& r);
 
-}  // namespace pvdf::mesh::planar
+}  // namespace pvdf::planar
