@@ -1228,18 +1228,18 @@ void MembranePostprocessor::evaluate_vector_field(const DataPostprocessorInputs:
 }
 
 std::vector<std::string> MembranePostprocessor::get_names() const {
-  return {"N_global_N_per_m", "N_global_N_per_m", "N_global_N_per_m",
-          "N_material_N_per_m", "N_material_N_per_m", "N_material_N_per_m",
-          "N_polar_N_per_m", "N_polar_N_per_m", "N_polar_N_per_m",
+  // Scalars, one per component: deal.II groups "vector" components in blocks of spacedim (2 here),
+  // which would merge 3-component Voigt triples across fields.
+  return {"N_global_xx_N_per_m", "N_global_yy_N_per_m", "N_global_xy_N_per_m",
+          "N_material_11_N_per_m", "N_material_22_N_per_m", "N_material_12_N_per_m",
+          "N_polar_rr_N_per_m", "N_polar_tt_N_per_m", "N_polar_rt_N_per_m",
           "charge_density_C_per_m2"};
 }
 
 std::vector<DataComponentInterpretation::DataComponentInterpretation>
 MembranePostprocessor::get_data_component_interpretation() const {
-  std::vector<DataComponentInterpretation::DataComponentInterpretation> v(
-      9, DataComponentInterpretation::component_is_part_of_vector);
-  v.push_back(DataComponentInterpretation::component_is_scalar);
-  return v;
+  return std::vector<DataComponentInterpretation::DataComponentInterpretation>(
+      10, DataComponentInterpretation::component_is_scalar);
 }
 
 std::string FilmSolver::write_vtu(int cycle, Model model) {
@@ -1247,9 +1247,11 @@ std::string FilmSolver::write_vtu(int cycle, Model model) {
   pvdf::make_directories(options_.vtu_directory);
   DataOut<dim> data_out;
   data_out.attach_dof_handler(dof_handler_);
-  const std::vector<std::string> names = {"displacement_m", "displacement_m", "displacement_m"};
-  const std::vector<DataComponentInterpretation::DataComponentInterpretation> interp(
-      3, DataComponentInterpretation::component_is_part_of_vector);
+  // In-plane displacement as a 2-vector (ParaView pads it to 3-D), deflection w as a scalar.
+  const std::vector<std::string> names = {"displacement_inplane_m", "displacement_inplane_m", "w_m"};
+  const std::vector<DataComponentInterpretation::DataComponentInterpretation> interp = {
+      DataComponentInterpretation::component_is_part_of_vector,
+      DataComponentInterpretation::component_is_part_of_vector, DataComponentInterpretation::component_is_scalar};
   data_out.add_data_vector(solution_, names, DataOut<dim>::type_dof_data, interp);
   MembranePostprocessor post(*this);
   data_out.add_data_vector(solution_, post);
