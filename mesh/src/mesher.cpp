@@ -24,6 +24,17 @@ namespace pvdf::mesh {
 
 namespace {
 
+/// Reorders a quad's vertices counter-clockwise (deal.II's orientation) when Gmsh gave them clockwise.
+void make_counter_clockwise(std::array<unsigned int, 4>& quad, const std::vector<std::array<double, 2>>& vertices) {
+  double area2 = 0;
+  for (int c = 0; c < 4; ++c) {
+    const auto& p = vertices[quad[c]];
+    const auto& r = vertices[quad[(c + 1) % 4]];
+    area2 += p[0] * r[1] - r[0] * p[1];
+  }
+  if (area2 < 0) std::swap(quad[1], quad[3]);
+}
+
 constexpr double pi = 3.14159265358979323846;
 
 /// Gmsh is a process-wide singleton: initialized on first use, finalized once at exit, and
@@ -300,13 +311,7 @@ Model mesh_scene(const pvdf::Scene& scene, const MeshParameters& params,
           for (std::size_t q = 0; q + 3 < nodes.size(); q += 4) {
             std::array<unsigned int, 4> quad{index.at(nodes[q]), index.at(nodes[q + 1]), index.at(nodes[q + 2]),
                                              index.at(nodes[q + 3])};
-            double area2 = 0;
-            for (int c = 0; c < 4; ++c) {
-              const auto& p = mesh.vertices[quad[c]];
-              const auto& r = mesh.vertices[quad[(c + 1) % 4]];
-              area2 += p[0] * r[1] - r[0] * p[1];
-            }
-            if (area2 < 0) std::swap(quad[1], quad[3]);
+            make_counter_clockwise(quad, mesh.vertices);
             mesh.quads.push_back(quad);
             mesh.material_ids.push_back(static_cast<std::uint8_t>(fm.second));
           }
@@ -575,13 +580,7 @@ FilmMesh read_msh(const std::string& path) {
     for (const auto& q : raw) {
       std::array<unsigned int, 4> quad{index.at(q.tags[0]), index.at(q.tags[1]), index.at(q.tags[2]),
                                        index.at(q.tags[3])};
-      double area2 = 0;
-      for (int c = 0; c < 4; ++c) {
-        const auto& p = mesh.vertices[quad[c]];
-        const auto& r = mesh.vertices[quad[(c + 1) % 4]];
-        area2 += p[0] * r[1] - r[0] * p[1];
-      }
-      if (area2 < 0) std::swap(quad[1], quad[3]);
+      make_counter_clockwise(quad, mesh.vertices);
       mesh.quads.push_back(quad);
       mesh.material_ids.push_back(q.material);
     }
