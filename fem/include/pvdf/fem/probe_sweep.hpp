@@ -1,0 +1,88 @@
+// Many single-probe solves on one scene (charge maps, design sweeps): the setup (mesh, model
+// choice, DOF numbering, sparsity, symbolic factorization) is done once; each probe solve
+// warm-starts Newton from a neighbouring solution. Public types are std/pvdf only.
+#pragma once
+
+#include "pvdf/core/scene.hpp"
+#include "pvdf/fem/solver.hpp"
+
+#include <array>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace pvdf::fem {
+
+/// Settings of a probe sweep (public members with defaults).
+struct SweepOptions {
+  /// Model, tolerance and Newton settings. The mesh is chosen once at setup so that the
+  /// electrode charges meet `solver.tolerance` for any served probe position.
+  Options solver;
+  /// Probe centres closer than this to the rim are not served (m); 0 = the probe radius.
+  double rim_margin_m = 0.0;
+  /// Force levels the sweep will be asked for (N); the setup chooses model and mesh for the
+  /// largest and checks them at the smallest. Empty = the scene's first load force (or 1 N).
+  std::vector<double> forces_N;
+};
+
+/// What the setup decided, for reports and map provenance.
+struct SweepSetup {
+  Model model = Model::linear;          ///< kinematics used for every probe solve
+  std::string model_reason;             ///< why
+  bool include_bending = true;          ///< whether bending stiffness is in the model
+  std::size_t n_dofs = 0;
+  std::size_t n_cells = 0;
+  double estimated_relative_error = 1;  ///< of electrode charges on the sweep mesh (setup check)
+  std::string error_estimator;          ///< how it was obtained
+  double setup_s = 0;                   ///< wall time of the setup
+};
+
+/// Opaque solver state (nodal unknowns) for warm starts. Valid only for the ProbeSweep that
+/// produced it; empty = start from the flat film.
+struct SweepState {
+  std::vector<double> dofs;
+};
+
+/// One probe solve.
+struct ProbeSolution {
+  Status status = Status::no_convergence;
+  std::string message;                  ///< one line: diagnostic when not usable
+  double x_m = 0, y_m = 0, force_N = 0;
+  double deflection_at_load_m = 0;      ///< w at the probe centre (m)
+  double rim_reaction_N = 0;            ///< vertical rim reaction (= force_N at equilibrium)
+  /// Charge of every electrode, scene order (C): ∫ (d31 σ11 + d32 σ22) dA, σ = N/h.
+  std::vector<double> charge_C;
+  /// Mean membrane force over each electrode in material axes [N11, N22, N12] (N/m).
+  std::vector<std::array<double, 3>> mean_membrane_force_material_N_per_m;
+  int newton_iterations = 0;
+  bool warm_started = false;            ///< Newton started from the given state (not from flat)
+  double wall_s = 0;
+};
+
+/// A reusable single-probe solver for one scene. Not thread-safe: use one instance per thread
+/// (instances are independent). The scene's own loads are ignored; the probe radius is the
+/// scene's `probe.radius_m`.
+class ProbeSweep {
+ public:
+  /// Chooses model and mesh and prepares the linear algebra. Throws pvdf::InputError on bad
+  /// input (e.g. a film outline the solver cannot mesh).
+  explicit ProbeSweep(const pvdf::Scene& scene, const SweepOptions& options = {});
+  ~ProbeSweep();
+  ProbeSweep(const ProbeSweep&) = delete;
+  ProbeSweep& operator=(const ProbeSweep&) = delete;
+
+  const SweepSetup& setup() const;
+
+  /// Solves a vertical probe force `force_N` (N, > 0) centred at (`x_m`, `y_m`) (m).
+  /// @param[in]  warm_start  state of a neighbouring solve (nullptr or empty = from flat)
+  /// @param[out] state_out   receives the converged state when usable(status) (may be nullptr)
+  /// A position outside the served region gives an InputError; a numerical failure is a status.
+  ProbeSolution solve(double x_m, double y_m, double force_N, const SweepState* warm_start = nullptr,
+                      SweepState* state_out = nullptr);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace pvdf::fem
