@@ -1,0 +1,140 @@
+// Charge-map generation with the FEM solver (issue 5): every grid position × force level → the
+// charge of every electrode, the deflection at the load and a status. Fast by design (warm
+// starts along rows, F^(2/3) force scaling where checked, mirror symmetry), MPI/thread scale-out,
+// checkpoints. Target pvdf_mapping_fem (needs pvdf_fem); docs/map-generation.md.
+#pragma once
+
+#include "pvdf/core/scene.hpp"
+#include "pvdf/mapping/map.hpp"
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace pvdf::mapping {
+
+/// Settings of a map generation (public members with defaults).
+struct MapOptions {
+  /// Grid spacing in x and y (m). Grid nodes sit at integer multiples of it (the origin is a
+  /// node), so a mirror-symmetric scene gives a mirror-symmetric grid.
+  double spacing_m = 0.002;
+  /// Force levels (N), > 0; sorted ascending and de-duplicated in the map.
+  std::vector<double> forces_N{1.0};
+  /// Optional rectangle {xmin, xmax, ymin, ymax} (m) limiting the mapped positions; default:
+  /// the film's bounding box. Positions outside the film minus the rim margin are always masked.
+  std::optional<std::array<double, 4>> region_m;
+  /// Probe centres closer than this to the rim are not mapped (m); 0 = the probe radius + 1 mm.
+  double rim_margin_m = 0.0;
+  /// Kinematics: "auto" | "linear" | "von-karman" | "large-rotation"; "" = the scene's.
+  std::string model = "auto";
+  /// Requested relative error of the charges (0 = the scene's model.tolerance). Also the
+  /// acceptance threshold of the force-scaling check.
+  double tolerance = 0.01;
+  /// Use Q ∝ F^(2/3), w ∝ F^(1/3) from the largest level for the other levels where the check
+  /// passes (all levels solved on a coarse lattice of check positions; a position is scaled
+  /// only when every check position at the corners of its lattice cell passed).
+  bool use_force_scaling = true;
+  /// Lattice step of the force-scaling check positions, in grid steps (>= 1).
+  int scaling_check_stride = 4;
+  /// Copy results to mirror-image positions when the scene is mirror-symmetric about x and/or y.
+  bool use_symmetry = true;
+  /// Worker threads in this process (one ProbeSweep each); 0 = hardware concurrency.
+  int threads = 0;
+  /// Checkpoint file ("" = none). Completed rows are saved periodically (atomically); an
+  /// existing checkpoint for the same scene and options is resumed when `resume` is true; a
+  /// checkpoint for different scene/options is refused (pvdf::InputError).
+  std::string checkpoint_path;
+  bool resume = true;
+  /// Minimum time between checkpoint writes (s); 0 = after every completed row.
+  double checkpoint_interval_s = 30.0;
+  /// Split the positions over the ranks of MPI_COMM_WORLD (MPI must be initialized, e.g. by
+  /// MpiSession). Every rank must call generate_map with the same arguments; rank 0 returns
+  /// the complete map, the other ranks return a map holding only their own rows.
+  bool distributed = false;
+  /// Test hook: stop (as if killed) after this many solved positions in this process
+  /// (0 = never); the map then holds not_computed points and the checkpoint is written.
+  std::size_t stop_after_positions = 0;
+  /// Called (from one thread) as positions complete: (done, total) over this process.
+  std::function<void(std::size_t done, std::size_t total)> progress;
+  /// 1-σ charge noise per channel written into the map (C); empty = 0.05 pC each.
+  std::vector<double> noise_C;
+  /// Free text stored in the map.
+  std::string description;
+};
+
+/// Per-point provenance flags, stored as uint8 [nf][ny][nx] in the map file's `/provenance`.
+namespace provenance {
+inline constexpr std::uint8_t solved = 0;    ///< solved by the FEM at this position and force
+inline constexpr std::uint8_t scaled = 1;    ///< from the largest level by Q ∝ F^(2/3), w ∝ F^(1/3)
+inline constexpr std::uint8_t mirrored = 2;  ///< copied from the mirror-image position (electrodes permuted)
+inline constexpr std::uint8_t resumed = 4;   ///< taken from a checkpoint of an earlier run
+}  // namespace provenance
+
+/// What a generation did.
+struct MapReport {
+  std::size_t n_positions = 0;    ///< grid positions inside the mask
+  std::size_t n_points = 0;       ///< n_positions × force levels
+  std::size_t n_solved = 0;       ///< points solved by the FEM (this process, or all ranks on rank 0)
+  std::size_t n_scaled = 0;       ///< points obtained by force scaling
+  std::size_t n_mirrored = 0;     ///< points copied from a mirror image
+  std::size_t n_resumed = 0;      ///< points taken from the checkpoint
+  std::size_t n_failed = 0;       ///< points with status not_converged
+  std::size_t n_not_computed = 0; ///< mapped points left not_computed (stop hook)
+  std::size_t n_scaling_checks = 0;        ///< check positions (all levels solved)
+  std::size_t n_scaling_checks_failed = 0; ///< of which the scaled prediction missed the tolerance
+  double max_scaling_check_error = 0;      ///< worst relative error of the scaled prediction
+  bool mirror_x = false;          ///< symmetric under y → −y (mirror about the x axis) and used
+  bool mirror_y = false;          ///< symmetric under x → −x (mirror about the y axis) and used
+  std::string symmetry_reason;    ///< why (or why not) symmetry was used
+  std::string model;              ///< kinematics used ("von-karman", ...)
+  std::string model_reason;
+  double estimated_relative_error = 1;  ///< of the charges on the sweep mesh (setup check)
+  std::size_t n_dofs = 0;
+  int ranks = 1;                  ///< MPI ranks
+  int threads = 1;                ///< threads per rank
+  double setup_s = 0;             ///< ProbeSweep setup (max over threads of this process)
+  double wall_s = 0;              ///< whole generation
+  double per_position_s = 0;      ///< wall_s / solved positions (this process)
+  bool stopped_early = false;     ///< the stop hook fired
+  std::string checkpoint_hash;    ///< hash of scene + options that ties a checkpoint to this run
+  /// [nf][ny][nx] provenance flags (see namespace provenance).
+  std::vector<std::uint8_t> provenance;
+};
+
+/// Generates the charge map of `scene` (its loads are ignored; the probe radius is the scene's).
+/// Bad input (spacing ≤ 0, forces ≤ 0, empty region, mismatching checkpoint) throws
+/// pvdf::InputError; a point whose solve fails is status not_converged (NaN values), never a
+/// guess. With `distributed`, collective over MPI_COMM_WORLD.
+ChargeMap generate_map(const pvdf::Scene& scene, const MapOptions& options, MapReport* report = nullptr);
+
+/// Writes a generated map atomically (pvdf::mapping::write_map) with the extra dataset
+/// `/provenance` (uint8 [nf][ny][nx], flags above; empty = not written).
+void write_generated_map(const std::string& path, const ChargeMap& map, const std::vector<std::uint8_t>& provenance);
+
+/// Reads `/provenance` of a map file; empty when the file has none. Throws pvdf::InputError.
+std::vector<std::uint8_t> read_provenance(const std::string& path);
+
+/// Process-wide MPI for `distributed` generation: initializes MPI (also without mpirun:
+/// singleton start) unless already initialized, finalizes at destruction if it initialized it.
+class MpiSession {
+ public:
+  MpiSession();
+  ~MpiSession();
+  MpiSession(const MpiSession&) = delete;
+  MpiSession& operator=(const MpiSession&) = delete;
+  int rank() const { return rank_; }
+  int size() const { return size_; }
+  /// True when the process was started by an MPI launcher (mpirun/srun environment seen).
+  static bool launched_by_mpirun();
+
+ private:
+  int rank_ = 0;
+  int size_ = 1;
+  bool owns_ = false;
+};
+
+}  // namespace pvdf::mapping
