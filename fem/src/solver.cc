@@ -4,6 +4,8 @@
 // docs/fem.md explains every equation used here.
 #include "pvdf/fem/solver.hpp"
 
+#include "sweep_engine.hpp"
+
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
 #include "pvdf/core/material.hpp"
@@ -235,6 +237,19 @@ class FilmSolver {
   Result run();
   JacobianCheck check_jacobian(double amplitude_m, int n_directions, unsigned int seed);
 
+  // Probe sweeps (detail::SweepEngine): one fixed mesh built without any probe load, then one
+  // probe moved over it; DOFs, sparsity and the symbolic factorization are kept.
+  void prepare_sweep();
+  void set_probe(double x_m, double y_m, double force_N);
+  NewtonOutcome solve_probe(Model model, Vector<double>& u, bool warm, int& newton_iterations, bool& warm_used);
+  void probe_outputs(const Vector<double>& u, Model model, detail::EngineSolution& out);
+  void scale_state(Vector<double>& u, double inplane_factor, double w_factor) const;
+  const Summary& summary() const { return summary_; }
+  unsigned int n_dofs() const { return dof_handler_.n_dofs(); }
+  unsigned int n_cells() const { return triangulation_.n_active_cells(); }
+  int n_factorizations() const { return n_factorizations_; }
+  double load_vector_s = 0;
+
   // Used by the postprocessor.
   MembraneForce membrane_force(const Kinematics& k, const Point<dim>& x) const;
   double charge_density(const MembraneForce& n) const {
@@ -302,6 +317,7 @@ class FilmSolver {
   std::vector<std::ptrdiff_t> eigen_index_;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::AMDOrdering<int>> ldlt_;
   bool ldlt_analyzed_ = false;
+  int n_factorizations_ = 0;
 
   Model current_model_ = Model::linear;
   double last_energy_ = 0;  // potential Π of the last assemble() call (J)
@@ -870,6 +886,7 @@ bool FilmSolver::solve_linear(const Vector<double>& rhs, Vector<double>& x, std:
         ldlt_analyzed_ = true;
       }
       ldlt_.factorize(eigen_tangent_);
+      ++n_factorizations_;
       bool good = ldlt_.info() == Eigen::Success;
       if (good) {
         const Eigen::Map<const Eigen::VectorXd> b(rhs.begin(), rhs.size());
@@ -1513,6 +1530,86 @@ Result FilmSolver::run() {
   return result;
 }
 
+// ------------------------------------------------------------------------------ probe sweeps
+
+// The sweep mesh is graded to the electrodes only (the scene copy given to this solver carries
+// no loads), capped everywhere by the coarse size, which is therefore the size under any probe.
+void FilmSolver::prepare_sweep() {
+  make_grid();
+  setup_system();
+}
+
+// A new probe position or force changes only the load vector: it is re-integrated on the fixed
+// mesh (cut cells sub-sampled, then scaled so the total vertical force is exactly F).
+void FilmSolver::set_probe(double x_m, double y_m, double force_N) {
+  const auto t0 = Clock::now();
+  LoadCase c;
+  c.probe = true;
+  c.center = Point<dim>(x_m, y_m);
+  c.radius_m = scene_.probe.radius_m;
+  c.force_N = force_N;
+  loads_ = {c};
+  total_force_ = std::abs(force_N);
+  assemble_load_vector();
+  load_vector_s += seconds_since(t0);
+}
+
+// Warm: Newton from the given state (no continuation: a neighbour's state is already tensioned);
+// if that fails, or when cold, the artificial-pretension continuation from the flat film.
+NewtonOutcome FilmSolver::solve_probe(Model model, Vector<double>& u, bool warm, int& newton_iterations,
+                                      bool& warm_used) {
+  const int before = summary_.newton_iterations;
+  warm_used = false;
+  if (warm) {
+    const int cap = options_.max_newton_iterations;
+    options_.max_newton_iterations = std::min(cap, 25);
+    Vector<double> start = u;
+    NewtonOutcome o = newton(model, 0.0, u);
+    options_.max_newton_iterations = cap;
+    summary_.newton_iterations += o.iterations;
+    if (o.status == Status::converged) {
+      newton_iterations = summary_.newton_iterations - before;
+      warm_used = true;
+      return o;
+    }
+    u = start;
+  }
+  NewtonOutcome o = solve_from_flat(model, u);
+  newton_iterations = summary_.newton_iterations - before;
+  o.iterations = newton_iterations;
+  return o;
+}
+
+void FilmSolver::scale_state(Vector<double>& u, double inplane_factor, double w_factor) const {
+  std::vector<bool> done(u.size(), false);
+  std::vector<types::global_dof_index> dofs(fe_->n_dofs_per_cell());
+  for (const auto& cell : dof_handler_.active_cell_iterators()) {
+    cell->get_dof_indices(dofs);
+    for (unsigned int i = 0; i < dofs.size(); ++i) {
+      if (done[dofs[i]]) continue;
+      done[dofs[i]] = true;
+      u(dofs[i]) *= fe_->system_to_component_index(i).first == 2 ? w_factor : inplane_factor;
+    }
+  }
+}
+
+void FilmSolver::probe_outputs(const Vector<double>& u, Model model, detail::EngineSolution& out) {
+  current_model_ = model;
+  out.charge_C.clear();
+  out.mean_membrane_force_material_N_per_m.clear();
+  for (std::size_t k = 0; k < scene_.electrodes.size(); ++k) {
+    const auto g = electrode_mean_force(u, model, k);
+    const Eigen::Vector3d m = pvdf::stress_to_material(draw_angle_) * Eigen::Vector3d(g[0], g[1], g[2]);
+    out.mean_membrane_force_material_N_per_m.push_back({m[0], m[1], m[2]});
+    out.charge_C.push_back(scene_.electrodes[k].area_m2() *
+                           (scene_.material.d31_C_per_N * m[0] + scene_.material.d32_C_per_N * m[1]) / thickness_);
+  }
+  Vector<double> value(3);
+  VectorTools::point_value(*mapping_, dof_handler_, u, loads_.front().center, value);
+  out.deflection_at_load_m = value[2];
+  out.rim_reaction_N = rim_reaction(u, model);
+}
+
 JacobianCheck FilmSolver::check_jacobian(double amplitude_m, int n_directions, unsigned int seed) {
   setup_system();
   std::mt19937 rng(seed);
@@ -1622,6 +1719,98 @@ Result run_with_model_choice(const pvdf::Scene& scene, const Options& options,
 }
 
 }  // namespace
+
+// ------------------------------------------------------------------------------ sweep engine
+
+namespace detail {
+
+std::string bending_negligible_reason(const pvdf::Scene& scene, const Options& options) {
+  return bending_negligible(scene, options);
+}
+
+struct SweepEngine::Impl {
+  pvdf::Scene scene;  // outlives the solver, which keeps a reference
+  Options options;
+  Model model = Model::large_rotation;
+  std::unique_ptr<FilmSolver> solver;
+  EngineTiming timing;
+};
+
+SweepEngine::SweepEngine(const pvdf::Scene& scene, const Options& options, Model model, bool include_bending,
+                         const SweepMeshSizes& sizes)
+    : impl_(std::make_unique<Impl>()) {
+  impl_->scene = scene;
+  impl_->scene.loads.clear();
+  impl_->model = model;
+  Options o = options;
+  o.model = model;
+  o.include_bending = include_bending;
+  o.adaptive = false;
+  o.coarse_size_m = sizes.region_size_m;
+  o.probe_size_m = sizes.region_size_m;
+  o.electrode_size_m = sizes.electrode_size_m;
+  o.grading = sizes.grading;
+  o.initial_global_refinements = sizes.global_refinements;
+  o.sample_points_m.clear();
+  o.vtu_directory.clear();
+  impl_->options = o;
+  impl_->solver = std::make_unique<FilmSolver>(impl_->scene, o);
+  impl_->solver->prepare_sweep();
+}
+
+SweepEngine::~SweepEngine() = default;
+
+std::size_t SweepEngine::n_dofs() const { return impl_->solver->n_dofs(); }
+std::size_t SweepEngine::n_cells() const { return impl_->solver->n_cells(); }
+
+EngineTiming SweepEngine::timing() const {
+  EngineTiming t = impl_->timing;
+  const Summary& s = impl_->solver->summary();
+  t.assembly_s = s.assembly_s;
+  t.linear_solve_s = s.linear_solve_s;
+  t.load_vector_s = impl_->solver->load_vector_s;
+  t.newton_iterations = s.newton_iterations;
+  t.factorizations = impl_->solver->n_factorizations();
+  return t;
+}
+
+EngineSolution SweepEngine::solve(double x_m, double y_m, double force_N, std::vector<double>& state, bool warm,
+                                  double state_force_N) {
+  FilmSolver& fs = *impl_->solver;
+  EngineSolution out;
+  const int factorizations_before = fs.n_factorizations();
+  fs.set_probe(x_m, y_m, force_N);
+  Vector<double> u(fs.n_dofs());
+  const bool use_warm = warm && state.size() == u.size();
+  if (use_warm) {
+    std::copy(state.begin(), state.end(), u.begin());
+    // Pure-membrane scaling (w ∝ F^(1/3), strains and in-plane displacements ∝ F^(2/3)): exact for
+    // von Kármán without bending or pretension, a close start otherwise.
+    if (state_force_N > 0 && state_force_N != force_N) {
+      const double ratio = force_N / state_force_N;
+      fs.scale_state(u, std::cbrt(ratio * ratio), std::cbrt(ratio));
+    }
+  }
+  NewtonOutcome o = fs.solve_probe(impl_->model, u, use_warm, out.newton_iterations, out.warm_started);
+  out.status = o.status;
+  out.message = o.message;
+  out.factorizations = fs.n_factorizations() - factorizations_before;
+  if (o.status != Status::converged) return out;
+  const auto t0 = Clock::now();
+  fs.probe_outputs(u, impl_->model, out);
+  impl_->timing.outputs_s += seconds_since(t0);
+  bool finite = std::isfinite(out.deflection_at_load_m) && std::isfinite(out.rim_reaction_N);
+  for (double q : out.charge_C) finite = finite && std::isfinite(q);
+  if (!finite) {
+    out.status = Status::not_finite;
+    out.message = "non-finite outputs";
+    return out;
+  }
+  state.assign(u.begin(), u.end());
+  return out;
+}
+
+}  // namespace detail
 
 Result solve(const pvdf::Scene& scene, const Options& options) {
   return run_with_model_choice(scene, options, [](FilmSolver& s) { s.make_grid(); });

@@ -23,6 +23,9 @@ struct SweepOptions {
   /// Force levels the sweep will be asked for (N); the setup chooses model and mesh for the
   /// largest and checks them at the smallest. Empty = the scene's first load force (or 1 N).
   std::vector<double> forces_N;
+  /// Probe positions (centre, on the first electrode, far from it) at which the setup compares
+  /// the sweep mesh's charges with direct solves (0..3; 0 = no check, error not estimated).
+  int n_setup_checks = 3;
 };
 
 /// What the setup decided, for reports and map provenance.
@@ -34,6 +37,9 @@ struct SweepSetup {
   std::size_t n_cells = 0;
   double estimated_relative_error = 1;  ///< of electrode charges on the sweep mesh (setup check)
   std::string error_estimator;          ///< how it was obtained
+  double estimated_deflection_relative_error = 1;  ///< of deflection_at_load_m at the same checks
+  double region_size_m = 0;             ///< largest cell size of the sweep mesh (also under any probe)
+  double electrode_size_m = 0;          ///< cell size on the electrodes
   double setup_s = 0;                   ///< wall time of the setup
 };
 
@@ -41,6 +47,8 @@ struct SweepSetup {
 /// produced it; empty = start from the flat film.
 struct SweepState {
   std::vector<double> dofs;
+  double force_N = 0;                   ///< force it was converged under (warm starts across forces scale it)
+  double x_m = 0, y_m = 0;              ///< probe centre it was converged for (m)
 };
 
 /// One probe solve.
@@ -59,6 +67,16 @@ struct ProbeSolution {
   double wall_s = 0;
 };
 
+/// Where the time of the probe solves went (s), accumulated since construction (setup checks included).
+struct SweepTiming {
+  double assembly_s = 0;      ///< residual + tangent assembly
+  double linear_solve_s = 0;  ///< factorizations, back substitutions, preconditioned iterations
+  double load_vector_s = 0;   ///< probe load re-integration
+  double outputs_s = 0;       ///< electrode charges, deflection, rim reaction
+  int newton_iterations = 0;
+  int factorizations = 0;
+};
+
 /// A reusable single-probe solver for one scene. Not thread-safe: use one instance per thread
 /// (instances are independent). The scene's own loads are ignored; the probe radius is the
 /// scene's `probe.radius_m`.
@@ -72,6 +90,8 @@ class ProbeSweep {
   ProbeSweep& operator=(const ProbeSweep&) = delete;
 
   const SweepSetup& setup() const;
+  /// Cost breakdown of the solves so far (for benchmarks).
+  SweepTiming timing() const;
 
   /// Solves a vertical probe force `force_N` (N, > 0) centred at (`x_m`, `y_m`) (m).
   /// @param[in]  warm_start  state of a neighbouring solve (nullptr or empty = from flat)
