@@ -27,7 +27,7 @@ struct MapOptions {
   /// Optional rectangle {xmin, xmax, ymin, ymax} (m) limiting the mapped positions; default:
   /// the film's bounding box. Positions outside the film minus the rim margin are always masked.
   std::optional<std::array<double, 4>> region_m;
-  /// Probe centres closer than this to the rim are not mapped (m); 0 = the probe radius + 1 mm.
+  /// Probe centres closer than this to the rim are not mapped (m); 0 = twice the probe radius.
   double rim_margin_m = 0.0;
   /// Kinematics: "auto" | "linear" | "von-karman" | "large-rotation"; "" = the scene's.
   std::string model = "auto";
@@ -71,7 +71,6 @@ namespace provenance {
 inline constexpr std::uint8_t solved = 0;    ///< solved by the FEM at this position and force
 inline constexpr std::uint8_t scaled = 1;    ///< from the largest level by Q ∝ F^(2/3), w ∝ F^(1/3)
 inline constexpr std::uint8_t mirrored = 2;  ///< copied from the mirror-image position (electrodes permuted)
-inline constexpr std::uint8_t resumed = 4;   ///< taken from a checkpoint of an earlier run
 }  // namespace provenance
 
 /// What a generation did.
@@ -101,6 +100,7 @@ struct MapReport {
   double per_position_s = 0;      ///< wall_s / solved positions (this process)
   bool stopped_early = false;     ///< the stop hook fired
   std::string checkpoint_hash;    ///< hash of scene + options that ties a checkpoint to this run
+  std::string first_failure;      ///< first failed point and the solver's message ("" = none)
   /// [nf][ny][nx] provenance flags (see namespace provenance).
   std::vector<std::uint8_t> provenance;
 };
@@ -114,6 +114,9 @@ ChargeMap generate_map(const pvdf::Scene& scene, const MapOptions& options, MapR
 /// Writes a generated map atomically (pvdf::mapping::write_map) with the extra dataset
 /// `/provenance` (uint8 [nf][ny][nx], flags above; empty = not written).
 void write_generated_map(const std::string& path, const ChargeMap& map, const std::vector<std::uint8_t>& provenance);
+
+/// Deletes a checkpoint and its per-rank files (`<path>.rank<N>`), e.g. after the map was written.
+void remove_checkpoint_files(const std::string& checkpoint_path);
 
 /// Reads `/provenance` of a map file; empty when the file has none. Throws pvdf::InputError.
 std::vector<std::uint8_t> read_provenance(const std::string& path);

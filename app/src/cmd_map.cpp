@@ -1,0 +1,176 @@
+// `pvdfkit map`: the charge map of a scene — every grid position × force level → the charge of
+// every electrode (FEM probe sweep; docs/map-generation.md). Runs unchanged under
+// `mpirun -np N`; resumes from its checkpoint; exit 3 when any point failed (map still written).
+#include "command.hpp"
+
+#include "pvdf/core/error.hpp"
+#include "pvdf/core/io.hpp"
+#include "pvdf/core/progress.hpp"
+#include "pvdf/core/scene.hpp"
+#include "pvdf/mapping/generate.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <optional>
+
+namespace {
+
+struct MapCommandOptions {
+  std::string scene_path;
+  std::string output;
+  double spacing_m = 0.002;
+  std::string forces = "1";
+  std::string region;
+  double rim_margin_m = 0;
+  std::string model = "auto";
+  double tolerance = 0;
+  int threads = 0;
+  std::string checkpoint;
+  bool no_checkpoint = false;
+  bool no_resume = false;
+  bool no_symmetry = false;
+  bool no_force_scaling = false;
+  int scaling_check_stride = 4;
+  std::string noise;
+  bool json = false;
+  bool force_mpi = false;
+  std::size_t stop_after = 0;
+  bool quiet = false;
+};
+
+int run_map(const MapCommandOptions& o) {
+  using namespace pvdf::mapping;
+  // MPI only when launched by mpirun (or asked for): a plain run needs no MPI runtime.
+  std::optional<MpiSession> mpi;
+  if (o.force_mpi || MpiSession::launched_by_mpirun()) mpi.emplace();
+  const int rank = mpi ? mpi->rank() : 0;
+
+  pvdf::Scene scene = pvdf::load_scene(o.scene_path);
+  if (rank == 0) {
+    for (const auto& w : scene.warnings) pvdf::app::warn(w);
+  }
+  MapOptions options;
+  options.spacing_m = o.spacing_m;
+  options.forces_N = pvdf::parse_number_list(o.forces, "--forces-N");
+  if (!o.region.empty()) {
+    const auto r = pvdf::parse_number_list(o.region, "--region XMIN,XMAX,YMIN,YMAX (m)", 4);
+    options.region_m = std::array<double, 4>{r[0], r[1], r[2], r[3]};
+  }
+  options.rim_margin_m = o.rim_margin_m;
+  options.model = o.model;
+  options.tolerance = o.tolerance;
+  options.threads = o.threads;
+  options.use_symmetry = !o.no_symmetry;
+  options.use_force_scaling = !o.no_force_scaling;
+  options.scaling_check_stride = o.scaling_check_stride;
+  if (!o.noise.empty()) options.noise_C = pvdf::parse_number_list(o.noise, "--noise-C", scene.electrodes.size());
+  if (!o.no_checkpoint) options.checkpoint_path = o.checkpoint.empty() ? o.output + ".checkpoint" : o.checkpoint;
+  options.resume = !o.no_resume;
+  options.distributed = mpi.has_value();
+  options.stop_after_positions = o.stop_after;
+  options.description = "pvdfkit map " + o.scene_path;
+
+  std::unique_ptr<pvdf::Progress> bar;
+  if (rank == 0 && !o.quiet) {
+    options.progress = [&bar](std::size_t done, std::size_t total) {
+      if (!bar) bar = std::make_unique<pvdf::Progress>("map", total);
+      bar->update(done);
+    };
+  }
+  MapReport report;
+  const ChargeMap map = generate_map(scene, options, &report);
+  if (bar) bar->finish();
+  if (rank != 0) return report.n_failed > 0 || report.stopped_early ? pvdf::exit_code::numerical : pvdf::exit_code::success;
+
+  if (report.stopped_early) {
+    std::cerr << "error: stopped after " << o.stop_after << " positions (--stop-after-positions); the checkpoint "
+              << options.checkpoint_path << " holds the completed rows: rerun without the flag to resume\n";
+    return pvdf::exit_code::numerical;
+  }
+  write_generated_map(o.output, map, report.provenance);
+  remove_checkpoint_files(options.checkpoint_path);
+
+  if (o.json) {
+    nlohmann::json j;
+    j["output"] = o.output;
+    j["n_positions"] = report.n_positions;
+    j["n_points"] = report.n_points;
+    j["n_solved"] = report.n_solved;
+    j["n_scaled"] = report.n_scaled;
+    j["n_mirrored"] = report.n_mirrored;
+    j["n_resumed"] = report.n_resumed;
+    j["n_failed"] = report.n_failed;
+    j["n_scaling_checks"] = report.n_scaling_checks;
+    j["n_scaling_checks_failed"] = report.n_scaling_checks_failed;
+    j["max_scaling_check_error"] = report.max_scaling_check_error;
+    j["mirror_x"] = report.mirror_x;
+    j["mirror_y"] = report.mirror_y;
+    j["symmetry_reason"] = report.symmetry_reason;
+    j["model"] = report.model;
+    j["model_reason"] = report.model_reason;
+    j["tolerance"] = map.tolerance;
+    j["estimated_relative_error"] = report.estimated_relative_error;
+    j["n_dofs"] = report.n_dofs;
+    j["ranks"] = report.ranks;
+    j["threads"] = report.threads;
+    j["wall_s"] = report.wall_s;
+    j["per_position_s"] = report.per_position_s;
+    j["nx"] = map.nx();
+    j["ny"] = map.ny();
+    j["forces_N"] = map.forces_N;
+    j["rim_margin_m"] = map.rim_margin_m;
+    j["checkpoint_hash"] = report.checkpoint_hash;
+    if (!report.first_failure.empty()) j["first_failure"] = report.first_failure;
+    std::cout << j.dump(2) << '\n';
+  } else {
+    std::printf("%s: %zu x %zu grid, %zu positions x %zu force levels = %zu points\n", o.output.c_str(), map.nx(),
+                map.ny(), report.n_positions, map.nf(), report.n_points);
+    std::printf("solved %zu, scaled %zu (checks %zu, failed %zu, worst %.3g), mirrored %zu, resumed %zu, failed %zu\n",
+                report.n_solved, report.n_scaled, report.n_scaling_checks, report.n_scaling_checks_failed,
+                report.max_scaling_check_error, report.n_mirrored, report.n_resumed, report.n_failed);
+    std::printf("model %s: %s\n", report.model.c_str(), report.model_reason.c_str());
+    std::printf("symmetry: %s\n", report.symmetry_reason.c_str());
+    std::printf("%d rank(s) x %d thread(s), %.1f s, %.3g s per solved position and core\n", report.ranks,
+                report.threads, report.wall_s, report.per_position_s);
+  }
+  if (report.n_failed > 0) {
+    std::cerr << "error: " << report.n_failed << " map point(s) did not converge and are marked not_converged in "
+              << o.output << " (first: " << report.first_failure << ")\n";
+    return pvdf::exit_code::numerical;
+  }
+  return pvdf::exit_code::success;
+}
+
+}  // namespace
+
+PVDF_COMMAND(35, [](CLI::App& root) {
+  auto* sub = root.add_subcommand("map", "Charge map: the charge of every electrode for a probe pressed at every grid "
+                                         "position and force level (FEM; runs under mpirun -np N)");
+  auto o = std::make_shared<MapCommandOptions>();
+  sub->add_option("scene", o->scene_path, "Scene file (JSON)")->required();
+  sub->add_option("-o,--output", o->output, "Map file to write (HDF5, docs/mapping.md)")->required();
+  sub->add_option("--spacing-m", o->spacing_m, "Grid spacing (m); nodes at multiples of it (default 0.002)");
+  sub->add_option("--forces-N", o->forces, "Force levels F1,F2,... (N, > 0; default 1)");
+  sub->add_option("--region", o->region, "Map only XMIN,XMAX,YMIN,YMAX (m; default: the whole film)");
+  sub->add_option("--rim-margin-m", o->rim_margin_m, "No probe centres closer than this to the rim (m; 0 = 2 x probe radius)");
+  sub->add_option("--model", o->model, "Kinematics: auto|linear|von-karman|large-rotation (default auto)");
+  sub->add_option("--tolerance", o->tolerance, "Requested relative charge error (default: scene, 0.01)");
+  sub->add_option("--threads", o->threads, "Threads per process (0 = cores / ranks)");
+  sub->add_option("--checkpoint", o->checkpoint, "Checkpoint file (default OUTPUT.checkpoint; resumed when it exists)");
+  sub->add_flag("--no-checkpoint", o->no_checkpoint, "Write no checkpoint");
+  sub->add_flag("--no-resume", o->no_resume, "Ignore an existing checkpoint (start afresh)");
+  sub->add_flag("--no-symmetry", o->no_symmetry, "Solve every position even when the scene is mirror-symmetric");
+  sub->add_flag("--no-force-scaling", o->no_force_scaling, "Solve every force level (no Q ~ F^(2/3) shortcut)");
+  sub->add_option("--scaling-check-stride", o->scaling_check_stride,
+                  "Force-scaling check positions every N grid steps (default 4)");
+  sub->add_option("--noise-C", o->noise, "1-sigma charge noise per electrode N1,N2,... (C; default 5e-14 each)");
+  sub->add_flag("--json", o->json, "Print a JSON summary (counts, model, timings)");
+  sub->add_flag("--quiet", o->quiet, "No progress bar");
+  sub->add_flag("--mpi", o->force_mpi, "Initialize MPI even when not started by mpirun (singleton)");
+  sub->add_option("--stop-after-positions", o->stop_after,
+                  "Testing: stop as if killed after N solved positions (checkpoint kept, no map written)");
+  return pvdf::app::Subcommand{sub, [o] { return run_map(*o); }};
+});
