@@ -19,7 +19,9 @@ constexpr double nan_value = std::numeric_limits<double>::quiet_NaN();
 
 /// The (calibrated) charge of electrode k for presses of force F on a grid `refine` times finer
 /// than the map's, in pC; NaN where the map has no value.
-plot::Grid charge_grid_pC(const Locator& locator, const ChargeMap& map, std::size_t k, double force_N, int refine) {
+/// With half_width_m > 0 the grid covers [−w, w]² (clipped to the map) at the same resolution.
+plot::Grid charge_grid_pC(const Locator& locator, const ChargeMap& map, std::size_t k, double force_N, int refine,
+                          double half_width_m = 0.0) {
   plot::Grid g;
   g.x0 = map.x_m.front() * 1e3;
   g.x1 = map.x_m.back() * 1e3;
@@ -27,6 +29,16 @@ plot::Grid charge_grid_pC(const Locator& locator, const ChargeMap& map, std::siz
   g.y1 = map.y_m.back() * 1e3;
   g.nx = (map.nx() - 1) * std::size_t(refine) + 1;
   g.ny = (map.ny() - 1) * std::size_t(refine) + 1;
+  if (half_width_m > 0) {
+    const double w = half_width_m * 1e3;
+    const double hx = (g.x1 - g.x0) / double(g.nx - 1), hy = (g.y1 - g.y0) / double(g.ny - 1);
+    g.x0 = std::max(g.x0, -w);
+    g.x1 = std::min(g.x1, w);
+    g.y0 = std::max(g.y0, -w);
+    g.y1 = std::min(g.y1, w);
+    g.nx = std::size_t(std::max(2.0, std::ceil((g.x1 - g.x0) / hx) + 1));
+    g.ny = std::size_t(std::max(2.0, std::ceil((g.y1 - g.y0) / hy) + 1));
+  }
   g.values.assign(g.nx * g.ny, nan_value);
   std::array<double, max_electrodes> q{};
   for (std::size_t j = 0; j < g.ny; ++j) {
@@ -74,10 +86,11 @@ std::string format_number(const char* fmt, double v) {
 }  // namespace
 
 void write_isocharge_png(const Locator& locator, const ChargeMap& map, std::size_t electrode, double force_N,
-                         const std::string& path) {
+                         const std::string& path, double half_width_m) {
   if (electrode >= map.ne()) throw InputError("isocharge picture: electrode index " + std::to_string(electrode) + " out of range");
   if (!(force_N > 0)) throw InputError("isocharge picture: force " + std::to_string(force_N) + " N must be > 0");
-  const plot::Grid g = charge_grid_pC(locator, map, electrode, force_N, 2);
+  if (!(half_width_m >= 0)) throw InputError("isocharge picture: half width " + std::to_string(half_width_m) + " m must be >= 0");
+  const plot::Grid g = charge_grid_pC(locator, map, electrode, force_N, half_width_m > 0 ? 4 : 2, half_width_m);
   // Contours between the 5th and 95th percentile of the field: the peak at the electrode
   // would otherwise take all the levels.
   std::vector<double> v;
@@ -164,6 +177,155 @@ void write_charge_vtk(const ChargeMap& map, const std::string& path) {
       }
     }
   });
+}
+
+void write_isocharge_overlay_png(const Locator& locator, const ChargeMap& map, double force_N, const std::string& path,
+                                 double half_width_m) {
+  if (!(force_N > 0)) throw InputError("isocharge picture: force " + std::to_string(force_N) + " N must be > 0");
+  if (!(half_width_m >= 0)) throw InputError("isocharge picture: half width " + std::to_string(half_width_m) + " m must be >= 0");
+  plot::Figure fig(900, 800);
+  auto& ax = fig.axes();
+  for (std::size_t k = 0; k < map.ne(); ++k) {
+    const plot::Grid g = charge_grid_pC(locator, map, k, force_N, half_width_m > 0 ? 4 : 2, half_width_m);
+    std::vector<double> v;
+    for (double x : g.values) {
+      if (std::isfinite(x)) v.push_back(x);
+    }
+    if (v.empty()) throw InputError("isocharge picture: the map has no value to draw in the window");
+    std::sort(v.begin(), v.end());
+    // Fewer, rounder levels than the single-electrode picture: three families share the panel.
+    const double lo = v[v.size() / 10], hi = v[v.size() * 9 / 10];
+    ax.contour(g, nice_levels(lo, hi, 5), plot::cycle_color(k), 1.8, "%.3g pC", 1.0,
+               "electrode " + map.electrode_names[k] + " (pC)");
+  }
+  mark_electrodes(ax, map);
+  ax.title("Isocharge contours of all electrodes at " + format_number("%.3g", force_N) + " N (" + map.model + " map)")
+      .xlabel("probe x (mm)")
+      .ylabel("probe y (mm)")
+      .equal_aspect()
+      .grid_lines()
+      .legend("lower right");
+  if (half_width_m > 0) {
+    ax.xlim(-half_width_m * 1e3, half_width_m * 1e3).ylim(-half_width_m * 1e3, half_width_m * 1e3);
+  }
+  fig.save_png(path);
+}
+
+void write_rays_png(const RayAnalysis& analysis, const ChargeMap& map, std::size_t electrode,
+                    const std::vector<double>& beta_deg, const std::vector<MeasuredPress>* measured,
+                    double angle_tolerance_deg, const std::string& path) {
+  if (electrode >= map.ne()) throw InputError("rays picture: electrode index " + std::to_string(electrode) + " out of range");
+  plot::Figure fig(1000, 750);
+  auto& ax = fig.axes();
+  constexpr double pi = 3.14159265358979323846;
+  std::size_t colour = 0;
+  bool any = false;
+  for (double beta : beta_deg) {
+    const RayFit* ray = nullptr;
+    for (const auto& r : analysis.rays) {
+      if (r.electrode == electrode && std::abs(r.beta_deg - beta) < 1e-6) ray = &r;
+    }
+    if (!ray || ray->d_m.empty()) continue;
+    any = true;
+    const plot::Color c = plot::cycle_color(colour++);
+    std::vector<double> d_mm, q_pC;
+    for (std::size_t i = 0; i < ray->d_m.size(); ++i) {
+      if (ray->charge_C[i] > 0) {
+        d_mm.push_back(ray->d_m[i] * 1e3);
+        q_pC.push_back(ray->charge_C[i] * 1e12);
+      }
+    }
+    std::string label = format_number("β = %.0f°", beta);
+    if (ray->fitted) {
+      label += format_number(": C$_2$ = %.3f", ray->C2);
+      std::vector<double> fd, fq;
+      for (double d : d_mm) {
+        fd.push_back(d);
+        fq.push_back(ray->C1_C * 1e12 * std::pow(d, ray->C2));
+      }
+      ax.line(fd, fq, "", c, plot::LineStyle::solid, plot::Marker::none, 1.8);
+    } else {
+      label += " (not fitted)";
+    }
+    ax.scatter(d_mm, q_pC, label, c, measured ? plot::Marker::plus : plot::Marker::circle, measured ? 6.0 : 4.0);
+    if (measured) {
+      // Measured presses on this ray: bearing from the electrode within the tolerance.
+      std::vector<double> md, mq;
+      for (const auto& m : *measured) {
+        const double dx = m.x_m - map.electrode_centers_m[electrode][0], dy = m.y_m - map.electrode_centers_m[electrode][1];
+        double bearing = (std::atan2(dy, dx) - analysis.draw_angle_rad) * 180.0 / pi;
+        bearing = std::fmod(bearing + 720.0, 360.0);
+        double off = std::abs(bearing - beta);
+        off = std::min(off, 360.0 - off);
+        if (off <= angle_tolerance_deg && m.charge_C[electrode] > 0) {
+          md.push_back(std::hypot(dx, dy) * 1e3);
+          mq.push_back(m.charge_C[electrode] * 1e12);
+        }
+      }
+      if (!md.empty()) ax.scatter(md, mq, format_number("measured, β = %.0f°", beta), c, plot::Marker::square, 8.0);
+    }
+  }
+  if (!any) throw InputError("rays picture: electrode " + map.electrode_names[electrode] + " has no sampled ray at the requested angles");
+  ax.title("Charge of electrode " + map.electrode_names[electrode] + " against distance (" +
+           format_number("%.3g", analysis.options.force_N) + " N, " + map.model + " map; lines: Q = C$_1$ d$^{C_2}$)")
+      .xlabel("distance d from the electrode centre (mm)")
+      .ylabel("charge Q (pC)")
+      .log_x()
+      .log_y()
+      .grid_lines()
+      .legend("upper right");
+  fig.save_png(path);
+}
+
+void write_comparison_png(const Comparison& comparison, const std::string& path) {
+  plot::Figure fig(1400, 650, 1, 2);
+  auto& left = fig.axes(0, 0);
+  auto& right = fig.axes(0, 1);
+  double lo = std::numeric_limits<double>::infinity(), hi = 0;
+  const std::size_t ne = comparison.electrodes.size();
+  for (std::size_t k = 0; k < ne; ++k) {
+    std::vector<double> qm, qf, index, pct;
+    for (std::size_t i = 0; i < comparison.presses.size(); ++i) {
+      const auto& p = comparison.presses[i];
+      if (!std::isfinite(p.difference_pct[k])) continue;
+      qf.push_back(p.map_charge_C[k] * 1e12);
+      qm.push_back(p.measured.charge_C[k] * 1e12);
+      index.push_back(double(i + 1));
+      pct.push_back(p.difference_pct[k]);
+      for (double v : {qf.back(), qm.back()}) {
+        if (v > 0) {
+          lo = std::min(lo, v);
+          hi = std::max(hi, v);
+        }
+      }
+    }
+    const auto& s = comparison.electrodes[k];
+    left.scatter(qf, qm, s.name + format_number(": mean |diff| %.1f %%", s.mean_abs_difference_pct), plot::cycle_color(k),
+                 plot::Marker::circle, 6);
+    right.scatter(index, pct, s.name, plot::cycle_color(k), plot::Marker::square, 6);
+  }
+  if (hi > 0 && std::isfinite(lo)) {
+    const double a = lo / 1.3, b = hi * 1.3;
+    const double f = 1.0 + paper_mean_difference_pct / 100.0;
+    left.line({a, b}, {a, b}, "measured = map", plot::Color{0, 0, 0}, plot::LineStyle::solid);
+    left.line({a, b}, {a * f, b * f}, "±18 % (seed 001 mean)", plot::Color{120, 120, 120}, plot::LineStyle::dashed);
+    left.line({a, b}, {a / f, b / f}, "", plot::Color{120, 120, 120}, plot::LineStyle::dashed);
+    left.xlim(a, b).ylim(a, b).log_x().log_y();
+  }
+  left.title("Measured against FEM-map charge")
+      .xlabel("map (FEM) charge (pC)")
+      .ylabel("measured charge (pC)")
+      .grid_lines()
+      .legend("upper left");
+  right.hline(0.0, plot::Color{0, 0, 0}, plot::LineStyle::solid)
+      .hline(paper_mean_difference_pct, plot::Color{120, 120, 120}, plot::LineStyle::dashed, "±18 % (seed 001 mean)")
+      .hline(-paper_mean_difference_pct, plot::Color{120, 120, 120}, plot::LineStyle::dashed)
+      .title(format_number("Difference per press (mean |diff| %.1f %%)", comparison.mean_abs_difference_pct))
+      .xlabel("press number (CSV data row)")
+      .ylabel("100·(measured − map)/map (%)")
+      .grid_lines()
+      .legend("upper right");
+  fig.save_png(path);
 }
 
 }  // namespace pvdf::mapping

@@ -2,17 +2,26 @@
 // triple's isocharge contours with their intersection, and VTK image data for ParaView.
 #pragma once
 
+#include "pvdf/mapping/analysis.hpp"
 #include "pvdf/mapping/locator.hpp"
 #include "pvdf/mapping/map.hpp"
 
 #include <string>
+#include <vector>
 
 namespace pvdf::mapping {
 
 /// Isocharge contours of electrode `electrode` for presses of `force_N` over the map: filled
 /// field and labelled contour lines in pC, axes in mm, electrodes marked. PNG, written atomically.
+/// `half_width_m` > 0 zooms on the square [−w, w]² around the film centre (seed 001 Fig. 6
+/// shows the electrode triangle); 0 draws the whole map.
 void write_isocharge_png(const Locator& locator, const ChargeMap& map, std::size_t electrode, double force_N,
-                         const std::string& path);
+                         const std::string& path, double half_width_m = 0.0);
+
+/// Every electrode's labelled isocharge contours on one figure, one colour per electrode (seed
+/// 001 Fig. 8), over [−w, w]² (w = half_width_m; 0 = whole map). PNG, written atomically.
+void write_isocharge_overlay_png(const Locator& locator, const ChargeMap& map, double force_N, const std::string& path,
+                                 double half_width_m = 0.0);
 
 /// For measured charges q: each electrode's isocharge contour Q_k(x, y, F) = q_k at the located
 /// force, on one figure, with the located position (and an ambiguous alternative) marked —
@@ -23,5 +32,19 @@ void write_intersection_png(const Locator& locator, const ChargeMap& map, const 
 /// Legacy VTK STRUCTURED_POINTS of the map: one scalar field `charge_<name>_pC_F<i>` per
 /// electrode and force level (NaN outside the mask / failed points), plus `mask`; coordinates in m.
 void write_charge_vtk(const ChargeMap& map, const std::string& path);
+
+/// Charge against distance (seed 001 Fig. 7): for electrode `electrode`, the sampled Q(d) of the
+/// rays at the angles `beta_deg` (markers) and their eq. 6 fits (lines), log-log axes in mm and
+/// pC. With `measured` (may be null), measured presses whose bearing from the electrode lies
+/// within ±angle_tolerance_deg of a drawn ray are added as filled markers (Fig. 12). Rays that
+/// were not fitted are drawn without a line. PNG, written atomically.
+void write_rays_png(const RayAnalysis& analysis, const ChargeMap& map, std::size_t electrode,
+                    const std::vector<double>& beta_deg, const std::vector<MeasuredPress>* measured,
+                    double angle_tolerance_deg, const std::string& path);
+
+/// FEM map against measurement (seed 001 Fig. 12): left, measured against map charge per
+/// electrode (pC) with the identity and ±18 % lines; right, the % difference of every compared
+/// value against the press number. PNG, written atomically.
+void write_comparison_png(const Comparison& comparison, const std::string& path);
 
 }  // namespace pvdf::mapping

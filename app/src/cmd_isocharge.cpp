@@ -1,0 +1,87 @@
+// `pvdfkit isocharge`: isocharge pictures of a charge map (seed 001 Figs 6 and 8) — one contour
+// map per electrode, all electrodes on one figure, VTK image data for ParaView, and for a
+// charge triple its three isocharge contours with their intersection.
+#include "command.hpp"
+
+#include "pvdf/core/error.hpp"
+#include "pvdf/core/io.hpp"
+#include "pvdf/mapping/locator.hpp"
+#include "pvdf/mapping/map.hpp"
+#include "pvdf/mapping/pictures.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+
+namespace {
+
+struct IsochargeOptions {
+  std::string map_path;
+  std::string out_dir;
+  double force_N = 0;
+  double zoom_m = 0;
+  std::string charges;
+};
+
+int run_isocharge(const IsochargeOptions& o) {
+  using namespace pvdf::mapping;
+  if (o.force_N != 0 && !(o.force_N > 0)) throw pvdf::InputError("--force-N " + std::to_string(o.force_N) + ": must be > 0 (N)");
+  if (!(o.zoom_m >= 0)) throw pvdf::InputError("--zoom-m " + std::to_string(o.zoom_m) + ": must be >= 0 (m; 0 = whole map)");
+  const ChargeMap map = read_map(o.map_path);
+  std::vector<double> q;
+  if (!o.charges.empty()) q = pvdf::parse_number_list(o.charges, "--charges-C", map.ne());
+  LocatorOptions lo;
+  lo.use_calibration = false;  // pictures of the map as computed
+  lo.known_force_N = o.force_N;
+  const Locator locator(map, lo);
+  pvdf::make_directories(o.out_dir);
+  double force = o.force_N;
+  if (!(force > 0)) {  // the level nearest 1 N (seed 001 pressed with 1 N)
+    force = map.forces_N.front();
+    for (double f : map.forces_N) {
+      if (std::abs(std::log(f)) < std::abs(std::log(force))) force = f;
+    }
+  }
+  for (std::size_t k = 0; k < map.ne(); ++k) {
+    const std::string path = o.out_dir + "/isocharge_" + map.electrode_names[k] + ".png";
+    write_isocharge_png(locator, map, k, force, path, o.zoom_m);
+    std::printf("wrote %s\n", path.c_str());
+  }
+  const std::string all = o.out_dir + "/isocharge_all.png";
+  write_isocharge_overlay_png(locator, map, force, all, o.zoom_m);
+  std::printf("wrote %s\n", all.c_str());
+  const std::string vtk = o.out_dir + "/charges.vtk";
+  write_charge_vtk(map, vtk);
+  std::printf("wrote %s\n", vtk.c_str());
+  if (!q.empty()) {
+    const Location r = o.force_N > 0 ? locator.locate(q.data(), o.force_N) : locator.locate(q.data());
+    if (!r.has_position()) {
+      std::cerr << "error: the charges " << o.charges << " locate no press on this map (" << flags_text(r.flags)
+                << "): no intersection picture\n";
+      return pvdf::exit_code::numerical;
+    }
+    const std::string path = o.out_dir + "/intersection.png";
+    write_intersection_png(locator, map, q.data(), r, path);
+    std::printf("wrote %s: contours meet at (%.3f, %.3f) mm, %.4g N, flags %s\n", path.c_str(), r.x_m * 1e3, r.y_m * 1e3,
+                r.force_N, flags_text(r.flags).c_str());
+  }
+  return pvdf::exit_code::success;
+}
+
+}  // namespace
+
+PVDF_COMMAND(62, [](CLI::App& root) {
+  auto* sub = root.add_subcommand(
+      "isocharge",
+      "Isocharge pictures of a charge map: contour PNG per electrode and all together (seed 001 Figs 6, 8), VTK image "
+      "data, and a charge triple's contours with their intersection");
+  auto o = std::make_shared<IsochargeOptions>();
+  sub->add_option("MAP", o->map_path, "Charge map (HDF5 from `pvdfkit map`)")->required();
+  sub->add_option("--out-dir", o->out_dir, "Folder for isocharge_<name>.png, isocharge_all.png, charges.vtk")->required();
+  sub->add_option("--force-N", o->force_N, "Press force of the pictures (N); default: the map level nearest 1 N");
+  sub->add_option("--zoom-m", o->zoom_m, "Draw only [-W, W] x [-W, W] around the film centre (m), e.g. 0.015; default: all");
+  sub->add_option("--charges-C", o->charges,
+                  "A charge triple (C, map electrode order): also write intersection.png with its isocharge contours");
+  return pvdf::app::Subcommand{sub, [o] { return run_isocharge(*o); }};
+});
