@@ -1,0 +1,558 @@
+// `pvdfkit design`: compare candidate sensor layouts before fabrication (issue 9). Each layout's
+// charge map (FEM preview, synthetic stand-in, or a ready map file) → Cramér–Rao error maps,
+// ambiguity, sensitivity, dynamic range, dead zones → a ranking, side-by-side PNG maps, and for
+// a sweep of one scene key the figure of merit against the swept value. docs/design.md.
+#include "command.hpp"
+
+#include "pvdf/core/error.hpp"
+#include "pvdf/core/io.hpp"
+#include "pvdf/core/plot.hpp"
+#include "pvdf/core/progress.hpp"
+#include "pvdf/core/scene.hpp"
+#include "pvdf/mapping/design.hpp"
+#include "pvdf/mapping/map.hpp"
+#ifdef PVDF_HAVE_MAP_GENERATION
+#include "pvdf/mapping/generate.hpp"
+#endif
+
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <optional>
+#include <sstream>
+
+namespace {
+
+using namespace pvdf::mapping;
+
+struct DesignCommandOptions {
+  std::vector<std::string> scenes;
+  std::vector<std::string> maps;
+  std::string vary;
+  std::string noise = "5e-14";
+  double target_mm = 0.5;
+  double force_N = 1.0;
+  std::string force_range = "0.25,4";
+  bool force_known = false;
+  double spacing_m = 0;  // 0: 1 mm synthetic, 3 mm FEM
+  bool synthetic = false;
+  int refine_best = 0;
+  double refine_spacing_m = 0;  // 0: half the preview spacing
+  double tolerance = 0;         // 0: the scene's
+  int threads = 0;
+  int adc_bits = 12;
+  double full_scale_C = 0;
+  double ambiguity_min_distance_m = 0;
+  bool json = false;
+  std::string out_dir = "design-out";
+  bool no_plots = false;
+};
+
+/// One candidate layout and what the analysis found.
+struct Candidate {
+  std::string label;            ///< shown in tables and plots
+  std::string source;           ///< scene or map file
+  std::optional<nlohmann::json> scene;  ///< null for a ready map
+  std::string sweep_key;
+  double sweep_value = 0;
+  int series = 0;               ///< which SCENE of the command line (sweep curves)
+  std::string map_source;       ///< "fem" | "synthetic" | "file"
+  std::string map_file;         ///< written or read map (empty for synthetic)
+  ChargeMap map;
+  DesignSummary summary;
+  bool refined = false;
+};
+
+std::string stem(const std::string& path) {
+  std::string s = path.substr(path.find_last_of('/') + 1);
+  const std::size_t dot = s.rfind('.');
+  return dot == std::string::npos || dot == 0 ? s : s.substr(0, dot);
+}
+
+std::string slug(const std::string& text) {
+  std::string s;
+  for (char c : text) s += (std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '-' || c == '=') ? c : '_';
+  return s;
+}
+
+std::string fmt(const char* f, double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, f, v);
+  return buf;
+}
+
+/// mm with "unbounded" for +∞ (never "inf" or "nan" as a result).
+std::string mm(double m) { return std::isfinite(m) ? fmt(m < 1e-4 ? "%.4f mm" : "%.3g mm", m * 1e3) : "unbounded"; }
+std::string pct(double f) { return std::isfinite(f) ? fmt("%.1f %%", 100 * f) : "unbounded"; }
+
+// ---------------------------------------------------------------------------------------------
+// Maps
+
+ChargeMap make_map(const Candidate& c, const DesignCommandOptions& o, double spacing, std::string& map_file,
+                   std::string& map_source) {
+  const pvdf::Scene scene = pvdf::parse_scene(*c.scene, c.source);
+  if (o.synthetic) {
+    map_source = "synthetic";
+    return synthetic_map_for_scene(scene, spacing, o.force_N, 5e-14);
+  }
+#ifdef PVDF_HAVE_MAP_GENERATION
+  MapOptions mo;
+  mo.spacing_m = spacing;
+  mo.forces_N = {o.force_N};  // one level: other forces by the F^(2/3) law (docs/design.md §1)
+  mo.tolerance = o.tolerance;
+  mo.threads = o.threads;
+  mo.description = "pvdfkit design preview of " + c.label;
+  std::unique_ptr<pvdf::Progress> bar;
+  mo.progress = [&bar, &c](std::size_t done, std::size_t total) {
+    if (!bar) bar = std::make_unique<pvdf::Progress>("map " + c.label, total);
+    bar->update(done);
+  };
+  MapReport report;
+  ChargeMap map = generate_map(scene, mo, &report);
+  if (bar) bar->finish();
+  pvdf::make_directories(o.out_dir + "/maps");
+  map_file = o.out_dir + "/maps/" + slug(c.label) + "_" + fmt("%.2gmm", spacing * 1e3) + ".h5";
+  write_generated_map(map_file, map, report.provenance);
+  std::cerr << "map " << c.label << ": " << report.n_solved << " FEM solves in " << pvdf::format_duration(report.wall_s)
+            << " (model " << report.model << ", estimated charge error " << fmt("%.2g", report.estimated_relative_error)
+            << "), written to " << map_file << "\n";
+  if (report.n_failed > 0) {
+    pvdf::app::warn(c.label + ": " + std::to_string(report.n_failed) + " map points did not converge (left out)");
+  }
+  map_source = "fem";
+  return map;
+#else
+  (void)spacing;
+  (void)map_file;
+  (void)map_source;
+  throw pvdf::InputError("this pvdfkit was built without FEM map generation (PVDF_WITH_FEM=OFF): use --synthetic for "
+                         "a preview, or --map MAP.h5 with a map from another build");
+#endif
+}
+
+void evaluate(Candidate& c, const DesignOptions& d) {
+  c.summary = evaluate_design(c.map, d);
+  if (c.map_source == "synthetic") c.summary.synthetic = true;
+}
+
+/// Best first: usable fraction, then coverage, then the median bound; unable-to-locate last.
+bool better(const Candidate& a, const Candidate& b) {
+  const auto& x = a.summary;
+  const auto& y = b.summary;
+  if ((x.status == DesignStatus::ok) != (y.status == DesignStatus::ok)) return x.status == DesignStatus::ok;
+  if (x.usable_fraction != y.usable_fraction) return x.usable_fraction > y.usable_fraction;
+  if (x.coverage != y.coverage) return x.coverage > y.coverage;
+  return x.median_sigma_pos_m < y.median_sigma_pos_m;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Text and JSON
+
+void print_table(const std::vector<const Candidate*>& ranked, const std::string& title) {
+  std::printf("\n%s\n", title.c_str());
+  std::printf("%4s  %-34s %8s %9s %12s %11s %10s %10s %7s %8s %9s %7s  %s\n", "rank", "layout", "usable", "coverage",
+              "median σpos", "p90 σpos", "median σF", "ambiguous", "dead", "singular", "FS (pC)", "LSB/σ", "map");
+  int rank = 0;
+  for (const Candidate* c : ranked) {
+    const auto& s = c->summary;
+    std::string label = c->label;
+    if (label.size() > 34) label = label.substr(0, 31) + "...";
+    std::printf("%4d  %-34s %8s %9s %12s %11s %10s %10s %7s %8s %9.3g %7.2g  %s %.2g mm%s\n", ++rank, label.c_str(),
+                pct(s.usable_fraction).c_str(), pct(s.coverage).c_str(), mm(s.median_sigma_pos_m).c_str(),
+                mm(s.p90_sigma_pos_m).c_str(), pct(s.median_sigma_force_rel).c_str(), pct(s.ambiguous_fraction).c_str(),
+                pct(s.dead_fraction).c_str(), pct(s.singular_fraction).c_str(), s.full_scale_C * 1e12, s.lsb_over_noise,
+                c->map_source.c_str(), s.spacing_m * 1e3, s.status == DesignStatus::ok ? "" : "  UNABLE TO LOCATE");
+  }
+}
+
+void print_details(const Candidate& c) {
+  const auto& s = c.summary;
+  std::printf("  %s: %s", c.label.c_str(), design_status_name(s.status).c_str());
+  if (!s.status_reason.empty()) std::printf(" (%s)", s.status_reason.c_str());
+  std::printf("; model %s, tolerance %.3g, %zu of %zu mapped nodes evaluated; silent ambiguity %s; saturated at %.3g N: %s; "
+              "an electrode below 1 LSB at %.3g N: %s\n",
+              s.model.c_str(), s.tolerance, s.n_evaluated, s.n_mapped, pct(s.silent_ambiguous_fraction).c_str(),
+              s.max_force_N, pct(s.saturated_fraction).c_str(), s.min_force_N, pct(s.below_lsb_fraction).c_str());
+  std::printf("    median σpos with the force known: %s\n", mm(s.median_sigma_pos_known_force_m).c_str());
+  for (const auto& e : s.electrodes) {
+    std::printf("    %-6s sensitivity %s pC/N on its centre, median %.3g pC/N over the film; max %.4g pC at %.3g N; "
+                "noise %.3g pC (with quantization %.3g pC)\n",
+                e.name.c_str(),
+                std::isfinite(e.sensitivity_at_center_C_per_N) ? fmt("%.3g", e.sensitivity_at_center_C_per_N * 1e12).c_str()
+                                                                 : "n/a",
+                e.median_sensitivity_C_per_N * 1e12, e.max_charge_C * 1e12, s.max_force_N, e.noise_C * 1e12,
+                e.effective_noise_C * 1e12);
+  }
+}
+
+nlohmann::json candidate_json(const Candidate& c, int rank) {
+  nlohmann::json j = design_summary_json(c.summary);
+  j["rank"] = rank;
+  j["label"] = c.label;
+  j["source"] = c.source;
+  j["map_source"] = c.map_source;
+  if (!c.map_file.empty()) j["map_file"] = c.map_file;
+  if (!c.sweep_key.empty()) {
+    j["vary_key"] = c.sweep_key;
+    j["vary_value"] = c.sweep_value;
+  }
+  j["refined"] = c.refined;
+  return j;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Figures
+
+std::vector<std::array<double, 2>> outline_mm(const pvdf::FilmOutline& o) {
+  std::vector<std::array<double, 2>> v;
+  const double pi = std::acos(-1.0);
+  switch (o.shape) {
+    case pvdf::FilmOutline::Shape::circle:
+    case pvdf::FilmOutline::Shape::ellipse: {
+      const double a = o.shape == pvdf::FilmOutline::Shape::circle ? o.radius_m : o.semi_axes_m[0];
+      const double b = o.shape == pvdf::FilmOutline::Shape::circle ? o.radius_m : o.semi_axes_m[1];
+      for (int i = 0; i < 128; ++i) v.push_back({1e3 * a * std::cos(2 * pi * i / 128), 1e3 * b * std::sin(2 * pi * i / 128)});
+      break;
+    }
+    case pvdf::FilmOutline::Shape::rectangle: {
+      const double w = 500 * o.size_m[0], h = 500 * o.size_m[1];
+      v = {{-w, -h}, {w, -h}, {w, h}, {-w, h}};
+      break;
+    }
+    case pvdf::FilmOutline::Shape::polygon:
+      for (const auto& p : o.vertices_m) v.push_back({1e3 * p[0], 1e3 * p[1]});
+      break;
+  }
+  return v;
+}
+
+/// One panel: log10 of `values` (m → mm, or a fraction → %) over the map, the target contour,
+/// ambiguous (red ×) and dead (grey) nodes, the electrodes and the film outline.
+void map_panel(pvdf::plot::Axes& ax, const Candidate& c, const std::vector<double>& values, double scale, double vmin,
+               double vmax, double contour_at, const std::string& bar_label) {
+  const DesignMaps& m = c.summary.maps;
+  pvdf::plot::Grid g;
+  g.nx = m.x_m.size();
+  g.ny = m.y_m.size();
+  g.x0 = m.x_m.front() * 1e3;
+  g.x1 = m.x_m.back() * 1e3;
+  g.y0 = m.y_m.front() * 1e3;
+  g.y1 = m.y_m.back() * 1e3;
+  g.values.assign(g.nx * g.ny, std::nan(""));
+  std::vector<double> ax_x, ax_y, dx, dy;
+  for (std::size_t p = 0; p < g.values.size(); ++p) {
+    if (!m.evaluated[p]) continue;
+    const double v = values[p] * scale;
+    g.values[p] = std::isfinite(v) && v > 0 ? std::clamp(std::log10(v), vmin, vmax) : vmax;  // unbounded → top colour
+    const double x = m.x_m[p % g.nx] * 1e3, y = m.y_m[p / g.nx] * 1e3;
+    if (m.ambiguous[p]) {
+      ax_x.push_back(x);
+      ax_y.push_back(y);
+    }
+    if (m.dead[p]) {
+      dx.push_back(x);
+      dy.push_back(y);
+    }
+  }
+  ax.field(g, bar_label, false, vmin, vmax);
+  if (contour_at > vmin && contour_at < vmax) ax.contour(g, {contour_at}, pvdf::plot::Color{255, 255, 255}, 2.0);
+  if (!ax_x.empty()) ax.scatter(ax_x, ax_y, "ambiguous", pvdf::plot::Color{220, 30, 30}, pvdf::plot::Marker::cross, 2.0);
+  if (!dx.empty()) ax.scatter(dx, dy, "dead zone", pvdf::plot::Color{150, 150, 150}, pvdf::plot::Marker::square, 2.0);
+  try {
+    const pvdf::Scene scene = pvdf::parse_scene(nlohmann::json::parse(c.map.scene_json), c.source);
+    ax.polygon(outline_mm(scene.membrane.outline), std::nullopt, pvdf::plot::Color{0, 0, 0}, 1.5);
+    for (const auto& e : scene.electrodes) {
+      std::vector<std::array<double, 2>> v;
+      for (const auto& p : e.outline()) v.push_back({p[0] * 1e3, p[1] * 1e3});
+      ax.polygon(v, pvdf::plot::Color{255, 255, 255}, pvdf::plot::Color{0, 0, 0}, 1.0);
+    }
+  } catch (const std::exception&) {
+    std::vector<double> ex, ey;
+    for (const auto& e : c.map.electrode_centers_m) {
+      ex.push_back(e[0] * 1e3);
+      ey.push_back(e[1] * 1e3);
+    }
+    ax.scatter(ex, ey, "electrodes", pvdf::plot::Color{255, 255, 255}, pvdf::plot::Marker::square, 7.0);
+  }
+  ax.xlabel("x (mm)").ylabel("y (mm)").equal_aspect().legend(ax_x.empty() && dx.empty() ? "none" : "lower right");
+}
+
+void write_map_figures(const std::vector<const Candidate*>& ranked, const DesignCommandOptions& o,
+                       const std::string& noise_text, std::vector<std::string>& written) {
+  const std::size_t n = std::min<std::size_t>(ranked.size(), 8);
+  const int cols = int(std::min<std::size_t>(n, 4)), rows = int((n + 3) / 4);
+  bool any_synthetic = false;
+  for (std::size_t i = 0; i < n; ++i) any_synthetic |= ranked[i]->summary.synthetic;
+  const std::string kind = any_synthetic ? " — SYNTHETIC maps" : "";
+  const double target = o.target_mm;
+  for (int which = 0; which < 2; ++which) {
+    pvdf::plot::Figure fig(std::max(1100, 460 * cols), 430 * rows + 40, rows, cols);
+    for (std::size_t i = 0; i < n; ++i) {
+      const Candidate& c = *ranked[i];
+      auto& ax = fig.axes(int(i) / 4, int(i) % 4);
+      if (which == 0) {
+        map_panel(ax, c, c.summary.maps.sigma_pos_m, 1e3, std::log10(target / 100), std::log10(target * 20),
+                  std::log10(target), "log$_{10}$ σ$_{pos}$ (mm)");
+        ax.title("#" + std::to_string(i + 1) + " " + c.label + ": usable " + pct(c.summary.usable_fraction));
+      } else {
+        map_panel(ax, c, c.summary.maps.sigma_force_rel, 100, -2, 2, 0, "log$_{10}$ σ$_F$/F (%)");
+        ax.title("#" + std::to_string(i + 1) + " " + c.label + ": median " + pct(c.summary.median_sigma_force_rel));
+      }
+    }
+    const std::string what = which == 0 ? "Position bound" : "Force bound";
+    fig.suptitle(what + std::string(o.force_known ? " (force known), " : " (force unknown), ") + noise_text + ", " +
+                 fmt("%.3g N", o.force_N) + (which == 0 ? ", white line " + fmt("%.3g mm", target) : "") + kind);
+    const std::string path = o.out_dir + (which == 0 ? "/design_position.png" : "/design_force.png");
+    fig.save_png(path);
+    written.push_back(path);
+  }
+}
+
+void write_sweep_figure(const std::vector<Candidate>& all, const std::vector<std::string>& series_names,
+                        const DesignCommandOptions& o, const std::string& key, std::vector<std::string>& written) {
+  pvdf::plot::Figure fig(1200, 520, 1, 2);
+  auto& a = fig.axes(0, 0);
+  auto& b = fig.axes(0, 1);
+  bool synthetic = false;
+  for (std::size_t s = 0; s < series_names.size(); ++s) {
+    std::vector<double> x, usable, coverage, median;
+    const Candidate* best = nullptr;
+    for (const auto& c : all) {
+      if (c.series != int(s) || c.refined) continue;
+      synthetic |= c.summary.synthetic;
+      x.push_back(c.sweep_value);
+      usable.push_back(100 * c.summary.usable_fraction);
+      coverage.push_back(100 * c.summary.coverage);
+      median.push_back(std::isfinite(c.summary.median_sigma_pos_m) ? c.summary.median_sigma_pos_m * 1e3 : std::nan(""));
+      if (!best || better(c, *best)) best = &c;
+    }
+    const auto color = pvdf::plot::cycle_color(s);
+    a.line(x, usable, series_names[s] + ": usable", color, pvdf::plot::LineStyle::solid, pvdf::plot::Marker::circle);
+    a.line(x, coverage, series_names[s] + ": coverage", color, pvdf::plot::LineStyle::dashed, pvdf::plot::Marker::none);
+    b.line(x, median, series_names[s], color, pvdf::plot::LineStyle::solid, pvdf::plot::Marker::circle);
+    if (best) {
+      a.scatter({best->sweep_value}, {100 * best->summary.usable_fraction}, "best: " + fmt("%.4g", best->sweep_value),
+                pvdf::plot::Color{220, 30, 30}, pvdf::plot::Marker::square, 12);
+      a.vline(best->sweep_value, pvdf::plot::Color{220, 30, 30});
+    }
+  }
+  a.xlabel(key).ylabel("area fraction (%)").title(fmt("usable and covered area (σ$_{pos}$ ≤ %.3g mm)", o.target_mm)).grid_lines().legend("best");
+  b.xlabel(key).ylabel("median σ$_{pos}$ (mm)").log_y().title("median position bound").grid_lines().legend("best");
+  fig.suptitle("pvdfkit design --vary " + key + (synthetic ? " — SYNTHETIC stand-in maps, not FEM" : ""));
+  const std::string path = o.out_dir + "/design_sweep.png";
+  fig.save_png(path);
+  written.push_back(path);
+}
+
+// ---------------------------------------------------------------------------------------------
+
+int run_design(const DesignCommandOptions& o) {
+  if (o.scenes.empty() && o.maps.empty()) {
+    throw pvdf::InputError("nothing to compare: give one or more SCENE files (or --map MAP.h5)");
+  }
+  if (!o.vary.empty() && o.scenes.empty()) throw pvdf::InputError("--vary needs a SCENE to vary");
+  if (!(o.target_mm > 0)) throw pvdf::InputError("--target-mm " + fmt("%g", o.target_mm) + " must be > 0 (mm)");
+  if (o.spacing_m < 0 || o.refine_spacing_m < 0) throw pvdf::InputError("--spacing-m and --refine-spacing-m must be > 0 (m)");
+  if (o.refine_best < 0) throw pvdf::InputError("--refine-best must be >= 0");
+
+  DesignOptions d;
+  d.noise_C = pvdf::parse_number_list(o.noise, "--noise-C");
+  const auto range = pvdf::parse_number_list(o.force_range, "--force-range-N", 2);
+  d.min_force_N = range[0];
+  d.max_force_N = range[1];
+  d.force_N = o.force_N;
+  d.force_known = o.force_known;
+  d.target_m = o.target_mm * 1e-3;
+  d.adc_bits = o.adc_bits;
+  d.full_scale_C = o.full_scale_C;
+  d.ambiguity_min_distance_m = o.ambiguity_min_distance_m;
+  const double spacing = o.spacing_m > 0 ? o.spacing_m : (o.synthetic ? 0.001 : 0.003);
+
+  // Step 1: the candidates.
+  std::vector<Candidate> all;
+  std::vector<std::string> series_names;
+  std::optional<SceneSweep> sweep;
+  if (!o.vary.empty()) sweep = parse_scene_sweep(o.vary);
+  for (const auto& path : o.scenes) {
+    const pvdf::Scene scene = pvdf::load_scene(path);
+    for (const auto& w : scene.warnings) pvdf::app::warn(w);
+    const int series = int(series_names.size());
+    series_names.push_back(stem(path));
+    if (!sweep) {
+      Candidate c;
+      c.label = stem(path);
+      c.source = path;
+      c.scene = scene.original;
+      c.series = series;
+      all.push_back(std::move(c));
+      continue;
+    }
+    for (double v : sweep->values) {
+      Candidate c;
+      c.label = stem(path) + " " + sweep->key + "=" + fmt("%.4g", v);
+      c.source = path;
+      c.scene = set_scene_key(scene.original, sweep->key, v, path);
+      c.sweep_key = sweep->key;
+      c.sweep_value = v;
+      c.series = series;
+      all.push_back(std::move(c));
+    }
+  }
+  if (sweep && o.synthetic && all.size() >= 2) {
+    // The stand-in sees only geometry, draw angle, d32/d31 and electrode area: say so when the
+    // swept key changes none of them.
+    const auto m0 = synthetic_model_for_scene(pvdf::parse_scene(*all[0].scene, all[0].source));
+    const auto m1 = synthetic_model_for_scene(pvdf::parse_scene(*all[1].scene, all[1].source));
+    if (m0.centers_m == m1.centers_m && m0.draw_angle_rad == m1.draw_angle_rad && m0.scale_C == m1.scale_C &&
+        m0.d32_over_d31 == m1.d32_over_d31 && m0.film_radius_m == m1.film_radius_m) {
+      pvdf::app::warn("--vary " + sweep->key + " does not change the synthetic stand-in (it models only geometry, draw "
+                      "angle, d32/d31 and electrode area): every value will score the same; drop --synthetic for FEM maps");
+    }
+  }
+  for (const auto& path : o.maps) {
+    Candidate c;
+    c.label = stem(path);
+    c.source = path;
+    c.map_source = "file";
+    c.map_file = path;
+    c.map = read_map(path);
+    c.series = -1;
+    all.push_back(std::move(c));
+  }
+
+  // Step 2: maps (coarse previews) and their evaluation.
+  for (auto& c : all) {
+    if (c.scene) c.map = make_map(c, o, spacing, c.map_file, c.map_source);
+    evaluate(c, d);
+  }
+
+  // Step 3: rank; refine the winners at a finer spacing and rank again.
+  std::vector<const Candidate*> ranked;
+  for (const auto& c : all) ranked.push_back(&c);
+  std::stable_sort(ranked.begin(), ranked.end(), [](const Candidate* a, const Candidate* b) { return better(*a, *b); });
+  std::vector<Candidate> refined;
+  if (o.refine_best > 0) {
+    const double fine = o.refine_spacing_m > 0 ? o.refine_spacing_m : spacing / 2;
+    for (const Candidate* c : ranked) {
+      if (int(refined.size()) >= o.refine_best) break;
+      if (!c->scene) continue;  // a ready map cannot be refined here
+      Candidate r = *c;
+      r.refined = true;
+      r.map = make_map(r, o, fine, r.map_file, r.map_source);
+      evaluate(r, d);
+      refined.push_back(std::move(r));
+    }
+  }
+  std::vector<const Candidate*> ranked_refined;
+  for (const auto& c : refined) ranked_refined.push_back(&c);
+  std::stable_sort(ranked_refined.begin(), ranked_refined.end(),
+                   [](const Candidate* a, const Candidate* b) { return better(*a, *b); });
+
+  // Step 4: report.
+  bool any_synthetic = false;
+  for (const auto& c : all) any_synthetic |= c.summary.synthetic;
+  std::string noise_text;
+  for (std::size_t k = 0; k < d.noise_C.size(); ++k) noise_text += (k ? "/" : "") + fmt("%.3g", d.noise_C[k] * 1e12);
+  noise_text = "σ = " + noise_text + " pC" + (o.adc_bits > 0 ? ", " + std::to_string(o.adc_bits) + "-bit ADC" : "");
+  std::vector<std::string> written;
+  if (!o.no_plots) {
+    pvdf::make_directories(o.out_dir);
+    write_map_figures(ranked_refined.empty() ? ranked : ranked_refined, o, noise_text, written);
+    if (sweep) write_sweep_figure(all, series_names, o, sweep->key, written);
+  }
+  const Candidate* best = ranked_refined.empty() ? ranked.front() : ranked_refined.front();
+  nlohmann::json j;
+  j["synthetic"] = any_synthetic;
+  j["noise_C"] = d.noise_C;
+  j["target_m"] = d.target_m;
+  j["force_N"] = d.force_N;
+  j["force_range_N"] = {d.min_force_N, d.max_force_N};
+  j["force_known"] = d.force_known;
+  j["adc_bits"] = d.adc_bits;
+  j["preview_spacing_m"] = spacing;
+  j["layouts"] = nlohmann::json::array();
+  for (std::size_t i = 0; i < ranked.size(); ++i) j["layouts"].push_back(candidate_json(*ranked[i], int(i) + 1));
+  if (!refined.empty()) {
+    j["refined"] = nlohmann::json::array();
+    for (std::size_t i = 0; i < ranked_refined.size(); ++i) j["refined"].push_back(candidate_json(*ranked_refined[i], int(i) + 1));
+  }
+  j["best"] = best->label;
+  if (sweep) {
+    j["vary"] = {{"key", sweep->key}, {"values", sweep->values}};
+  }
+  j["figures"] = written;
+  if (!o.no_plots) {
+    pvdf::write_file_atomically(o.out_dir + "/design.json", [&j](std::ostream& out) { out << j.dump(2) << '\n'; });
+  }
+
+  if (o.json) {
+    std::cout << j.dump(2) << '\n';
+  } else {
+    std::printf("pvdfkit design: %zu layout%s; maps: %s\n", all.size(), all.size() == 1 ? "" : "s",
+                any_synthetic ? "SYNTHETIC stand-in (geometry, draw angle, d32/d31, electrode area only; not FEM)"
+                              : "FEM (pvdfkit map engine) or files");
+    std::printf("noise %s, press %.3g N, force range %.3g-%.3g N, force %s, target σpos <= %.3g mm\n",
+                noise_text.c_str(), d.force_N, d.min_force_N, d.max_force_N, d.force_known ? "known" : "unknown",
+                o.target_mm);
+    std::printf("usable = σpos within target, not ambiguous, not dead (figure of merit); σpos = RMS radial error "
+                "√(Cxx+Cyy) of the Cramér–Rao bound; σF = relative force bound\n");
+    print_table(ranked, "Ranking (preview)");
+    for (const Candidate* c : ranked) print_details(*c);
+    if (!ranked_refined.empty()) {
+      print_table(ranked_refined, "Ranking of the refined winners");
+      for (const Candidate* c : ranked_refined) print_details(*c);
+    }
+    std::printf("\nbest: %s\n", best->label.c_str());
+    for (const auto& w : written) std::printf("wrote %s\n", w.c_str());
+    if (!o.no_plots) std::printf("wrote %s/design.json\n", o.out_dir.c_str());
+  }
+  // Every layout unable to locate is a numerical outcome, not a ranking.
+  for (const auto& c : all) {
+    if (c.summary.status == DesignStatus::ok) return pvdf::exit_code::success;
+  }
+  std::cerr << "error: no layout can locate a press (singular Fisher matrix everywhere)\n";
+  return pvdf::exit_code::numerical;
+}
+
+}  // namespace
+
+PVDF_COMMAND(75, [](CLI::App& root) {
+  auto* sub = root.add_subcommand(
+      "design",
+      "Compare candidate sensor layouts before fabrication: Cramer-Rao error maps, coverage, ambiguity, "
+      "sensitivity, dynamic range, dead zones; ranking and PNG maps (docs/design.md)");
+  auto o = std::make_shared<DesignCommandOptions>();
+  sub->add_option("SCENE", o->scenes, "Scene file(s) of the candidate layouts");
+  sub->add_option("--vary", o->vary,
+                  "Sweep one scene key, KEY=START:STEP:STOP, e.g. material.draw_angle_deg=0:15:90, "
+                  "electrodes[0].center_m[1]=0.008:0.002:0.016, @layout_radius_m=0.006:0.002:0.02, @rotation_deg, "
+                  "@layout_scale, @electrode_size_m (docs/design.md)");
+  sub->add_option("--noise-C", o->noise, "1-sigma charge noise per electrode before quantization, one value or one per electrode (C)")
+      ->capture_default_str();
+  sub->add_option("--target-mm", o->target_mm, "Coverage target for the position bound (mm)")->capture_default_str();
+  sub->add_option("--force-N", o->force_N, "Force of the evaluated presses (N)")->capture_default_str();
+  sub->add_option("--force-range-N", o->force_range, "Forces the sensor must serve MIN,MAX (N): ADC full scale at MAX, 1-LSB check at MIN")
+      ->capture_default_str();
+  sub->add_flag("--force-known", o->force_known, "Figure of merit with the force measured separately (fit x, y only)");
+  sub->add_option("--spacing-m", o->spacing_m, "Preview map spacing (m); default 0.003 (FEM) or 0.001 (--synthetic)");
+  sub->add_flag("--synthetic", o->synthetic, "Instant previews on the analytic stand-in instead of FEM maps (labelled synthetic)");
+  sub->add_option("--map", o->maps, "Evaluate a ready charge map (HDF5) as one more layout (repeatable)");
+  sub->add_option("--refine-best", o->refine_best, "Recompute the best N layouts at --refine-spacing-m and rank them again");
+  sub->add_option("--refine-spacing-m", o->refine_spacing_m, "Spacing of the refined maps (m); default half the preview spacing");
+  sub->add_option("--tolerance", o->tolerance, "FEM maps: requested relative charge error (0 = the scene's model.tolerance)");
+  sub->add_option("--threads", o->threads, "FEM maps: worker threads (0 = all cores)");
+  sub->add_option("--adc-bits", o->adc_bits, "ADC resolution (bits, bipolar); 0 = ideal")->capture_default_str();
+  sub->add_option("--full-scale-C", o->full_scale_C, "ADC full scale (C); default 1.25 x the largest charge at the top of the force range");
+  sub->add_option("--ambiguity-distance-m", o->ambiguity_min_distance_m,
+                  "Another accepted solution farther than max(this, 3 sigma) is a distinct press (default: the target)");
+  sub->add_flag("--json", o->json, "Print the ranking as JSON");
+  sub->add_option("--out-dir", o->out_dir, "Folder for design_position.png, design_force.png, design_sweep.png, design.json, maps/")
+      ->capture_default_str();
+  sub->add_flag("--no-plots", o->no_plots, "Write no files (ranking on stdout only)");
+  return pvdf::app::Subcommand{sub, [o] { return run_design(*o); }};
+});
