@@ -8,7 +8,10 @@
 // Outputs: centre deflection, and the mean 2nd Piola–Kirchhoff membrane force [N11, N22, N12]
 // over each electrode square A, B, C (default scene), error = ‖N − N_ref‖ / ‖N_ref‖.
 //
-// Usage: bench_fem [--quick] [--out DIR] [--no-ccx] [--no-pvdf] [--bending]
+// The ProbeSweep path (fixed mesh, warm starts; what maps use) adds rows: setup, cold and warm
+// load case (--no-sweep leaves them out).
+//
+// Usage: bench_fem [--quick] [--out DIR] [--no-ccx] [--no-pvdf] [--no-sweep] [--bending]
 //   --quick   coarse levels only (~1–2 min); the default runs finer levels (several minutes)
 //   --out     work folder for decks, the PNG and the markdown table (default bench_fem_out)
 //   --bending pvdfkit with bending (CalculiX M3D4 and the oracle are pure membranes)
@@ -20,10 +23,12 @@
 #include "pvdf/core/scene.hpp"
 
 #ifdef PVDF_BENCH_HAVE_FEM
+#include "pvdf/fem/probe_sweep.hpp"
 #include "pvdf/fem/solver.hpp"
 #endif
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -156,6 +161,53 @@ Row run_pvdf_level(const pvdf::Scene& scene, bool isotropic, int refinements, bo
     row.electrode[k] = res.electrodes[k].mean_membrane_force_material_N_per_m;
   return row;
 }
+
+// The ProbeSweep path (fixed sweep mesh, kept factorization pattern, warm starts): one row for
+// the setup (mesh, DOFs, three check solves against direct solves), one for a cold load case
+// (continuation from the flat film) and one for a warm load case (the centred probe warm-started
+// from the converged state of a probe 1 mm away, what a map does between grid neighbours).
+std::vector<Row> run_pvdf_sweep(const pvdf::Scene& scene, bool isotropic, bool bending) {
+  std::vector<Row> rows(3);
+  for (Row& r : rows) {
+    r.tool = "pvdfkit";
+    r.variant = isotropic ? "iso" : "ortho";
+  }
+  rows[0].level = "sweep setup";
+  rows[1].level = "sweep cold";
+  rows[2].level = "sweep warm";
+  pvdf::fem::SweepOptions so;
+  so.solver.model = pvdf::fem::Model::large_rotation;
+  so.solver.include_bending = bending;
+  auto t0 = std::chrono::steady_clock::now();
+  pvdf::fem::ProbeSweep sweep(scene, so);
+  rows[0].wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  rows[0].dofs = sweep.setup().n_dofs;
+  rows[0].note = "setup only (no load case); estimated charge error " +
+                 std::to_string(sweep.setup().estimated_relative_error);
+  const double x = scene.loads.at(0).position_m[0], y = scene.loads.at(0).position_m[1];
+  const double F = scene.loads.at(0).force_N;
+  pvdf::fem::SweepState neighbour;
+  const auto n = sweep.solve(x + 1e-3, y, F, nullptr, &neighbour);
+  const pvdf::fem::ProbeSolution cold = sweep.solve(x, y, F);
+  const pvdf::fem::ProbeSolution warm = sweep.solve(x, y, F, &neighbour);
+  for (int i = 1; i < 3; ++i) {
+    const auto& p = i == 1 ? cold : warm;
+    Row& r = rows[i];
+    r.dofs = sweep.setup().n_dofs;
+    r.wall_s = p.wall_s;
+    if (!pvdf::fem::usable(p.status) || !pvdf::fem::usable(n.status)) {
+      r.note = pvdf::fem::status_name(p.status) + ": " + p.message;
+      continue;
+    }
+    r.ok = true;
+    r.deflection_m = std::abs(p.deflection_at_load_m);
+    r.rim_N = std::abs(p.rim_reaction_N);
+    for (std::size_t k = 0; k < 3 && k < p.mean_membrane_force_material_N_per_m.size(); ++k)
+      r.electrode[k] = p.mean_membrane_force_material_N_per_m[k];
+    r.note = std::to_string(p.newton_iterations) + " Newton iterations";
+  }
+  return rows;
+}
 #endif
 
 // Time of `rows` (one tool, one variant) at error `e`: log–log interpolation between levels, or
@@ -193,7 +245,7 @@ std::string fmt(const char* f, double v) {
 
 int main(int argc, char** argv) {
   try {
-    bool quick = false, use_ccx = true, use_pvdf = true, bending = false;
+    bool quick = false, use_ccx = true, use_pvdf = true, bending = false, use_sweep = true;
     std::string out = "bench_fem_out";
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
@@ -201,9 +253,10 @@ int main(int argc, char** argv) {
       else if (a == "--no-ccx") use_ccx = false;
       else if (a == "--no-pvdf") use_pvdf = false;
       else if (a == "--bending") bending = true;
+      else if (a == "--no-sweep") use_sweep = false;
       else if (a == "--out" && i + 1 < argc) out = argv[++i];
       else if (a == "--help" || a == "-h") {
-        std::cout << "usage: bench_fem [--quick] [--out DIR] [--no-ccx] [--no-pvdf] [--bending]\n";
+        std::cout << "usage: bench_fem [--quick] [--out DIR] [--no-ccx] [--no-pvdf] [--no-sweep] [--bending]\n";
         return 0;
       } else {
         std::cerr << "error: bench_fem: unknown argument '" << a << "'; see --help\n";
@@ -232,12 +285,18 @@ int main(int argc, char** argv) {
           std::cerr << "  ccx " << rows.back().variant << " " << rows.back().level << " " << rows.back().wall_s << " s\n";
         }
 #ifdef PVDF_BENCH_HAVE_FEM
-      if (use_pvdf)
+      if (use_pvdf) {
         for (int l : pvdf_levels) {
           rows.push_back(run_pvdf_level(scene, iso, l, bending));
           std::cerr << "  pvdfkit " << rows.back().variant << " " << rows.back().level << " " << rows.back().wall_s
                     << " s " << rows.back().note << "\n";
         }
+        if (use_sweep)
+          for (const Row& r : run_pvdf_sweep(scene, iso, bending)) {
+            rows.push_back(r);
+            std::cerr << "  pvdfkit " << r.variant << " " << r.level << " " << r.wall_s << " s " << r.note << "\n";
+          }
+      }
 #else
       if (use_pvdf) {
         Row r;
@@ -332,7 +391,7 @@ int main(int argc, char** argv) {
       for (const std::string variant : {"iso", "ortho"}) {
         std::vector<double> x, y;
         for (const Row& r : rows)
-          if (r.ok && r.tool == tool && r.variant == variant && r.err_max() > 0) {
+          if (r.ok && r.tool == tool && r.variant == variant && r.err_max() > 0 && r.level.rfind("sweep", 0) != 0) {
             x.push_back(r.wall_s);
             y.push_back(r.err_max());
           }
@@ -340,6 +399,19 @@ int main(int argc, char** argv) {
         ax.line(x, y, tool + " (" + variant + ")", pvdf::plot::cycle_color(colour++),
                 variant == "iso" ? pvdf::plot::LineStyle::solid : pvdf::plot::LineStyle::dashed,
                 tool == "pvdfkit" ? pvdf::plot::Marker::circle : pvdf::plot::Marker::square);
+      }
+    for (const std::string level : {"sweep cold", "sweep warm"})
+      for (const std::string variant : {"iso", "ortho"}) {
+        std::vector<double> x, y;
+        for (const Row& r : rows)
+          if (r.ok && r.level == level && r.variant == variant && r.err_max() > 0) {
+            x.push_back(r.wall_s);
+            y.push_back(r.err_max());
+          }
+        if (x.empty()) continue;
+        ax.scatter(x, y, "pvdfkit ProbeSweep, " + level.substr(6) + " load case (" + variant + ")",
+                   pvdf::plot::cycle_color(colour++), level == "sweep warm" ? pvdf::plot::Marker::triangle
+                                                                           : pvdf::plot::Marker::cross);
       }
     ax.log_x().log_y().grid_lines().legend("upper right");
     ax.xlabel("wall time, 1 thread (s)").ylabel("max relative error (w0, electrode forces)");

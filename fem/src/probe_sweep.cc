@@ -133,6 +133,9 @@ ProbeSweep::ProbeSweep(const pvdf::Scene& scene, const SweepOptions& options) : 
   sizes.region_size_m = std::min(a / 6.0, 8.0 * scene.probe.radius_m) * shrink;
   sizes.electrode_size_m = (scene.electrodes.empty() ? sizes.region_size_m : 0.5 * smallest_electrode_side(scene)) * shrink;
   sizes.grading = 1.0;
+  if (options.region_size_m > 0) sizes.region_size_m = options.region_size_m;
+  if (options.electrode_size_m > 0) sizes.electrode_size_m = options.electrode_size_m;
+  if (options.grading > 0) sizes.grading = options.grading;
 
   // 3. Check positions: the film centre, the first electrode's centre, and a far point opposite
   // it, each inside the served region.

@@ -265,7 +265,8 @@ class FilmSolver {
   void assemble_load_vector();
   void assemble(const Vector<double>& u, Model model, double artificial_tension, bool want_matrix,
                 Vector<double>& residual);
-  bool solve_linear(const Vector<double>& rhs, Vector<double>& x, std::string& message);
+  void build_geometry_cache();
+  bool solve_linear(const Vector<double>& rhs, Vector<double>& x, std::string& message, bool factorize = true);
   NewtonOutcome newton(Model model, double artificial_tension, Vector<double>& u);
   NewtonOutcome solve_from_flat(Model model, Vector<double>& u);
   double estimate_tension() const;
@@ -318,7 +319,21 @@ class FilmSolver {
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::AMDOrdering<int>> ldlt_;
   bool ldlt_analyzed_ = false;
   int n_factorizations_ = 0;
+  bool ldlt_good_ = false;            // ldlt_ holds a usable factorization of the current pattern
+  // Chord steps (probe sweeps): keep the last factorized tangent while Newton contracts fast.
+  bool reuse_factorization_ = false;
+  bool chord_first_step_ = false;     // the first step of the next newton() may use the old factorization
 
+  // Per-mesh assembly cache (build_geometry_cache): scalar shape gradients [cell][q][base][2],
+  // JxW [cell][q], DOF indices [cell][i]; system_index[c·n_base + a] = local index of (component c, base a).
+  struct GeometryCache {
+    bool valid = false;
+    std::size_t n_cells = 0;
+    unsigned int n_q = 0, n_base = 0;
+    std::vector<unsigned int> system_index;
+    std::vector<double> grad, jxw;
+    std::vector<types::global_dof_index> dofs;
+  } cache_;
   Model current_model_ = Model::linear;
   double last_energy_ = 0;  // potential Π of the last assemble() call (J)
   Summary summary_;
@@ -330,6 +345,7 @@ class FilmSolver {
 
 FilmSolver::FilmSolver(const pvdf::Scene& scene, const Options& options)
     : scene_(scene), options_(options), dof_handler_(triangulation_) {
+  triangulation_.signals.any_change.connect([this]() { cache_.valid = false; });
   const auto& m = scene.membrane;
   thickness_ = m.thickness_m;
   pretension_ = m.pretension_N_per_m;
@@ -759,96 +775,177 @@ void FilmSolver::assemble_load_vector() {
 
 // ------------------------------------------------------------------------------ Newton
 
-// Membrane residual and tangent (docs/fem.md §3): with S = h·Q̄·E + (N0 + N_art)·I and, per
-// shape function φ_i of component c_i, δE_i = sym(v_i ⊗ ∇φ_i), v_i = row c_i of F (large rotation),
-// e_{c_i} (von Kármán, linear), ∇w (for c_i = w). Tangent = δE_i·C·δE_j + ∇φ_i·S·∇φ_j (geometric
-// stiffness, w–w and, for large rotation, same in-plane component). Bending: + K_b u.
-void FilmSolver::assemble(const Vector<double>& u, Model model, double artificial_tension, bool want_matrix,
-                          Vector<double>& residual) {
-  const auto t0 = Clock::now();
+// Geometry cache for assembly: the mesh is fixed between refinements (and for a whole probe
+// sweep), so the mapped gradients of the scalar shape functions, JxW and the DOF indices of each
+// cell are computed once per mesh instead of once per assembly (the triangulation's change
+// signal invalidates the cache).
+void FilmSolver::build_geometry_cache() {
   const unsigned int p = options_.fe_degree;
   const QGauss<dim> quadrature(p + 1);
   FEValues<dim> fe_values(*mapping_, *fe_, quadrature, update_gradients | update_JxW_values);
-  const FEValuesExtractors::Vector inplane(0);
-  const FEValuesExtractors::Scalar w(2);
   const unsigned int n = fe_->n_dofs_per_cell();
+  const unsigned int n_base = n / 3;
+  const unsigned int n_q = quadrature.size();
+  cache_.n_q = n_q;
+  cache_.n_base = n_base;
+  cache_.system_index.assign(3 * n_base, 0);
+  for (unsigned int c = 0; c < 3; ++c)
+    for (unsigned int a = 0; a < n_base; ++a) cache_.system_index[c * n_base + a] = fe_->component_to_system_index(c, a);
+  const std::size_t n_cells = triangulation_.n_active_cells();
+  cache_.grad.assign(n_cells * n_q * n_base * 2, 0.0);
+  cache_.jxw.assign(n_cells * n_q, 0.0);
+  cache_.dofs.assign(n_cells * n, 0);
+  std::vector<types::global_dof_index> dofs(n);
+  std::size_t k = 0;
+  for (const auto& cell : dof_handler_.active_cell_iterators()) {
+    fe_values.reinit(cell);
+    cell->get_dof_indices(dofs);
+    std::copy(dofs.begin(), dofs.end(), cache_.dofs.begin() + k * n);
+    for (unsigned int q = 0; q < n_q; ++q) {
+      cache_.jxw[k * n_q + q] = fe_values.JxW(q);
+      for (unsigned int a = 0; a < n_base; ++a) {
+        const Tensor<1, dim> g = fe_values.shape_grad(cache_.system_index[a], q);  // component 0, base a
+        double* dst = &cache_.grad[((k * n_q + q) * n_base + a) * 2];
+        dst[0] = g[0];
+        dst[1] = g[1];
+      }
+    }
+    ++k;
+  }
+  cache_.n_cells = n_cells;
+  cache_.valid = true;
+}
+
+// Membrane residual and tangent (docs/fem.md §3): with S = h·Q̄·E + (N0 + N_art)·I and, per
+// shape function φ_a of component c, δE = sym(v_c ⊗ ∇φ_a), v_c = row c of F (large rotation),
+// e_c (von Kármán, linear), ∇w (for c = w). So the residual is r_(c,a) = v_c·(S∇φ_a) and the
+// tangent block (c,d) is ∇φ_a·(B_cᵀ C B_d + δ_cd G)∇φ_b with B_c the 3×2 map ∇φ ↦ δE (Voigt) and
+// G = S the geometric stiffness (w–w, and same in-plane component for large rotation). The 2×2
+// block matrices are formed once per quadrature point. Bending: + K_b u.
+void FilmSolver::assemble(const Vector<double>& u, Model model, double artificial_tension, bool want_matrix,
+                          Vector<double>& residual) {
+  const auto t0 = Clock::now();
+  if (!cache_.valid || cache_.n_cells != triangulation_.n_active_cells()) build_geometry_cache();
+  const unsigned int n = fe_->n_dofs_per_cell();
+  const unsigned int nb = cache_.n_base, n_q = cache_.n_q;
   FullMatrix<double> cell_matrix(n, n);
   Vector<double> cell_rhs(n);
   std::vector<types::global_dof_index> dofs(n);
-  std::vector<Tensor<2, dim>> grad_u(quadrature.size());
-  std::vector<Tensor<1, dim>> grad_w(quadrature.size());
-  std::vector<unsigned int> comp(n);
-  for (unsigned int i = 0; i < n; ++i) comp[i] = fe_->system_to_component_index(i).first;
-  std::vector<std::array<double, 3>> dE(n), CdE(n);
-  std::vector<Tensor<1, dim>> dphi(n);
+  std::vector<double> ul(n);  // local values ordered (component, base)
   const double N_tot = pretension_ + artificial_tension;
+  const auto& C = membrane_C_.c;
+  const bool geometric_inplane = model == Model::large_rotation;
 
   residual.reinit(dof_handler_.n_dofs());
   membrane_raw_ = 0;
   if (want_matrix) tangent_ = 0;
   double energy = 0;
+  // Block-local arrays: rb[c][a] residual, Kb[c][d][a][b] tangent.
+  std::vector<double> rb(3 * nb), Kb(9 * nb * nb);
 
-  for (const auto& cell : dof_handler_.active_cell_iterators()) {
-    fe_values.reinit(cell);
-    fe_values[inplane].get_function_gradients(u, grad_u);
-    fe_values[w].get_function_gradients(u, grad_w);
-    cell_matrix = 0;
-    cell_rhs = 0;
-    for (unsigned int q = 0; q < quadrature.size(); ++q) {
-      Kinematics k;
+  for (std::size_t k = 0; k < cache_.n_cells; ++k) {
+    const types::global_dof_index* cd = &cache_.dofs[k * n];
+    for (unsigned int c = 0; c < 3; ++c)
+      for (unsigned int a = 0; a < nb; ++a) ul[c * nb + a] = u(cd[cache_.system_index[c * nb + a]]);
+    std::fill(rb.begin(), rb.end(), 0.0);
+    if (want_matrix) std::fill(Kb.begin(), Kb.end(), 0.0);
+    for (unsigned int q = 0; q < n_q; ++q) {
+      const double* G = &cache_.grad[(k * n_q + q) * nb * 2];
+      const double jxw = cache_.jxw[k * n_q + q];
+      // Gradients: grad[c] = Σ_a ul[c,a] ∇φ_a.
+      double gr[3][2] = {{0, 0}, {0, 0}, {0, 0}};
+      for (unsigned int c = 0; c < 3; ++c)
+        for (unsigned int a = 0; a < nb; ++a) {
+          gr[c][0] += ul[c * nb + a] * G[2 * a];
+          gr[c][1] += ul[c * nb + a] * G[2 * a + 1];
+        }
+      Kinematics kin;
       for (int a = 0; a < 2; ++a) {
-        k.g[a] = grad_w[q][a];
-        for (int b = 0; b < 2; ++b) k.H[a][b] = grad_u[q][a][b];
+        kin.g[a] = gr[2][a];
+        for (int b = 0; b < 2; ++b) kin.H[a][b] = gr[a][b];
       }
-      const std::array<double, 3> E = membrane_strain(k, model);
+      const std::array<double, 3> E = membrane_strain(kin, model);
       std::array<double, 3> S = membrane_C_.apply(E);
-      energy += (0.5 * (S[0] * E[0] + S[1] * E[1] + S[2] * E[2]) + N_tot * (E[0] + E[1])) * fe_values.JxW(q);
-      if (model == Model::linear) energy += 0.5 * N_tot * (k.g[0] * k.g[0] + k.g[1] * k.g[1]) * fe_values.JxW(q);
+      energy += (0.5 * (S[0] * E[0] + S[1] * E[1] + S[2] * E[2]) + N_tot * (E[0] + E[1])) * jxw;
+      if (model == Model::linear) energy += 0.5 * N_tot * (kin.g[0] * kin.g[0] + kin.g[1] * kin.g[1]) * jxw;
       S[0] += N_tot;
       S[1] += N_tot;
-      const double jxw = fe_values.JxW(q);
-      for (unsigned int i = 0; i < n; ++i) {
-        dphi[i] = fe_values.shape_grad(i, q);
-        double v0 = 0, v1 = 0;
-        if (comp[i] < 2) {
-          if (model == Model::large_rotation) {
-            v0 = (comp[i] == 0 ? 1.0 : 0.0) + k.H[comp[i]][0];
-            v1 = (comp[i] == 1 ? 1.0 : 0.0) + k.H[comp[i]][1];
-          } else {
-            v0 = comp[i] == 0 ? 1.0 : 0.0;
-            v1 = comp[i] == 1 ? 1.0 : 0.0;
-          }
-        } else if (model != Model::linear) {
-          v0 = k.g[0];
-          v1 = k.g[1];
+      // v_c for each component.
+      double v[3][2];
+      for (unsigned int c = 0; c < 2; ++c) {
+        if (model == Model::large_rotation) {
+          v[c][0] = (c == 0 ? 1.0 : 0.0) + kin.H[c][0];
+          v[c][1] = (c == 1 ? 1.0 : 0.0) + kin.H[c][1];
+        } else {
+          v[c][0] = c == 0 ? 1.0 : 0.0;
+          v[c][1] = c == 1 ? 1.0 : 0.0;
         }
-        dE[i] = {v0 * dphi[i][0], v1 * dphi[i][1], v0 * dphi[i][1] + v1 * dphi[i][0]};
-        CdE[i] = membrane_C_.apply(dE[i]);
-        double r = S[0] * dE[i][0] + S[1] * dE[i][1] + S[2] * dE[i][2];
-        if (model == Model::linear && comp[i] == 2) r += N_tot * (k.g[0] * dphi[i][0] + k.g[1] * dphi[i][1]);
-        cell_rhs(i) += r * jxw;
+      }
+      v[2][0] = model == Model::linear ? 0.0 : kin.g[0];
+      v[2][1] = model == Model::linear ? 0.0 : kin.g[1];
+      // Residual: r_(c,a) = v_c · (S ∇φ_a) (+ N_tot g·∇φ_a for linear w).
+      for (unsigned int a = 0; a < nb; ++a) {
+        const double gx = G[2 * a], gy = G[2 * a + 1];
+        const double s0 = (S[0] * gx + S[2] * gy) * jxw, s1 = (S[2] * gx + S[1] * gy) * jxw;
+        for (unsigned int c = 0; c < 3; ++c) rb[c * nb + a] += v[c][0] * s0 + v[c][1] * s1;
+        if (model == Model::linear) rb[2 * nb + a] += N_tot * (kin.g[0] * gx + kin.g[1] * gy) * jxw;
       }
       if (!want_matrix) continue;
-      for (unsigned int i = 0; i < n; ++i) {
-        const Tensor<1, dim> Sd{{S[0] * dphi[i][0] + S[2] * dphi[i][1], S[2] * dphi[i][0] + S[1] * dphi[i][1]}};
-        for (unsigned int j = 0; j < n; ++j) {
-          double kij = CdE[i][0] * dE[j][0] + CdE[i][1] * dE[j][1] + CdE[i][2] * dE[j][2];
-          if (comp[i] == comp[j]) {
-            if (comp[i] == 2) {
-              if (model == Model::linear) kij += N_tot * (dphi[i] * dphi[j]);
-              else kij += Sd * dphi[j];
-            } else if (model == Model::large_rotation) {
-              kij += Sd * dphi[j];
+      // B_c (3×2): δE = (v0 φx, v1 φy, v0 φy + v1 φx) → columns for φx, φy.
+      double CB[3][3][2];  // C·B_c
+      for (unsigned int c = 0; c < 3; ++c) {
+        const double B[3][2] = {{v[c][0], 0.0}, {0.0, v[c][1]}, {v[c][1], v[c][0]}};
+        for (int i = 0; i < 3; ++i)
+          for (int j = 0; j < 2; ++j) CB[c][i][j] = C[i][0] * B[0][j] + C[i][1] * B[1][j] + C[i][2] * B[2][j];
+      }
+      for (unsigned int c = 0; c < 3; ++c) {
+        const double Bc[3][2] = {{v[c][0], 0.0}, {0.0, v[c][1]}, {v[c][1], v[c][0]}};
+        for (unsigned int d = 0; d < 3; ++d) {
+          double M[2][2];
+          for (int i = 0; i < 2; ++i)
+            for (int j = 0; j < 2; ++j) M[i][j] = Bc[0][i] * CB[d][0][j] + Bc[1][i] * CB[d][1][j] + Bc[2][i] * CB[d][2][j];
+          if (c == d) {
+            double gs0 = 0, gs1 = 0, gs2 = 0;
+            if (c == 2) {
+              if (model == Model::linear) gs0 = gs1 = N_tot;
+              else gs0 = S[0], gs1 = S[1], gs2 = S[2];
+            } else if (geometric_inplane) {
+              gs0 = S[0], gs1 = S[1], gs2 = S[2];
             }
+            M[0][0] += gs0;
+            M[1][1] += gs1;
+            M[0][1] += gs2;
+            M[1][0] += gs2;
           }
-          cell_matrix(i, j) += kij * jxw;
+          double* K = &Kb[(c * 3 + d) * nb * nb];
+          for (unsigned int b = 0; b < nb; ++b) {
+            const double gx = G[2 * b] * jxw, gy = G[2 * b + 1] * jxw;
+            const double t0x = M[0][0] * gx + M[0][1] * gy, t0y = M[1][0] * gx + M[1][1] * gy;
+            for (unsigned int a = 0; a < nb; ++a) K[a * nb + b] += G[2 * a] * t0x + G[2 * a + 1] * t0y;
+          }
         }
       }
     }
-    cell->get_dof_indices(dofs);
-    for (unsigned int i = 0; i < n; ++i) membrane_raw_(dofs[i]) += cell_rhs(i);
-    if (want_matrix) constraints_.distribute_local_to_global(cell_matrix, cell_rhs, dofs, tangent_, residual);
-    else constraints_.distribute_local_to_global(cell_rhs, dofs, residual);
+    // Back to the FE's local (system) order.
+    for (unsigned int i = 0; i < n; ++i) dofs[i] = cd[i];
+    for (unsigned int c = 0; c < 3; ++c)
+      for (unsigned int a = 0; a < nb; ++a) {
+        const unsigned int i = cache_.system_index[c * nb + a];
+        cell_rhs(i) = rb[c * nb + a];
+        membrane_raw_(dofs[i]) += rb[c * nb + a];
+      }
+    if (want_matrix) {
+      for (unsigned int c = 0; c < 3; ++c)
+        for (unsigned int d = 0; d < 3; ++d) {
+          const double* K = &Kb[(c * 3 + d) * nb * nb];
+          for (unsigned int a = 0; a < nb; ++a)
+            for (unsigned int b = 0; b < nb; ++b)
+              cell_matrix(cache_.system_index[c * nb + a], cache_.system_index[d * nb + b]) = K[a * nb + b];
+        }
+      constraints_.distribute_local_to_global(cell_matrix, cell_rhs, dofs, tangent_, residual);
+    } else {
+      constraints_.distribute_local_to_global(cell_rhs, dofs, residual);
+    }
   }
   if (options_.include_bending) {
     Vector<double> bu(u.size());
@@ -864,7 +961,7 @@ void FilmSolver::assemble(const Vector<double>& u, Model model, double artificia
   summary_.assembly_s += seconds_since(t0);
 }
 
-bool FilmSolver::solve_linear(const Vector<double>& rhs, Vector<double>& x, std::string& message) {
+bool FilmSolver::solve_linear(const Vector<double>& rhs, Vector<double>& x, std::string& message, bool factorize) {
   const auto t0 = Clock::now();
   bool ok = true;
   try {
@@ -875,6 +972,11 @@ bool FilmSolver::solve_linear(const Vector<double>& rhs, Vector<double>& x, std:
       SolverGMRES<Vector<double>> gmres(control, SolverGMRES<Vector<double>>::AdditionalData(100));
       x = 0;
       gmres.solve(tangent_, x, rhs, ilu);
+    } else if (!factorize && ldlt_analyzed_ && ldlt_good_) {
+      // Chord step: the factorization of an earlier tangent of the same pattern.
+      const Eigen::Map<const Eigen::VectorXd> b(rhs.begin(), rhs.size());
+      Eigen::Map<Eigen::VectorXd> xv(x.begin(), x.size());
+      xv = ldlt_.solve(b);
     } else {
       // Copy the values in the pattern's row order (the order eigen_index_ was built in).
       double* values = eigen_tangent_.valuePtr();
@@ -888,6 +990,7 @@ bool FilmSolver::solve_linear(const Vector<double>& rhs, Vector<double>& x, std:
       ldlt_.factorize(eigen_tangent_);
       ++n_factorizations_;
       bool good = ldlt_.info() == Eigen::Success;
+      ldlt_good_ = false;
       if (good) {
         const Eigen::Map<const Eigen::VectorXd> b(rhs.begin(), rhs.size());
         Eigen::Map<Eigen::VectorXd> xv(x.begin(), x.size());
@@ -896,6 +999,7 @@ bool FilmSolver::solve_linear(const Vector<double>& rhs, Vector<double>& x, std:
         tangent_.vmult(check, x);
         check -= rhs;
         good = std::isfinite(check.l2_norm()) && check.l2_norm() <= 1e-6 * rhs.l2_norm() + 1e-300;
+        ldlt_good_ = good;
       }
       if (!good) {  // indefinite or ill-conditioned pivots: pivoting LU
         SparseDirectUMFPACK direct;
@@ -929,8 +1033,15 @@ NewtonOutcome FilmSolver::newton(Model model, double artificial_tension, Vector<
   Vector<double> r(u.size()), du(u.size()), trial(u.size()), r_trial(u.size()), rhs(u.size());
   constraints_.distribute(u);
   double last_increment = std::numeric_limits<double>::max();
+  // Chord steps (reuse_factorization_, probe sweeps): while a step contracts the residual by 10x or
+  // more, the next step reuses the factorized tangent (one back substitution instead of assembly
+  // of the tangent + factorization); a weaker contraction refactorizes.
+  bool refactorize = !(reuse_factorization_ && chord_first_step_ && ldlt_analyzed_ && ldlt_good_);
+  chord_first_step_ = false;
+  bool have_r = false;  // r and last_energy_ already belong to u (the accepted line-search trial)
   for (int it = 0; it <= options_.max_newton_iterations; ++it) {
-    assemble(u, model, artificial_tension, true, r);
+    if (!have_r || refactorize) assemble(u, model, artificial_tension, refactorize, r);
+    have_r = false;
     const double r_norm = r.l2_norm();
     out.residual_norm = r_norm;
     if (!std::isfinite(r_norm)) {
@@ -956,7 +1067,7 @@ NewtonOutcome FilmSolver::newton(Model model, double artificial_tension, Vector<
     rhs = r;
     rhs *= -1.0;
     std::string msg;
-    if (!solve_linear(rhs, du, msg)) {
+    if (!solve_linear(rhs, du, msg, refactorize)) {
       out.status = Status::linear_solver_failed;
       out.message = msg;
       return out;
@@ -968,14 +1079,23 @@ NewtonOutcome FilmSolver::newton(Model model, double artificial_tension, Vector<
     // negative whenever the tangent is positive definite (tension); otherwise (compressed,
     // indefinite tangent) backtrack on ‖r‖ instead.
     double best_alpha = 1.0, best_norm = std::numeric_limits<double>::max();
+    double last_alpha = -1.0;  // the last trial assembled (r_trial, last_energy_ belong to it)
     const double energy0 = last_energy_;
     const double s0 = r * du;
+    // At round-off level the energy cannot resolve the step (|r·du| ≤ 1e-12|Π|): take it whole.
+    if (s0 < 0 && -s0 <= 1e-12 * std::abs(energy0)) {
+      u.add(1.0, du);
+      last_increment = du.l2_norm();
+      if (reuse_factorization_) refactorize = false;
+      continue;
+    }
     if (s0 < 0) {
       double alpha = 1.0, best_energy = std::numeric_limits<double>::max();
       for (int ls = 0; ls < 16; ++ls) {
         trial = u;
         trial.add(alpha, du);
         assemble(trial, model, artificial_tension, false, r_trial);
+        last_alpha = alpha;
         const double e = last_energy_;
         const double tn = r_trial.l2_norm();
         if (std::isfinite(e) && std::isfinite(tn) && e < best_energy) {
@@ -994,6 +1114,7 @@ NewtonOutcome FilmSolver::newton(Model model, double artificial_tension, Vector<
         trial = u;
         trial.add(alpha, du);
         assemble(trial, model, artificial_tension, false, r_trial);
+        last_alpha = alpha;
         const double tn = r_trial.l2_norm();
         if (std::isfinite(tn) && tn < best_norm) {
           best_norm = tn;
@@ -1010,6 +1131,13 @@ NewtonOutcome FilmSolver::newton(Model model, double artificial_tension, Vector<
     }
     u.add(best_alpha, du);
     last_increment = best_alpha * du.l2_norm();
+    if (reuse_factorization_ && !options_.iterative_solver) {
+      refactorize = !(best_alpha == 1.0 && best_norm <= 0.1 * r_norm);
+      if (last_alpha == best_alpha) {
+        r.swap(r_trial);
+        have_r = true;
+      }
+    }
     if (options_.verbose) {
       std::printf("      step alpha = %.3g, |du| = %.3e, slope r.du = %.3e\n", best_alpha, du.l2_norm(), s0);
     }
@@ -1560,7 +1688,10 @@ NewtonOutcome FilmSolver::solve_probe(Model model, Vector<double>& u, bool warm,
                                       bool& warm_used) {
   const int before = summary_.newton_iterations;
   warm_used = false;
+  reuse_factorization_ = true;
   if (warm) {
+    // The warm state is a neighbour's converged one: its last factorized tangent is a good chord.
+    chord_first_step_ = true;
     const int cap = options_.max_newton_iterations;
     options_.max_newton_iterations = std::min(cap, 25);
     Vector<double> start = u;

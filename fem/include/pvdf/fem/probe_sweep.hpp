@@ -26,6 +26,11 @@ struct SweepOptions {
   /// Probe positions (centre, on the first electrode, far from it) at which the setup compares
   /// the sweep mesh's charges with direct solves (0..3; 0 = no check, error not estimated).
   int n_setup_checks = 3;
+  /// Sweep-mesh sizes (m) and grading; 0 = chosen from the tolerance (docs/fem.md §9). The
+  /// setup check still measures the error of whatever mesh results.
+  double region_size_m = 0;
+  double electrode_size_m = 0;
+  double grading = 0;
 };
 
 /// What the setup decided, for reports and map provenance.
