@@ -34,6 +34,7 @@ struct MapCommandOptions {
   bool no_symmetry = false;
   bool no_force_scaling = false;
   int scaling_check_stride = 4;
+  int setup_checks = 3;
   std::string noise;
   bool json = false;
   bool force_mpi = false;
@@ -66,6 +67,7 @@ int run_map(const MapCommandOptions& o) {
   options.use_symmetry = !o.no_symmetry;
   options.use_force_scaling = !o.no_force_scaling;
   options.scaling_check_stride = o.scaling_check_stride;
+  options.n_setup_checks = o.setup_checks;
   if (!o.noise.empty()) options.noise_C = pvdf::parse_number_list(o.noise, "--noise-C", scene.electrodes.size());
   if (!o.no_checkpoint) options.checkpoint_path = o.checkpoint.empty() ? o.output + ".checkpoint" : o.checkpoint;
   options.resume = !o.no_resume;
@@ -166,6 +168,8 @@ PVDF_COMMAND(35, [](CLI::App& root) {
   sub->add_flag("--no-force-scaling", o->no_force_scaling, "Solve every force level (no Q ~ F^(2/3) shortcut)");
   sub->add_option("--scaling-check-stride", o->scaling_check_stride,
                   "Force-scaling check positions every N grid steps (default 4)");
+  sub->add_option("--setup-checks", o->setup_checks,
+                  "Direct solves that measure the sweep mesh's charge error at setup (0-3, default 3)");
   sub->add_option("--noise-C", o->noise, "1-sigma charge noise per electrode N1,N2,... (C; default 5e-14 each)");
   sub->add_flag("--json", o->json, "Print a JSON summary (counts, model, timings)");
   sub->add_flag("--quiet", o->quiet, "No progress bar");

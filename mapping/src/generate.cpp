@@ -593,7 +593,12 @@ void Generator::run_blocks(const std::vector<Block>& blocks) {
   std::mutex error_mutex;
   auto worker = [&](int t) {
     try {
-      if (!sweeps_[std::size_t(t)]) sweeps_[std::size_t(t)] = std::make_unique<fem::ProbeSweep>(scene_, sweep_options_);
+      if (!sweeps_[std::size_t(t)]) {
+        // Same mesh as the first sweep; its setup check already measured the error.
+        fem::SweepOptions options = sweep_options_;
+        options.n_setup_checks = 0;
+        sweeps_[std::size_t(t)] = std::make_unique<fem::ProbeSweep>(scene_, options);
+      }
       std::vector<double> records;
       while (!stop_) {
         const std::size_t b = next.fetch_add(1);
@@ -708,6 +713,7 @@ ChargeMap Generator::run(MapReport& report) {
   sweep_options_.solver.tolerance = tolerance_;
   sweep_options_.rim_margin_m = margin_;
   sweep_options_.forces_N = o_.forces_N;
+  sweep_options_.n_setup_checks = o_.n_setup_checks;
   sweeps_.resize(std::size_t(threads_));
   sweeps_[0] = std::make_unique<fem::ProbeSweep>(scene_, sweep_options_);
 
