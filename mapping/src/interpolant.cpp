@@ -107,6 +107,40 @@ MapInterpolant::MapInterpolant(const ChargeMap& map)
       }
     }
   }
+
+  // Per-cell polynomial coefficients: A = H·F·Hᵀ with F the 4×4 Hermite data of a cell
+  // (rows: G(0,·), G(1,·), G_t(0,·), G_t(1,·); columns the same in s) and H the cubic Hermite →
+  // monomial matrix, so that G(t, s) = Σ A[m][n] t^m s^n.
+  static constexpr double H[4][4] = {{1, 0, 0, 0}, {0, 0, 1, 0}, {-3, 3, -2, -1}, {2, -2, 1, 1}};
+  coef_.assign((nx_ - 1) * (ny_ - 1) * nf_ * 16 * ne_, 0.0);
+  for (std::size_t j = 0; j + 1 < ny_; ++j) {
+    for (std::size_t i = 0; i + 1 < nx_; ++i) {
+      if (!cell_ok_[j * (nx_ - 1) + i]) continue;
+      for (std::size_t f = 0; f < nf_; ++f) {
+        double* out = &coef_[((j * (nx_ - 1) + i) * nf_ + f) * 16 * ne_];
+        for (std::size_t k = 0; k < ne_; ++k) {
+          double F[4][4];
+          for (int a = 0; a < 2; ++a) {
+            for (int b = 0; b < 2; ++b) {
+              F[a][b] = at(f, i + std::size_t(a), j + std::size_t(b), k, 0);
+              F[2 + a][b] = at(f, i + std::size_t(a), j + std::size_t(b), k, 1);
+              F[a][2 + b] = at(f, i + std::size_t(a), j + std::size_t(b), k, 2);
+              F[2 + a][2 + b] = at(f, i + std::size_t(a), j + std::size_t(b), k, 3);
+            }
+          }
+          for (int m = 0; m < 4; ++m) {
+            for (int n = 0; n < 4; ++n) {
+              double v = 0;
+              for (int a = 0; a < 4; ++a) {
+                for (int b = 0; b < 4; ++b) v += H[m][a] * F[a][b] * H[n][b];
+              }
+              out[std::size_t(m * 4 + n) * ne_ + k] = v;
+            }
+          }
+        }
+      }
+    }
+  }
 }
 
 bool MapInterpolant::inside(double x_m, double y_m) const {
@@ -116,77 +150,37 @@ bool MapInterpolant::inside(double x_m, double y_m) const {
   return cell_ok_[j * (nx_ - 1) + i] != 0;
 }
 
-/// Tensor-product cubic Hermite weights at (t, s) for the 4 corners × {G, Gt, Gs, Gts}: value
-/// weights w, and their t- and s-derivatives wt, ws. Corner order (a, b) = (0,0), (1,0), (0,1), (1,1).
-struct HermiteBasis {
-  double w[4][4], wt[4][4], ws[4][4];
-  HermiteBasis(double t, double s) {
-    const double t2 = t * t, t3 = t2 * t, s2 = s * s, s3 = s2 * s;
-    const double A[2] = {2 * t3 - 3 * t2 + 1, -2 * t3 + 3 * t2};
-    const double C[2] = {t3 - 2 * t2 + t, t3 - t2};
-    const double dA[2] = {6 * t2 - 6 * t, -6 * t2 + 6 * t};
-    const double dC[2] = {3 * t2 - 4 * t + 1, 3 * t2 - 2 * t};
-    const double B[2] = {2 * s3 - 3 * s2 + 1, -2 * s3 + 3 * s2};
-    const double D[2] = {s3 - 2 * s2 + s, s3 - s2};
-    const double dB[2] = {6 * s2 - 6 * s, -6 * s2 + 6 * s};
-    const double dD[2] = {3 * s2 - 4 * s + 1, 3 * s2 - 2 * s};
-    for (int b = 0; b < 2; ++b) {
-      for (int a = 0; a < 2; ++a) {
-        const int c = b * 2 + a;
-        w[c][0] = A[a] * B[b], w[c][1] = C[a] * B[b], w[c][2] = A[a] * D[b], w[c][3] = C[a] * D[b];
-        wt[c][0] = dA[a] * B[b], wt[c][1] = dC[a] * B[b], wt[c][2] = dA[a] * D[b], wt[c][3] = dC[a] * D[b];
-        ws[c][0] = A[a] * dB[b], ws[c][1] = C[a] * dB[b], ws[c][2] = A[a] * dD[b], ws[c][3] = C[a] * dD[b];
-      }
-    }
-  }
-};
-
 namespace {
 
-/// Value and gradient (in cell units) of NE electrodes (NE = 0: runtime ne) in a cell whose
-/// four corner records (NE × {G, hx·Gx, hy·Gy, hx·hy·Gxy} each) start at `corner`.
+/// Value and gradient (cell units) of the NE electrodes (NE = 0: runtime count) of one level of
+/// one cell: c holds the 16 coefficients × ne, [m*4+n][k] for t^m s^n. Horner in s, then in t.
 template <std::size_t NE>
-inline void hermite_cell(const HermiteBasis& h, const double* const corner[4], std::size_t ne_runtime, double* g,
-                         double* gt, double* gs) {
+inline void horner_cell(const double* c, std::size_t ne_runtime, double t, double s, double* g, double* gt,
+                        double* gs) {
   const std::size_t ne = NE > 0 ? NE : ne_runtime;
   for (std::size_t k = 0; k < ne; ++k) {
-    double v = 0, vt = 0, vs = 0;
-    for (int c = 0; c < 4; ++c) {
-      const double* n = corner[c] + 4 * k;
-      v += h.w[c][0] * n[0] + h.w[c][1] * n[1] + h.w[c][2] * n[2] + h.w[c][3] * n[3];
-      vt += h.wt[c][0] * n[0] + h.wt[c][1] * n[1] + h.wt[c][2] * n[2] + h.wt[c][3] * n[3];
-      vs += h.ws[c][0] * n[0] + h.ws[c][1] * n[1] + h.ws[c][2] * n[2] + h.ws[c][3] * n[3];
+    double b[4], db[4];
+    for (int m = 0; m < 4; ++m) {
+      const double* a = c + std::size_t(m * 4) * ne + k;
+      const double a0 = a[0], a1 = a[ne], a2 = a[2 * ne], a3 = a[3 * ne];
+      b[m] = ((a3 * s + a2) * s + a1) * s + a0;
+      db[m] = (3 * a3 * s + 2 * a2) * s + a1;
     }
-    g[k] = v;
-    gt[k] = vt;
-    gs[k] = vs;
+    g[k] = ((b[3] * t + b[2]) * t + b[1]) * t + b[0];
+    gt[k] = (3 * b[3] * t + 2 * b[2]) * t + b[1];
+    gs[k] = ((db[3] * t + db[2]) * t + db[1]) * t + db[0];
+  }
+}
+
+inline void horner(const double* c, std::size_t ne, double t, double s, double* g, double* gt, double* gs) {
+  switch (ne) {
+    case 3: horner_cell<3>(c, ne, t, s, g, gt, gs); break;
+    case 4: horner_cell<4>(c, ne, t, s, g, gt, gs); break;
+    default: horner_cell<0>(c, ne, t, s, g, gt, gs); break;
   }
 }
 
 }  // namespace
-
-bool MapInterpolant::evaluate_level(std::size_t f, std::size_t i, std::size_t j, double t, double s, double* g,
-                                    double* gx, double* gy) const {
-  return evaluate_level(f, i, j, HermiteBasis(t, s), g, gx, gy);
-}
-
-bool MapInterpolant::evaluate_level(std::size_t f, std::size_t i, std::size_t j, const HermiteBasis& h, double* g,
-                                    double* gx, double* gy) const {
-  const std::size_t stride = ne_ * 4;
-  const double* base = &data_[((f * ny_ + j) * nx_ + i) * stride];
-  const double* const corner[4] = {base, base + stride, base + nx_ * stride, base + (nx_ + 1) * stride};
-  switch (ne_) {
-    case 3: hermite_cell<3>(h, corner, ne_, g, gx, gy); break;
-    case 4: hermite_cell<4>(h, corner, ne_, g, gx, gy); break;
-    default: hermite_cell<0>(h, corner, ne_, g, gx, gy); break;
-  }
-  const double ihx = 1.0 / hx_, ihy = 1.0 / hy_;
-  for (std::size_t k = 0; k < ne_; ++k) {
-    gx[k] *= ihx;
-    gy[k] *= ihy;
-  }
-  return true;
-}
 
 bool MapInterpolant::evaluate(double x_m, double y_m, double log_force, double* q, std::array<double, 3>* dq) const {
   const double u = (x_m - x0_) / hx_, v = (y_m - y0_) / hy_;
@@ -211,14 +205,12 @@ bool MapInterpolant::evaluate(double x_m, double y_m, double log_force, double* 
       dw = 1.0 / span;
     }
   }
-  const HermiteBasis basis(t, s);
-  std::array<double, max_electrodes> g0, gx0, gy0;
-  if (w < 1) {
-    evaluate_level(f0, i, j, basis, g0.data(), gx0.data(), gy0.data());
-  }
-  std::array<double, max_electrodes> g1{}, gx1{}, gy1{};
+  const double* cell = &coef_[(j * (nx_ - 1) + i) * nf_ * 16 * ne_];
+  const std::size_t level_stride = 16 * ne_;
+  std::array<double, max_electrodes> g0, gx0, gy0, g1, gx1, gy1;
+  if (w < 1) horner(cell + f0 * level_stride, ne_, t, s, g0.data(), gx0.data(), gy0.data());
   if (nf_ > 1 && w > 0) {
-    evaluate_level(f0 + 1, i, j, basis, g1.data(), gx1.data(), gy1.data());
+    horner(cell + (f0 + 1) * level_stride, ne_, t, s, g1.data(), gx1.data(), gy1.data());
     if (w >= 1) {
       g0 = g1;
       gx0 = gx1;
@@ -229,13 +221,14 @@ bool MapInterpolant::evaluate(double x_m, double y_m, double log_force, double* 
     gx1 = gx0;
     gy1 = gy0;
   }
+  const double ihx = 1.0 / hx_, ihy = 1.0 / hy_;
   const double amplitude = std::exp(p_ * log_force);
   for (std::size_t k = 0; k < ne_; ++k) {
     const double g = (1 - w) * g0[k] + w * g1[k];
     q[k] = amplitude * g;
     if (dq != nullptr) {
-      dq[k][0] = amplitude * ((1 - w) * gx0[k] + w * gx1[k]);
-      dq[k][1] = amplitude * ((1 - w) * gy0[k] + w * gy1[k]);
+      dq[k][0] = amplitude * ihx * ((1 - w) * gx0[k] + w * gx1[k]);
+      dq[k][1] = amplitude * ihy * ((1 - w) * gy0[k] + w * gy1[k]);
       dq[k][2] = p_ * q[k] + amplitude * dw * (g1[k] - g0[k]);
     }
   }

@@ -180,6 +180,74 @@ Locator::Locator(const ChargeMap& map, const LocatorOptions& options)
       th_hi = std::max(th_hi, box[3]);
     }
   }
+  // Linear direction model of every usable cell at every level (the coarse search's predictor):
+  // unit direction d at the centre, its derivatives in cell units, their least-squares inverse,
+  // and how well the linear model reproduces the corner directions.
+  pred_stride_ = 5 * ne_ + 3;
+  for (double F : map.forces_N) level_log_.push_back(std::log(F));
+  pred_.assign(cells_.size() * nf * pred_stride_, 0.0);
+  cell_lin_err2_.assign(cells_.size(), 0.0);
+  cell_log_norm_.assign(cells_.size(), 0.0);
+  for (std::size_t c = 0; c < cells_.size(); ++c) {
+    const std::size_t i = cells_[c] % (nx - 1), j = cells_[c] / (nx - 1);
+    double log_norm = 0;
+    for (std::size_t f = 0; f < nf; ++f) {
+      const double lf = std::log(map.forces_N[f]);
+      Vec qc{};
+      std::array<std::array<double, 3>, max_electrodes> dq{};
+      interp_.evaluate(cell_xy_[c][0], cell_xy_[c][1], lf, qc.data(), dq.data());
+      const double norm = normalize(qc.data(), ne_);  // qc is now the unit direction d
+      log_norm += (std::log(norm) - interp_.force_exponent() * lf) / double(nf);
+      double* rec = &pred_[(c * nf + f) * pred_stride_];
+      double* d = rec;
+      double* J = rec + ne_;
+      double* P = rec + 3 * ne_;
+      for (std::size_t k = 0; k < ne_; ++k) d[k] = qc[k];
+      for (int a = 0; a < 2; ++a) {  // ∂d/∂t = (I − d dᵀ) ∂q/∂t / |q|
+        const double h = a == 0 ? interp_.hx() : interp_.hy();
+        double proj = 0;
+        for (std::size_t k = 0; k < ne_; ++k) proj += d[k] * dq[k][std::size_t(a)];
+        for (std::size_t k = 0; k < ne_; ++k) J[k * 2 + std::size_t(a)] = h * (dq[k][std::size_t(a)] - proj * d[k]) / norm;
+      }
+      double a00 = 0, a01 = 0, a11 = 0;
+      for (std::size_t k = 0; k < ne_; ++k) {
+        a00 += J[k * 2] * J[k * 2];
+        a01 += J[k * 2] * J[k * 2 + 1];
+        a11 += J[k * 2 + 1] * J[k * 2 + 1];
+      }
+      const double det = a00 * a11 - a01 * a01;
+      if (det > 1e-14 * (a00 * a11 + 1e-300)) {
+        for (std::size_t k = 0; k < ne_; ++k) {
+          P[k] = (a11 * J[k * 2] - a01 * J[k * 2 + 1]) / det;
+          P[ne_ + k] = (-a01 * J[k * 2] + a00 * J[k * 2 + 1]) / det;
+        }
+      }  // else P = 0: the cell predicts its centre (a fold or a flat spot)
+      // ln |G| at the centre and its gradient in cell units (refines the force of a start).
+      rec[5 * ne_] = std::log(norm) - interp_.force_exponent() * lf;
+      for (int a = 0; a < 2; ++a) {
+        const double h = a == 0 ? interp_.hx() : interp_.hy();
+        double proj = 0;
+        for (std::size_t k = 0; k < ne_; ++k) proj += d[k] * dq[k][std::size_t(a)];
+        rec[5 * ne_ + 1 + std::size_t(a)] = h * proj / norm;
+      }
+      // Error of the linear model at the four corners (|offset| = ½ cell each way).
+      for (int b = 0; b < 2; ++b) {
+        for (int a = 0; a < 2; ++a) {
+          Vec n{};
+          for (std::size_t k = 0; k < ne_; ++k) n[k] = interp_.node_value(f, i + std::size_t(a), j + std::size_t(b), k);
+          normalize(n.data(), ne_);
+          const double dt = a - 0.5, ds = b - 0.5;
+          double e2 = 0;
+          for (std::size_t k = 0; k < ne_; ++k) {
+            const double e = n[k] - d[k] - J[k * 2] * dt - J[k * 2 + 1] * ds;
+            e2 += e * e;
+          }
+          cell_lin_err2_[c] = std::max(cell_lin_err2_[c], e2);
+        }
+      }
+    }
+    cell_log_norm_[c] = log_norm;
+  }
   if (cells_.empty()) throw InputError("map has no usable cell (four ok nodes with non-zero charge); nothing can be located");
   bins_ = options.direction_bins > 0 ? options.direction_bins
                                      : std::clamp(int(std::sqrt(double(cells_.size()))), 16, 256);
@@ -213,6 +281,7 @@ Locator::Locator(const ChargeMap& map, const LocatorOptions& options)
       for (int p = p0; p <= p1; ++p) bin_cells_[fill[std::size_t(t * bins_ + p)]++] = c;
     }
   }
+
 }
 
 bool Locator::predict(double x_m, double y_m, double force_N, double* charges_C) const {
@@ -275,6 +344,102 @@ void Locator::coarse_candidates(const double* q_unit, double noise2, Shortlist& 
   }
 }
 
+bool Locator::predicted_starts(const double* q_unit, double log_q_norm, double noise2, bool fixed_force,
+                               double log_force, double log_lo, double log_hi, StartList& starts) const {
+  starts.n = 0;
+  double phi, theta;
+  direction_key(q_unit, phi, theta);
+  const int p = int(std::floor((phi - phi0_) / (phi1_ - phi0_) * bins_));
+  const int t = int(std::floor((theta - theta0_) / (theta1_ - theta0_) * bins_));
+  const std::size_t nf = interp_.n_levels();
+  const double p_exp = interp_.force_exponent();
+  const double hx = interp_.hx(), hy = interp_.hy();
+  for (int ring = 0; ring <= 1 && starts.n == 0; ++ring) {
+    for (int tt = t - ring; tt <= t + ring; ++tt) {
+      for (int pp = p - ring; pp <= p + ring; ++pp) {
+        if (pp < 0 || tt < 0 || pp >= bins_ || tt >= bins_) continue;
+        if (ring == 1 && tt != t - 1 && tt != t + 1 && pp != p - 1 && pp != p + 1) continue;
+        const std::size_t b = std::size_t(tt * bins_ + pp);
+        for (std::size_t m = bin_start_[b]; m < bin_start_[b + 1]; ++m) {
+          const std::size_t c = bin_cells_[m];
+          // Cheap angular screen against the cell's mean direction and angular radius.
+          const double* dm = &cell_dir_[c * ne_];
+          double dot = 0;
+          for (std::size_t k = 0; k < ne_; ++k) dot += dm[k] * q_unit[k];
+          if (dot <= 0 || 1.0 - dot * dot > 4.0 * cell_radius2_[c] + 9.0 * noise2 + 1e-14) continue;
+          // Level: the known force, or the force that makes the cell's mean |G| match |q|.
+          const double l = std::clamp(fixed_force ? log_force : (log_q_norm - cell_log_norm_[c]) / p_exp, log_lo, log_hi);
+          std::size_t f0 = 0;
+          double w = 0;
+          if (nf > 1) {
+            if (l >= level_log_[nf - 1]) {
+              f0 = nf - 2;
+              w = 1;
+            } else if (l > level_log_[0]) {
+              while (f0 + 2 < nf && l > level_log_[f0 + 1]) ++f0;
+              w = (l - level_log_[f0]) / (level_log_[f0 + 1] - level_log_[f0]);
+            }
+          }
+          const double* r0 = &pred_[(c * nf + f0) * pred_stride_];
+          const double* r1 = nf > 1 ? r0 + pred_stride_ : r0;
+          // Blend the two levels' linear models and predict the offset δ (cell units).
+          std::array<double, max_electrodes> e{};
+          double dt = 0, ds = 0;
+          for (std::size_t n = 0; n < ne_; ++n) {
+            e[n] = q_unit[n] - ((1 - w) * r0[n] + w * r1[n]);
+            dt += ((1 - w) * r0[3 * ne_ + n] + w * r1[3 * ne_ + n]) * e[n];
+            ds += ((1 - w) * r0[4 * ne_ + n] + w * r1[4 * ne_ + n]) * e[n];
+          }
+          if (!(std::abs(dt) <= 1.0 && std::abs(ds) <= 1.0)) continue;  // predicted beyond the neighbours
+          double res2 = 0;
+          for (std::size_t n = 0; n < ne_; ++n) {
+            const double jt = (1 - w) * r0[ne_ + 2 * n] + w * r1[ne_ + 2 * n];
+            const double js = (1 - w) * r0[ne_ + 2 * n + 1] + w * r1[ne_ + 2 * n + 1];
+            const double r = e[n] - jt * dt - js * ds;
+            res2 += r * r;
+          }
+          // Within what the linear model's own error and the noise allow: a solution may be here.
+          if (res2 > 4.0 * cell_lin_err2_[c] + 9.0 * noise2 + 1e-14) continue;
+          // Force at the predicted point: |q| = F^p |G(δ)| with ln |G| linear in δ.
+          double l1 = l;
+          if (!fixed_force) {
+            const double* g0 = r0 + 5 * ne_;
+            const double* g1 = r1 + 5 * ne_;
+            const double log_g = (1 - w) * (g0[0] + g0[1] * dt + g0[2] * ds) + w * (g1[0] + g1[1] * dt + g1[2] * ds);
+            l1 = (log_q_norm - log_g) / p_exp;
+            // A solution needs a plausible force: far outside the range, this is not one.
+            if (l1 < log_lo - 0.25 || l1 > log_hi + 0.25) continue;
+            l1 = std::clamp(l1, log_lo, log_hi);
+          }
+          Start st{cell_xy_[c][0] + dt * hx, cell_xy_[c][1] + ds * hy, l1, res2};
+          // Same solution as a start already found (predicted within ¾ cell)? Keep the better one.
+          int same = -1;
+          for (int o = 0; o < starts.n && same < 0; ++o) {
+            const Start& so = starts.start[std::size_t(o)];
+            if (std::abs(so.x - st.x) < 0.75 * hx && std::abs(so.y - st.y) < 0.75 * hy) same = o;
+          }
+          int pos;
+          if (same >= 0) {
+            if (starts.start[std::size_t(same)].score <= res2) continue;
+            pos = same;  // replace, then bubble up
+          } else if (starts.n < StartList::capacity) {
+            pos = starts.n++;
+          } else if (starts.start[StartList::capacity - 1].score > res2) {
+            pos = StartList::capacity - 1;
+          } else {
+            continue;
+          }
+          starts.start[std::size_t(pos)] = st;
+          for (; pos > 0 && starts.start[std::size_t(pos - 1)].score > st.score; --pos) {
+            std::swap(starts.start[std::size_t(pos)], starts.start[std::size_t(pos - 1)]);
+          }
+        }
+      }
+    }
+  }
+  return starts.n > 0;
+}
+
 Locator::Fit Locator::levenberg_marquardt(const double* q, const double* w, double x, double y, double l, bool fixed_force,
                                           double log_lo, double log_hi, const Fit* found, int n_found) const {
   Fit fit;
@@ -323,6 +488,21 @@ Locator::Fit Locator::levenberg_marquardt(const double* q, const double* w, doub
     limit = std::min(limit, 4.0 * hx / std::max(std::abs(step[0]), 1e-300));
     limit = std::min(limit, 4.0 * hy / std::max(std::abs(step[1]), 1e-300));
     limit = std::min(limit, 1.0 / std::max(std::abs(step[2]), 1e-300));
+    // A nearly undamped Gauss–Newton step below 1e-3 of a cell and 1e-4 in ln F: the iteration
+    // is in its quadratic phase, so after this step the error is ~ step² (~1e-6 cell, far below
+    // the interpolation error). Take it without evaluating the model there; χ² from the linear
+    // model, χ² + 2 stepᵀJᵀr + stepᵀJᵀJ step (its change is second order too).
+    if (lambda < 1e-2 && std::abs(step[0]) < 1e-3 * hx && std::abs(step[1]) < 1e-3 * hy && std::abs(step[2]) < 1e-4 &&
+        interp_.inside(x + step[0], y + step[1]) && l + step[2] >= log_lo && l + step[2] <= log_hi) {
+      x += step[0];
+      y += step[1];
+      l += step[2];
+      chi2 = std::max(0.0, chi2 + 2.0 * Jtr.dot(step) + step.dot(JtJ * step));
+      fit.converged = true;
+      fit.blocked = false;
+      ++it;
+      break;
+    }
     const double nx = x + limit * step[0], ny = y + limit * step[1], nl = l + limit * step[2];
     Vec trial{};
     std::array<std::array<double, 3>, max_electrodes> trial_grad{};
@@ -392,27 +572,36 @@ Locator::Fit Locator::levenberg_marquardt(const double* q, const double* w, doub
   fit.l = l;
   fit.chi2 = chi2;
   fit.iterations = it;
+  fit.jtj = {JtJ(0, 0), JtJ(0, 1), JtJ(0, 2), JtJ(1, 1), JtJ(1, 2), JtJ(2, 2)};
+  fit.ok = std::isfinite(chi2) && std::isfinite(x) && std::isfinite(y) && std::isfinite(l);
+  return fit;
+}
+
+void Locator::covariance(Fit& fit, bool fixed_force) const {
   // Covariance of (x, y, ln F): (JᵀWJ)⁻¹ with the weights already in J.
   // Equilibrate first: the x, y columns (C/m) and the ln F column (C) differ by ~1e3.
+  Eigen::Matrix3d JtJ;
+  JtJ << fit.jtj[0], fit.jtj[1], fit.jtj[2], fit.jtj[1], fit.jtj[3], fit.jtj[4], fit.jtj[2], fit.jtj[4], fit.jtj[5];
   Eigen::Vector3d d = JtJ.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
   Eigen::Matrix3d S = d.asDiagonal() * JtJ * d.asDiagonal();
   if (fixed_force) {  // σ of (x, y) only; the force is given
+    S.row(2).setZero();
+    S.col(2).setZero();
     S(2, 2) = 1.0;
     d[2] = 0.0;
   }
   Eigen::FullPivLU<Eigen::Matrix3d> lu(S);
   lu.setThreshold(1e-12);
+  fit.singular = false;
   if (lu.isInvertible()) {
     const Eigen::Matrix3d C = d.asDiagonal() * lu.inverse() * d.asDiagonal();
-    for (int d = 0; d < 3; ++d) fit.sigma[std::size_t(d)] = C(d, d) > 0 ? std::sqrt(C(d, d)) : 0.0;
+    for (int k = 0; k < 3; ++k) fit.sigma[std::size_t(k)] = C(k, k) > 0 ? std::sqrt(C(k, k)) : 0.0;
     fit.singular = !(std::isfinite(fit.sigma[0]) && std::isfinite(fit.sigma[1]) && std::isfinite(fit.sigma[2]));
   } else {
     fit.singular = true;
   }
   if (fit.singular) fit.sigma = {0, 0, 0};
   if (fixed_force) fit.sigma[2] = 0;
-  fit.ok = std::isfinite(chi2) && std::isfinite(x) && std::isfinite(y) && std::isfinite(l);
-  return fit;
 }
 
 bool Locator::distinct_minima(const double* q, const double* w, const Fit& a, const Fit& b, double separation,
@@ -481,33 +670,50 @@ Location Locator::locate_impl(const double* charges_C, bool fixed_force, double 
   const double q_norm = normalize(q_unit.data(), ne_);
   const double noise2 = noise_norm2 / (q_norm * q_norm);
 
-  Shortlist list;
-  coarse_candidates(q_unit.data(), noise2, list);
-
-  // Distinct starts: the best candidates at least a few cells apart.
-  const double cluster_distance = 3.0 * std::max(interp_.hx(), interp_.hy());
-  std::array<std::size_t, 8> starts{};
-  int n_starts = 0;
-  for (int c = 0; c < list.n && n_starts < options_.max_starts; ++c) {
-    const auto& p = cell_xy_[list.cell[std::size_t(c)]];
-    bool far = true;
-    for (int s = 0; s < n_starts; ++s) {
-      const auto& o = cell_xy_[starts[std::size_t(s)]];
-      far = far && (p[0] - o[0]) * (p[0] - o[0]) + (p[1] - o[1]) * (p[1] - o[1]) > cluster_distance * cluster_distance;
-    }
-    if (far) starts[std::size_t(n_starts++)] = list.cell[std::size_t(c)];
-  }
-
   std::array<Fit, 8> fits{};
   const double p_exp = interp_.force_exponent();
-  for (int s = 0; s < n_starts; ++s) {
-    const std::size_t c = starts[std::size_t(s)];
-    double dot = 0;
-    for (std::size_t k = 0; k < ne_; ++k) dot += cell_dir_[c * ne_ + k] * q[k];
-    const double amplitude = dot > 0 ? dot / cell_norm_[c] : 1.0;
-    const double l0 = std::clamp(std::log(amplitude) / p_exp, log_lo, log_hi);
-    fits[std::size_t(s)] = levenberg_marquardt(q.data(), w.data(), cell_xy_[c][0], cell_xy_[c][1], l0, fixed_force, log_lo,
-                                               log_hi, fits.data(), s);
+  int n_starts = 0;
+  // Coarse search by the linearized direction model: one start per distinct predicted solution.
+  StartList predicted;
+  if (predicted_starts(q_unit.data(), std::log(q_norm), noise2, fixed_force, log_known_force, log_lo, log_hi, predicted)) {
+    for (int s = 0; s < predicted.n && n_starts < options_.max_starts; ++s) {
+      const Start& st = predicted.start[std::size_t(s)];
+      fits[std::size_t(n_starts)] =
+          levenberg_marquardt(q.data(), w.data(), st.x, st.y, st.l, fixed_force, log_lo, log_hi, fits.data(), n_starts);
+      ++n_starts;
+    }
+  }
+  bool any_within = false;
+  for (int s = 0; s < n_starts; ++s) any_within = any_within || (fits[std::size_t(s)].ok && fits[std::size_t(s)].chi2 <= limit);
+  if (!any_within) {
+    // No cell's linear model reaches the charges, or none of its fits is within noise (outside
+    // the map, far off the model, or a strongly curved cell): the angular shortlist, starts at
+    // cell centres at least three cells apart, as many as there is room for.
+    Shortlist list;
+    coarse_candidates(q_unit.data(), noise2, list);
+    const double cluster_distance = 3.0 * std::max(interp_.hx(), interp_.hy());
+    std::array<std::size_t, 8> starts{};
+    int n_cells = 0;
+    for (int c = 0; c < list.n && n_cells < options_.max_starts; ++c) {
+      const auto& p = cell_xy_[list.cell[std::size_t(c)]];
+      bool far = true;
+      for (int s = 0; s < n_cells; ++s) {
+        const auto& o = cell_xy_[starts[std::size_t(s)]];
+        far = far && (p[0] - o[0]) * (p[0] - o[0]) + (p[1] - o[1]) * (p[1] - o[1]) > cluster_distance * cluster_distance;
+      }
+      if (far) starts[std::size_t(n_cells++)] = list.cell[std::size_t(c)];
+    }
+    if (n_starts + n_cells > int(fits.size())) n_starts = std::max(0, int(fits.size()) - n_cells);
+    for (int s = 0; s < n_cells; ++s) {
+      const std::size_t c = starts[std::size_t(s)];
+      double dot = 0;
+      for (std::size_t k = 0; k < ne_; ++k) dot += cell_dir_[c * ne_ + k] * q[k];
+      const double amplitude = dot > 0 ? dot / cell_norm_[c] : 1.0;
+      const double l0 = std::clamp(std::log(amplitude) / p_exp, log_lo, log_hi);
+      fits[std::size_t(n_starts)] = levenberg_marquardt(q.data(), w.data(), cell_xy_[c][0], cell_xy_[c][1], l0, fixed_force,
+                                                        log_lo, log_hi, fits.data(), n_starts);
+      ++n_starts;
+    }
   }
   out.n_starts = n_starts;
   // Rank: fits within noise first, among them forces inside the map's levels first, then χ².
@@ -528,7 +734,8 @@ Location Locator::locate_impl(const double* charges_C, bool fixed_force, double 
     out.flags = flag::outside_map;
     return out;
   }
-  const Fit& b = fits[std::size_t(best)];
+  Fit& b = fits[std::size_t(best)];
+  covariance(b, fixed_force);
   out.x_m = b.x;
   out.y_m = b.y;
   out.force_N = std::exp(b.l);
@@ -578,7 +785,8 @@ Location Locator::locate_impl(const double* charges_C, bool fixed_force, double 
     }
     out.n_alternatives = std::min(n_distinct, int(out.alternatives.size()));
     for (int a = 0; a < out.n_alternatives; ++a) {
-      const Fit& f = fits[std::size_t(distinct[std::size_t(a)])];
+      Fit& f = fits[std::size_t(distinct[std::size_t(a)])];
+      covariance(f, fixed_force);
       out.alternatives[std::size_t(a)] = {f.x, f.y, std::exp(f.l), std::sqrt(f.chi2), f.sigma[0], f.sigma[1],
                                           std::exp(f.l) * f.sigma[2]};
     }

@@ -11,8 +11,6 @@
 
 namespace pvdf::mapping {
 
-struct HermiteBasis;
-
 /// Most electrodes the runtime handles with fixed-size storage (no allocation per locate).
 inline constexpr std::size_t max_electrodes = 8;
 
@@ -21,7 +19,9 @@ inline constexpr std::size_t max_electrodes = 8;
 /// are 4th-order finite differences (or the map's derivative datasets); across levels G is
 /// linear in ln F, and constant beyond the first/last level (the scaling law, exact for a pure
 /// membrane). A cell is usable when its four nodes are inside the mask with status ok at every
-/// level. Immutable after construction: evaluate() is thread-safe and allocation-free.
+/// level. Each usable cell stores its 16 polynomial coefficients per level and electrode
+/// (precomputed from the Hermite data), so an evaluation is a Horner scheme on one contiguous
+/// block. Immutable after construction: evaluate() is thread-safe and allocation-free.
 class MapInterpolant {
  public:
   /// Throws InputError if the map has more than max_electrodes electrodes.
@@ -54,15 +54,13 @@ class MapInterpolant {
   bool node_usable(std::size_t i, std::size_t j) const { return node_ok_[j * nx_ + i] != 0; }
 
  private:
-  bool evaluate_level(std::size_t f, std::size_t i, std::size_t j, double t, double s, double* g, double* gx,
-                      double* gy) const;
-  bool evaluate_level(std::size_t f, std::size_t i, std::size_t j, const HermiteBasis& basis, double* g, double* gx,
-                      double* gy) const;
   std::size_t nx_ = 0, ny_ = 0, nf_ = 0, ne_ = 0;
   double x0_ = 0, y0_ = 0, hx_ = 1, hy_ = 1;
   double p_ = 2.0 / 3.0;
   std::vector<double> log_f_;
   std::vector<double> data_;  ///< [f][j][i][k][4]: G, hx·Gx, hy·Gy, hx·hy·Gxy
+  /// [cell j*(nx−1)+i][f][m*4+n][k]: coefficient of t^m s^n of G in cell units (t, s ∈ [0, 1]).
+  std::vector<double> coef_;
   std::vector<std::uint8_t> node_ok_, cell_ok_;
 };
 

@@ -113,11 +113,14 @@ class Locator {
   struct Fit {
     double x = 0, y = 0, l = 0, chi2 = 0;
     std::array<double, 3> sigma{0, 0, 0};
+    std::array<double, 6> jtj{};  ///< weighted JᵀJ at the end point (upper triangle: 00 01 02 11 12 22)
     int iterations = 0;
     bool converged = false, blocked = false, ok = false, singular = false, duplicate = false;
   };
   Fit levenberg_marquardt(const double* q, const double* inv_sigma, double x, double y, double l, bool fixed_force,
                           double log_lo, double log_hi, const Fit* found, int n_found) const;
+  /// Fills fit.sigma / fit.singular from fit.jtj (only for the fits that are reported).
+  void covariance(Fit& fit, bool fixed_force) const;
   Location locate_impl(const double* charges_C, bool fixed_force, double log_known_force) const;
   bool distinct_minima(const double* q, const double* w, const Fit& a, const Fit& b, double separation,
                        double limit) const;
@@ -127,6 +130,20 @@ class Locator {
     std::array<double, capacity> score{};
     int n = 0;
   };
+  /// A start predicted by the linearized direction of one cell: position, ln F, residual².
+  struct Start {
+    double x = 0, y = 0, l = 0, score = 0;
+  };
+  struct StartList {
+    static constexpr int capacity = 8;
+    std::array<Start, capacity> start{};
+    int n = 0;
+  };
+  /// Coarse search: bins of the direction table → cells whose linearized direction reaches the
+  /// query inside (or next to) the cell → distinct starts, best first. Returns false when no
+  /// cell can produce the direction (then the old angular shortlist is used).
+  bool predicted_starts(const double* q_unit, double log_q_norm, double noise2, bool fixed_force, double log_force,
+                        double log_lo, double log_hi, StartList& starts) const;
   void coarse_candidates(const double* q_unit, double noise2, Shortlist& list) const;
   void scan_cells(const std::size_t* begin, const std::size_t* end, const double* q_unit, double noise2,
                   Shortlist& list) const;
@@ -150,6 +167,15 @@ class Locator {
   std::vector<double> cell_norm_;           ///< |G| at the centre (C/N^p), mean over levels
   std::vector<double> cell_radius2_;        ///< max 1 − (ĉ·n̂)² over corners and levels
   std::vector<std::array<double, 2>> cell_xy_;
+  /// Per cell and level (stride pred_stride_): unit direction d (ne), its tangential derivatives
+  /// J = ∂d/∂(t, s) in cell units (ne × 2, [k][2]), the least-squares inverse P = (JᵀJ)⁻¹Jᵀ
+  /// (2 × ne), ln |G| at the centre and its gradient ∂ln|G|/∂(t, s). With them a query direction q̂ predicts the offset
+  /// δ = P (q̂ − d) from the centre and the residual |q̂ − d − J δ| of the linear model.
+  std::vector<double> pred_;
+  std::size_t pred_stride_ = 0;
+  std::vector<double> level_log_;           ///< ln of the map's force levels
+  std::vector<double> cell_lin_err2_;       ///< max squared error of the linear direction model at the corners
+  std::vector<double> cell_log_norm_;       ///< ln of the mean |G| over levels (first guess of ln F)
   int bins_ = 0;
   double phi0_ = 0, phi1_ = 1, theta0_ = 0, theta1_ = 1;
   std::vector<std::size_t> bin_start_;      ///< CSR: bin b holds bin_cells_[bin_start_[b] .. bin_start_[b+1])
