@@ -113,7 +113,7 @@ RayAnalysis analyse_rays(const ChargeMap& map, const MapInterpolant& interpolant
     std::vector<double> exponents;
     s.min_r_squared = 1.0;
     for (const double beta_deg : betas) {
-      RayFit r;
+      RayChargeFit r;
       r.electrode = k;
       r.beta_deg = beta_deg;
       const double theta = a.draw_angle_rad + beta_deg * pi / 180.0;

@@ -7,7 +7,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <limits>
 #include <ostream>
 
@@ -147,33 +149,40 @@ void write_intersection_png(const Locator& locator, const ChargeMap& map, const 
   fig.save_png(path);
 }
 
+// Legacy VTK in BINARY form (big-endian IEEE): VTK's ASCII reader cannot parse "nan", and
+// the points without a value must stay NaN (ParaView then leaves them blank).
 void write_charge_vtk(const ChargeMap& map, const std::string& path) {
+  auto put_be64 = [](std::ostream& out, double v) {
+    std::uint64_t bits = 0;
+    std::memcpy(&bits, &v, sizeof bits);
+    char bytes[8];
+    for (int b = 0; b < 8; ++b) bytes[b] = char((bits >> (8 * (7 - b))) & 0xffu);
+    out.write(bytes, 8);
+  };
   write_file_atomically(path, [&](std::ostream& out) {
-    out.precision(9);
+    out.precision(17);
     const double hx = (map.x_m.back() - map.x_m.front()) / double(map.nx() - 1);
     const double hy = (map.y_m.back() - map.y_m.front()) / double(map.ny() - 1);
     out << "# vtk DataFile Version 3.0\n"
         << "pvdfkit charge map (" << map.model << "), charges in pC, coordinates in m\n"
-        << "ASCII\nDATASET STRUCTURED_POINTS\n"
+        << "BINARY\nDATASET STRUCTURED_POINTS\n"
         << "DIMENSIONS " << map.nx() << ' ' << map.ny() << " 1\n"
         << "ORIGIN " << map.x_m.front() << ' ' << map.y_m.front() << " 0\n"
         << "SPACING " << hx << ' ' << hy << " 1\n"
         << "POINT_DATA " << map.nx() * map.ny() << '\n';
     out << "SCALARS mask unsigned_char 1\nLOOKUP_TABLE default\n";
-    for (std::size_t p = 0; p < map.nx() * map.ny(); ++p) out << int(map.mask[p]) << '\n';
+    for (std::size_t p = 0; p < map.nx() * map.ny(); ++p) out.put(char(map.mask[p]));
+    out << '\n';
     for (std::size_t f = 0; f < map.nf(); ++f) {
       for (std::size_t k = 0; k < map.ne(); ++k) {
         out << "SCALARS charge_" << map.electrode_names[k] << "_pC_F" << f << " double 1\nLOOKUP_TABLE default\n";
         for (std::size_t j = 0; j < map.ny(); ++j) {
           for (std::size_t i = 0; i < map.nx(); ++i) {
             const std::size_t p = map.point(f, j, i);
-            if (map.status[p] == std::uint8_t(PointStatus::ok)) {
-              out << map.charge_C[p * map.ne() + k] * 1e12 << '\n';
-            } else {
-              out << "nan\n";
-            }
+            put_be64(out, map.status[p] == std::uint8_t(PointStatus::ok) ? map.charge_C[p * map.ne() + k] * 1e12 : nan_value);
           }
         }
+        out << '\n';
       }
     }
   });
@@ -221,7 +230,7 @@ void write_rays_png(const RayAnalysis& analysis, const ChargeMap& map, std::size
   std::size_t colour = 0;
   bool any = false;
   for (double beta : beta_deg) {
-    const RayFit* ray = nullptr;
+    const RayChargeFit* ray = nullptr;
     for (const auto& r : analysis.rays) {
       if (r.electrode == electrode && std::abs(r.beta_deg - beta) < 1e-6) ray = &r;
     }

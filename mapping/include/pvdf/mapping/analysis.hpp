@@ -31,7 +31,7 @@ struct RayOptions {
 
 /// One ray: the sampled charge of one electrode along a straight line from its centre, and the
 /// least-squares fit of ln Q = ln C1 + C2·ln(d / 1 mm) over the usable samples.
-struct RayFit {
+struct RayChargeFit {
   std::size_t electrode = 0;
   double beta_deg = 0;                ///< angle from the draw direction, counter-clockwise (deg)
   std::vector<double> d_m;            ///< distances of the samples inside the map (m)
@@ -58,7 +58,7 @@ struct RayElectrodeSummary {
 struct RayAnalysis {
   RayOptions options;
   double draw_angle_rad = 0;
-  std::vector<RayFit> rays;                      ///< electrode-major, then β ascending
+  std::vector<RayChargeFit> rays;                      ///< electrode-major, then β ascending
   std::vector<RayElectrodeSummary> electrodes;   ///< [ne]
 };
 

@@ -29,7 +29,7 @@ void write_isocharge_overlay_png(const Locator& locator, const ChargeMap& map, d
 void write_intersection_png(const Locator& locator, const ChargeMap& map, const double* charges_C,
                             const Location& result, const std::string& path);
 
-/// Legacy VTK STRUCTURED_POINTS of the map: one scalar field `charge_<name>_pC_F<i>` per
+/// Legacy VTK STRUCTURED_POINTS (binary, big-endian; opens in ParaView and vtkStructuredPointsReader) of the map: one scalar field `charge_<name>_pC_F<i>` per
 /// electrode and force level (NaN outside the mask / failed points), plus `mask`; coordinates in m.
 void write_charge_vtk(const ChargeMap& map, const std::string& path);
 
