@@ -369,6 +369,10 @@ void Generator::build_grid() {
   }
   grid_.nx = std::size_t(i1 - grid_.i0 + 1);
   grid_.ny = std::size_t(j1 - grid_.j0 + 1);
+  if (grid_.nx < 2 || grid_.ny < 2) {
+    throw InputError("--region/--spacing-m: the grid has " + std::to_string(grid_.nx) + " x " + std::to_string(grid_.ny) +
+                     " nodes (multiples of " + num(s) + " m); a map needs at least 2 along x and y: widen the region or reduce the spacing");
+  }
   if (grid_.nx * grid_.ny > 50'000'000) {
     throw InputError("--spacing-m " + num(s) + ": " + std::to_string(grid_.nx * grid_.ny) +
                      " grid nodes is too many; use a larger spacing or a --region");
@@ -828,6 +832,9 @@ ChargeMap Generator::run(MapReport& report) {
       if (!b.empty() && !complete) all.push_back(std::move(b));
     }
     run_blocks(split_for_rank(all));
+    int stopped_b = stop_ ? 1 : 0;
+    if (use_mpi_) MPI_Allreduce(MPI_IN_PLACE, &stopped_b, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+    stopped_anywhere = stopped_b != 0;
   }
   {
     std::lock_guard<std::mutex> lock(mutex_);

@@ -1,0 +1,294 @@
+// Map generation against its oracles: direct solves at the same positions (warm-started rows
+// = independent solves), mirror images = solves at the mirrored position, the force-scaling
+// shortcut used only where its check passes (pure membrane: passes; 100 N/m pretension:
+// fails), and kill-and-resume = an uninterrupted run. A small 10 mm film keeps solves cheap.
+#include "pvdf/core/error.hpp"
+#include "pvdf/fem/probe_sweep.hpp"
+#include "pvdf/fem/solver.hpp"
+#include "pvdf/mapping/generate.hpp"
+
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+
+using namespace pvdf::mapping;
+
+namespace {
+
+pvdf::Scene small_scene(double pretension_N_per_m = 0.0, double draw_angle_deg = 0.0) {
+  nlohmann::json j = nlohmann::json::parse(R"({
+    "membrane": {"shape": "circle", "radius_m": 0.010, "thickness_m": 25e-6, "pretension_N_per_m": 0.0},
+    "material": {"E1_Pa": 2.2e9, "E2_Pa": 1.8e9, "G12_Pa": 0.58e9, "nu12": 0.35,
+                 "draw_angle_deg": 0.0, "d31_C_per_N": 6.5e-12, "d32_C_per_N": 0.65e-12},
+    "electrodes": [
+      {"name": "A", "center_m": [0.0, 0.004], "size_m": [0.0015, 0.0015], "angle_deg": 0.0},
+      {"name": "B", "center_m": [-0.0035, -0.002], "size_m": [0.0015, 0.0015], "angle_deg": 0.0},
+      {"name": "C", "center_m": [0.0035, -0.002], "size_m": [0.0015, 0.0015], "angle_deg": 0.0}
+    ],
+    "probe": {"radius_m": 0.001},
+    "loads": [{"position_m": [0.0, 0.0], "force_N": 1.0}],
+    "model": {"kinematics": "auto", "tolerance": 0.02, "max_refinements": 0}
+  })");
+  j["membrane"]["pretension_N_per_m"] = pretension_N_per_m;
+  j["material"]["draw_angle_deg"] = draw_angle_deg;
+  return pvdf::parse_scene(j, "small-map-scene");
+}
+
+MapOptions cheap_options(std::array<double, 4> region, std::vector<double> forces = {1.0}) {
+  MapOptions o;
+  o.spacing_m = 0.002;
+  o.forces_N = std::move(forces);
+  o.region_m = region;
+  o.tolerance = 0.02;
+  o.threads = 1;
+  o.n_setup_checks = 0;
+  o.use_symmetry = false;
+  return o;
+}
+
+std::size_t index_of(const std::vector<double>& axis, double v) {
+  for (std::size_t i = 0; i < axis.size(); ++i) {
+    if (std::abs(axis[i] - v) < 1e-12) return i;
+  }
+  FAIL("grid has no node at " << v);
+  return 0;
+}
+
+// Largest charge difference relative to the largest charge magnitude of `reference`.
+double charge_difference(const ChargeMap& m, std::size_t f, std::size_t j, std::size_t i, const std::vector<double>& reference) {
+  double diff = 0, scale = 0;
+  for (std::size_t k = 0; k < m.ne(); ++k) {
+    diff = std::max(diff, std::abs(m.charge_C[m.charge_index(f, j, i, k)] - reference[k]));
+    scale = std::max(scale, std::abs(reference[k]));
+  }
+  return diff / scale;
+}
+
+std::string temp_dir() {
+  const auto d = std::filesystem::temp_directory_path() / "pvdf_test_generate";
+  std::filesystem::create_directories(d);
+  return d.string();
+}
+
+pvdf::fem::SweepOptions sweep_options_like(const pvdf::Scene& scene, const MapOptions& o) {
+  pvdf::fem::SweepOptions s;
+  s.solver = pvdf::fem::options_from_scene(scene);
+  s.solver.tolerance = o.tolerance;
+  s.rim_margin_m = 2 * scene.probe.radius_m;
+  s.forces_N = o.forces_N;
+  s.n_setup_checks = 0;
+  return s;
+}
+
+}  // namespace
+
+TEST_CASE("map generation: bad input is refused before any solve", "[mapping][generate]") {
+  const auto scene = small_scene();
+  MapOptions o = cheap_options({0, 0.002, 0, 0.002});
+  o.spacing_m = 0;
+  CHECK_THROWS_AS(generate_map(scene, o), pvdf::InputError);
+  o = cheap_options({0, 0.002, 0, 0.002}, {1.0, -0.5});
+  CHECK_THROWS_AS(generate_map(scene, o), pvdf::InputError);
+  o = cheap_options({0.002, 0.0, 0, 0.002});
+  CHECK_THROWS_AS(generate_map(scene, o), pvdf::InputError);
+  o = cheap_options({0.008, 0.010, 0, 0.002});  // no node inside the film minus the 2 mm margin
+  CHECK_THROWS_AS(generate_map(scene, o), pvdf::InputError);
+  o = cheap_options({0, 0.001, 0, 0.002});  // one column: no interpolation cell
+  CHECK_THROWS_AS(generate_map(scene, o), pvdf::InputError);
+}
+
+TEST_CASE("map points equal direct solves at the same positions", "[mapping][generate][slow]") {
+  const auto scene = small_scene();
+  const MapOptions o = cheap_options({0, 0.002, 0, 0.002});
+  MapReport report;
+  const ChargeMap m = generate_map(scene, o, &report);
+  REQUIRE(m.nx() == 2);
+  REQUIRE(m.ny() == 2);
+  CHECK(report.n_positions == 4);
+  CHECK(report.n_solved == 4);
+  CHECK(report.n_failed == 0);
+  for (auto s : m.status) CHECK(s == std::uint8_t(PointStatus::ok));
+
+  // (a) Warm-started rows give what an independent cold solve on the same sweep gives.
+  pvdf::fem::ProbeSweep sweep(scene, sweep_options_like(scene, o));
+  for (std::size_t j = 0; j < 2; ++j) {
+    for (std::size_t i = 0; i < 2; ++i) {
+      const auto s = sweep.solve(m.x_m[i], m.y_m[j], 1.0);
+      REQUIRE(pvdf::fem::usable(s.status));
+      CHECK(charge_difference(m, 0, j, i, s.charge_C) < 1e-6);
+      CHECK(m.deflection_at_load_m[m.point(0, j, i)] == Approx(s.deflection_at_load_m).epsilon(1e-6));
+    }
+  }
+  // (b) The full adaptive solver (`pvdfkit solve`) at two map positions, to the tolerance.
+  for (const auto& ij : {std::array<std::size_t, 2>{0, 0}, std::array<std::size_t, 2>{1, 1}}) {
+    pvdf::Scene direct = scene;
+    pvdf::Load load;
+    load.position_m = {m.x_m[ij[0]], m.y_m[ij[1]]};
+    load.force_N = 1.0;
+    direct.loads = {load};
+    pvdf::fem::Options options = pvdf::fem::options_from_scene(direct);
+    options.tolerance = o.tolerance;
+    const auto r = pvdf::fem::solve(direct, options);
+    REQUIRE(pvdf::fem::usable(r.summary.status));
+    std::vector<double> q;
+    for (const auto& e : r.electrodes) q.push_back(e.charge_C);
+    const double d = charge_difference(m, 0, ij[1], ij[0], q);
+    INFO("map vs direct solve at (" << load.position_m[0] << ", " << load.position_m[1] << "): " << d);
+    CHECK(d <= o.tolerance);
+    CHECK(m.deflection_at_load_m[m.point(0, ij[1], ij[0])] == Approx(r.deflection_at_load_m).epsilon(o.tolerance));
+  }
+}
+
+TEST_CASE("mirror symmetry: mirrored points equal solves at the mirrored positions", "[mapping][generate][slow]") {
+  const auto scene = small_scene();
+  MapOptions o = cheap_options({-0.002, 0.002, 0, 0.002});
+  o.use_symmetry = true;
+  MapReport report;
+  const ChargeMap m = generate_map(scene, o, &report);
+  CHECK(report.mirror_y);        // x -> -x maps B <-> C and A to itself
+  CHECK_FALSE(report.mirror_x);  // y -> -y does not map A onto an electrode
+  REQUIRE(report.n_positions == 6);
+  CHECK(report.n_mirrored == 2);  // x = -2 mm copied from x = +2 mm
+  CHECK(report.n_solved == 4);
+  const std::size_t i = index_of(m.x_m, -0.002);
+  pvdf::fem::ProbeSweep sweep(scene, sweep_options_like(scene, o));
+  for (std::size_t j = 0; j < m.ny(); ++j) {
+    CHECK(report.provenance[m.point(0, j, i)] == provenance::mirrored);
+    const auto s = sweep.solve(-0.002, m.y_m[j], 1.0);
+    REQUIRE(pvdf::fem::usable(s.status));
+    const double d = charge_difference(m, 0, j, i, s.charge_C);
+    INFO("mirrored vs solved at (-2, " << m.y_m[j] * 1e3 << ") mm: " << d);
+    CHECK(d <= o.tolerance);
+    CHECK(m.deflection_at_load_m[m.point(0, j, i)] == Approx(s.deflection_at_load_m).epsilon(o.tolerance));
+  }
+
+  // A draw direction at 30 deg breaks both mirrors: nothing is copied.
+  MapOptions one = cheap_options({0, 0.002, 0, 0.002});
+  one.use_symmetry = true;
+  MapReport skew;
+  generate_map(small_scene(0.0, 30.0), one, &skew);
+  CHECK_FALSE(skew.mirror_x);
+  CHECK_FALSE(skew.mirror_y);
+  CHECK(skew.n_mirrored == 0);
+}
+
+TEST_CASE("force scaling is used only where its check passes", "[mapping][generate][slow]") {
+  // 3 x 3 positions, check lattice every 2 steps: the 4 corners solve both levels, the other
+  // 5 are scaled from 1 N only if all corners of their cell passed.
+  MapOptions o = cheap_options({0, 0.004, 0, 0.004}, {0.25, 1.0});
+  o.scaling_check_stride = 2;
+
+  SECTION("pure membrane: Q ~ F^(2/3) holds, the shortcut is taken and is right") {
+    const auto scene = small_scene(0.0);
+    MapReport report;
+    const ChargeMap m = generate_map(scene, o, &report);
+    CHECK(report.n_scaling_checks == 4);
+    CHECK(report.n_scaling_checks_failed == 0);
+    CHECK(report.max_scaling_check_error <= 0.5 * o.tolerance);
+    CHECK(report.n_scaled == 5);
+    const std::size_t i = index_of(m.x_m, 0.002), j = index_of(m.y_m, 0.002);
+    REQUIRE(report.provenance[m.point(0, j, i)] == provenance::scaled);
+    CHECK(report.provenance[m.point(1, j, i)] == provenance::solved);
+    pvdf::fem::ProbeSweep sweep(scene, sweep_options_like(scene, o));
+    const auto s = sweep.solve(0.002, 0.002, 0.25);
+    REQUIRE(pvdf::fem::usable(s.status));
+    const double d = charge_difference(m, 0, j, i, s.charge_C);
+    INFO("scaled vs solved at 0.25 N: " << d);
+    CHECK(d <= o.tolerance);
+    // Every scaled point: recompute its cell corners' check from the map itself.
+    for (std::size_t jj = 0; jj < m.ny(); ++jj) {
+      for (std::size_t ii = 0; ii < m.nx(); ++ii) {
+        if (report.provenance[m.point(0, jj, ii)] != provenance::scaled) continue;
+        for (std::size_t cj : {std::size_t(0), std::size_t(2)}) {
+          for (std::size_t ci : {std::size_t(0), std::size_t(2)}) {
+            REQUIRE(report.provenance[m.point(0, cj, ci)] == provenance::solved);
+            std::vector<double> predicted;
+            for (std::size_t k = 0; k < m.ne(); ++k) {
+              predicted.push_back(m.charge_C[m.charge_index(1, cj, ci, k)] * std::pow(0.25, 2.0 / 3.0));
+            }
+            CHECK(charge_difference(m, 0, cj, ci, predicted) <= 0.5 * o.tolerance * 1.0001 + 1e-12);
+          }
+        }
+      }
+    }
+  }
+
+  SECTION("100 N/m pretension: the check fails, every level is solved") {
+    const auto scene = small_scene(100.0);
+    MapReport report;
+    const ChargeMap m = generate_map(scene, o, &report);
+    CHECK(report.n_scaling_checks == 4);
+    CHECK(report.n_scaling_checks_failed == 4);
+    CHECK(report.max_scaling_check_error > 0.5 * o.tolerance);
+    CHECK(report.n_scaled == 0);
+    CHECK(report.n_solved == 18);
+    for (std::size_t p = 0; p < m.status.size(); ++p) {
+      CHECK(report.provenance[p] == provenance::solved);
+      CHECK(m.status[p] == std::uint8_t(PointStatus::ok));
+    }
+  }
+}
+
+TEST_CASE("kill and resume gives the uninterrupted map; a foreign checkpoint is refused", "[mapping][generate][slow]") {
+  const auto scene = small_scene();
+  const std::string checkpoint = temp_dir() + "/resume.checkpoint";
+  remove_checkpoint_files(checkpoint);
+  MapOptions o = cheap_options({0, 0.002, 0, 0.004});  // 3 rows x 2 positions
+  o.checkpoint_path = checkpoint;
+  o.checkpoint_interval_s = 0;
+
+  MapOptions killed = o;
+  killed.stop_after_positions = 3;  // row 0 done, row 1 abandoned mid-way
+  MapReport r1;
+  const ChargeMap partial = generate_map(scene, killed, &r1);
+  CHECK(r1.stopped_early);
+  CHECK(r1.n_not_computed == 4);
+  REQUIRE(std::filesystem::exists(checkpoint));
+
+  // Different options: refused (exit 2 in the command).
+  MapOptions other = o;
+  other.forces_N = {2.0};
+  CHECK_THROWS_AS(generate_map(scene, other), pvdf::InputError);
+
+  MapReport r2;
+  const ChargeMap resumed = generate_map(scene, o, &r2);
+  CHECK_FALSE(r2.stopped_early);
+  CHECK(r2.n_resumed == 2);
+  CHECK(r2.n_solved == 4);
+
+  MapOptions fresh = cheap_options({0, 0.002, 0, 0.004});
+  const ChargeMap uninterrupted = generate_map(scene, fresh);
+  REQUIRE(resumed.status == uninterrupted.status);
+  double worst = 0;
+  bool bitwise = true;
+  for (std::size_t n = 0; n < resumed.charge_C.size(); ++n) {
+    const double a = resumed.charge_C[n], b = uninterrupted.charge_C[n];
+    bitwise = bitwise && a == b;
+    worst = std::max(worst, std::abs(a - b) / std::abs(b));
+  }
+  INFO("largest relative difference resumed vs uninterrupted: " << worst << (bitwise ? " (bitwise equal)" : ""));
+  CHECK(worst < 1e-9);
+  remove_checkpoint_files(checkpoint);
+  CHECK_FALSE(std::filesystem::exists(checkpoint));
+}
+
+TEST_CASE("generated map file round trip with /provenance", "[mapping][generate][slow]") {
+  const auto scene = small_scene();
+  MapOptions o = cheap_options({-0.002, 0.002, -0.002, 0.0});  // x = -2, 0, 2 mm; y = -2, 0 mm
+  o.use_symmetry = true;
+  MapReport report;
+  const ChargeMap m = generate_map(scene, o, &report);
+  const std::string path = temp_dir() + "/roundtrip.h5";
+  write_generated_map(path, m, report.provenance);
+  const ChargeMap back = read_map(path);
+  CHECK(back.charge_C == m.charge_C);
+  CHECK(back.status == m.status);
+  CHECK(back.model == report.model);
+  CHECK(back.tolerance == Approx(0.02));
+  CHECK(read_provenance(path) == report.provenance);
+  CHECK(std::count(report.provenance.begin(), report.provenance.end(), provenance::mirrored) == 2);
+}
