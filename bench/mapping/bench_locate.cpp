@@ -17,6 +17,7 @@
 #include <functional>
 #include <random>
 #include <string>
+#include <thread>
 #include <vector>
 
 using namespace pvdf::mapping;
@@ -148,6 +149,28 @@ int main(int argc, char** argv) {
   }
   std::printf("\n(median/p95: error of the reported answer nearest the truth; 'ambiguous': another solution fits "
               "within noise and is reported too)\n\n");
+
+  // Threads: one Locator shared by T threads, each locating its share of the presses (wall
+  // time, best of 3; on a loaded machine the other users' load shows here).
+  const unsigned n_threads = std::max(2u, std::thread::hardware_concurrency());
+  for (unsigned T : {1u, n_threads}) {
+    double best = 1e30;
+    for (int pass = 0; pass < 3; ++pass) {
+      const auto t0 = std::chrono::steady_clock::now();
+      std::vector<std::thread> workers;
+      std::vector<double> sink(T, 0.0);
+      for (unsigned w = 0; w < T; ++w) {
+        workers.emplace_back([&, w] {
+          for (std::size_t i = w; i < n; i += T) sink[w] += locator.locate(q[i].data()).x_m;
+        });
+      }
+      for (auto& t : workers) t.join();
+      best = std::min(best, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    }
+    std::printf("lookup, force unknown (6 starts, ambiguity), %u thread(s): %.0f locates/s wall clock\n", T,
+                double(n) / best);
+  }
+  std::printf("\n");
 
   // Position error against charge noise.
   const std::vector<double> noise_pC{0.01, 0.03, 0.1, 0.3, 1.0, 3.0};
