@@ -402,10 +402,13 @@ bool Locator::predicted_starts(const double* q_unit, double log_q_norm, double n
           if (res2 > 4.0 * cell_lin_err2_[c] + 9.0 * noise2 + 1e-14) continue;
           // Force at the predicted point: |q| = F^p |G(δ)| with ln |G| linear in δ.
           double l1 = l;
-          if (!fixed_force) {
-            const double* g0 = r0 + 5 * ne_;
-            const double* g1 = r1 + 5 * ne_;
-            const double log_g = (1 - w) * (g0[0] + g0[1] * dt + g0[2] * ds) + w * (g1[0] + g1[1] * dt + g1[2] * ds);
+          const double* g0 = r0 + 5 * ne_;
+          const double* g1 = r1 + 5 * ne_;
+          const double log_g = (1 - w) * (g0[0] + g0[1] * dt + g0[2] * ds) + w * (g1[0] + g1[1] * dt + g1[2] * ds);
+          if (fixed_force) {
+            // The known force must also explain the magnitude (else: an unknown-force twin).
+            if (std::abs(log_q_norm - p_exp * l - log_g) > 0.05 + 3.0 * std::sqrt(std::max(noise2, 0.0))) continue;
+          } else {
             l1 = (log_q_norm - log_g) / p_exp;
             // A solution needs a plausible force: far outside the range, this is not one.
             if (l1 < log_lo - 0.25 || l1 > log_hi + 0.25) continue;
