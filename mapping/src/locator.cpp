@@ -362,11 +362,8 @@ bool Locator::predicted_starts(const double* q_unit, double log_q_norm, double n
         const std::size_t b = std::size_t(tt * bins_ + pp);
         for (std::size_t m = bin_start_[b]; m < bin_start_[b + 1]; ++m) {
           const std::size_t c = bin_cells_[m];
-          // Cheap angular screen against the cell's mean direction and angular radius.
-          const double* dm = &cell_dir_[c * ne_];
-          double dot = 0;
-          for (std::size_t k = 0; k < ne_; ++k) dot += dm[k] * q_unit[k];
-          if (dot <= 0 || 1.0 - dot * dot > 4.0 * cell_radius2_[c] + 9.0 * noise2 + 1e-14) continue;
+          // (No angular pre-screen: with the force levels' spread in a cell's direction range it
+          // passed nearly every cell of the bin; the offset test below is about as cheap.)
           // Level: the known force, or the force that makes the cell's mean |G| match |q|.
           const double l = std::clamp(fixed_force ? log_force : (log_q_norm - cell_log_norm_[c]) / p_exp, log_lo, log_hi);
           std::size_t f0 = 0;
@@ -383,14 +380,16 @@ bool Locator::predicted_starts(const double* q_unit, double log_q_norm, double n
           const double* r0 = &pred_[(c * nf + f0) * pred_stride_];
           const double* r1 = nf > 1 ? r0 + pred_stride_ : r0;
           // Blend the two levels' linear models and predict the offset δ (cell units).
+          // (Most cells of a bin are rejected here, by the first offset component alone.)
           std::array<double, max_electrodes> e{};
           double dt = 0, ds = 0;
           for (std::size_t n = 0; n < ne_; ++n) {
             e[n] = q_unit[n] - ((1 - w) * r0[n] + w * r1[n]);
             dt += ((1 - w) * r0[3 * ne_ + n] + w * r1[3 * ne_ + n]) * e[n];
-            ds += ((1 - w) * r0[4 * ne_ + n] + w * r1[4 * ne_ + n]) * e[n];
           }
-          if (!(std::abs(dt) <= 1.0 && std::abs(ds) <= 1.0)) continue;  // predicted beyond the neighbours
+          if (!(std::abs(dt) <= 1.0)) continue;  // predicted beyond the neighbours
+          for (std::size_t n = 0; n < ne_; ++n) ds += ((1 - w) * r0[4 * ne_ + n] + w * r1[4 * ne_ + n]) * e[n];
+          if (!(std::abs(ds) <= 1.0)) continue;
           double res2 = 0;
           for (std::size_t n = 0; n < ne_; ++n) {
             const double jt = (1 - w) * r0[ne_ + 2 * n] + w * r1[ne_ + 2 * n];
