@@ -9,8 +9,10 @@
 # The "measured" charges are examples/data/seed001-measured-style.csv: SYNTHETIC (FEM solves
 # perturbed by the paper's own error estimates), because the paper's data exist only in figures.
 #
-# Run:    examples/mapping/seed001-reproduction.sh OUTDIR [--spacing-m S] [--map MAP.h5] [--pvdfkit EXE]
-#         (S = grid spacing of the map, default 0.002 m; --map reuses an existing map)
+# Run:    examples/mapping/seed001-reproduction.sh OUTDIR [--spacing-m S] [--region X0,X1,Y0,Y1]
+#                                                 [--map MAP.h5] [--pvdfkit EXE]
+#         (S = grid spacing of the map, default 0.002 m; the region, default ±26 mm around the
+#         centre, covers the electrode triangle and the 20 mm rays; --map reuses an existing map)
 # Expect: OUTDIR/map.h5, OUTDIR/isocharge/*.png + charges.vtk, OUTDIR/rays.{txt,csv,json},
 #         OUTDIR/fig7_rays_B.png, OUTDIR/fig12_B.png, OUTDIR/compare.{txt,csv,png}; decay exponents
 #         −C2 printed next to the paper's 0.58–1.0; a mean difference of a few % (the synthetic
@@ -19,15 +21,17 @@
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
-usage() { sed -n '2,20p' "$0" | sed 's/^# \{0,1\}//'; }
+usage() { sed -n '2,22p' "$0" | sed 's/^# \{0,1\}//'; }
 [[ $# -ge 1 && $1 != -* ]] || { usage; exit 2; }
 out=$1; shift
 spacing=0.002
+region=-0.026,0.026,-0.026,0.026
 map=""
 pvdfkit=${PVDFKIT:-$root/build/app/pvdfkit}
 while [[ $# -gt 0 ]]; do
   case $1 in
     --spacing-m) spacing=$2; shift 2 ;;
+    --region) region=$2; shift 2 ;;
     --map) map=$2; shift 2 ;;
     --pvdfkit) pvdfkit=$2; shift 2 ;;
     -h|--help) usage; exit 0 ;;
@@ -40,12 +44,12 @@ measured=$root/examples/data/seed001-measured-style.csv
 mkdir -p "$out"
 has_command() { "$pvdfkit" --help | grep -qE "^  $1 "; }
 
-echo "== 1. The charge map of the seed-001 scene (spacing $spacing m, 1 N)"
+echo "== 1. The charge map of the seed-001 scene (spacing $spacing m, region $region m, 1 N)"
 if [[ -n $map ]]; then
   echo "using the given map $map"
 elif has_command map; then
   map=$out/map.h5
-  "$pvdfkit" map "$scene" -o "$map" --spacing-m "$spacing" --forces-N 1
+  "$pvdfkit" map "$scene" -o "$map" --spacing-m "$spacing" --region "$region" --forces-N 1 --quiet
 else
   # Until `pvdfkit map` is built, the pipeline still runs on the analytic stand-in, loudly.
   echo "NOTE: this pvdfkit has no 'map' command: using the analytic stand-in map (NOT an FEM result)"
