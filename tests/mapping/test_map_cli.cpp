@@ -1,0 +1,167 @@
+// End-to-end `pvdfkit map`: the same map from 1 process and from `mpirun -np 2`, kill (test
+// hook) and resume = uninterrupted, a foreign checkpoint refused with exit 2, bad input exit 2,
+// the JSON summary. Small 10 mm film, 3 x 5 positions, so each run takes seconds.
+#include "../app/cli_runner.hpp"
+
+#include "pvdf/mapping/generate.hpp"
+#include "pvdf/mapping/map.hpp"
+
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+
+using pvdf::test::run_pvdfkit;
+using namespace pvdf::mapping;
+
+namespace {
+
+std::string dir() {
+  const auto d = std::filesystem::temp_directory_path() / "pvdf_test_map_cli";
+  std::filesystem::create_directories(d);
+  return d.string();
+}
+
+const std::string& scene_path() {
+  static const std::string path = [] {
+    const std::string p = dir() + "/scene.json";
+    std::ofstream(p) << R"({
+      "membrane": {"shape": "circle", "radius_m": 0.010, "thickness_m": 25e-6},
+      "material": {"E1_Pa": 2.2e9, "E2_Pa": 1.8e9, "G12_Pa": 0.58e9, "nu12": 0.35,
+                   "draw_angle_deg": 0.0, "d31_C_per_N": 6.5e-12, "d32_C_per_N": 0.65e-12},
+      "electrodes": [
+        {"name": "A", "center_m": [0.0, 0.004], "size_m": [0.0015, 0.0015]},
+        {"name": "B", "center_m": [-0.0035, -0.002], "size_m": [0.0015, 0.0015]},
+        {"name": "C", "center_m": [0.0035, -0.002], "size_m": [0.0015, 0.0015]}
+      ],
+      "probe": {"radius_m": 0.001},
+      "model": {"kinematics": "auto", "tolerance": 0.02, "max_refinements": 0}
+    })";
+    return p;
+  }();
+  return path;
+}
+
+// 5 x 3 grid (x = -4..4 mm, y = -2..2 mm); x -> -x symmetry leaves 3 x 3 to solve.
+std::string map_args(const std::string& out) {
+  return "map " + scene_path() + " -o " + out +
+         " --spacing-m 0.002 --region -0.004,0.004,-0.002,0.002 --setup-checks 0 --threads 1 --quiet";
+}
+
+void require_same_map(const ChargeMap& a, const ChargeMap& b) {
+  REQUIRE(a.x_m == b.x_m);
+  REQUIRE(a.y_m == b.y_m);
+  REQUIRE(a.status == b.status);
+  double worst = 0;
+  bool bitwise = true;
+  for (std::size_t n = 0; n < a.charge_C.size(); ++n) {
+    if (std::isnan(a.charge_C[n]) && std::isnan(b.charge_C[n])) continue;
+    bitwise = bitwise && a.charge_C[n] == b.charge_C[n];
+    worst = std::max(worst, std::abs(a.charge_C[n] - b.charge_C[n]) / std::abs(b.charge_C[n]));
+  }
+  INFO("largest relative charge difference " << worst << (bitwise ? " (bitwise equal)" : ""));
+  CHECK(worst < 1e-9);
+}
+
+// The uninterrupted one-process map, made once.
+const std::string& reference_map() {
+  static const std::string path = [] {
+    const std::string p = dir() + "/reference.h5";
+    const auto r = run_pvdfkit(map_args(p) + " --no-checkpoint --json");
+    INFO(r.err);
+    REQUIRE(r.exit_code == 0);
+    return p;
+  }();
+  return path;
+}
+
+}  // namespace
+
+TEST_CASE("pvdfkit map: JSON summary, provenance, symmetry", "[mapping][cli][map]") {
+  const std::string out = dir() + "/summary.h5";
+  const auto r = run_pvdfkit(map_args(out) + " --json --forces-N 1");
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  const auto j = nlohmann::json::parse(r.out);
+  CHECK(j["n_positions"] == 15);
+  CHECK(j["n_points"] == 15);
+  CHECK(j["n_solved"] == 9);
+  CHECK(j["n_mirrored"] == 6);
+  CHECK(j["n_failed"] == 0);
+  CHECK(j["mirror_y"] == true);
+  CHECK(j["ranks"] == 1);
+  CHECK(j["model"].get<std::string>() == "large-rotation");
+  const ChargeMap m = read_map(out);
+  CHECK(m.nx() == 5);
+  CHECK(m.ny() == 3);
+  CHECK(read_provenance(out).size() == 15);
+  CHECK_FALSE(std::filesystem::exists(out + ".checkpoint"));  // removed after the map was written
+  require_same_map(m, read_map(reference_map()));
+}
+
+TEST_CASE("pvdfkit map under mpirun -np 2 gives the one-process map", "[mapping][cli][map][mpi]") {
+  if (std::system("command -v mpirun >/dev/null 2>&1") != 0) {
+    WARN("mpirun not found (install openmpi-bin): the 2-rank test is skipped");
+    return;
+  }
+  const std::string out = dir() + "/two_ranks.h5";
+  std::filesystem::remove(out);
+  const std::string log = dir() + "/mpirun.log";
+  const std::string cmd = "OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 OMPI_MCA_rmaps_base_oversubscribe=1 "
+                          "mpirun -np 2 --oversubscribe '" + std::string(PVDFKIT_EXE) + "' " + map_args(out) +
+                          " --no-checkpoint --json > '" + log + "' 2>&1 < /dev/null";
+  const int status = std::system(cmd.c_str());
+  std::ifstream in(log);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  INFO(text);
+  REQUIRE(status == 0);
+  CHECK(text.find("\"ranks\": 2") != std::string::npos);
+  require_same_map(read_map(out), read_map(reference_map()));
+}
+
+TEST_CASE("pvdfkit map: killed and resumed equals uninterrupted; foreign checkpoint refused", "[mapping][cli][map]") {
+  const std::string out = dir() + "/resumed.h5";
+  const std::string checkpoint = dir() + "/resumed.ckpt";
+  std::filesystem::remove(out);
+  remove_checkpoint_files(checkpoint);
+  // Killed after 4 positions: row 1 (3 positions) is in the checkpoint, row 2 is lost.
+  auto r = run_pvdfkit(map_args(out) + " --checkpoint " + checkpoint + " --stop-after-positions 4");
+  INFO(r.err);
+  CHECK(r.exit_code == 3);
+  CHECK_FALSE(std::filesystem::exists(out));
+  REQUIRE(std::filesystem::exists(checkpoint));
+
+  // Another spacing: the checkpoint belongs to a different map -> exit 2 naming it.
+  r = run_pvdfkit("map " + scene_path() + " -o " + out +
+                  " --spacing-m 0.001 --region -0.004,0.004,-0.002,0.002 --setup-checks 0 --quiet --checkpoint " + checkpoint);
+  CHECK(r.exit_code == 2);
+  CHECK(r.err.find(checkpoint) != std::string::npos);
+  CHECK(r.err.find("different scene or map options") != std::string::npos);
+
+  r = run_pvdfkit(map_args(out) + " --checkpoint " + checkpoint + " --json");
+  INFO(r.err);
+  REQUIRE(r.exit_code == 0);
+  const auto j = nlohmann::json::parse(r.out);
+  CHECK(j["n_resumed"] == 3);
+  CHECK(j["n_solved"] == 6);
+  CHECK_FALSE(std::filesystem::exists(checkpoint));
+  require_same_map(read_map(out), read_map(reference_map()));
+}
+
+TEST_CASE("pvdfkit map: bad input exits 2 with one line", "[mapping][cli][map]") {
+  const std::string out = dir() + "/bad.h5";
+  for (const std::string& flags : {std::string("--spacing-m 0"), std::string("--forces-N 1,-2"),
+                                   std::string("--region 0.004,-0.004,0,0.002"), std::string("--region 1,2,3"),
+                                   std::string("--model spline")}) {
+    const auto r = run_pvdfkit("map " + scene_path() + " -o " + out + " " + flags + " --quiet");
+    INFO(flags << ": " << r.err);
+    CHECK(r.exit_code == 2);
+    CHECK(r.err.rfind("error: ", 0) == 0);
+    CHECK(pvdf::test::line_count(r.err) == 1);
+  }
+  CHECK_FALSE(std::filesystem::exists(out));
+  const auto r = run_pvdfkit("map " + dir() + "/missing.json -o " + out);
+  CHECK(r.exit_code == 2);
+}
