@@ -36,10 +36,17 @@ echo "== 1. Compare seed 001's triangle with three alternatives (force unknown, 
   "$SCENES/four-electrodes-45deg.json" "$SCENES/design-draw-45deg.json" \
   --noise-C 5e-14 --target-mm 0.5 $SOURCE --out-dir "$OUT/compare"
 
-echo "== 2. The same layouts with the force measured separately (a force transducer): reuse nothing, just a flag"
-"$PVDFKIT" design "$SCENES/seed001.json" "$SCENES/design-large-triangle.json" \
-  "$SCENES/four-electrodes-45deg.json" "$SCENES/design-draw-45deg.json" \
-  --force-known --noise-C 5e-14 --target-mm 0.5 $SOURCE --out-dir "$OUT/compare-force-known"
+echo "== 2. The same layouts with the force measured separately (a force transducer)"
+if [ "$MAPS" = synthetic ]; then
+  "$PVDFKIT" design "$SCENES/seed001.json" "$SCENES/design-large-triangle.json" \
+    "$SCENES/four-electrodes-45deg.json" "$SCENES/design-draw-45deg.json" \
+    --force-known --noise-C 5e-14 --target-mm 0.5 $SOURCE --out-dir "$OUT/compare-force-known"
+else  # reuse the FEM maps of step 1: no new solves
+  MAPSDIR="$OUT/compare/maps"
+  "$PVDFKIT" design --map "$MAPSDIR/seed001_6mm.h5" --map "$MAPSDIR/design-large-triangle_6mm.h5" \
+    --map "$MAPSDIR/four-electrodes-45deg_6mm.h5" --map "$MAPSDIR/design-draw-45deg_6mm.h5" \
+    --force-known --noise-C 5e-14 --target-mm 0.5 --out-dir "$OUT/compare-force-known"
+fi
 
 echo "== 3. Sweep the triangle's size (mean distance of the electrodes from their centroid) and mark the best"
 if [ "$MAPS" = synthetic ]; then
