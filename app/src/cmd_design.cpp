@@ -306,7 +306,7 @@ void write_map_figures(const std::vector<const Candidate*>& ranked, const Design
     }
     const std::string what = which == 0 ? "Position bound" : "Force bound";
     fig.suptitle(what + std::string(o.force_known ? " (force known), " : " (force unknown), ") + noise_text + ", " +
-                 fmt("%.3g N", o.force_N) + (which == 0 ? ", white line " + fmt("%.3g mm", target) : "") + kind);
+                 fmt("%.3g N", o.force_N) + (which == 0 ? ", white line " + fmt("%.3g mm", target) : ", white line 1 %") + kind);
     const std::string path = o.out_dir + (which == 0 ? "/design_position.png" : "/design_force.png");
     fig.save_png(path);
     written.push_back(path);
