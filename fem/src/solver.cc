@@ -1504,6 +1504,7 @@ void FilmSolver::fill_result(Result& result, Model model) {
 Result FilmSolver::run() {
   const auto t_start = Clock::now();
   Result result;
+  reuse_factorization_ = true;  // chord steps while Newton contracts >= 10x per step (see newton())
   setup_system();
   Summary& s = summary_;
   auto finish_failure = [&](const NewtonOutcome& o, const std::string& where) {

@@ -23,11 +23,12 @@ struct SweepOptions {
   /// Force levels the sweep will be asked for (N); the setup chooses model and mesh for the
   /// largest and checks them at the smallest. Empty = the scene's first load force (or 1 N).
   std::vector<double> forces_N;
-  /// Probe positions (centre, on the first electrode, far from it) at which the setup compares
-  /// the sweep mesh's charges with direct solves (0..3; 0 = no check, error not estimated).
-  int n_setup_checks = 3;
-  /// Sweep-mesh sizes (m) and grading; 0 = chosen from the tolerance (docs/fem.md §9). The
-  /// setup check still measures the error of whatever mesh results.
+  /// Probe positions (film centre, on the first electrode, beside the last one, far) at which the
+  /// setup compares the sweep mesh's charges with direct solves (0..4; 0 = no check, error not
+  /// estimated, status `converged` without an error estimate).
+  int n_setup_checks = 4;
+  /// Sweep-mesh sizes (m) and grading; 0 = chosen from the tolerance (docs/bench-fem.md,
+  /// "ProbeSweep"). The setup check still measures the error of whatever mesh results.
   double region_size_m = 0;
   double electrode_size_m = 0;
   double grading = 0;
