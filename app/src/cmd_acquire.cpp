@@ -39,7 +39,7 @@ using pvdf::hardware::SampleBlock;
 using pvdf::hardware::StreamInfo;
 
 volatile std::sig_atomic_t interrupted = 0;
-extern "C" void on_interrupt(int) { interrupted = 1; }
+extern "C" void on_acquire_interrupt(int) { interrupted = 1; }  // C linkage: the name is global, keep it unique
 
 struct AcquireOptions {
   std::string device = "sim:";
@@ -325,7 +325,7 @@ int run_acquire(const AcquireOptions& o) {
                  info.sample_rate_Hz, o.channels.empty() ? "all" : o.channels.c_str(), info.adc_bits, info.full_scale_V);
 
   interrupted = 0;
-  auto* previous = std::signal(SIGINT, on_interrupt);
+  auto* previous = std::signal(SIGINT, on_acquire_interrupt);
   bool stop_sent = false, by_user = false;
   std::uint64_t samples = 0;
   double first_t = -1, last_t = 0;
