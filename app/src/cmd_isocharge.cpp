@@ -22,6 +22,7 @@ struct IsochargeOptions {
   double force_N = 0;
   double zoom_m = 0;
   std::string charges;
+  std::string at;
 };
 
 int run_isocharge(const IsochargeOptions& o) {
@@ -31,10 +32,18 @@ int run_isocharge(const IsochargeOptions& o) {
   const ChargeMap map = read_map(o.map_path);
   std::vector<double> q;
   if (!o.charges.empty()) q = pvdf::parse_number_list(o.charges, "--charges-C", map.ne());
+  if (!o.charges.empty() && !o.at.empty()) throw pvdf::InputError("--charges-C and --at-m: give one charge triple, not both");
   LocatorOptions lo;
   lo.use_calibration = false;  // pictures of the map as computed
   lo.known_force_N = o.force_N;
   const Locator locator(map, lo);
+  if (!o.at.empty()) {  // the triple the map itself predicts for a press there
+    const auto xy = pvdf::parse_number_list(o.at, "--at-m", 2);
+    q.assign(map.ne(), 0.0);
+    if (!locator.predict(xy[0], xy[1], o.force_N > 0 ? o.force_N : 1.0, q.data())) {
+      throw pvdf::InputError("--at-m " + o.at + ": not inside the map's usable cells; choose a position inside the map");
+    }
+  }
   pvdf::make_directories(o.out_dir);
   double force = o.force_N;
   if (!(force > 0)) {  // the level nearest 1 N (seed 001 pressed with 1 N)
@@ -83,5 +92,6 @@ PVDF_COMMAND(62, [](CLI::App& root) {
   sub->add_option("--zoom-m", o->zoom_m, "Draw only [-W, W] x [-W, W] around the film centre (m), e.g. 0.015; default: all");
   sub->add_option("--charges-C", o->charges,
                   "A charge triple (C, map electrode order): also write intersection.png with its isocharge contours");
+  sub->add_option("--at-m", o->at, "X,Y (m): use the charges the map predicts for a press there as the triple");
   return pvdf::app::Subcommand{sub, [o] { return run_isocharge(*o); }};
 });

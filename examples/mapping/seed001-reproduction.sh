@@ -59,11 +59,11 @@ fi
 
 echo "== 2. Isocharge contours (seed 001 Figs 6, 8) and VTK image data"
 # Fig. 6's triple: A 40 pC, B 20 pC, C 15 pC at 1 N. If the map cannot place it (its charges
-# are of another size), the centre press of the measured-style file is drawn instead.
+# are of another size, docs/seed001-reproduction.md §1), the triple the map predicts for a press
+# at (4, 0) mm is drawn instead: its three contours must meet there.
 if ! "$pvdfkit" isocharge "$map" --out-dir "$out/isocharge" --zoom-m 0.02 --force-N 1 --charges-C 40e-12,20e-12,15e-12; then
-  echo "NOTE: the seed-001 Fig. 6 triple (40, 20, 15 pC) does not fit this map; drawing the measured-style centre press"
-  triple=$(awk -F, '!/^#/ && NR > 1 && $1 == 0 && $2 == 0 { print $4 "," $5 "," $6 }' "$measured")
-  "$pvdfkit" isocharge "$map" --out-dir "$out/isocharge" --zoom-m 0.02 --force-N 1 --charges-C "$triple"
+  echo "NOTE: the seed-001 Fig. 6 triple (40, 20, 15 pC) does not fit this map; drawing the map's triple at (4, 0) mm"
+  "$pvdfkit" isocharge "$map" --out-dir "$out/isocharge" --zoom-m 0.02 --force-N 1 --at-m 0.004,0
 fi
 
 echo "== 3. Charge against distance along rays every 10 degrees, Q = C1 d^C2 (seed 001 Fig. 7, eq. 6)"

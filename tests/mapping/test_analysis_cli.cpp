@@ -126,4 +126,9 @@ TEST_CASE("isocharge: PNGs per electrode and together, VTK, and the intersection
   }
   CHECK(r.out.find("contours meet at (3.000, 2.000) mm") != std::string::npos);
   CHECK(run_pvdfkit("isocharge " + map_path() + " --out-dir " + out + " --zoom-m -1").exit_code == 2);
+  // --at-m: the map's own triple at a grid node; its contours meet there.
+  const auto at = run_pvdfkit("isocharge " + map_path() + " --out-dir " + out + " --force-N 1 --at-m 0.004,-0.002");
+  CHECK(at.exit_code == 0);
+  CHECK(at.out.find("contours meet at (4.000, -2.000) mm") != std::string::npos);
+  CHECK(run_pvdfkit("isocharge " + map_path() + " --out-dir " + out + " --at-m 0.2,0").exit_code == 2);
 }
