@@ -11,12 +11,18 @@
 
 #include <nlohmann/json.hpp>
 
+#include <atomic>
+#include <csignal>
 #include <cstdio>
 #include <iostream>
 #include <memory>
 #include <optional>
 
 namespace {
+
+// Set by SIGINT/SIGTERM: the generation stops after the current solves and keeps its checkpoint.
+std::atomic<bool> interrupted{false};
+extern "C" void on_interrupt(int) { interrupted.store(true); }
 
 struct MapCommandOptions {
   std::string scene_path;
@@ -73,6 +79,9 @@ int run_map(const MapCommandOptions& o) {
   options.resume = !o.no_resume;
   options.distributed = mpi.has_value();
   options.stop_after_positions = o.stop_after;
+  options.cancel = &interrupted;
+  std::signal(SIGINT, on_interrupt);
+  std::signal(SIGTERM, on_interrupt);
   options.description = "pvdfkit map " + o.scene_path;
 
   std::unique_ptr<pvdf::Progress> bar;
@@ -88,9 +97,15 @@ int run_map(const MapCommandOptions& o) {
   if (rank != 0) return report.n_failed > 0 || report.stopped_early ? pvdf::exit_code::numerical : pvdf::exit_code::success;
 
   if (report.stopped_early) {
-    std::cerr << "error: stopped after " << o.stop_after << " positions (--stop-after-positions); the checkpoint "
-              << options.checkpoint_path << " holds the completed rows: rerun without the flag to resume\n";
-    return pvdf::exit_code::numerical;
+    const std::string why = interrupted ? std::string("interrupted") :
+                                          "stopped after " + std::to_string(o.stop_after) + " positions (--stop-after-positions)";
+    if (options.checkpoint_path.empty()) {
+      std::cerr << "error: " << why << "; no checkpoint (--no-checkpoint), no map written\n";
+    } else {
+      std::cerr << "error: " << why << "; the checkpoint " << options.checkpoint_path
+                << " holds the completed rows: rerun the same command to resume\n";
+    }
+    return interrupted ? 130 : pvdf::exit_code::numerical;
   }
   write_generated_map(o.output, map, report.provenance);
   remove_checkpoint_files(options.checkpoint_path);

@@ -37,6 +37,7 @@ double relative_charge_error(const std::vector<double>& q, const std::vector<dou
 }  // namespace
 
 int main(int argc, char** argv) {
+  std::setvbuf(stdout, nullptr, _IOLBF, 0);  // progress visible when redirected
   bool full = false;
   int threads = 0, sample = 10;
   for (int a = 1; a < argc; ++a) {

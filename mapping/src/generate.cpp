@@ -465,6 +465,7 @@ void Generator::solve_block(fem::ProbeSweep& sweep, const Block& block, std::vec
   records.clear();
   abandoned = false;
   for (const auto& task : block) {
+    if (o_.cancel && o_.cancel->load()) stop_ = true;
     if (stop_) {
       abandoned = true;
       return;

@@ -8,6 +8,7 @@
 #include "pvdf/mapping/map.hpp"
 
 #include <array>
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -61,6 +62,9 @@ struct MapOptions {
   /// Test hook: stop (as if killed) after this many solved positions in this process
   /// (0 = never); the map then holds not_computed points and the checkpoint is written.
   std::size_t stop_after_positions = 0;
+  /// When non-null and set (e.g. by a SIGINT/SIGTERM handler), workers stop after their
+  /// current solve like the stop hook: completed rows are checkpointed, the rest not_computed.
+  const std::atomic<bool>* cancel = nullptr;
   /// Called (from one thread) as positions complete: (done, total) over this process.
   std::function<void(std::size_t done, std::size_t total)> progress;
   /// 1-σ charge noise per channel written into the map (C); empty = 0.05 pC each.
