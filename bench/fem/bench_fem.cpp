@@ -181,7 +181,7 @@ std::vector<Row> run_pvdf_sweep(const pvdf::Scene& scene, bool isotropic, bool b
   auto t0 = std::chrono::steady_clock::now();
   pvdf::fem::ProbeSweep sweep(scene, so);
   rows[0].wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  rows[0].dofs = sweep.setup().n_dofs;
+  rows[0].dofs = sweep.setup().n_dofs;  // printed only with a load case (ok rows)
   rows[0].note = "setup only (no load case); estimated charge error " +
                  std::to_string(sweep.setup().estimated_relative_error);
   const double x = scene.loads.at(0).position_m[0], y = scene.loads.at(0).position_m[1];
@@ -329,8 +329,8 @@ int main(int argc, char** argv) {
               << fmt("%.3f", e_ref[0][0]) << ", " << fmt("%.3f", e_ref[0][1]) << ", " << fmt("%.3f", e_ref[0][2]) << "] N/m\n";
       } else {
         Row* best = nullptr;
-        for (std::size_t i = first; i < rows.size(); ++i)
-          if (rows[i].ok && rows[i].tool == "pvdfkit") best = &rows[i];
+        for (std::size_t i = first; i < rows.size(); ++i)  // the finest mesh level, not a sweep row
+          if (rows[i].ok && rows[i].tool == "pvdfkit" && rows[i].level.rfind("sweep", 0) != 0) best = &rows[i];
         Row* best_ccx = nullptr;
         for (std::size_t i = first; i < rows.size(); ++i)
           if (rows[i].ok && rows[i].tool != "pvdfkit") best_ccx = &rows[i];
@@ -373,7 +373,7 @@ int main(int argc, char** argv) {
           ratio = fmt("%.3g", r.wall_s / t) + (extrapolated ? " (ccx extrapolated)" : "");
       }
       md << "| " << r.tool << " | " << r.variant << " | " << r.level << " | " << (r.ok ? std::to_string(r.dofs) : "—")
-         << " | " << (r.ok ? fmt("%.2f", r.wall_s) : "—") << " | " << (r.ok ? fmt("%.5f", r.rim_N) : "—") << " | ";
+         << " | " << (r.ok || r.wall_s > 0 ? fmt("%.2f", r.wall_s) : "—") << " | " << (r.ok ? fmt("%.5f", r.rim_N) : "—") << " | ";
       if (r.reference)
         md << "(reference) | | | | — |\n";
       else
