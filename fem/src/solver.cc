@@ -275,6 +275,7 @@ class FilmSolver {
   Stiffness3 membrane_C_;  // h·Q̄
   Stiffness3 bending_D_;   // h³/12·Q̄
   double bending_penalty_scale_ = 0;
+  bool bending_rim_terms_ = true;  // false only in check_bending (interior terms of the operator)
   double draw_angle_ = 0;
   double radius_ = 0;  // characteristic film radius
   std::vector<LoadCase> loads_;
@@ -304,7 +305,6 @@ class FilmSolver {
   std::vector<std::ptrdiff_t> eigen_index_;
   Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::AMDOrdering<int>> ldlt_;
   bool ldlt_analyzed_ = false;
-  bool bending_rim_terms_ = true;  // false only in check_bending (interior terms of the operator)
 
   Model current_model_ = Model::linear;
   double last_energy_ = 0;  // potential Π of the last assemble() call (J)
