@@ -236,6 +236,7 @@ class FilmSolver {
   void make_grid_from(const pvdf::mesh::FilmMesh& mesh);
   Result run();
   JacobianCheck check_jacobian(double amplitude_m, int n_directions, unsigned int seed);
+  BendingCheck check_bending(const std::array<double, 3>& coefficients, int n_directions, unsigned int seed);
 
   // Probe sweeps (detail::SweepEngine): one fixed mesh built without any probe load, then one
   // probe moved over it; DOFs, sparsity and the symbolic factorization are kept.
@@ -262,6 +263,7 @@ class FilmSolver {
   void set_material_ids();
   void setup_system();
   void assemble_bending_matrix();
+  void add_bending_face_couplings(DynamicSparsityPattern& dsp) const;
   void assemble_load_vector();
   void assemble(const Vector<double>& u, Model model, double artificial_tension, bool want_matrix,
                 Vector<double>& residual);
@@ -289,6 +291,7 @@ class FilmSolver {
   Stiffness3 membrane_C_;  // h·Q̄
   Stiffness3 bending_D_;   // h³/12·Q̄
   double bending_penalty_scale_ = 0;
+  bool bending_rim_terms_ = true;  // false only in check_bending (interior terms of the operator)
   double draw_angle_ = 0;
   double radius_ = 0;  // characteristic film radius
   std::vector<LoadCase> loads_;
@@ -558,15 +561,10 @@ void FilmSolver::setup_system() {
   constraints_.close();
 
   DynamicSparsityPattern dsp(dof_handler_.n_dofs());
-  // Cells couple all components; faces (the C0IP bending terms) couple only w with w.
-  Table<2, DoFTools::Coupling> cell_coupling(3, 3), face_coupling(3, 3);
-  for (unsigned int i = 0; i < 3; ++i)
-    for (unsigned int j = 0; j < 3; ++j) {
-      cell_coupling(i, j) = DoFTools::always;
-      face_coupling(i, j) = (i == 2 && j == 2 && options_.include_bending) ? DoFTools::always : DoFTools::none;
-    }
-  DoFTools::make_flux_sparsity_pattern(dof_handler_, dsp, constraints_, true, cell_coupling, face_coupling,
-                                       numbers::invalid_subdomain_id);
+  // Cells couple all components; faces (the C0IP bending terms) couple only w with w. Both with
+  // the fill-in of the hanging-node condensation (see add_bending_face_couplings).
+  DoFTools::make_sparsity_pattern(dof_handler_, dsp, constraints_, true);
+  if (options_.include_bending) add_bending_face_couplings(dsp);
   sparsity_.copy_from(dsp);
   tangent_.reinit(sparsity_);
   {
@@ -612,6 +610,39 @@ void FilmSolver::setup_system() {
   assemble_bending_matrix();
   assemble_load_vector();
   summary_.setup_s += seconds_since(t0);
+}
+
+// Sparsity of the C0IP face terms: every face couples the w DOFs of the two cells beside it, and
+// the hanging-node condensation spreads a constrained DOF's row and column onto its masters. The
+// flux-pattern builder of deal.II 9.4 with coupling masks ignores the constraints on faces (it adds
+// only the raw cell-neighbour pairs), so in a Release build distribute_local_to_global silently
+// dropped the condensed face entries that fell outside the pattern (3488 of 41897 nonzero entries,
+// up to 3 % of the largest, on a probe mesh): the condensed bending matrix then disagreed with the
+// energy the line search uses and Newton stalled on every mesh with hanging nodes (docs/fem.md §8).
+// Here each interface visited by assemble_bending_matrix() adds its w DOFs through the
+// constraints, fill-in included.
+void FilmSolver::add_bending_face_couplings(DynamicSparsityPattern& dsp) const {
+  std::vector<types::global_dof_index> cell_dofs(fe_->n_dofs_per_cell()), neighbor_dofs(fe_->n_dofs_per_cell());
+  std::vector<types::global_dof_index> w_dofs;
+  for (const auto& cell : dof_handler_.active_cell_iterators()) {
+    cell->get_dof_indices(cell_dofs);
+    for (const unsigned int f : cell->face_indices()) {
+      if (cell->face(f)->at_boundary()) continue;  // rim faces: one cell, already in the cell pattern
+      const auto neighbor = cell->neighbor(f);
+      if (neighbor->has_children()) continue;  // visited from the finer side
+      if (!cell->neighbor_is_coarser(f) && neighbor->index() < cell->index()) continue;  // same level: once
+      neighbor->get_dof_indices(neighbor_dofs);
+      w_dofs.clear();
+      for (unsigned int i = 0; i < cell_dofs.size(); ++i) {
+        if (fe_->system_to_component_index(i).first != 2) continue;
+        w_dofs.push_back(cell_dofs[i]);
+        w_dofs.push_back(neighbor_dofs[i]);
+      }
+      std::sort(w_dofs.begin(), w_dofs.end());
+      w_dofs.erase(std::unique(w_dofs.begin(), w_dofs.end()), w_dofs.end());
+      constraints_.add_entries_local_to_global(w_dofs, dsp, true);
+    }
+  }
 }
 
 // Kirchhoff bending, C0 interior penalty (step-47 generalised to an anisotropic D):
@@ -692,6 +723,7 @@ void FilmSolver::assemble_bending_matrix() {
     for (const unsigned int f : cell->face_indices()) {
       const double h_cell = cell->extent_in_direction(GeometryInfo<dim>::unit_normal_direction[f]);
       if (cell->face(f)->at_boundary()) {
+        if (!bending_rim_terms_) continue;
         fiv.reinit(cell, f);
         face_terms(pp / h_cell);
         continue;
@@ -712,6 +744,60 @@ void FilmSolver::assemble_bending_matrix() {
       }
     }
   }
+}
+
+// Test hook (docs/fem.md §8). (1) Condensation: for a random admissible v (constrained entries
+// distributed from their masters), the condensed operator must give K_c v̄ = Cᵀ K v, the gradient
+// of the energy ½ vᵀKv the line search uses. (2) Energy: w = c0 x² + c1 xy + c2 y² is represented
+// exactly by Q2 on straight-sided cells and is C¹, so every jump term vanishes and ½ wᵀKw over the
+// interior terms (cells + interior faces, without the rim's one-sided terms) must equal
+// ½ κ·Dκ × area with the constant κ = [2c0, 2c2, 2c1], on any mesh, hanging nodes or not.
+BendingCheck FilmSolver::check_bending(const std::array<double, 3>& coefficients, int n_directions,
+                                       unsigned int seed) {
+  setup_system();
+  BendingCheck out;
+  out.n_dofs = dof_handler_.n_dofs();
+  out.n_hanging_node_constraints = hanging_constraints_.n_constraints();
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> uni(-1.0, 1.0);
+  Vector<double> v(dof_handler_.n_dofs()), condensed(v.size()), projected(v.size());
+  for (int d = 0; d < n_directions; ++d) {
+    for (auto& x : v) x = uni(rng);
+    constraints_.distribute(v);
+    bending_.vmult(condensed, v);
+    constraints_.set_zero(condensed);
+    bending_raw_.vmult(projected, v);
+    constraints_.condense(projected);
+    constraints_.set_zero(projected);
+    const double scale = projected.l2_norm();
+    condensed -= projected;
+    out.condensation_mismatch = std::max(out.condensation_mismatch, condensed.l2_norm() / scale);
+  }
+
+  bending_rim_terms_ = false;
+  assemble_bending_matrix();
+  bending_rim_terms_ = true;
+  std::map<types::global_dof_index, Point<dim>> support;
+  DoFTools::map_dofs_to_support_points(*mapping_, dof_handler_, support);
+  Vector<double> w(dof_handler_.n_dofs());
+  std::vector<types::global_dof_index> dofs(fe_->n_dofs_per_cell());
+  for (const auto& cell : dof_handler_.active_cell_iterators()) {
+    cell->get_dof_indices(dofs);
+    for (unsigned int i = 0; i < dofs.size(); ++i) {
+      if (fe_->system_to_component_index(i).first != 2) continue;
+      const Point<dim>& x = support.at(dofs[i]);
+      w(dofs[i]) = coefficients[0] * x[0] * x[0] + coefficients[1] * x[0] * x[1] + coefficients[2] * x[1] * x[1];
+    }
+  }
+  out.energy_J = 0.5 * bending_raw_.matrix_norm_square(w);
+  const QGauss<dim> quadrature(options_.fe_degree + 1);
+  FEValues<dim> fe_values(*mapping_, *fe_, quadrature, update_JxW_values);
+  for (const auto& cell : dof_handler_.active_cell_iterators()) {
+    fe_values.reinit(cell);
+    for (unsigned int q = 0; q < quadrature.size(); ++q) out.mesh_area_m2 += fe_values.JxW(q);
+  }
+  assemble_bending_matrix();  // back to the operator with the rim terms
+  return out;
 }
 
 // External force: probes are uniform pressure F/(πc²) over their disk, integrated on cells cut
@@ -1959,6 +2045,13 @@ JacobianCheck check_jacobian(const pvdf::Scene& scene, const Options& options, d
   FilmSolver solver(scene, options);
   solver.make_grid();
   return solver.check_jacobian(amplitude_m, n_directions, seed);
+}
+
+BendingCheck check_bending(const pvdf::Scene& scene, const Options& options, const std::array<double, 3>& coefficients,
+                           int n_directions, unsigned int seed) {
+  FilmSolver solver(scene, options);
+  solver.make_grid();
+  return solver.check_bending(coefficients, n_directions, seed);
 }
 
 }  // namespace pvdf::fem

@@ -166,4 +166,21 @@ struct JacobianCheck {
 JacobianCheck check_jacobian(const pvdf::Scene& scene, const Options& options, double amplitude_m,
                              int n_directions = 3, unsigned int seed = 1);
 
+/// Solver internals exposed for tests: the C0 interior-penalty bending operator K on the scene's
+/// initial mesh (docs/fem.md §8).
+struct BendingCheck {
+  /// ½ wᵀKw for w = c0 x² + c1 xy + c2 y² interpolated (x, y in m), K restricted to its interior
+  /// terms (cells and interior faces; the rim's one-sided terms left out) (J).
+  double energy_J = 0;
+  double mesh_area_m2 = 0;              ///< Σ JxW over the mesh with the solver's mapping
+  /// max over random admissible v of |K_c v − Cᵀ K v| / |Cᵀ K v|: the condensed operator (Newton
+  /// tangent, residual) against the gradient of the unconstrained energy (line search).
+  double condensation_mismatch = 0;
+  std::size_t n_hanging_node_constraints = 0;
+  std::size_t n_dofs = 0;
+};
+/// Builds the scene's initial mesh and checks the bending operator (see BendingCheck).
+BendingCheck check_bending(const pvdf::Scene& scene, const Options& options, const std::array<double, 3>& coefficients,
+                           int n_directions = 3, unsigned int seed = 1);
+
 }  // namespace pvdf::fem
