@@ -109,6 +109,9 @@ int main(int argc, char** argv) {
     if (!cold_q[n].empty() && !warm_q[n].empty()) warm_vs_cold = std::max(warm_vs_cold, relative_charge_error(warm_q[n], cold_q[n]));
   }
 
+  std::printf("measured: cold %.3f s/position, warm rows %.3f s/position (%zu positions), warm vs cold %.2e\n", cold_s,
+              warm_s, row.size(), warm_vs_cold);
+
   // Accuracy: a refined sweep (tolerance / 8) at three sample points.
   pvdf::fem::SweepOptions ref_options = so;
   ref_options.solver.tolerance = tolerance / 8;
@@ -121,6 +124,7 @@ int main(int argc, char** argv) {
     if (pvdf::fem::usable(r.status) && !warm_q[n].empty()) accuracy = std::max(accuracy, relative_charge_error(warm_q[n], r.charge_C));
   }
   const double reference_s = seconds_since(t0);
+  std::printf("measured: charge error vs refined sweep %.2e (%.1f s)\n", accuracy, reference_s);
 
   // Force scaling check at two points (0.5 N vs 1 N): what a multi-level map would gain.
   double scaling_error = 0;
