@@ -11,24 +11,36 @@
 namespace pvdf::mapping {
 
 std::vector<Measurement> read_measurements(const std::string& path, const std::vector<std::string>& names) {
-  const CsvTable table = read_csv(path, BadRowPolicy::refuse);
-  const std::size_t cx = table.column("x_m"), cy = table.column("y_m"), cf = table.column("force_N");
-  std::vector<std::size_t> cq;
-  for (const auto& n : names) cq.push_back(table.column("charge_" + n + "_C"));
-  std::vector<Measurement> out;
-  for (std::size_t i = 0; i < table.rows.size(); ++i) {
-    const auto& row = table.rows[i];
-    Measurement m;
-    m.x_m = row[cx];
-    m.y_m = row[cy];
-    m.force_N = row[cf];
-    m.line = table.line_numbers[i];
-    if (!(m.force_N > 0)) {
-      throw InputError(path + ":" + std::to_string(m.line) + ": force_N = " + std::to_string(m.force_N) +
-                       " must be > 0; fix or remove the row");
+  const CsvTable t = read_csv(path, BadRowPolicy::refuse);
+  auto need = [&](const std::string& column) {
+    if (!t.has_column(column)) {
+      std::string have;
+      for (const auto& c : t.columns) have += (have.empty() ? "" : ",") + c;
+      std::string want = "x_m,y_m,force_N";
+      for (const auto& n : names) want += ",charge_" + n + "_C";
+      throw InputError(path + ": missing column '" + column + "' (the header has " + have + "); the map's electrodes need " +
+                       want);
     }
-    for (std::size_t c : cq) m.charge_C.push_back(row[c]);
-    out.push_back(std::move(m));
+    return t.column(column);
+  };
+  const std::size_t cx = need("x_m"), cy = need("y_m"), cf = need("force_N");
+  std::vector<std::size_t> cq;
+  for (const auto& n : names) cq.push_back(need("charge_" + n + "_C"));
+  if (t.rows.empty()) throw InputError(path + ": no data rows after the header; add one row per measured press");
+  std::vector<Measurement> out;
+  for (std::size_t i = 0; i < t.rows.size(); ++i) {
+    const auto& row = t.rows[i];
+    Measurement p;
+    p.x_m = row[cx];
+    p.y_m = row[cy];
+    p.force_N = row[cf];
+    p.line = t.line_numbers[i];
+    if (!(p.force_N > 0)) {
+      throw InputError(path + ":" + std::to_string(p.line) + ": force_N = " + std::to_string(p.force_N) +
+                       " must be > 0 (the press force in newtons); fix or remove the row");
+    }
+    for (std::size_t c : cq) p.charge_C.push_back(row[c]);
+    out.push_back(std::move(p));
   }
   return out;
 }

@@ -2,6 +2,7 @@
 // electrode with the power-law fit of eq. 6 (Fig. 7), and FEM map against measured charges (Fig. 12).
 #pragma once
 
+#include "pvdf/mapping/calibration.hpp"
 #include "pvdf/mapping/interpolant.hpp"
 #include "pvdf/mapping/map.hpp"
 
@@ -84,15 +85,13 @@ inline constexpr double paper_exponent_max = 1.0;
 // FEM map against measured charges (seed 001 Fig. 12, "an average difference of 18 %")
 
 /// One measured press: position, force and the charge of every electrode of the map (map order).
-struct MeasuredPress {
-  double x_m = 0, y_m = 0, force_N = 0;
-  std::vector<double> charge_C;       ///< [ne]
-  std::size_t line = 0;               ///< 1-based line in the CSV file
-};
+/// The same record (and CSV format) as the calibration's presses.
+using MeasuredPress = Measurement;
 
 /// Reads a measured-charge CSV: columns x_m, y_m, force_N and charge_<name>_C for every name
 /// in `electrode_names` (any order, other columns ignored; '#' comments). Throws InputError
 /// naming the file and the missing column, or the line of a malformed row or a force ≤ 0.
+/// (Same reader as read_measurements in calibration.hpp.)
 std::vector<MeasuredPress> read_measured_csv(const std::string& path, const std::vector<std::string>& electrode_names);
 
 /// A measured press next to the map's prediction.
