@@ -3,6 +3,7 @@
 // synthetic seed-001 map whose truth is the analytic model; then position error against charge
 // noise (optionally plotted: --plot PNG).
 //   bench_locate [--presses N] [--plot docs/img/lookup_error_vs_noise.png]
+//   bench_locate --profile   (only the 6-start lookup, 50 passes: for perf record)
 #include "pvdf/core/plot.hpp"
 #include "pvdf/mapping/locator.hpp"
 #include "pvdf/mapping/synthetic.hpp"
@@ -95,9 +96,11 @@ Row run(const std::string& name, const std::vector<Press>& presses, const std::v
 int main(int argc, char** argv) {
   std::size_t n = 2000;
   std::string plot_path;
+  bool profile = false;  // --profile: only the first lookup row, repeated (for perf record)
   for (int a = 1; a < argc; ++a) {
     if (!std::strcmp(argv[a], "--presses") && a + 1 < argc) n = std::size_t(std::atol(argv[++a]));
     if (!std::strcmp(argv[a], "--plot") && a + 1 < argc) plot_path = argv[++a];
+    if (!std::strcmp(argv[a], "--profile")) profile = true;
   }
   SyntheticModel model;  // seed-001 triangle, d31/d32 direction factor, anisotropy, core, rim
   model.force_skew = 0.05;
@@ -125,6 +128,14 @@ int main(int argc, char** argv) {
   std::vector<std::array<double, 3>> q(n);
   for (std::size_t i = 0; i < n; ++i) {
     for (std::size_t k = 0; k < 3; ++k) q[i][k] = model.charge_C(presses[i].x, presses[i].y, presses[i].F, k);
+  }
+  if (profile) {
+    double sink = 0;
+    for (int pass = 0; pass < 50; ++pass) {
+      for (std::size_t i = 0; i < n; ++i) sink += locator.locate(q[i].data()).x_m;
+    }
+    std::printf("profile: 50 x %zu locates (checksum %g)\n", n, sink);
+    return 0;
   }
   std::printf("pvdfkit lookup benchmark: synthetic seed-001 map, %zu x %zu nodes (%.1f mm), %zu force levels, "
               "%zu presses within 15 mm, 0.5-2 N, noise-free; map + tables built in %.2f s; locates/s = presses per "

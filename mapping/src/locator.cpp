@@ -30,22 +30,31 @@ namespace {
 
 using Vec = std::array<double, max_electrodes>;
 
-/// (φ, θ) of a unit vector's first three components: the coarse table's key.
+/// The coarse table's key of a direction: two pseudo-angles of its first three components,
+/// no atan2 or sqrt. φ is the "diamond angle" of (n0, n1) (monotone in atan2(n1, n0), in
+/// (−2, 2], cut at n0 < 0, n1 = 0 like atan2), θ = n2 / (|n0| + |n1| + |n2|) (monotone in
+/// the elevation for a fixed φ). Any continuous key serves: the table is built with this one.
 inline void direction_key(const double* n, double& phi, double& theta) {
-  phi = std::atan2(n[1], n[0]);
-  theta = std::atan2(n[2], std::sqrt(n[0] * n[0] + n[1] * n[1]));  // (std::hypot is slow)
+  const double a0 = std::abs(n[0]), a1 = std::abs(n[1]);
+  const double l1 = a0 + a1 + 1e-300;
+  const double r = n[1] / l1;
+  phi = n[0] >= 0 ? r : (n[1] >= 0 ? 2.0 - r : -2.0 - r);
+  theta = n[2] / (l1 + std::abs(n[2]));
 }
 
-/// Solves the symmetric positive definite 3×3 system A x = b by Cholesky (closed form, no
-/// pivoting: the damped normal equations are SPD). Returns a non-finite x if A is not SPD.
+/// Solves the symmetric positive definite 3×3 system A x = b by a closed-form LDLᵀ (no
+/// pivoting, no square roots: the damped normal equations are SPD; three reciprocals instead
+/// of Cholesky's three square roots and nine divisions, which sat on the critical path).
+/// Returns a non-finite x if A is not SPD (a pivot ≤ 0 or NaN).
 inline Eigen::Vector3d solve_spd3(const Eigen::Matrix3d& A, const Eigen::Vector3d& b) {
-  const double l00 = std::sqrt(A(0, 0));
-  const double l10 = A(1, 0) / l00, l20 = A(2, 0) / l00;
-  const double l11 = std::sqrt(A(1, 1) - l10 * l10);
-  const double l21 = (A(2, 1) - l20 * l10) / l11;
-  const double l22 = std::sqrt(A(2, 2) - l20 * l20 - l21 * l21);
-  const double y0 = b[0] / l00, y1 = (b[1] - l10 * y0) / l11, y2 = (b[2] - l20 * y0 - l21 * y1) / l22;
-  const double x2 = y2 / l22, x1 = (y1 - l21 * x2) / l11, x0 = (y0 - l10 * x1 - l20 * x2) / l00;
+  const double d0 = A(0, 0), i0 = 1.0 / d0;
+  const double l10 = A(1, 0) * i0, l20 = A(2, 0) * i0;
+  const double d1 = A(1, 1) - l10 * A(1, 0), i1 = 1.0 / d1;
+  const double l21 = (A(2, 1) - l20 * A(1, 0)) * i1;
+  const double d2 = A(2, 2) - l20 * A(2, 0) - l21 * l21 * d1, i2 = 1.0 / d2;
+  if (!(d0 > 0 && d1 > 0 && d2 > 0)) return Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  const double y0 = b[0], y1 = b[1] - l10 * y0, y2 = b[2] - l20 * y0 - l21 * y1;
+  const double x2 = y2 * i2, x1 = y1 * i1 - l21 * x2, x0 = y0 * i0 - l10 * x1 - l20 * x2;
   return Eigen::Vector3d(x0, x1, x2);
 }
 
@@ -171,7 +180,7 @@ Locator::Locator(const ChargeMap& map, const LocatorOptions& options)
       cell_xy_.push_back({xc, yc});
       // Grow the box by a quarter of its size each way: the direction inside a cell can
       // bulge slightly beyond the corners' range.
-      const double gp = 0.25 * (box[1] - box[0]), gt = 0.25 * (box[3] - box[2]);
+      const double gp = 0.1 * (box[1] - box[0]), gt = 0.1 * (box[3] - box[2]);
       box = {box[0] - gp, box[1] + gp, box[2] - gt, box[3] + gt};
       boxes.push_back(box);
       phi_lo = std::min(phi_lo, box[0]);
@@ -250,7 +259,7 @@ Locator::Locator(const ChargeMap& map, const LocatorOptions& options)
   }
   if (cells_.empty()) throw InputError("map has no usable cell (four ok nodes with non-zero charge); nothing can be located");
   bins_ = options.direction_bins > 0 ? options.direction_bins
-                                     : std::clamp(int(std::sqrt(double(cells_.size()))), 16, 256);
+                                     : std::clamp(int(3.0 * std::sqrt(double(cells_.size()))), 16, 512);
   const double pad_p = 1e-9 + 1e-6 * (phi_hi - phi_lo), pad_t = 1e-9 + 1e-6 * (th_hi - th_lo);
   phi0_ = phi_lo - pad_p;
   phi1_ = phi_hi + pad_p;
@@ -592,15 +601,37 @@ void Locator::covariance(Fit& fit, bool fixed_force) const {
     S(2, 2) = 1.0;
     d[2] = 0.0;
   }
-  Eigen::FullPivLU<Eigen::Matrix3d> lu(S);
-  lu.setThreshold(1e-12);
+  // S is symmetric with unit diagonal, so a fully pivoted LU of it is a diagonally pivoted
+  // LDLᵀ (the largest remaining element sits on the diagonal): its pivots, in closed form, say
+  // whether S is invertible (every pivot above 1e-12 of the first, as the LU threshold had it),
+  // and only the diagonal of S⁻¹ (cofactor / determinant) is needed.
   fit.singular = false;
-  if (lu.isInvertible()) {
-    const Eigen::Matrix3d C = d.asDiagonal() * lu.inverse() * d.asDiagonal();
-    for (int k = 0; k < 3; ++k) fit.sigma[std::size_t(k)] = C(k, k) > 0 ? std::sqrt(C(k, k)) : 0.0;
+  {
+    std::array<int, 3> order{0, 1, 2};
+    auto at = [&](int r, int c) { return S(order[std::size_t(r)], order[std::size_t(c)]); };
+    int p0 = 0;
+    for (int k = 1; k < 3; ++k) {
+      if (std::abs(S(k, k)) > std::abs(S(p0, p0))) p0 = k;
+    }
+    std::swap(order[0], order[std::size_t(p0)]);
+    const double d0 = at(0, 0);
+    double s11 = at(1, 1) - at(1, 0) * at(0, 1) / d0, s22 = at(2, 2) - at(2, 0) * at(0, 2) / d0;
+    const double s12 = at(1, 2) - at(1, 0) * at(0, 2) / d0;
+    if (std::abs(s22) > std::abs(s11)) std::swap(s11, s22);
+    const double d1 = s11, d2 = s22 - s12 * s12 / s11;
+    const double tol = 1e-12 * std::abs(d0);
+    if (!(std::abs(d0) > tol && std::abs(d1) > tol && std::abs(d2) > tol)) fit.singular = true;
+  }
+  if (!fit.singular) {
+    const double det = S(0, 0) * (S(1, 1) * S(2, 2) - S(1, 2) * S(2, 1)) - S(0, 1) * (S(1, 0) * S(2, 2) - S(1, 2) * S(2, 0)) +
+                       S(0, 2) * (S(1, 0) * S(2, 1) - S(1, 1) * S(2, 0));
+    const std::array<double, 3> cof{S(1, 1) * S(2, 2) - S(1, 2) * S(2, 1), S(0, 0) * S(2, 2) - S(0, 2) * S(2, 0),
+                                    S(0, 0) * S(1, 1) - S(0, 1) * S(1, 0)};
+    for (int k = 0; k < 3; ++k) {
+      const double c = d[k] * d[k] * cof[std::size_t(k)] / det;
+      fit.sigma[std::size_t(k)] = c > 0 ? std::sqrt(c) : 0.0;
+    }
     fit.singular = !(std::isfinite(fit.sigma[0]) && std::isfinite(fit.sigma[1]) && std::isfinite(fit.sigma[2]));
-  } else {
-    fit.singular = true;
   }
   if (fit.singular) fit.sigma = {0, 0, 0};
   if (fixed_force) fit.sigma[2] = 0;
