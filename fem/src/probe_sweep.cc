@@ -230,15 +230,7 @@ ProbeSweep::~ProbeSweep() = default;
 const SweepSetup& ProbeSweep::setup() const { return impl_->setup; }
 
 SweepTiming ProbeSweep::timing() const {
-  const detail::EngineTiming e = impl_->engine->timing();
-  SweepTiming t;
-  t.assembly_s = e.assembly_s;
-  t.linear_solve_s = e.linear_solve_s;
-  t.load_vector_s = e.load_vector_s;
-  t.outputs_s = e.outputs_s;
-  t.newton_iterations = e.newton_iterations;
-  t.factorizations = e.factorizations;
-  return t;
+  return impl_->engine->timing();
 }
 
 ProbeSolution ProbeSweep::solve(double x_m, double y_m, double force_N, const SweepState* warm_start,

@@ -3,6 +3,7 @@
 #pragma once
 
 #include "pvdf/core/scene.hpp"
+#include "pvdf/fem/probe_sweep.hpp"
 #include "pvdf/fem/solver.hpp"
 
 #include <array>
@@ -33,15 +34,8 @@ struct EngineSolution {
   std::vector<std::array<double, 3>> mean_membrane_force_material_N_per_m;
 };
 
-/// Accumulated cost of the probe solves (s), for benchmarks.
-struct EngineTiming {
-  double assembly_s = 0;
-  double linear_solve_s = 0;
-  double load_vector_s = 0;
-  double outputs_s = 0;
-  int newton_iterations = 0;
-  int factorizations = 0;
-};
+/// Accumulated cost of the probe solves: the public pvdf::fem::SweepTiming.
+using EngineTiming = SweepTiming;
 
 class SweepEngine {
  public:
