@@ -244,6 +244,15 @@ DesignSummary evaluate_design(const ChargeMap& map, const DesignOptions& o) {
     lo.use_calibration = false;
     lo.min_force_N = o.min_force_N;
     lo.max_force_N = o.max_force_N;
+    // The deployed lookup calls a second solution "within noise" when its χ² is below the
+    // automatic limit L = ν + 5√(2ν) + 4. Noise moves an alternative's χ² by about ±2√χ²,
+    // so an alternative just above L (noise-free) still fits in a few percent of real presses:
+    // judged here against L + 4√L (two of those standard deviations), a conservative margin.
+    {
+      const double nu = std::max(double(ne) - (o.force_known ? 2.0 : 3.0), 0.0);
+      const double limit = nu + 5.0 * std::sqrt(2.0 * std::max(nu, 1.0)) + 4.0;
+      lo.chi2_limit = limit + 4.0 * std::sqrt(limit);
+    }
     const Locator locator(map, lo);
     const double min_distance = o.ambiguity_min_distance_m > 0 ? o.ambiguity_min_distance_m : o.target_m;
     for (std::size_t p = 0; p < np; ++p) {

@@ -195,6 +195,10 @@ Locator::Locator(const ChargeMap& map, const LocatorOptions& options)
   pred_stride_ = 5 * ne_ + 3;
   for (double F : map.forces_N) level_log_.push_back(std::log(F));
   pred_.assign(cells_.size() * nf * pred_stride_, 0.0);
+  quad_stride_ = 3 * ne_ + 3;
+  quad_.assign(cells_.size() * nf * quad_stride_, 0.0);
+  cell_slot_.assign((nx - 1) * (ny - 1), -1);
+  for (std::size_t c = 0; c < cells_.size(); ++c) cell_slot_[cells_[c]] = std::int32_t(c);
   cell_lin_err2_.assign(cells_.size(), 0.0);
   cell_log_norm_.assign(cells_.size(), 0.0);
   for (std::size_t c = 0; c < cells_.size(); ++c) {
@@ -239,6 +243,36 @@ Locator::Locator(const ChargeMap& map, const LocatorOptions& options)
         for (std::size_t k = 0; k < ne_; ++k) proj += d[k] * dq[k][std::size_t(a)];
         rec[5 * ne_ + 1 + std::size_t(a)] = h * proj / norm;
       }
+      // Second derivatives of d and ln |G| in cell units, by central differences of the cell's
+      // own patch at ±a (inside the cell): the quadratic model that refines a start (§1.2).
+      {
+        double* H = &quad_[(c * nf + f) * quad_stride_];
+        const double a = 0.45, xc = cell_xy_[c][0], yc = cell_xy_[c][1], hx = interp_.hx(), hy = interp_.hy();
+        auto dir_at = [&](double dt, double ds, Vec& n, double& log_g) {
+          interp_.evaluate(xc + dt * hx, yc + ds * hy, lf, n.data(), nullptr);
+          log_g = std::log(normalize(n.data(), ne_)) - interp_.force_exponent() * lf;
+        };
+        Vec pt, mt, ps, ms, pp, pm, mp, mm;
+        double gpt, gmt, gps, gms, gpp, gpm, gmp, gmm;
+        dir_at(a, 0, pt, gpt);
+        dir_at(-a, 0, mt, gmt);
+        dir_at(0, a, ps, gps);
+        dir_at(0, -a, ms, gms);
+        dir_at(a, a, pp, gpp);
+        dir_at(a, -a, pm, gpm);
+        dir_at(-a, a, mp, gmp);
+        dir_at(-a, -a, mm, gmm);
+        const double ia2 = 1.0 / (a * a), ia24 = 0.25 / (a * a);
+        for (std::size_t k = 0; k < ne_; ++k) {
+          H[k * 3 + 0] = (pt[k] + mt[k] - 2 * d[k]) * ia2;
+          H[k * 3 + 1] = (pp[k] - pm[k] - mp[k] + mm[k]) * ia24;
+          H[k * 3 + 2] = (ps[k] + ms[k] - 2 * d[k]) * ia2;
+        }
+        const double g0 = rec[5 * ne_];
+        H[3 * ne_ + 0] = (gpt + gmt - 2 * g0) * ia2;
+        H[3 * ne_ + 1] = (gpp - gpm - gmp + gmm) * ia24;
+        H[3 * ne_ + 2] = (gps + gms - 2 * g0) * ia2;
+      }
       // Error of the linear model at the four corners (|offset| = ½ cell each way).
       for (int b = 0; b < 2; ++b) {
         for (int a = 0; a < 2; ++a) {
@@ -257,6 +291,151 @@ Locator::Locator(const ChargeMap& map, const LocatorOptions& options)
     }
     cell_log_norm_[c] = log_norm;
   }
+  // The coarse search's model per cell, compact: the middle level's linear model in (t, s)
+  // carried to other forces by the secant over the levels, and its worst error at the corners
+  // and levels (the start is then refined by refine_start with the exact level blend).
+  scan_stride_ = 6 * ne_ + 8;
+  scan_.assign(cells_.size() * scan_stride_, 0.0f);
+  {
+    const std::size_t fm = nf / 2;
+    const double span = nf > 1 ? level_log_[nf - 1] - level_log_[0] : 1.0;
+    for (std::size_t c = 0; c < cells_.size(); ++c) {
+      const std::size_t i = cells_[c] % (nx - 1), j = cells_[c] / (nx - 1);
+      const double* rm = &pred_[(c * nf + fm) * pred_stride_];
+      const double* ra = &pred_[(c * nf) * pred_stride_];
+      const double* rb = &pred_[(c * nf + nf - 1) * pred_stride_];
+      float* sc = &scan_[c * scan_stride_];
+      std::array<double, max_electrodes> dl{};
+      for (std::size_t k = 0; k < ne_; ++k) {
+        dl[k] = nf > 1 ? (rb[k] - ra[k]) / span : 0.0;
+        sc[k] = float(rm[k]);
+        sc[ne_ + k] = float(rm[3 * ne_ + k]);
+        sc[2 * ne_ + k] = float(rm[4 * ne_ + k]);
+        sc[3 * ne_ + k] = float(dl[k]);
+        sc[4 * ne_ + k] = float(rm[ne_ + 2 * k]);
+        sc[5 * ne_ + k] = float(rm[ne_ + 2 * k + 1]);
+      }
+      float* tail = sc + 6 * ne_;
+      tail[0] = float(level_log_[fm]);
+      tail[1] = float(cell_log_norm_[c]);
+      tail[2] = float(rm[5 * ne_]);
+      tail[3] = float(rm[5 * ne_ + 1]);
+      tail[4] = float(rm[5 * ne_ + 2]);
+      tail[5] = nf > 1 ? float((rb[5 * ne_] - ra[5 * ne_]) / span) : 0.0f;
+      double err2 = cell_lin_err2_[c];
+      for (std::size_t f = 0; f < nf; ++f) {
+        const double dlf = level_log_[f] - level_log_[fm];
+        for (int bb = 0; bb < 2; ++bb) {
+          for (int aa = 0; aa < 2; ++aa) {
+            Vec n{};
+            for (std::size_t k = 0; k < ne_; ++k) n[k] = interp_.node_value(f, i + std::size_t(aa), j + std::size_t(bb), k);
+            normalize(n.data(), ne_);
+            const double dt = aa - 0.5, ds = bb - 0.5;
+            double e2 = 0;
+            for (std::size_t k = 0; k < ne_; ++k) {
+              const double e = n[k] - rm[k] - dl[k] * dlf - rm[ne_ + 2 * k] * dt - rm[ne_ + 2 * k + 1] * ds;
+              e2 += e * e;
+            }
+            err2 = std::max(err2, e2);
+          }
+        }
+      }
+      tail[6] = float(err2);
+      // Curvature ratio κ = |H| / σ_min(J) (cell units, worst level): a Newton step δ leaves an
+      // error ≈ κ δ² / 2 (levenberg_marquardt's unevaluated last step).
+      double kappa = 0;
+      for (std::size_t f = 0; f < nf; ++f) {
+        const double* r = &pred_[(c * nf + f) * pred_stride_];
+        const double* H = &quad_[(c * nf + f) * quad_stride_];
+        double a00 = 0, a01 = 0, a11 = 0, h2 = 0;
+        for (std::size_t k = 0; k < ne_; ++k) {
+          const double jt = r[ne_ + 2 * k], js = r[ne_ + 2 * k + 1];
+          a00 += jt * jt;
+          a01 += jt * js;
+          a11 += js * js;
+          h2 += H[3 * k] * H[3 * k] + 2 * H[3 * k + 1] * H[3 * k + 1] + H[3 * k + 2] * H[3 * k + 2];
+        }
+        const double half = 0.5 * (a00 + a11), dev = std::sqrt(0.25 * (a00 - a11) * (a00 - a11) + a01 * a01);
+        const double smin = std::sqrt(std::max(half - dev, 0.0));
+        kappa = std::max(kappa, smin > 0 ? std::sqrt(h2) / smin : 1e30);
+      }
+      tail[7] = float(std::min(kappa, 1e30));
+    }
+  }
+  // The start refinement's and fold search's model per cell and level, compact (float, one
+  // contiguous row per level): d, J (t, s), H (tt, ts, ss), then ln |G| and its first and
+  // second derivatives. The double tables it came from are not needed after this.
+  model_stride_ = 6 * ne_ + 6;
+  model_.assign(cells_.size() * nf * model_stride_, 0.0f);
+  for (std::size_t c = 0; c < cells_.size(); ++c) {
+    for (std::size_t f = 0; f < nf; ++f) {
+      const double* r = &pred_[(c * nf + f) * pred_stride_];
+      const double* H = &quad_[(c * nf + f) * quad_stride_];
+      float* m = &model_[(c * nf + f) * model_stride_];
+      for (std::size_t k = 0; k < ne_; ++k) {
+        m[k] = float(r[k]);
+        m[ne_ + k] = float(r[ne_ + 2 * k]);
+        m[2 * ne_ + k] = float(r[ne_ + 2 * k + 1]);
+        m[3 * ne_ + k] = float(H[3 * k]);
+        m[4 * ne_ + k] = float(H[3 * k + 1]);
+        m[5 * ne_ + k] = float(H[3 * k + 2]);
+      }
+      for (int a = 0; a < 3; ++a) {
+        m[6 * ne_ + std::size_t(a)] = float(r[5 * ne_ + std::size_t(a)]);
+        m[6 * ne_ + 3 + std::size_t(a)] = float(H[3 * ne_ + std::size_t(a)]);
+      }
+    }
+  }
+  // Fold-prone cells: where the orientation of the direction map, sign of d · (J_t × J_s),
+  // differs between a cell and one of its 8 neighbours at some level, a fold passes within
+  // about a cell, and a solution there may have a twin the coarse search cannot separate.
+  // (More than three electrodes: no orientation; a cell is fold-prone where J is nearly
+  // singular, σ_min/σ_max < 0.1.)
+  cell_fold_.assign(cells_.size(), 0);
+  {
+    std::vector<signed char> orient(cells_.size() * nf, 0);
+    for (std::size_t c = 0; c < cells_.size(); ++c) {
+      for (std::size_t f = 0; f < nf; ++f) {
+        const double* r = &pred_[(c * nf + f) * pred_stride_];
+        if (ne_ == 3) {
+          const double jt[3] = {r[3], r[5], r[7]}, js[3] = {r[4], r[6], r[8]};
+          const double t = r[0] * (jt[1] * js[2] - jt[2] * js[1]) + r[1] * (jt[2] * js[0] - jt[0] * js[2]) +
+                           r[2] * (jt[0] * js[1] - jt[1] * js[0]);
+          orient[c * nf + f] = t > 0 ? 1 : t < 0 ? -1 : 0;
+        } else {
+          double a00 = 0, a01 = 0, a11 = 0;
+          for (std::size_t k = 0; k < ne_; ++k) {
+            a00 += r[ne_ + 2 * k] * r[ne_ + 2 * k];
+            a01 += r[ne_ + 2 * k] * r[ne_ + 2 * k + 1];
+            a11 += r[ne_ + 2 * k + 1] * r[ne_ + 2 * k + 1];
+          }
+          const double half = 0.5 * (a00 + a11), dev = std::sqrt(0.25 * (a00 - a11) * (a00 - a11) + a01 * a01);
+          if (half - dev < 0.01 * (half + dev)) cell_fold_[c] = 1;
+        }
+      }
+    }
+    if (ne_ == 3) {
+      for (std::size_t c = 0; c < cells_.size(); ++c) {
+        const long i = long(cells_[c] % (nx - 1)), j = long(cells_[c] / (nx - 1));
+        for (long dj = -1; dj <= 1 && !cell_fold_[c]; ++dj) {
+          for (long di = -1; di <= 1 && !cell_fold_[c]; ++di) {
+            const long ii = i + di, jj = j + dj;
+            if (ii < 0 || jj < 0 || ii >= long(nx - 1) || jj >= long(ny - 1)) continue;
+            const std::int32_t o = cell_slot_[std::size_t(jj) * (nx - 1) + std::size_t(ii)];
+            if (o < 0) continue;
+            for (std::size_t f = 0; f < nf; ++f) {
+              const int a = orient[c * nf + f], b = orient[std::size_t(o) * nf + f];
+              if (a == 0 || a != b) cell_fold_[c] = 1;
+            }
+          }
+        }
+      }
+    }
+    std::size_t n_fold = 0;
+    for (auto v : cell_fold_) n_fold += v;
+  }
+  pred_ = {};
+  quad_ = {};
   if (cells_.empty()) throw InputError("map has no usable cell (four ok nodes with non-zero charge); nothing can be located");
   bins_ = options.direction_bins > 0 ? options.direction_bins
                                      : std::clamp(int(3.0 * std::sqrt(double(cells_.size()))), 16, 512);
@@ -271,7 +450,7 @@ Locator::Locator(const ChargeMap& map, const LocatorOptions& options)
     t0 = std::clamp(int((b[2] - theta0_) / (theta1_ - theta0_) * bins_), 0, bins_ - 1);
     t1 = std::clamp(int((b[3] - theta0_) / (theta1_ - theta0_) * bins_), 0, bins_ - 1);
   };
-  std::vector<std::size_t> counts(std::size_t(bins_) * std::size_t(bins_) + 1, 0);
+  std::vector<std::uint32_t> counts(std::size_t(bins_) * std::size_t(bins_) + 1, 0);
   for (const auto& b : boxes) {
     int p0, p1, t0, t1;
     bin_range(b, p0, p1, t0, t1);
@@ -282,12 +461,12 @@ Locator::Locator(const ChargeMap& map, const LocatorOptions& options)
   bin_start_.assign(counts.size(), 0);
   for (std::size_t b = 0; b + 1 < counts.size(); ++b) bin_start_[b + 1] = bin_start_[b] + counts[b];
   bin_cells_.assign(bin_start_.back(), 0);
-  std::vector<std::size_t> fill(bin_start_.begin(), bin_start_.end() - 1);
+  std::vector<std::uint32_t> fill(bin_start_.begin(), bin_start_.end() - 1);
   for (std::size_t c = 0; c < boxes.size(); ++c) {
     int p0, p1, t0, t1;
     bin_range(boxes[c], p0, p1, t0, t1);
     for (int t = t0; t <= t1; ++t) {
-      for (int p = p0; p <= p1; ++p) bin_cells_[fill[std::size_t(t * bins_ + p)]++] = c;
+      for (int p = p0; p <= p1; ++p) bin_cells_[fill[std::size_t(t * bins_ + p)]++] = std::uint32_t(c);
     }
   }
 
@@ -300,9 +479,9 @@ bool Locator::predict(double x_m, double y_m, double force_N, double* charges_C)
   return true;
 }
 
-void Locator::scan_cells(const std::size_t* begin, const std::size_t* end, const double* q_unit, double noise2,
+void Locator::scan_cells(const std::uint32_t* begin, const std::uint32_t* end, const double* q_unit, double noise2,
                          Shortlist& list) const {
-  for (const std::size_t* it = begin; it != end; ++it) {
+  for (const std::uint32_t* it = begin; it != end; ++it) {
     const std::size_t c = *it;
     const double* d = &cell_dir_[c * ne_];
     double dot = 0;
@@ -349,7 +528,10 @@ void Locator::coarse_candidates(const double* q_unit, double noise2, Shortlist& 
   if (list.n == 0) {
     // Last resort (a direction no cell produces: outside the map or far off the model): the
     // best-matching cells anywhere, so that the fit can say how far off it is.
-    for (std::size_t c = 0; c < cells_.size(); ++c) scan_cells(&c, &c + 1, q_unit, -1.0, list);
+    for (std::size_t c = 0; c < cells_.size(); ++c) {
+      const std::uint32_t c32 = std::uint32_t(c);
+      scan_cells(&c32, &c32 + 1, q_unit, -1.0, list);
+    }
   }
 }
 
@@ -360,7 +542,6 @@ bool Locator::predicted_starts(const double* q_unit, double log_q_norm, double n
   direction_key(q_unit, phi, theta);
   const int p = int(std::floor((phi - phi0_) / (phi1_ - phi0_) * bins_));
   const int t = int(std::floor((theta - theta0_) / (theta1_ - theta0_) * bins_));
-  const std::size_t nf = interp_.n_levels();
   const double p_exp = interp_.force_exponent();
   const double hx = interp_.hx(), hy = interp_.hy();
   for (int ring = 0; ring <= 1 && starts.n == 0; ++ring) {
@@ -369,50 +550,41 @@ bool Locator::predicted_starts(const double* q_unit, double log_q_norm, double n
         if (pp < 0 || tt < 0 || pp >= bins_ || tt >= bins_) continue;
         if (ring == 1 && tt != t - 1 && tt != t + 1 && pp != p - 1 && pp != p + 1) continue;
         const std::size_t b = std::size_t(tt * bins_ + pp);
+        // Ask for every candidate's record first: the loads overlap instead of queueing behind
+        // the mispredicted branches of the tests below.
+        for (std::size_t m = bin_start_[b]; m < bin_start_[b + 1]; ++m) {
+          const char* rec = reinterpret_cast<const char*>(&scan_[std::size_t(bin_cells_[m]) * scan_stride_]);
+          __builtin_prefetch(rec);
+          __builtin_prefetch(rec + 64);
+        }
         for (std::size_t m = bin_start_[b]; m < bin_start_[b + 1]; ++m) {
           const std::size_t c = bin_cells_[m];
-          // (No angular pre-screen: with the force levels' spread in a cell's direction range it
-          // passed nearly every cell of the bin; the offset test below is about as cheap.)
           // Level: the known force, or the force that makes the cell's mean |G| match |q|.
-          const double l = std::clamp(fixed_force ? log_force : (log_q_norm - cell_log_norm_[c]) / p_exp, log_lo, log_hi);
-          std::size_t f0 = 0;
-          double w = 0;
-          if (nf > 1) {
-            if (l >= level_log_[nf - 1]) {
-              f0 = nf - 2;
-              w = 1;
-            } else if (l > level_log_[0]) {
-              while (f0 + 2 < nf && l > level_log_[f0 + 1]) ++f0;
-              w = (l - level_log_[f0]) / (level_log_[f0 + 1] - level_log_[f0]);
-            }
-          }
-          const double* r0 = &pred_[(c * nf + f0) * pred_stride_];
-          const double* r1 = nf > 1 ? r0 + pred_stride_ : r0;
-          // Blend the two levels' linear models and predict the offset δ (cell units).
-          // (Most cells of a bin are rejected here, by the first offset component alone.)
+          const float* sc = &scan_[c * scan_stride_];
+          const float* tail = sc + 6 * ne_;
+          const double l = std::clamp(fixed_force ? log_force : (log_q_norm - double(tail[1])) / p_exp, log_lo, log_hi);
+          // The cell's linear model carried to l predicts the offset δ (cell units); most cells of
+          // a bin are rejected by its first component alone.
+          const double dl = l - double(tail[0]);
           std::array<double, max_electrodes> e{};
           double dt = 0, ds = 0;
           for (std::size_t n = 0; n < ne_; ++n) {
-            e[n] = q_unit[n] - ((1 - w) * r0[n] + w * r1[n]);
-            dt += ((1 - w) * r0[3 * ne_ + n] + w * r1[3 * ne_ + n]) * e[n];
+            e[n] = q_unit[n] - double(sc[n]) - double(sc[3 * ne_ + n]) * dl;
+            dt += double(sc[ne_ + n]) * e[n];
           }
+          for (std::size_t n = 0; n < ne_; ++n) ds += double(sc[2 * ne_ + n]) * e[n];
           if (!(std::abs(dt) <= 1.0)) continue;  // predicted beyond the neighbours
-          for (std::size_t n = 0; n < ne_; ++n) ds += ((1 - w) * r0[4 * ne_ + n] + w * r1[4 * ne_ + n]) * e[n];
           if (!(std::abs(ds) <= 1.0)) continue;
           double res2 = 0;
           for (std::size_t n = 0; n < ne_; ++n) {
-            const double jt = (1 - w) * r0[ne_ + 2 * n] + w * r1[ne_ + 2 * n];
-            const double js = (1 - w) * r0[ne_ + 2 * n + 1] + w * r1[ne_ + 2 * n + 1];
-            const double r = e[n] - jt * dt - js * ds;
+            const double r = e[n] - double(sc[4 * ne_ + n]) * dt - double(sc[5 * ne_ + n]) * ds;
             res2 += r * r;
           }
-          // Within what the linear model's own error and the noise allow: a solution may be here.
-          if (res2 > 4.0 * cell_lin_err2_[c] + 9.0 * noise2 + 1e-14) continue;
-          // Force at the predicted point: |q| = F^p |G(δ)| with ln |G| linear in δ.
+          // Within what the model's own error and the noise allow: a solution may be here.
+          if (res2 > 4.0 * double(tail[6]) + 9.0 * noise2 + 1e-14) continue;
+          // Force at the predicted point: |q| = F^p |G(δ, l)| with ln |G| linear in δ and l.
           double l1 = l;
-          const double* g0 = r0 + 5 * ne_;
-          const double* g1 = r1 + 5 * ne_;
-          const double log_g = (1 - w) * (g0[0] + g0[1] * dt + g0[2] * ds) + w * (g1[0] + g1[1] * dt + g1[2] * ds);
+          const double log_g = double(tail[2]) + double(tail[3]) * dt + double(tail[4]) * ds + double(tail[5]) * dl;
           if (fixed_force) {
             // The known force must also explain the magnitude (else: an unknown-force twin).
             if (std::abs(log_q_norm - p_exp * l - log_g) > 0.05 + 3.0 * std::sqrt(std::max(noise2, 0.0))) continue;
@@ -423,11 +595,18 @@ bool Locator::predicted_starts(const double* q_unit, double log_q_norm, double n
             l1 = std::clamp(l1, log_lo, log_hi);
           }
           Start st{cell_xy_[c][0] + dt * hx, cell_xy_[c][1] + ds * hy, l1, res2};
-          // Same solution as a start already found (predicted within ¾ cell)? Keep the better one.
+          if ((std::abs(dt) > 0.5 || std::abs(ds) > 0.5) && !interp_.inside(st.x, st.y)) {
+            // Predicted just off the map (a press on its edge): start inside the cell instead.
+            st.x = cell_xy_[c][0] + std::clamp(dt, -0.499, 0.499) * hx;
+            st.y = cell_xy_[c][1] + std::clamp(ds, -0.499, 0.499) * hy;
+          }
+          // Same solution as a start already found (predicted within ½ cell)? Keep the better one.
+          // (Not wider: across a fold next to an electrode two exact solutions can lie ~0.4 cell
+          // apart, each predicted by the cells on its own side.)
           int same = -1;
           for (int o = 0; o < starts.n && same < 0; ++o) {
             const Start& so = starts.start[std::size_t(o)];
-            if (std::abs(so.x - st.x) < 0.75 * hx && std::abs(so.y - st.y) < 0.75 * hy) same = o;
+            if (std::abs(so.x - st.x) < 0.5 * hx && std::abs(so.y - st.y) < 0.5 * hy) same = o;
           }
           int pos;
           if (same >= 0) {
@@ -449,6 +628,147 @@ bool Locator::predicted_starts(const double* q_unit, double log_q_norm, double n
     }
   }
   return starts.n > 0;
+}
+
+bool Locator::cell_model(double x, double y, double l, CellModel& m) const {
+  const std::size_t nx = interp_.nx(), ny = interp_.ny(), nf = interp_.n_levels();
+  const double u = (x - interp_.x0()) / interp_.hx(), v = (y - interp_.y0()) / interp_.hy();
+  if (!(u >= 0 && v >= 0 && u < double(nx - 1) && v < double(ny - 1))) return false;
+  const std::size_t i = std::size_t(u), j = std::size_t(v);
+  const std::int32_t slot = cell_slot_[j * (nx - 1) + i];
+  if (slot < 0) return false;
+  m.cell = std::size_t(slot);
+  m.dt = u - double(i) - 0.5;
+  m.ds = v - double(j) - 0.5;
+  std::size_t f0 = 0;
+  double w = 0;
+  if (nf > 1) {
+    if (l >= level_log_[nf - 1]) {
+      f0 = nf - 2;
+      w = 1;
+    } else if (l > level_log_[0]) {
+      while (f0 + 2 < nf && l > level_log_[f0 + 1]) ++f0;
+      w = (l - level_log_[f0]) / (level_log_[f0 + 1] - level_log_[f0]);
+    }
+  }
+  const float* m0 = &model_[(m.cell * nf + f0) * model_stride_];
+  const float* m1 = nf > 1 ? m0 + model_stride_ : m0;
+  const std::size_t n = 6 * ne_ + 6;
+  for (std::size_t k = 0; k < n; ++k) m.v[k] = (1 - w) * double(m0[k]) + w * double(m1[k]);
+  return true;
+}
+
+void Locator::refine_start(const double* q_unit, double log_q_norm, bool fixed_force, double log_lo, double log_hi,
+                           Start& st) const {
+  const double hx = interp_.hx(), hy = interp_.hy(), p_exp = interp_.force_exponent();
+  std::size_t last_cell = std::size_t(-1);
+  for (int pass = 0; pass < 2; ++pass) {
+    CellModel m;
+    if (!cell_model(st.x, st.y, st.l, m)) return;
+    if (m.cell == last_cell) return;  // the second pass only when the start moved to another cell
+    last_cell = m.cell;
+    const double* d = m.v.data();
+    const double *jt = d + ne_, *js = d + 2 * ne_, *htt = d + 3 * ne_, *hts = d + 4 * ne_, *hss = d + 5 * ne_;
+    double dt = m.dt, ds = m.ds;
+    // Two Newton steps on q̂ = d + J δ + ½ H(δ, δ) in least squares.
+    for (int it = 0; it < 2; ++it) {
+      double a00 = 0, a01 = 0, a11 = 0, b0 = 0, b1 = 0;
+      for (std::size_t k = 0; k < ne_; ++k) {
+        const double e = q_unit[k] - d[k] - jt[k] * dt - js[k] * ds -
+                         0.5 * (htt[k] * dt * dt + 2 * hts[k] * dt * ds + hss[k] * ds * ds);
+        const double ct = jt[k] + htt[k] * dt + hts[k] * ds, cs = js[k] + hts[k] * dt + hss[k] * ds;
+        a00 += ct * ct;
+        a01 += ct * cs;
+        a11 += cs * cs;
+        b0 += ct * e;
+        b1 += cs * e;
+      }
+      const double det = a00 * a11 - a01 * a01;
+      if (!(det > 1e-14 * (a00 * a11 + 1e-300))) return;  // a fold: leave the start to the fit
+      const double idet = 1.0 / det;
+      const double st_t = (a11 * b0 - a01 * b1) * idet, st_s = (a00 * b1 - a01 * b0) * idet;
+      if (!(std::abs(st_t) < 1.0 && std::abs(st_s) < 1.0)) return;  // the model has no solution near
+      dt += st_t;
+      ds += st_s;
+    }
+    if (!(std::abs(dt) < 1.5 && std::abs(ds) < 1.5)) return;
+    // Never off the map: a solution on the map's edge stays a start the fit can evaluate.
+    const double nx = cell_xy_[m.cell][0] + dt * hx, ny = cell_xy_[m.cell][1] + ds * hy;
+    if (!interp_.inside(nx, ny)) return;
+    st.x = nx;
+    st.y = ny;
+    if (!fixed_force) {
+      const double* g = d + 6 * ne_;
+      const double log_g = g[0] + g[1] * dt + g[2] * ds + 0.5 * (g[3] * dt * dt + 2 * g[4] * dt * ds + g[5] * ds * ds);
+      st.l = std::clamp((log_q_norm - log_g) / p_exp, log_lo, log_hi);
+    }
+  }
+}
+
+int Locator::fold_twins(const Fit& fit, std::array<Start, 2>& twins) const {
+  {
+    const double u = (fit.x - interp_.x0()) / interp_.hx(), v = (fit.y - interp_.y0()) / interp_.hy();
+    if (!(u >= 0 && v >= 0 && u < double(interp_.nx() - 1) && v < double(interp_.ny() - 1))) return 0;
+    const std::int32_t slot = cell_slot_[std::size_t(v) * (interp_.nx() - 1) + std::size_t(u)];
+    if (slot < 0 || !cell_fold_[std::size_t(slot)]) return 0;  // no fold nearby: no twin to look for
+  }
+  CellModel m;
+  if (!cell_model(fit.x, fit.y, fit.l, m)) return 0;
+  const double hx = interp_.hx(), hy = interp_.hy();
+  const double* d = m.v.data();
+  const double *jt = d + ne_, *js = d + 2 * ne_, *htt = d + 3 * ne_, *hts = d + 4 * ne_, *hss = d + 5 * ne_;
+  const double dt = m.dt, ds = m.ds;
+  // The quadratic direction model's Jacobian at the solution and its weak direction v; along v
+  // the model changes by a s + ½ b s² (b without its component along d, the sphere's own
+  // curvature).
+  std::array<double, max_electrodes> at{}, as{};
+  double g00 = 0, g01 = 0, g11 = 0;
+  for (std::size_t k = 0; k < ne_; ++k) {
+    at[k] = jt[k] + htt[k] * dt + hts[k] * ds;
+    as[k] = js[k] + hts[k] * dt + hss[k] * ds;
+    g00 += at[k] * at[k];
+    g01 += at[k] * as[k];
+    g11 += as[k] * as[k];
+  }
+  const double half = 0.5 * (g00 + g11), dev = std::sqrt(0.25 * (g00 - g11) * (g00 - g11) + g01 * g01);
+  double v0 = half - dev - g11, v1 = g01;
+  if (!(std::abs(g01) > 1e-300)) {
+    v0 = g00 <= g11 ? 1.0 : 0.0;
+    v1 = 1.0 - v0;
+  }
+  const double vn = std::sqrt(v0 * v0 + v1 * v1);
+  if (!(vn > 0)) return 0;
+  v0 /= vn;
+  v1 /= vn;
+  std::array<double, max_electrodes> bv{};
+  double bd = 0;
+  for (std::size_t k = 0; k < ne_; ++k) {
+    bv[k] = htt[k] * v0 * v0 + 2 * hts[k] * v0 * v1 + hss[k] * v1 * v1;
+    bd += bv[k] * d[k];
+  }
+  double aa = 0, ab = 0, bb = 0;
+  for (std::size_t k = 0; k < ne_; ++k) {
+    const double a = at[k] * v0 + as[k] * v1;
+    const double b = bv[k] - bd * d[k];
+    aa += a * a;
+    ab += a * b;
+    bb += b * b;
+  }
+  if (!(aa > 0 && bb > 0 && std::abs(ab) > 0)) return 0;
+  // Two guesses of the second zero along v: where a s + ½ b s² is smallest in least squares
+  // (s = −2 a·b / b·b), and the fold's normal form (u + β w², w²), whose twin of (u, w) is
+  // (u, −w): s = −2 a·a / a·b. Only twins the coarse search can miss (within 1.5 cells, not
+  // the solution itself) are returned; the fit does the rest.
+  int n = 0;
+  for (const double s_star : {-2.0 * ab / bb, -2.0 * aa / ab}) {
+    if (!(std::abs(s_star) <= 1.5 && std::abs(s_star) >= 0.01)) continue;
+    Start& t = twins[std::size_t(n++)];
+    t.x = fit.x + s_star * v0 * hx;
+    t.y = fit.y + s_star * v1 * hy;
+    t.l = fit.l;
+    t.score = 0;
+  }
+  return n;
 }
 
 Locator::Fit Locator::levenberg_marquardt(const double* q, const double* w, double x, double y, double l, bool fixed_force,
@@ -488,11 +808,21 @@ Locator::Fit Locator::levenberg_marquardt(const double* q, const double* w, doub
     Eigen::Matrix3d A = JtJ;
     for (int d = 0; d < 3; ++d) A(d, d) += lambda * JtJ(d, d) + 1e-300;
     if (fixed_force) A(2, 2) = 1.0;
-    const Eigen::Vector3d step = solve_spd3(A, -Jtr);
+    Eigen::Vector3d step = solve_spd3(A, -Jtr);
     if (!step.allFinite()) {
       lambda *= 10;
       if (lambda > 1e12) break;
       continue;
+    }
+    if (!fixed_force && (l + step[2] < log_lo || l + step[2] > log_hi)) {
+      // The step leaves the plausible force range: move ln F to the bound and solve for (x, y)
+      // with it held there (a projected step; it keeps the fit from spinning against the bound).
+      const double dl = (l + step[2] < log_lo ? log_lo : log_hi) - l;
+      const double b0 = -Jtr[0] - A(0, 2) * dl, b1 = -Jtr[1] - A(1, 2) * dl;
+      const double det = A(0, 0) * A(1, 1) - A(0, 1) * A(0, 1);
+      if (det > 0) {
+        step = Eigen::Vector3d((A(1, 1) * b0 - A(0, 1) * b1) / det, (A(0, 0) * b1 - A(0, 1) * b0) / det, dl);
+      }
     }
     // Keep steps within a few cells: the interpolant is only trusted where it is defined.
     double limit = 1.0;
@@ -503,7 +833,18 @@ Locator::Fit Locator::levenberg_marquardt(const double* q, const double* w, doub
     // is in its quadratic phase, so after this step the error is ~ step² (~1e-6 cell, far below
     // the interpolation error). Take it without evaluating the model there; χ² from the linear
     // model, χ² + 2 stepᵀJᵀr + stepᵀJᵀJ step (its change is second order too).
-    if (lambda < 1e-2 && std::abs(step[0]) < 1e-3 * hx && std::abs(step[1]) < 1e-3 * hy && std::abs(step[2]) < 1e-4 &&
+    // The threshold: the step's own error estimate κ δ² / 2 below 1e-4 cell (κ of the cell
+    // holding the point), between 1e-3 and 1e-2 cell.
+    double accept = 1e-3;
+    {
+      const double u = (x - interp_.x0()) / hx, v = (y - interp_.y0()) / hy;
+      const std::size_t gc = std::size_t(std::max(u, 0.0)) + std::size_t(std::max(v, 0.0)) * (interp_.nx() - 1);
+      if (u >= 0 && v >= 0 && u < double(interp_.nx() - 1) && v < double(interp_.ny() - 1) && cell_slot_[gc] >= 0) {
+        const double kappa = double(scan_[std::size_t(cell_slot_[gc]) * scan_stride_ + 6 * ne_ + 7]);
+        accept = std::clamp(std::sqrt(2e-4 / std::max(kappa, 1e-30)), 1e-3, 1e-2);
+      }
+    }
+    if (lambda < 1e-2 && std::abs(step[0]) < accept * hx && std::abs(step[1]) < accept * hy && std::abs(step[2]) < 1e-3 &&
         interp_.inside(x + step[0], y + step[1]) && l + step[2] >= log_lo && l + step[2] <= log_hi) {
       x += step[0];
       y += step[1];
@@ -548,8 +889,8 @@ Locator::Fit Locator::levenberg_marquardt(const double* q, const double* w, doub
       // Heading into a solution an earlier start already found: stop, it adds nothing (two
       // end points closer than a cell are never distinct solutions).
       for (int d = 0; d < n_found; ++d) {
-        if (found[d].ok && std::abs(x - found[d].x) < 0.25 * hx && std::abs(y - found[d].y) < 0.25 * hy &&
-            std::abs(l - found[d].l) < 0.05) {
+        if (found[d].ok && std::abs(x - found[d].x) < 0.05 * hx && std::abs(y - found[d].y) < 0.05 * hy &&
+            std::abs(l - found[d].l) < 0.01) {
           fit.duplicate = true;
           return fit;
         }
@@ -709,10 +1050,36 @@ Location Locator::locate_impl(const double* charges_C, bool fixed_force, double 
   StartList predicted;
   if (predicted_starts(q_unit.data(), std::log(q_norm), noise2, fixed_force, log_known_force, log_lo, log_hi, predicted)) {
     for (int s = 0; s < predicted.n && n_starts < options_.max_starts; ++s) {
-      const Start& st = predicted.start[std::size_t(s)];
+      Start st = predicted.start[std::size_t(s)];
+      refine_start(q_unit.data(), std::log(q_norm), fixed_force, log_lo, log_hi, st);
       fits[std::size_t(n_starts)] =
           levenberg_marquardt(q.data(), w.data(), st.x, st.y, st.l, fixed_force, log_lo, log_hi, fits.data(), n_starts);
       ++n_starts;
+    }
+  }
+  // Folds next to the electrodes: two exact solutions can lie within one cell, where the coarse
+  // search's linear models see only one. Each solution within noise proposes its fold twin
+  // (the quadratic model of its cell); a twin not already found is fitted too.
+  {
+    const int n_first = n_starts;
+    for (int s = 0; s < n_first && n_starts < int(fits.size()); ++s) {
+      const Fit& f = fits[std::size_t(s)];
+      if (!f.ok || f.duplicate || f.chi2 > limit) continue;
+      std::array<Start, 2> twins;
+      const int n_twins = fold_twins(f, twins);
+      for (int t = 0; t < n_twins && n_starts < int(fits.size()); ++t) {
+        Start& twin = twins[std::size_t(t)];
+        refine_start(q_unit.data(), std::log(q_norm), fixed_force, log_lo, log_hi, twin);
+        bool known = false;
+        for (int o = 0; o < n_starts && !known; ++o) {
+          const Fit& g = fits[std::size_t(o)];
+          known = g.ok && std::abs(g.x - twin.x) < 0.05 * interp_.hx() && std::abs(g.y - twin.y) < 0.05 * interp_.hy();
+        }
+        if (known) continue;
+        fits[std::size_t(n_starts)] = levenberg_marquardt(q.data(), w.data(), twin.x, twin.y, twin.l, fixed_force, log_lo,
+                                                          log_hi, fits.data(), n_starts);
+        ++n_starts;
+      }
     }
   }
   bool any_within = false;
@@ -793,15 +1160,40 @@ Location Locator::locate_impl(const double* charges_C, bool fixed_force, double 
   }
   // Other minima that also fit within noise and lie elsewhere: ambiguous.
   const double separation = options_.ambiguity_separation_cells * std::max(interp_.hx(), interp_.hy());
+  // Two end points are one solution when they are within 3 σ of each other (Mahalanobis
+  // distance in (x, y) from either one's JᵀWJ, ln F profiled out), or within 1e-3 cell
+  // (convergence tolerance), or closer than the optional separation. Where the position
+  // block is singular (a symmetry line or a flat spot) the misfit barrier between them decides.
+  auto distinct_from = [&](const Fit& a, const Fit& f) {
+    const double dx = f.x - a.x, dy = f.y - a.y;
+    if (std::abs(dx) < 1e-3 * interp_.hx() && std::abs(dy) < 1e-3 * interp_.hy()) return false;
+    if (separation > 0 && dx * dx + dy * dy <= separation * separation) return false;
+    double d2 = std::numeric_limits<double>::infinity();
+    bool singular = false;
+    for (const Fit* g : {&a, &f}) {
+      const auto& m = g->jtj;  // 00 01 02 11 12 22
+      double s00 = m[0], s01 = m[1], s11 = m[3];
+      if (!fixed_force && m[5] > 0) {
+        s00 -= m[2] * m[2] / m[5];
+        s01 -= m[2] * m[4] / m[5];
+        s11 -= m[4] * m[4] / m[5];
+      }
+      const double det = s00 * s11 - s01 * s01;
+      singular = singular || !(det > 1e-12 * (s00 * s11 + 1e-300));
+      d2 = std::min(d2, s00 * dx * dx + 2 * s01 * dx * dy + s11 * dy * dy);
+    }
+    if (singular) return distinct_minima(q.data(), w.data(), a, f, 0.0, limit);
+    return d2 > 9.0;
+  };
   std::array<int, 8> distinct{};
   int n_distinct = 0;
   for (int s = 0; s < n_starts; ++s) {
     const Fit& f = fits[std::size_t(s)];
     if (s == best || !f.ok || f.chi2 > limit) continue;
-    if (!distinct_minima(q.data(), w.data(), b, f, separation, limit)) continue;
+    if (!distinct_from(b, f)) continue;
     bool is_new = true;
     for (int d = 0; d < n_distinct; ++d) {
-      is_new = is_new && distinct_minima(q.data(), w.data(), fits[std::size_t(distinct[std::size_t(d)])], f, separation, limit);
+      is_new = is_new && distinct_from(fits[std::size_t(distinct[std::size_t(d)])], f);
     }
     if (!is_new) continue;
     distinct[std::size_t(n_distinct++)] = s;

@@ -41,9 +41,11 @@ struct LocatorOptions {
   /// ν + 5·√(2·max(ν, 1)) + 4 with ν = n − 3 degrees of freedom (n − 2 with a known force),
   /// ≈ 11 for three electrodes.
   double chi2_limit = 0.0;
-  /// Two minima are distinct when farther apart than this × grid spacing and the misfit rises
-  /// above the χ² limit between them (a barrier), or the straight path between them leaves the map.
-  double ambiguity_separation_cells = 1.0;
+  /// Two fits within noise are distinct solutions (→ ambiguous) when they are more than 3 σ
+  /// apart (Mahalanobis distance in (x, y) under either one's covariance) — or, where the
+  /// position covariance is singular, when the misfit rises above the χ² limit between them.
+  /// A value > 0 here also merges solutions closer than this × grid spacing (0 = off).
+  double ambiguity_separation_cells = 0.0;
   /// Plausible force range (N): solutions outside it are not accepted (the fit is held at the
   /// bound and then flagged outside_map if it does not fit within noise). 0 = automatic: half
   /// the lowest to twice the highest force level of the map; unbounded for a one-level map.
@@ -144,8 +146,24 @@ class Locator {
   /// cell can produce the direction (then the old angular shortlist is used).
   bool predicted_starts(const double* q_unit, double log_q_norm, double noise2, bool fixed_force, double log_force,
                         double log_lo, double log_hi, StartList& starts) const;
+  /// The compact model of the cell holding (x, y), blended between the force levels around l,
+  /// with the point's offset from the cell centre (cell units). False off the usable cells.
+  struct CellModel {
+    std::size_t cell = 0;
+    double dt = 0, ds = 0;
+    std::array<double, 6 * max_electrodes + 6> v;  ///< d, Jt, Js, Htt, Hts, Hss (ne each), ln|G| terms (6)
+  };
+  bool cell_model(double x, double y, double l, CellModel& m) const;
+  /// Moves a start to the solution of the quadratic direction model of the cell that holds it
+  /// (two passes: the point may move into a neighbour), with the force from |q|. No evaluation
+  /// of the interpolant; leaves the start as it is where the model has no solution nearby.
+  void refine_start(const double* q_unit, double log_q_norm, bool fixed_force, double log_lo, double log_hi,
+                    Start& start) const;
+  /// Starts for a fold's twin of a solution: guesses of the other zero of its cell's quadratic
+  /// direction model along the weak direction, less than 1.5 cells away (0, 1 or 2 of them).
+  int fold_twins(const Fit& fit, std::array<Start, 2>& twins) const;
   void coarse_candidates(const double* q_unit, double noise2, Shortlist& list) const;
-  void scan_cells(const std::size_t* begin, const std::size_t* end, const double* q_unit, double noise2,
+  void scan_cells(const std::uint32_t* begin, const std::uint32_t* end, const double* q_unit, double noise2,
                   Shortlist& list) const;
 
   MapInterpolant interp_;
@@ -173,13 +191,32 @@ class Locator {
   /// δ = P (q̂ − d) from the centre and the residual |q̂ − d − J δ| of the linear model.
   std::vector<double> pred_;
   std::size_t pred_stride_ = 0;
+  /// Per cell and level (stride quad_stride_): second derivatives of d in cell units, [k][tt, ts,
+  /// ss], then those of ln |G| (tt, ts, ss): the quadratic model that refines a start. pred_ and
+  /// quad_ are built in the constructor and released once model_ and scan_ hold what locate needs.
+  std::vector<double> quad_;
+  std::size_t quad_stride_ = 0;
+  /// The same per cell and level as float rows of model_stride_ (what locate() reads): d, Jt, Js,
+  /// Htt, Hts, Hss (ne each), then ln |G| and its derivatives t, s, tt, ts, ss.
+  std::vector<float> model_;
+  std::size_t model_stride_ = 0;
+  std::vector<std::int32_t> cell_slot_;     ///< grid cell j*(nx−1)+i → index into cells_, −1 if none
+  std::vector<std::uint8_t> cell_fold_;     ///< per cell: a fold of the direction map passes within ~1 cell
   std::vector<double> level_log_;           ///< ln of the map's force levels
   std::vector<double> cell_lin_err2_;       ///< max squared error of the linear direction model at the corners
   std::vector<double> cell_log_norm_;       ///< ln of the mean |G| over levels (first guess of ln F)
   int bins_ = 0;
   double phi0_ = 0, phi1_ = 1, theta0_ = 0, theta1_ = 1;
-  std::vector<std::size_t> bin_start_;      ///< CSR: bin b holds bin_cells_[bin_start_[b] .. bin_start_[b+1])
-  std::vector<std::size_t> bin_cells_;      ///< indices into cells_
+  std::vector<std::uint32_t> bin_start_;    ///< CSR: bin b holds bin_cells_[bin_start_[b] .. bin_start_[b+1])
+  std::vector<std::uint32_t> bin_cells_;    ///< indices into cells_
+  /// Per cell (stride scan_stride_, float: small enough to stay in cache), the coarse search's
+  /// whole model: the middle level's direction d, the rows of its inverse P (t, then s), its
+  /// Jacobian J (t, then s columns), ∂d/∂ln F across the levels (secant); then that level's ln F,
+  /// the cell's mean ln |G|, ln |G| at the centre with its gradient (t, s) and ∂/∂ln F, the
+  /// largest squared error of this model at the corners and levels, and the curvature ratio
+  /// κ = |H| / σ_min(J) (a Newton step δ leaves an error ≈ κ δ² / 2).
+  std::vector<float> scan_;
+  std::size_t scan_stride_ = 0;
 };
 
 }  // namespace pvdf::mapping
