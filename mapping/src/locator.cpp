@@ -829,12 +829,11 @@ Locator::Fit Locator::levenberg_marquardt(const double* q, const double* w, doub
     limit = std::min(limit, 4.0 * hx / std::max(std::abs(step[0]), 1e-300));
     limit = std::min(limit, 4.0 * hy / std::max(std::abs(step[1]), 1e-300));
     limit = std::min(limit, 1.0 / std::max(std::abs(step[2]), 1e-300));
-    // A nearly undamped Gauss–Newton step below 1e-3 of a cell and 1e-4 in ln F: the iteration
-    // is in its quadratic phase, so after this step the error is ~ step² (~1e-6 cell, far below
-    // the interpolation error). Take it without evaluating the model there; χ² from the linear
-    // model, χ² + 2 stepᵀJᵀr + stepᵀJᵀJ step (its change is second order too).
-    // The threshold: the step's own error estimate κ δ² / 2 below 1e-4 cell (κ of the cell
-    // holding the point), between 1e-3 and 1e-2 cell.
+    // A nearly undamped Gauss–Newton step this small is in the quadratic phase: the error left
+    // after it is ≈ κ δ² / 2 (κ = |H| / σ_min(J) of the cell holding the point). Below 1e-4 cell
+    // (the threshold on δ clamped to 1e-3…1e-2 cell, 1e-3 in ln F; the map's own interpolation
+    // error is ~1e-3 cell) take it without evaluating the model there; χ² from the linear model,
+    // χ² + 2 stepᵀJᵀr + stepᵀJᵀJ step (its change is second order too).
     double accept = 1e-3;
     {
       const double u = (x - interp_.x0()) / hx, v = (y - interp_.y0()) / hy;
