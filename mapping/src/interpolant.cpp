@@ -45,6 +45,8 @@ MapInterpolant::MapInterpolant(const ChargeMap& map)
   y0_ = map.y_m.front();
   hx_ = (map.x_m.back() - x0_) / double(nx_ - 1);
   hy_ = (map.y_m.back() - y0_) / double(ny_ - 1);
+  ihx_ = 1.0 / hx_;
+  ihy_ = 1.0 / hy_;
   for (double f : map.forces_N) log_f_.push_back(std::log(f));
 
   node_ok_.assign(nx_ * ny_, 0);
@@ -144,7 +146,7 @@ MapInterpolant::MapInterpolant(const ChargeMap& map)
 }
 
 bool MapInterpolant::inside(double x_m, double y_m) const {
-  const double u = (x_m - x0_) / hx_, v = (y_m - y0_) / hy_;
+  const double u = (x_m - x0_) * ihx_, v = (y_m - y0_) * ihy_;
   if (!(u >= 0) || !(v >= 0) || u > double(nx_ - 1) || v > double(ny_ - 1)) return false;
   const std::size_t i = std::min(std::size_t(u), nx_ - 2), j = std::min(std::size_t(v), ny_ - 2);
   return cell_ok_[j * (nx_ - 1) + i] != 0;
@@ -183,7 +185,7 @@ inline void horner(const double* c, std::size_t ne, double t, double s, double* 
 }  // namespace
 
 bool MapInterpolant::evaluate(double x_m, double y_m, double log_force, double* q, std::array<double, 3>* dq) const {
-  const double u = (x_m - x0_) / hx_, v = (y_m - y0_) / hy_;
+  const double u = (x_m - x0_) * ihx_, v = (y_m - y0_) * ihy_;
   if (!(u >= 0) || !(v >= 0) || u > double(nx_ - 1) || v > double(ny_ - 1) || !std::isfinite(log_force)) return false;
   const std::size_t i = std::min(std::size_t(u), nx_ - 2), j = std::min(std::size_t(v), ny_ - 2);
   if (!cell_ok_[j * (nx_ - 1) + i]) return false;
@@ -221,7 +223,7 @@ bool MapInterpolant::evaluate(double x_m, double y_m, double log_force, double* 
     gx1 = gx0;
     gy1 = gy0;
   }
-  const double ihx = 1.0 / hx_, ihy = 1.0 / hy_;
+  const double ihx = ihx_, ihy = ihy_;
   const double amplitude = std::exp(p_ * log_force);
   for (std::size_t k = 0; k < ne_; ++k) {
     const double g = (1 - w) * g0[k] + w * g1[k];

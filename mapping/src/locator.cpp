@@ -461,14 +461,75 @@ Locator::Locator(const ChargeMap& map, const LocatorOptions& options)
   bin_start_.assign(counts.size(), 0);
   for (std::size_t b = 0; b + 1 < counts.size(); ++b) bin_start_[b + 1] = bin_start_[b] + counts[b];
   bin_cells_.assign(bin_start_.back(), 0);
-  std::vector<std::uint32_t> fill(bin_start_.begin(), bin_start_.end() - 1);
+  // Within each bin the cells whose compact linear model can predict a start (|δ| ≤ 1 cell,
+  // the coarse search's test) for some direction of the bin and some force come first; the
+  // others (kept for the angular fallback) after bin_split_. The direction of a key is exact
+  // for three electrodes (the key is built from the first three components); with more, every
+  // cell counts as possible. Test: δ = P (d − d_mid − ∂d/∂lnF Δl) at the bin's four corners and
+  // the two ends of the force range, with 0.25 cell of margin for the bin's curvature.
+  const double l_min = std::min(level_log_.front(), log_force_lo_) - 0.5;
+  const double l_max = std::max(level_log_.back(), log_force_hi_) + 0.5;
+  auto key_direction = [](double phi, double theta, double* n) {
+    double r, n0;
+    if (phi <= 1.0 && phi >= -1.0) {
+      r = phi;
+      n0 = 1.0 - std::abs(r);
+    } else if (phi > 1.0) {
+      r = 2.0 - phi;
+      n0 = -(1.0 - std::abs(r));
+    } else {
+      r = -2.0 - phi;
+      n0 = -(1.0 - std::abs(r));
+    }
+    const double th = std::clamp(theta, -0.999999, 0.999999);
+    n[0] = n0;
+    n[1] = r;
+    n[2] = th / (1.0 - std::abs(th));
+    const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    for (int k = 0; k < 3; ++k) n[k] /= len;
+  };
+  const double dphi = (phi1_ - phi0_) / bins_, dtheta = (theta1_ - theta0_) / bins_;
+  auto can_predict = [&](std::size_t c, int p, int t) {
+    if (ne_ != 3) return true;
+    const float* sc = &scan_[c * scan_stride_];
+    const double lm = double(sc[6 * ne_]);
+    double lo_t = 1e300, hi_t = -1e300, lo_s = 1e300, hi_s = -1e300;
+    for (int corner = 0; corner < 4; ++corner) {
+      double n[3];
+      key_direction(phi0_ + (p + (corner & 1)) * dphi, theta0_ + (t + (corner >> 1)) * dtheta, n);
+      for (const double l : {l_min, l_max}) {
+        const double dl = std::isfinite(l) && l > -600 && l < 600 ? l - lm : 0.0;
+        double et = 0, es = 0;
+        for (std::size_t k = 0; k < 3; ++k) {
+          const double e = n[k] - double(sc[k]) - double(sc[3 * ne_ + k]) * dl;
+          et += double(sc[ne_ + k]) * e;
+          es += double(sc[2 * ne_ + k]) * e;
+        }
+        lo_t = std::min(lo_t, et);
+        hi_t = std::max(hi_t, et);
+        lo_s = std::min(lo_s, es);
+        hi_s = std::max(hi_s, es);
+      }
+    }
+    const double m = 1.25;
+    return hi_t >= -m && lo_t <= m && hi_s >= -m && lo_s <= m;
+  };
+  std::vector<std::uint32_t> front(bin_start_.begin(), bin_start_.end() - 1), back(bin_start_.begin() + 1, bin_start_.end());
   for (std::size_t c = 0; c < boxes.size(); ++c) {
     int p0, p1, t0, t1;
     bin_range(boxes[c], p0, p1, t0, t1);
     for (int t = t0; t <= t1; ++t) {
-      for (int p = p0; p <= p1; ++p) bin_cells_[fill[std::size_t(t * bins_ + p)]++] = std::uint32_t(c);
+      for (int p = p0; p <= p1; ++p) {
+        const std::size_t b = std::size_t(t * bins_ + p);
+        if (can_predict(c, p, t)) {
+          bin_cells_[front[b]++] = std::uint32_t(c);
+        } else {
+          bin_cells_[--back[b]] = std::uint32_t(c);
+        }
+      }
     }
   }
+  bin_split_ = std::move(front);
 
 }
 
@@ -542,7 +603,7 @@ bool Locator::predicted_starts(const double* q_unit, double log_q_norm, double n
   direction_key(q_unit, phi, theta);
   const int p = int(std::floor((phi - phi0_) / (phi1_ - phi0_) * bins_));
   const int t = int(std::floor((theta - theta0_) / (theta1_ - theta0_) * bins_));
-  const double p_exp = interp_.force_exponent();
+  const double p_exp = interp_.force_exponent(), inv_p = 1.0 / p_exp;
   const double hx = interp_.hx(), hy = interp_.hy();
   for (int ring = 0; ring <= 1 && starts.n == 0; ++ring) {
     for (int tt = t - ring; tt <= t + ring; ++tt) {
@@ -552,17 +613,17 @@ bool Locator::predicted_starts(const double* q_unit, double log_q_norm, double n
         const std::size_t b = std::size_t(tt * bins_ + pp);
         // Ask for every candidate's record first: the loads overlap instead of queueing behind
         // the mispredicted branches of the tests below.
-        for (std::size_t m = bin_start_[b]; m < bin_start_[b + 1]; ++m) {
+        for (std::size_t m = bin_start_[b]; m < bin_split_[b]; ++m) {
           const char* rec = reinterpret_cast<const char*>(&scan_[std::size_t(bin_cells_[m]) * scan_stride_]);
           __builtin_prefetch(rec);
           __builtin_prefetch(rec + 64);
         }
-        for (std::size_t m = bin_start_[b]; m < bin_start_[b + 1]; ++m) {
+        for (std::size_t m = bin_start_[b]; m < bin_split_[b]; ++m) {
           const std::size_t c = bin_cells_[m];
           // Level: the known force, or the force that makes the cell's mean |G| match |q|.
           const float* sc = &scan_[c * scan_stride_];
           const float* tail = sc + 6 * ne_;
-          const double l = std::clamp(fixed_force ? log_force : (log_q_norm - double(tail[1])) / p_exp, log_lo, log_hi);
+          const double l = std::clamp(fixed_force ? log_force : (log_q_norm - double(tail[1])) * inv_p, log_lo, log_hi);
           // The cell's linear model carried to l predicts the offset δ (cell units); most cells of
           // a bin are rejected by its first component alone.
           const double dl = l - double(tail[0]);
@@ -589,7 +650,7 @@ bool Locator::predicted_starts(const double* q_unit, double log_q_norm, double n
             // The known force must also explain the magnitude (else: an unknown-force twin).
             if (std::abs(log_q_norm - p_exp * l - log_g) > 0.05 + 3.0 * std::sqrt(std::max(noise2, 0.0))) continue;
           } else {
-            l1 = (log_q_norm - log_g) / p_exp;
+            l1 = (log_q_norm - log_g) * inv_p;
             // A solution needs a plausible force: far outside the range, this is not one.
             if (l1 < log_lo - 0.25 || l1 > log_hi + 0.25) continue;
             l1 = std::clamp(l1, log_lo, log_hi);
@@ -632,7 +693,7 @@ bool Locator::predicted_starts(const double* q_unit, double log_q_norm, double n
 
 bool Locator::cell_model(double x, double y, double l, CellModel& m) const {
   const std::size_t nx = interp_.nx(), ny = interp_.ny(), nf = interp_.n_levels();
-  const double u = (x - interp_.x0()) / interp_.hx(), v = (y - interp_.y0()) / interp_.hy();
+  const double u = (x - interp_.x0()) * interp_.inv_hx(), v = (y - interp_.y0()) * interp_.inv_hy();
   if (!(u >= 0 && v >= 0 && u < double(nx - 1) && v < double(ny - 1))) return false;
   const std::size_t i = std::size_t(u), j = std::size_t(v);
   const std::int32_t slot = cell_slot_[j * (nx - 1) + i];
@@ -700,14 +761,14 @@ void Locator::refine_start(const double* q_unit, double log_q_norm, bool fixed_f
     if (!fixed_force) {
       const double* g = d + 6 * ne_;
       const double log_g = g[0] + g[1] * dt + g[2] * ds + 0.5 * (g[3] * dt * dt + 2 * g[4] * dt * ds + g[5] * ds * ds);
-      st.l = std::clamp((log_q_norm - log_g) / p_exp, log_lo, log_hi);
+      st.l = std::clamp((log_q_norm - log_g) * (1.0 / p_exp), log_lo, log_hi);
     }
   }
 }
 
 int Locator::fold_twins(const Fit& fit, std::array<Start, 2>& twins) const {
   {
-    const double u = (fit.x - interp_.x0()) / interp_.hx(), v = (fit.y - interp_.y0()) / interp_.hy();
+    const double u = (fit.x - interp_.x0()) * interp_.inv_hx(), v = (fit.y - interp_.y0()) * interp_.inv_hy();
     if (!(u >= 0 && v >= 0 && u < double(interp_.nx() - 1) && v < double(interp_.ny() - 1))) return 0;
     const std::int32_t slot = cell_slot_[std::size_t(v) * (interp_.nx() - 1) + std::size_t(u)];
     if (slot < 0 || !cell_fold_[std::size_t(slot)]) return 0;  // no fold nearby: no twin to look for
@@ -836,7 +897,7 @@ Locator::Fit Locator::levenberg_marquardt(const double* q, const double* w, doub
     // χ² + 2 stepᵀJᵀr + stepᵀJᵀJ step (its change is second order too).
     double accept = 1e-3;
     {
-      const double u = (x - interp_.x0()) / hx, v = (y - interp_.y0()) / hy;
+      const double u = (x - interp_.x0()) * interp_.inv_hx(), v = (y - interp_.y0()) * interp_.inv_hy();
       const std::size_t gc = std::size_t(std::max(u, 0.0)) + std::size_t(std::max(v, 0.0)) * (interp_.nx() - 1);
       if (u >= 0 && v >= 0 && u < double(interp_.nx() - 1) && v < double(interp_.ny() - 1) && cell_slot_[gc] >= 0) {
         const double kappa = double(scan_[std::size_t(cell_slot_[gc]) * scan_stride_ + 6 * ne_ + 7]);
@@ -1047,10 +1108,11 @@ Location Locator::locate_impl(const double* charges_C, bool fixed_force, double 
   int n_starts = 0;
   // Coarse search by the linearized direction model: one start per distinct predicted solution.
   StartList predicted;
-  if (predicted_starts(q_unit.data(), std::log(q_norm), noise2, fixed_force, log_known_force, log_lo, log_hi, predicted)) {
+  const double log_q_norm = std::log(q_norm);
+  if (predicted_starts(q_unit.data(), log_q_norm, noise2, fixed_force, log_known_force, log_lo, log_hi, predicted)) {
     for (int s = 0; s < predicted.n && n_starts < options_.max_starts; ++s) {
       Start st = predicted.start[std::size_t(s)];
-      refine_start(q_unit.data(), std::log(q_norm), fixed_force, log_lo, log_hi, st);
+      refine_start(q_unit.data(), log_q_norm, fixed_force, log_lo, log_hi, st);
       fits[std::size_t(n_starts)] =
           levenberg_marquardt(q.data(), w.data(), st.x, st.y, st.l, fixed_force, log_lo, log_hi, fits.data(), n_starts);
       ++n_starts;
@@ -1068,7 +1130,7 @@ Location Locator::locate_impl(const double* charges_C, bool fixed_force, double 
       const int n_twins = fold_twins(f, twins);
       for (int t = 0; t < n_twins && n_starts < int(fits.size()); ++t) {
         Start& twin = twins[std::size_t(t)];
-        refine_start(q_unit.data(), std::log(q_norm), fixed_force, log_lo, log_hi, twin);
+        refine_start(q_unit.data(), log_q_norm, fixed_force, log_lo, log_hi, twin);
         bool known = false;
         for (int o = 0; o < n_starts && !known; ++o) {
           const Fit& g = fits[std::size_t(o)];

@@ -44,6 +44,8 @@ class MapInterpolant {
   double y0() const { return y0_; }
   double hx() const { return hx_; }
   double hy() const { return hy_; }
+  double inv_hx() const { return ihx_; }  ///< 1 / hx
+  double inv_hy() const { return ihy_; }  ///< 1 / hy
   double force_exponent() const { return p_; }
   double min_log_force() const { return log_f_.front(); }
   double max_log_force() const { return log_f_.back(); }
@@ -55,7 +57,7 @@ class MapInterpolant {
 
  private:
   std::size_t nx_ = 0, ny_ = 0, nf_ = 0, ne_ = 0;
-  double x0_ = 0, y0_ = 0, hx_ = 1, hy_ = 1;
+  double x0_ = 0, y0_ = 0, hx_ = 1, hy_ = 1, ihx_ = 1, ihy_ = 1;
   double p_ = 2.0 / 3.0;
   std::vector<double> log_f_;
   std::vector<double> data_;  ///< [f][j][i][k][4]: G, hx·Gx, hy·Gy, hx·hy·Gxy

@@ -209,6 +209,7 @@ class Locator {
   double phi0_ = 0, phi1_ = 1, theta0_ = 0, theta1_ = 1;
   std::vector<std::uint32_t> bin_start_;    ///< CSR: bin b holds bin_cells_[bin_start_[b] .. bin_start_[b+1])
   std::vector<std::uint32_t> bin_cells_;    ///< indices into cells_
+  std::vector<std::uint32_t> bin_split_;    ///< per bin: entries before it can predict a start (the rest: fallback only)
   /// Per cell (stride scan_stride_, float: small enough to stay in cache), the coarse search's
   /// whole model: the middle level's direction d, the rows of its inverse P (t, then s), its
   /// Jacobian J (t, then s columns), ∂d/∂ln F across the levels (secant); then that level's ln F,
