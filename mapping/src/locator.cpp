@@ -192,6 +192,25 @@ Locator::Locator(const ChargeMap& map, const LocatorOptions& options)
   // Linear direction model of every usable cell at every level (the coarse search's predictor):
   // unit direction d at the centre, its derivatives in cell units, their least-squares inverse,
   // and how well the linear model reproduces the corner directions.
+  // Largest squared distance, over the four corners of cell (i, j) at level f, between the
+  // corner's unit direction and a model's prediction there (offsets ±½ cell).
+  auto corner_error2 = [&](std::size_t f, std::size_t i, std::size_t j, auto&& predicted) {
+    double worst = 0;
+    for (int b = 0; b < 2; ++b) {
+      for (int a = 0; a < 2; ++a) {
+        Vec n{};
+        for (std::size_t k = 0; k < ne_; ++k) n[k] = interp_.node_value(f, i + std::size_t(a), j + std::size_t(b), k);
+        normalize(n.data(), ne_);
+        double e2 = 0;
+        for (std::size_t k = 0; k < ne_; ++k) {
+          const double e = n[k] - predicted(k, a - 0.5, b - 0.5);
+          e2 += e * e;
+        }
+        worst = std::max(worst, e2);
+      }
+    }
+    return worst;
+  };
   pred_stride_ = 5 * ne_ + 3;
   for (double F : map.forces_N) level_log_.push_back(std::log(F));
   pred_.assign(cells_.size() * nf * pred_stride_, 0.0);
@@ -274,20 +293,9 @@ Locator::Locator(const ChargeMap& map, const LocatorOptions& options)
         H[3 * ne_ + 2] = (gps + gms - 2 * g0) * ia2;
       }
       // Error of the linear model at the four corners (|offset| = ½ cell each way).
-      for (int b = 0; b < 2; ++b) {
-        for (int a = 0; a < 2; ++a) {
-          Vec n{};
-          for (std::size_t k = 0; k < ne_; ++k) n[k] = interp_.node_value(f, i + std::size_t(a), j + std::size_t(b), k);
-          normalize(n.data(), ne_);
-          const double dt = a - 0.5, ds = b - 0.5;
-          double e2 = 0;
-          for (std::size_t k = 0; k < ne_; ++k) {
-            const double e = n[k] - d[k] - J[k * 2] * dt - J[k * 2 + 1] * ds;
-            e2 += e * e;
-          }
-          cell_lin_err2_[c] = std::max(cell_lin_err2_[c], e2);
-        }
-      }
+      cell_lin_err2_[c] = std::max(cell_lin_err2_[c], corner_error2(f, i, j, [&](std::size_t k, double dt, double ds) {
+                                     return d[k] + J[k * 2] * dt + J[k * 2 + 1] * ds;
+                                   }));
     }
     cell_log_norm_[c] = log_norm;
   }
@@ -325,20 +333,9 @@ Locator::Locator(const ChargeMap& map, const LocatorOptions& options)
       double err2 = cell_lin_err2_[c];
       for (std::size_t f = 0; f < nf; ++f) {
         const double dlf = level_log_[f] - level_log_[fm];
-        for (int bb = 0; bb < 2; ++bb) {
-          for (int aa = 0; aa < 2; ++aa) {
-            Vec n{};
-            for (std::size_t k = 0; k < ne_; ++k) n[k] = interp_.node_value(f, i + std::size_t(aa), j + std::size_t(bb), k);
-            normalize(n.data(), ne_);
-            const double dt = aa - 0.5, ds = bb - 0.5;
-            double e2 = 0;
-            for (std::size_t k = 0; k < ne_; ++k) {
-              const double e = n[k] - rm[k] - dl[k] * dlf - rm[ne_ + 2 * k] * dt - rm[ne_ + 2 * k + 1] * ds;
-              e2 += e * e;
-            }
-            err2 = std::max(err2, e2);
-          }
-        }
+        err2 = std::max(err2, corner_error2(f, i, j, [&](std::size_t k, double dt, double ds) {
+                          return rm[k] + dl[k] * dlf + rm[ne_ + 2 * k] * dt + rm[ne_ + 2 * k + 1] * ds;
+                        }));
       }
       tail[6] = float(err2);
       // Curvature ratio κ = |H| / σ_min(J) (cell units, worst level): a Newton step δ leaves an
