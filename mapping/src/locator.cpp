@@ -862,6 +862,7 @@ Locator::Fit Locator::levenberg_marquardt(const double* q, const double* w, doub
   normal_equations();
   const double hx = interp_.hx(), hy = interp_.hy();
   int it = 0;
+  bool quadratic_exit = false;
   for (; it < options_.max_iterations; ++it) {
     Eigen::Matrix3d A = JtJ;
     for (int d = 0; d < 3; ++d) A(d, d) += lambda * JtJ(d, d) + 1e-300;
@@ -909,6 +910,7 @@ Locator::Fit Locator::levenberg_marquardt(const double* q, const double* w, doub
       chi2 = std::max(0.0, chi2 + 2.0 * Jtr.dot(step) + step.dot(JtJ * step));
       fit.converged = true;
       fit.blocked = false;
+      quadratic_exit = true;
       ++it;
       break;
     }
@@ -965,8 +967,10 @@ Locator::Fit Locator::levenberg_marquardt(const double* q, const double* w, doub
       }
     }
   }
-  // Is the minimum held by the map's edge? Test the undamped Gauss–Newton step.
-  {
+  // Is the minimum held by the map's edge? Test the undamped Gauss–Newton step. (Not after the
+  // quadratic-phase exit: that step was undamped, inside the map and in range, and the next one
+  // is of its square's order.)
+  if (!quadratic_exit) {
     Eigen::Matrix3d A = JtJ;
     for (int d = 0; d < 3; ++d) A(d, d) *= 1.0 + 1e-9;
     if (fixed_force) A(2, 2) = 1.0;
