@@ -967,10 +967,10 @@ Locator::Fit Locator::levenberg_marquardt(const double* q, const double* w, doub
       }
     }
   }
-  // Is the minimum held by the map's edge? Test the undamped Gauss–Newton step. (Not after the
-  // quadratic-phase exit: that step was undamped, inside the map and in range, and the next one
-  // is of its square's order.)
-  if (!quadratic_exit) {
+  // Is the minimum held by the map's edge? Test the undamped Gauss–Newton step. (Only asked of
+  // fits that do not fit within noise — outside_map or poor_fit — so it is skipped after a
+  // quadratic-phase exit within noise, the common case.)
+  if (!quadratic_exit || chi2 > (fixed_force ? chi2_limit_fixed_ : chi2_limit_free_)) {
     Eigen::Matrix3d A = JtJ;
     for (int d = 0; d < 3; ++d) A(d, d) *= 1.0 + 1e-9;
     if (fixed_force) A(2, 2) = 1.0;
