@@ -58,6 +58,53 @@ inline Eigen::Vector3d solve_spd3(const Eigen::Matrix3d& A, const Eigen::Vector3
   return Eigen::Vector3d(x0, x1, x2);
 }
 
+/// The coarse search's test of one candidate cell against the query direction (compact float
+/// record, Locator::scan_): the offset δ its linear model predicts (cell units), the model's
+/// residual² there and the force of a start; false when the cell cannot hold a solution.
+struct CandidateTest {
+  double dt, ds, res2, l;
+};
+template <std::size_t NE>
+inline bool test_candidate(const float* sc, std::size_t ne_runtime, const double* q_unit, double log_q_norm,
+                           double noise2, bool fixed_force, double log_force, double log_lo, double log_hi,
+                           double p_exp, double inv_p, CandidateTest& out) {
+  const std::size_t ne = NE > 0 ? NE : ne_runtime;
+  const float* tail = sc + 6 * ne;
+  // Level: the known force, or the force that makes the cell's mean |G| match |q|.
+  const double l = std::clamp(fixed_force ? log_force : (log_q_norm - double(tail[1])) * inv_p, log_lo, log_hi);
+  // The cell's linear model carried to l predicts the offset δ.
+  const double dl = l - double(tail[0]);
+  double e[NE > 0 ? NE : 8];
+  double dt = 0, ds = 0;
+  for (std::size_t n = 0; n < ne; ++n) {
+    e[n] = q_unit[n] - double(sc[n]) - double(sc[3 * ne + n]) * dl;
+    dt += double(sc[ne + n]) * e[n];
+    ds += double(sc[2 * ne + n]) * e[n];
+  }
+  if (!(std::abs(dt) <= 1.0 && std::abs(ds) <= 1.0)) return false;  // predicted beyond the neighbours
+  double res2 = 0;
+  for (std::size_t n = 0; n < ne; ++n) {
+    const double r = e[n] - double(sc[4 * ne + n]) * dt - double(sc[5 * ne + n]) * ds;
+    res2 += r * r;
+  }
+  // Within what the model's own error and the noise allow: a solution may be here.
+  if (res2 > 4.0 * double(tail[6]) + 9.0 * noise2 + 1e-14) return false;
+  // Force at the predicted point: |q| = F^p |G(δ, l)| with ln |G| linear in δ and l.
+  const double log_g = double(tail[2]) + double(tail[3]) * dt + double(tail[4]) * ds + double(tail[5]) * dl;
+  double l1 = l;
+  if (fixed_force) {
+    // The known force must also explain the magnitude (else: an unknown-force twin).
+    if (std::abs(log_q_norm - p_exp * l - log_g) > 0.05 + 3.0 * std::sqrt(std::max(noise2, 0.0))) return false;
+  } else {
+    l1 = (log_q_norm - log_g) * inv_p;
+    // A solution needs a plausible force: far outside the range, this is not one.
+    if (l1 < log_lo - 0.25 || l1 > log_hi + 0.25) return false;
+    l1 = std::clamp(l1, log_lo, log_hi);
+  }
+  out = {dt, ds, res2, l1};
+  return true;
+}
+
 inline double normalize(double* v, std::size_t n) {
   double s = 0;
   for (std::size_t k = 0; k < n; ++k) s += v[k] * v[k];
@@ -617,41 +664,14 @@ bool Locator::predicted_starts(const double* q_unit, double log_q_norm, double n
         }
         for (std::size_t m = bin_start_[b]; m < bin_split_[b]; ++m) {
           const std::size_t c = bin_cells_[m];
-          // Level: the known force, or the force that makes the cell's mean |G| match |q|.
           const float* sc = &scan_[c * scan_stride_];
-          const float* tail = sc + 6 * ne_;
-          const double l = std::clamp(fixed_force ? log_force : (log_q_norm - double(tail[1])) * inv_p, log_lo, log_hi);
-          // The cell's linear model carried to l predicts the offset δ (cell units); most cells of
-          // a bin are rejected by its first component alone.
-          const double dl = l - double(tail[0]);
-          std::array<double, max_electrodes> e{};
-          double dt = 0, ds = 0;
-          for (std::size_t n = 0; n < ne_; ++n) {
-            e[n] = q_unit[n] - double(sc[n]) - double(sc[3 * ne_ + n]) * dl;
-            dt += double(sc[ne_ + n]) * e[n];
-          }
-          for (std::size_t n = 0; n < ne_; ++n) ds += double(sc[2 * ne_ + n]) * e[n];
-          if (!(std::abs(dt) <= 1.0)) continue;  // predicted beyond the neighbours
-          if (!(std::abs(ds) <= 1.0)) continue;
-          double res2 = 0;
-          for (std::size_t n = 0; n < ne_; ++n) {
-            const double r = e[n] - double(sc[4 * ne_ + n]) * dt - double(sc[5 * ne_ + n]) * ds;
-            res2 += r * r;
-          }
-          // Within what the model's own error and the noise allow: a solution may be here.
-          if (res2 > 4.0 * double(tail[6]) + 9.0 * noise2 + 1e-14) continue;
-          // Force at the predicted point: |q| = F^p |G(δ, l)| with ln |G| linear in δ and l.
-          double l1 = l;
-          const double log_g = double(tail[2]) + double(tail[3]) * dt + double(tail[4]) * ds + double(tail[5]) * dl;
-          if (fixed_force) {
-            // The known force must also explain the magnitude (else: an unknown-force twin).
-            if (std::abs(log_q_norm - p_exp * l - log_g) > 0.05 + 3.0 * std::sqrt(std::max(noise2, 0.0))) continue;
-          } else {
-            l1 = (log_q_norm - log_g) * inv_p;
-            // A solution needs a plausible force: far outside the range, this is not one.
-            if (l1 < log_lo - 0.25 || l1 > log_hi + 0.25) continue;
-            l1 = std::clamp(l1, log_lo, log_hi);
-          }
+          CandidateTest ct{};
+          const bool pass = ne_ == 3 ? test_candidate<3>(sc, ne_, q_unit, log_q_norm, noise2, fixed_force, log_force, log_lo,
+                                                         log_hi, p_exp, inv_p, ct)
+                                     : test_candidate<0>(sc, ne_, q_unit, log_q_norm, noise2, fixed_force, log_force,
+                                                         log_lo, log_hi, p_exp, inv_p, ct);
+          if (!pass) continue;
+          const double dt = ct.dt, ds = ct.ds, l1 = ct.l, res2 = ct.res2;
           Start st{cell_xy_[c][0] + dt * hx, cell_xy_[c][1] + ds * hy, l1, res2};
           if ((std::abs(dt) > 0.5 || std::abs(ds) > 0.5) && !interp_.inside(st.x, st.y)) {
             // Predicted just off the map (a press on its edge): start inside the cell instead.
@@ -719,12 +739,16 @@ bool Locator::cell_model(double x, double y, double l, CellModel& m) const {
 void Locator::refine_start(const double* q_unit, double log_q_norm, bool fixed_force, double log_lo, double log_hi,
                            Start& st) const {
   const double hx = interp_.hx(), hy = interp_.hy(), p_exp = interp_.force_exponent();
-  std::size_t last_cell = std::size_t(-1);
+  double last_u = -1, last_v = -1;
   for (int pass = 0; pass < 2; ++pass) {
+    if (pass > 0) {  // the second pass only when the start moved to another cell
+      const double u = (st.x - interp_.x0()) * interp_.inv_hx(), v = (st.y - interp_.y0()) * interp_.inv_hy();
+      if (std::floor(u) == last_u && std::floor(v) == last_v) return;
+    }
     CellModel m;
     if (!cell_model(st.x, st.y, st.l, m)) return;
-    if (m.cell == last_cell) return;  // the second pass only when the start moved to another cell
-    last_cell = m.cell;
+    last_u = std::floor((st.x - interp_.x0()) * interp_.inv_hx());
+    last_v = std::floor((st.y - interp_.y0()) * interp_.inv_hy());
     const double* d = m.v.data();
     const double *jt = d + ne_, *js = d + 2 * ne_, *htt = d + 3 * ne_, *hts = d + 4 * ne_, *hss = d + 5 * ne_;
     double dt = m.dt, ds = m.ds;
