@@ -1102,38 +1102,79 @@ Location Locator::locate(const double* charges_C, double known_force_N) const {
   return locate_impl(charges_C, true, std::log(known_force_N));
 }
 
-Location Locator::locate_impl(const double* charges_C, bool fixed_force, double log_known_force) const {
-  const double log_lo = fixed_force ? log_known_force : log_force_lo_;
-  const double log_hi = fixed_force ? log_known_force : log_force_hi_;
-  const double limit = fixed_force ? chi2_limit_fixed_ : chi2_limit_free_;
-  Location out;
-  Vec q{}, w{}, q_unit{};
+bool Locator::prepare(const double* charges_C, bool fixed_force, double log_known_force, Query& Q,
+                      Location& early) const {
+  Q.fixed_force = fixed_force;
+  Q.log_known_force = log_known_force;
+  Q.log_lo = fixed_force ? log_known_force : log_force_lo_;
+  Q.log_hi = fixed_force ? log_known_force : log_force_hi_;
+  Q.limit = fixed_force ? chi2_limit_fixed_ : chi2_limit_free_;
   double snr2 = 0, noise_norm2 = 0;
   for (std::size_t k = 0; k < ne_; ++k) {
     if (!std::isfinite(charges_C[k])) {
-      out.flags = flag::outside_map | flag::no_press;
-      return out;
+      early = Location{};
+      early.flags = flag::outside_map | flag::no_press;
+      return false;
     }
-    q[k] = (charges_C[k] - offset_[k]) / gain_[k];
+    Q.q[k] = (charges_C[k] - offset_[k]) / gain_[k];
     const double sigma = noise_[k] / std::abs(gain_[k]);
-    w[k] = 1.0 / sigma;
-    snr2 += (q[k] * w[k]) * (q[k] * w[k]);
+    Q.w[k] = 1.0 / sigma;
+    snr2 += (Q.q[k] * Q.w[k]) * (Q.q[k] * Q.w[k]);
     noise_norm2 += sigma * sigma;
-    q_unit[k] = q[k];
+    Q.q_unit[k] = Q.q[k];
   }
   if (std::sqrt(snr2 / double(ne_)) < options_.no_press_snr) {
-    out.flags = flag::no_press;
-    return out;
+    early = Location{};
+    early.flags = flag::no_press;
+    return false;
   }
-  const double q_norm = normalize(q_unit.data(), ne_);
-  const double noise2 = noise_norm2 / (q_norm * q_norm);
+  Q.q_norm = normalize(Q.q_unit.data(), ne_);
+  Q.log_q_norm = std::log(Q.q_norm);
+  Q.noise2 = noise_norm2 / (Q.q_norm * Q.q_norm);
+  return true;
+}
+
+int Locator::add_fold_twins(const Query& Q, std::array<Fit, 8>& fits, int n_starts) const {
+  // Folds next to the electrodes: two exact solutions can lie within one cell, where the coarse
+  // search's linear models see only one. Each solution within noise proposes its fold twin
+  // (the quadratic model of its cell); a twin not already found is fitted too.
+  const int n_first = n_starts;
+  for (int s = 0; s < n_first && n_starts < int(fits.size()); ++s) {
+    const Fit& f = fits[std::size_t(s)];
+    if (!f.ok || f.duplicate || f.chi2 > Q.limit) continue;
+    std::array<Start, 2> twins;
+    const int n_twins = fold_twins(f, twins);
+    for (int t = 0; t < n_twins && n_starts < int(fits.size()); ++t) {
+      Start& twin = twins[std::size_t(t)];
+      refine_start(Q.q_unit.data(), Q.log_q_norm, Q.fixed_force, Q.log_lo, Q.log_hi, twin);
+      bool known = false;
+      for (int o = 0; o < n_starts && !known; ++o) {
+        const Fit& g = fits[std::size_t(o)];
+        known = g.ok && std::abs(g.x - twin.x) < 0.05 * interp_.hx() && std::abs(g.y - twin.y) < 0.05 * interp_.hy();
+      }
+      if (known) continue;
+      fits[std::size_t(n_starts)] = levenberg_marquardt(Q.q.data(), Q.w.data(), twin.x, twin.y, twin.l, Q.fixed_force,
+                                                        Q.log_lo, Q.log_hi, fits.data(), n_starts);
+      ++n_starts;
+    }
+  }
+  return n_starts;
+}
+
+Location Locator::locate_impl(const double* charges_C, bool fixed_force, double log_known_force) const {
+  Query Q;
+  Location early;
+  if (!prepare(charges_C, fixed_force, log_known_force, Q, early)) return early;
+  const double log_lo = Q.log_lo, log_hi = Q.log_hi, limit = Q.limit, noise2 = Q.noise2, log_q_norm = Q.log_q_norm;
+  const Vec& q = Q.q;
+  const Vec& w = Q.w;
+  const Vec& q_unit = Q.q_unit;
 
   std::array<Fit, 8> fits{};
   const double p_exp = interp_.force_exponent();
   int n_starts = 0;
   // Coarse search by the linearized direction model: one start per distinct predicted solution.
   StartList predicted;
-  const double log_q_norm = std::log(q_norm);
   if (predicted_starts(q_unit.data(), log_q_norm, noise2, fixed_force, log_known_force, log_lo, log_hi, predicted)) {
     for (int s = 0; s < predicted.n && n_starts < options_.max_starts; ++s) {
       Start st = predicted.start[std::size_t(s)];
@@ -1143,31 +1184,7 @@ Location Locator::locate_impl(const double* charges_C, bool fixed_force, double 
       ++n_starts;
     }
   }
-  // Folds next to the electrodes: two exact solutions can lie within one cell, where the coarse
-  // search's linear models see only one. Each solution within noise proposes its fold twin
-  // (the quadratic model of its cell); a twin not already found is fitted too.
-  {
-    const int n_first = n_starts;
-    for (int s = 0; s < n_first && n_starts < int(fits.size()); ++s) {
-      const Fit& f = fits[std::size_t(s)];
-      if (!f.ok || f.duplicate || f.chi2 > limit) continue;
-      std::array<Start, 2> twins;
-      const int n_twins = fold_twins(f, twins);
-      for (int t = 0; t < n_twins && n_starts < int(fits.size()); ++t) {
-        Start& twin = twins[std::size_t(t)];
-        refine_start(q_unit.data(), log_q_norm, fixed_force, log_lo, log_hi, twin);
-        bool known = false;
-        for (int o = 0; o < n_starts && !known; ++o) {
-          const Fit& g = fits[std::size_t(o)];
-          known = g.ok && std::abs(g.x - twin.x) < 0.05 * interp_.hx() && std::abs(g.y - twin.y) < 0.05 * interp_.hy();
-        }
-        if (known) continue;
-        fits[std::size_t(n_starts)] = levenberg_marquardt(q.data(), w.data(), twin.x, twin.y, twin.l, fixed_force, log_lo,
-                                                          log_hi, fits.data(), n_starts);
-        ++n_starts;
-      }
-    }
-  }
+  n_starts = add_fold_twins(Q, fits, n_starts);
   bool any_within = false;
   for (int s = 0; s < n_starts; ++s) any_within = any_within || (fits[std::size_t(s)].ok && fits[std::size_t(s)].chi2 <= limit);
   if (!any_within) {
@@ -1200,6 +1217,15 @@ Location Locator::locate_impl(const double* charges_C, bool fixed_force, double 
       ++n_starts;
     }
   }
+  return finish(Q, fits, n_starts);
+}
+
+Location Locator::finish(const Query& Q, std::array<Fit, 8>& fits, int n_starts) const {
+  const bool fixed_force = Q.fixed_force;
+  const double limit = Q.limit;
+  const Vec& q = Q.q;
+  const Vec& w = Q.w;
+  Location out;
   out.n_starts = n_starts;
   // Rank: fits within noise first, among them forces inside the map's levels first, then χ².
   auto extrapolated = [&](const Fit& f) {

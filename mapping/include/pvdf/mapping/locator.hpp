@@ -124,6 +124,18 @@ class Locator {
   /// Fills fit.sigma / fit.singular from fit.jtj (only for the fits that are reported).
   void covariance(Fit& fit, bool fixed_force) const;
   Location locate_impl(const double* charges_C, bool fixed_force, double log_known_force) const;
+  /// A query prepared for fitting: calibration undone, weights, unit direction, force bounds.
+  struct Query {
+    std::array<double, max_electrodes> q{}, w{}, q_unit{};
+    double q_norm = 0, log_q_norm = 0, noise2 = 0, log_lo = 0, log_hi = 0, limit = 0, log_known_force = 0;
+    bool fixed_force = false;
+  };
+  /// False (with `early` set: no_press or non-finite charges) when there is nothing to fit.
+  bool prepare(const double* charges_C, bool fixed_force, double log_known_force, Query& query, Location& early) const;
+  /// Fits the fold twins of the fits within noise (fold-prone cells only); returns the new count.
+  int add_fold_twins(const Query& query, std::array<Fit, 8>& fits, int n_fits) const;
+  /// Choice, flags, covariance and alternatives from the fits.
+  Location finish(const Query& query, std::array<Fit, 8>& fits, int n_fits) const;
   bool distinct_minima(const double* q, const double* w, const Fit& a, const Fit& b, double separation,
                        double limit) const;
   struct Shortlist {
