@@ -403,7 +403,8 @@ Locator::Locator(const ChargeMap& map, const LocatorOptions& options)
         const double smin = std::sqrt(std::max(half - dev, 0.0));
         kappa = std::max(kappa, smin > 0 ? std::sqrt(h2) / smin : 1e30);
       }
-      tail[7] = float(std::min(kappa, 1e30));
+      // Stored as the step threshold it gives: κ δ² / 2 ≤ 1e-4 cell, δ clamped to 1e-3…1e-2.
+      tail[7] = float(std::clamp(std::sqrt(2e-4 / std::max(kappa, 1e-30)), 1e-3, 1e-2));
     }
   }
   // The start refinement's and fold search's model per cell and level, compact (float, one
@@ -856,8 +857,8 @@ int Locator::fold_twins(const Fit& fit, std::array<Start, 2>& twins) const {
 Locator::Fit Locator::levenberg_marquardt(const double* q, const double* w, double x, double y, double l, bool fixed_force,
                                           double log_lo, double log_hi, const Fit* found, int n_found) const {
   Fit fit;
-  Vec model{};
-  std::array<std::array<double, 3>, max_electrodes> grad{};
+  Vec model;  // entries 0..ne−1 written by evaluate() before any read
+  std::array<std::array<double, 3>, max_electrodes> grad;
   if (!interp_.evaluate(x, y, l, model.data(), grad.data())) return fit;
   auto chi2_of = [&](const Vec& m) {
     double s = 0;
@@ -909,9 +910,9 @@ Locator::Fit Locator::levenberg_marquardt(const double* q, const double* w, doub
     }
     // Keep steps within a few cells: the interpolant is only trusted where it is defined.
     double limit = 1.0;
-    limit = std::min(limit, 4.0 * hx / std::max(std::abs(step[0]), 1e-300));
-    limit = std::min(limit, 4.0 * hy / std::max(std::abs(step[1]), 1e-300));
-    limit = std::min(limit, 1.0 / std::max(std::abs(step[2]), 1e-300));
+    if (std::abs(step[0]) > 4.0 * hx) limit = std::min(limit, 4.0 * hx / std::abs(step[0]));
+    if (std::abs(step[1]) > 4.0 * hy) limit = std::min(limit, 4.0 * hy / std::abs(step[1]));
+    if (std::abs(step[2]) > 1.0) limit = std::min(limit, 1.0 / std::abs(step[2]));
     // A nearly undamped Gauss–Newton step this small is in the quadratic phase: the error left
     // after it is ≈ κ δ² / 2 (κ = |H| / σ_min(J) of the cell holding the point). Below 1e-4 cell
     // (the threshold on δ clamped to 1e-3…1e-2 cell, 1e-3 in ln F; the map's own interpolation
@@ -922,8 +923,7 @@ Locator::Fit Locator::levenberg_marquardt(const double* q, const double* w, doub
       const double u = (x - interp_.x0()) * interp_.inv_hx(), v = (y - interp_.y0()) * interp_.inv_hy();
       const std::size_t gc = std::size_t(std::max(u, 0.0)) + std::size_t(std::max(v, 0.0)) * (interp_.nx() - 1);
       if (u >= 0 && v >= 0 && u < double(interp_.nx() - 1) && v < double(interp_.ny() - 1) && cell_slot_[gc] >= 0) {
-        const double kappa = double(scan_[std::size_t(cell_slot_[gc]) * scan_stride_ + 6 * ne_ + 7]);
-        accept = std::clamp(std::sqrt(2e-4 / std::max(kappa, 1e-30)), 1e-3, 1e-2);
+        accept = double(scan_[std::size_t(cell_slot_[gc]) * scan_stride_ + 6 * ne_ + 7]);
       }
     }
     if (lambda < 1e-2 && std::abs(step[0]) < accept * hx && std::abs(step[1]) < accept * hy && std::abs(step[2]) < 1e-3 &&
@@ -939,8 +939,8 @@ Locator::Fit Locator::levenberg_marquardt(const double* q, const double* w, doub
       break;
     }
     const double nx = x + limit * step[0], ny = y + limit * step[1], nl = l + limit * step[2];
-    Vec trial{};
-    std::array<std::array<double, 3>, max_electrodes> trial_grad{};
+    Vec trial;
+    std::array<std::array<double, 3>, max_electrodes> trial_grad;
     if (nl < log_lo || nl > log_hi || !interp_.evaluate(nx, ny, nl, trial.data(), trial_grad.data())) {
       fit.blocked = true;
       lambda *= 10;

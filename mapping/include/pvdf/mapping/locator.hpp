@@ -126,7 +126,7 @@ class Locator {
   Location locate_impl(const double* charges_C, bool fixed_force, double log_known_force) const;
   /// A query prepared for fitting: calibration undone, weights, unit direction, force bounds.
   struct Query {
-    std::array<double, max_electrodes> q{}, w{}, q_unit{};
+    std::array<double, max_electrodes> q, w, q_unit;  ///< entries 0..ne−1 are set by prepare()
     double q_norm = 0, log_q_norm = 0, noise2 = 0, log_lo = 0, log_hi = 0, limit = 0, log_known_force = 0;
     bool fixed_force = false;
   };
@@ -226,8 +226,9 @@ class Locator {
   /// whole model: the middle level's direction d, the rows of its inverse P (t, then s), its
   /// Jacobian J (t, then s columns), ∂d/∂ln F across the levels (secant); then that level's ln F,
   /// the cell's mean ln |G|, ln |G| at the centre with its gradient (t, s) and ∂/∂ln F, the
-  /// largest squared error of this model at the corners and levels, and the curvature ratio
-  /// κ = |H| / σ_min(J) (a Newton step δ leaves an error ≈ κ δ² / 2).
+  /// largest squared error of this model at the corners and levels, and the largest Newton step
+  /// (cell units) taken without a new evaluation: from the curvature ratio κ = |H| / σ_min(J),
+  /// the error κ δ² / 2 it leaves below 1e-4 cell.
   std::vector<float> scan_;
   std::size_t scan_stride_ = 0;
 };
