@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include <atomic>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <iostream>
@@ -130,6 +131,9 @@ int run_map(const MapCommandOptions& o) {
     j["model_reason"] = report.model_reason;
     j["tolerance"] = map.tolerance;
     j["estimated_relative_error"] = report.estimated_relative_error;
+    // Unknown (NaN: --setup-checks 0) is written as null, never as a number.
+    const double w_error = map.estimated_deflection_relative_error;
+    j["estimated_deflection_relative_error"] = std::isfinite(w_error) ? nlohmann::json(w_error) : nlohmann::json(nullptr);
     j["n_dofs"] = report.n_dofs;
     j["ranks"] = report.ranks;
     j["threads"] = report.threads;
@@ -149,6 +153,13 @@ int run_map(const MapCommandOptions& o) {
                 report.n_solved, report.n_scaled, report.n_scaling_checks, report.n_scaling_checks_failed,
                 report.max_scaling_check_error, report.n_mirrored, report.n_resumed, report.n_failed);
     std::printf("model %s: %s\n", report.model.c_str(), report.model_reason.c_str());
+    if (std::isnan(map.estimated_deflection_relative_error)) {
+      std::printf("estimated error: not estimated (--setup-checks 0)\n");
+    } else {
+      std::printf("estimated error (sweep setup): charge %.2g %%, deflection at the load %.2g %% (a lower bound: the "
+                  "sweep mesh is graded to the electrodes, not to the probe)\n",
+                  100 * map.estimated_relative_error, 100 * map.estimated_deflection_relative_error);
+    }
     std::printf("symmetry: %s\n", report.symmetry_reason.c_str());
     std::printf("%d rank(s) x %d thread(s), %.1f s, %.3g s per solved position and core\n", report.ranks,
                 report.threads, report.wall_s, report.per_position_s);

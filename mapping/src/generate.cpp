@@ -874,6 +874,11 @@ ChargeMap Generator::run(MapReport& report) {
   // Report.
   const fem::SweepSetup& setup = sweeps_[0]->setup();
   map_.model = fem::model_name(setup.model);
+  // Without setup checks SweepSetup holds its placeholder 1 ("not estimated"): the map says unknown.
+  if (o_.n_setup_checks > 0) {
+    map_.estimated_relative_error = setup.estimated_relative_error;
+    map_.estimated_deflection_relative_error = setup.estimated_deflection_relative_error;
+  }
   report = MapReport{};
   report.ranks = size_;
   report.threads = threads_;

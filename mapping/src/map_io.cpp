@@ -9,10 +9,12 @@
 #include <hdf5.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <set>
 #include <sstream>
+#include <utility>
 
 namespace pvdf::mapping {
 
@@ -48,6 +50,13 @@ std::string num(double v) {
 [[noreturn]] void bad(const std::string& source, const std::string& what) { throw InputError(source + ": " + what); }
 
 const std::string regenerate = "; regenerate the map with `pvdfkit map` or repair the file";
+
+/// Root attributes that may be absent (files written before they existed, maps without an FEM
+/// error estimate): absent in the file = NaN in ChargeMap = unknown. No new format version needed.
+constexpr std::array<std::pair<const char*, double ChargeMap::*>, 2> optional_number_attributes{{
+    {"estimated_relative_error", &ChargeMap::estimated_relative_error},
+    {"estimated_deflection_relative_error", &ChargeMap::estimated_deflection_relative_error},
+}};
 
 void check_axis(const std::vector<double>& axis, const std::string& name, const std::string& source) {
   if (axis.size() < 2) bad(source, name + " has " + std::to_string(axis.size()) + " values; at least 2 are needed" + regenerate);
@@ -156,6 +165,12 @@ void validate(const ChargeMap& m, const std::string& source) {
   if (n_ok == 0) bad(source, "/status has no ok point; the map holds no usable charge" + regenerate);
   if (!std::isfinite(m.tolerance) || m.tolerance < 0) bad(source, "attribute tolerance = " + num(m.tolerance) + " must be finite and >= 0" + regenerate);
   if (!std::isfinite(m.rim_margin_m) || m.rim_margin_m < 0) bad(source, "attribute rim_margin_m = " + num(m.rim_margin_m) + " must be finite and >= 0" + regenerate);
+  for (const auto& [name, member] : optional_number_attributes) {
+    const double value = m.*member;
+    if (!std::isnan(value) && !(std::isfinite(value) && value >= 0)) {
+      bad(source, std::string("attribute ") + name + " = " + num(value) + " must be finite and >= 0 (or absent: unknown)" + regenerate);
+    }
+  }
   if (m.calibration) {
     const auto& c = *m.calibration;
     if (c.gain.size() != m.ne() || c.offset_C.size() != m.ne()) {
@@ -433,6 +448,9 @@ void write_map(const std::string& path, const ChargeMap& map) {
     w.string_attribute(root, "scene_json", map.scene_json);
     w.string_attribute(root, "model", map.model);
     w.number_attribute(root, "tolerance", map.tolerance);
+    for (const auto& [name, member] : optional_number_attributes) {
+      if (!std::isnan(map.*member)) w.number_attribute(root, name, map.*member);
+    }
     w.number_attribute(root, "rim_margin_m", map.rim_margin_m);
     w.string_attribute(root, "description", map.description);
     w.string_attribute(root, "layout",
@@ -499,6 +517,9 @@ ChargeMap read_map(const std::string& path) {
   m.scene_json = r.read_string_attribute(root, "scene_json", "/:");
   m.model = r.read_string_attribute(root, "model", "/:");
   m.tolerance = r.read_number_attribute(root, "tolerance", "/:");
+  for (const auto& [name, member] : optional_number_attributes) {
+    if (H5Aexists(root, name) > 0) m.*member = r.read_number_attribute(root, name, "/:");
+  }
   m.rim_margin_m = r.read_number_attribute(root, "rim_margin_m", "/:");
   if (H5Aexists(root, "description") > 0) m.description = r.read_string_attribute(root, "description", "/:");
 

@@ -1,7 +1,8 @@
 // Map generation against its oracles: direct solves at the same positions (warm-started rows
 // = independent solves), mirror images = solves at the mirrored position, the force-scaling
 // shortcut used only where its check passes (pure membrane: passes; 100 N/m pretension:
-// fails), and kill-and-resume = an uninterrupted run. A small 10 mm film keeps solves cheap.
+// fails), kill-and-resume = an uninterrupted run, and the map file carries the sweep setup's own
+// charge and deflection error estimates. A small 10 mm film keeps solves cheap.
 #include "pvdf/core/error.hpp"
 #include "pvdf/fem/probe_sweep.hpp"
 #include "pvdf/fem/solver.hpp"
@@ -80,7 +81,7 @@ pvdf::fem::SweepOptions sweep_options_like(const pvdf::Scene& scene, const MapOp
   s.solver.tolerance = o.tolerance;
   s.rim_margin_m = 2 * scene.probe.radius_m;
   s.forces_N = o.forces_N;
-  s.n_setup_checks = 0;
+  s.n_setup_checks = o.n_setup_checks;
   return s;
 }
 
@@ -276,10 +277,11 @@ TEST_CASE("kill and resume gives the uninterrupted map; a foreign checkpoint is 
   CHECK_FALSE(std::filesystem::exists(checkpoint));
 }
 
-TEST_CASE("generated map file round trip with /provenance", "[mapping][generate][slow]") {
+TEST_CASE("generated map file round trip with /provenance and the setup's error estimates", "[mapping][generate][slow]") {
   const auto scene = small_scene();
   MapOptions o = cheap_options({-0.002, 0.002, -0.002, 0.0});  // x = -2, 0, 2 mm; y = -2, 0 mm
   o.use_symmetry = true;
+  o.n_setup_checks = 1;  // one direct solve (film centre) measures the sweep mesh's errors
   MapReport report;
   const ChargeMap m = generate_map(scene, o, &report);
   const std::string path = temp_dir() + "/roundtrip.h5";
@@ -291,4 +293,18 @@ TEST_CASE("generated map file round trip with /provenance", "[mapping][generate]
   CHECK(back.tolerance == Approx(0.02));
   CHECK(read_provenance(path) == report.provenance);
   CHECK(std::count(report.provenance.begin(), report.provenance.end(), provenance::mirrored) == 2);
+
+  // The error estimates are the sweep setup's, written and read back unchanged; the deflection
+  // one is a measurement (finite, > 0, < 1 = "a check failed"), not the placeholder or NaN.
+  const pvdf::fem::ProbeSweep sweep(scene, sweep_options_like(scene, o));
+  const pvdf::fem::SweepSetup& setup = sweep.setup();
+  INFO("setup: charge " << setup.estimated_relative_error << ", deflection " << setup.estimated_deflection_relative_error);
+  CHECK(back.estimated_relative_error == m.estimated_relative_error);
+  CHECK(back.estimated_deflection_relative_error == m.estimated_deflection_relative_error);
+  CHECK(m.estimated_relative_error == Approx(setup.estimated_relative_error).epsilon(1e-9));
+  CHECK(m.estimated_deflection_relative_error == Approx(setup.estimated_deflection_relative_error).epsilon(1e-9));
+  CHECK(m.estimated_relative_error == report.estimated_relative_error);
+  CHECK(std::isfinite(back.estimated_deflection_relative_error));
+  CHECK(back.estimated_deflection_relative_error > 0);
+  CHECK(back.estimated_deflection_relative_error < 1);
 }

@@ -9,6 +9,7 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -93,7 +94,14 @@ TEST_CASE("pvdfkit map: JSON summary, provenance, symmetry", "[mapping][cli][map
   CHECK(j["mirror_y"] == true);
   CHECK(j["ranks"] == 1);
   CHECK(j["model"].get<std::string>() == "large-rotation");
+  // --setup-checks 0: the deflection error is unknown, written as null (the charge-error key keeps
+  // its old placeholder 1) and absent from the map (NaN).
+  REQUIRE(j.contains("estimated_deflection_relative_error"));
+  CHECK(j["estimated_deflection_relative_error"].is_null());
+  CHECK(j["estimated_relative_error"] == 1.0);
   const ChargeMap m = read_map(out);
+  CHECK(std::isnan(m.estimated_relative_error));
+  CHECK(std::isnan(m.estimated_deflection_relative_error));
   CHECK(m.nx() == 5);
   CHECK(m.ny() == 3);
   CHECK(read_provenance(out).size() == 15);

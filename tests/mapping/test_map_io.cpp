@@ -7,6 +7,7 @@
 #include <catch2/catch.hpp>
 #include <hdf5.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -68,6 +69,8 @@ void replace_doubles(hid_t file, const char* name, const std::vector<hsize_t>& d
 
 TEST_CASE("a map survives a write/read round trip exactly", "[mapping][io]") {
   ChargeMap m = small_map();
+  m.estimated_relative_error = 0.0071;
+  m.estimated_deflection_relative_error = 0.031;
   m.calibration = Calibration{{1.1, 0.9, 1.05}, {1e-12, -2e-12, 0.0}, "measured.csv", R"({"n": 3})"};
   m.dcharge_dx_C_per_m.assign(m.charge_C.size(), 1e-9);
   m.dcharge_dy_C_per_m.assign(m.charge_C.size(), -2e-9);
@@ -77,6 +80,8 @@ TEST_CASE("a map survives a write/read round trip exactly", "[mapping][io]") {
   CHECK(r.scene_json == m.scene_json);
   CHECK(r.model == m.model);
   CHECK(r.tolerance == m.tolerance);
+  CHECK(r.estimated_relative_error == m.estimated_relative_error);
+  CHECK(r.estimated_deflection_relative_error == m.estimated_deflection_relative_error);
   CHECK(r.rim_margin_m == m.rim_margin_m);
   CHECK(r.x_m == m.x_m);
   CHECK(r.y_m == m.y_m);
@@ -102,6 +107,32 @@ TEST_CASE("a map survives a write/read round trip exactly", "[mapping][io]") {
   CHECK(r.calibration->offset_C == m.calibration->offset_C);
   CHECK(r.calibration->report_json == m.calibration->report_json);
   CHECK_FALSE(r.pvdfkit_version.empty());
+}
+
+TEST_CASE("a map file without the error estimates (written before they existed) loads, estimates unknown",
+          "[mapping][io]") {
+  ChargeMap m = small_map();
+  m.estimated_relative_error = 0.0071;
+  m.estimated_deflection_relative_error = 0.031;
+  const std::string path = temp_path("before_error_estimates.h5");
+  write_map(path, m);
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  const hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+  REQUIRE(file >= 0);
+  for (const char* name : {"estimated_relative_error", "estimated_deflection_relative_error"}) {
+    INFO(name);
+    REQUIRE(H5Aexists(file, name) > 0);  // written next to /:tolerance ...
+    REQUIRE(H5Adelete(file, name) >= 0);  // ... and removed: the file as an older pvdfkit wrote it
+  }
+  H5Fclose(file);
+  const ChargeMap r = read_map(path);
+  CHECK(std::isnan(r.estimated_relative_error));
+  CHECK(std::isnan(r.estimated_deflection_relative_error));
+  CHECK(r.deflection_at_load_m == m.deflection_at_load_m);
+  // Unknown is written as no attribute (and read back as unknown), never as a number.
+  write_map(path, r);
+  const ChargeMap again = read_map(path);
+  CHECK(std::isnan(again.estimated_deflection_relative_error));
 }
 
 TEST_CASE("map files are plain HDF5 that h5dump can read", "[mapping][io]") {
@@ -170,6 +201,9 @@ TEST_CASE("validation names the offending value", "[mapping][io]") {
   m = small_map();
   m.noise_C[0] = 0;
   CHECK_THROWS_WITH(validate(m, "m.h5"), Catch::Contains("/electrodes/noise_C[0]"));
+  m = small_map();
+  m.estimated_deflection_relative_error = -0.03;
+  CHECK_THROWS_WITH(validate(m, "m.h5"), Catch::Contains("attribute estimated_deflection_relative_error = -0.03"));
   m = small_map();
   m.calibration = Calibration{{1.0, 0.0, 1.0}, {0, 0, 0}, "", ""};
   CHECK_THROWS_WITH(validate(m, "m.h5"), Catch::Contains("/calibration/gain[1]"));

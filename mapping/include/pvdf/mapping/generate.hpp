@@ -44,7 +44,8 @@ struct MapOptions {
   /// Copy results to mirror-image positions when the scene is mirror-symmetric about x and/or y.
   bool use_symmetry = true;
   /// Probe positions at which the solver setup compares its sweep mesh with direct solves
-  /// (0..3, pvdf::fem::SweepOptions::n_setup_checks); 0 = none (the error is then not estimated).
+  /// (0..3, pvdf::fem::SweepOptions::n_setup_checks); 0 = none (the error is then not estimated:
+  /// ChargeMap::estimated_relative_error and estimated_deflection_relative_error stay NaN).
   int n_setup_checks = 3;
   /// Worker threads in this process (one ProbeSweep each); 0 = hardware concurrency.
   int threads = 0;

@@ -6,6 +6,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -38,6 +39,14 @@ struct ChargeMap {
   std::string pvdfkit_version;     ///< version that wrote the map
   std::string model;               ///< kinematics/model used ("von-karman", "synthetic-analytic", ...)
   double tolerance = 0.0;          ///< requested relative error of the computed charges
+  /// Estimated relative error of the charges (max_k |dQ_k| / max_k |Q_k|) and of
+  /// deflection_at_load_m, measured by the FEM sweep setup against direct solves
+  /// (pvdf::fem::SweepSetup). The deflection is the less accurate output (the sweep mesh is graded
+  /// to the electrodes, not to the probe) and its estimate, the largest error at the check
+  /// positions, is a lower bound (docs/map-generation.md §9). NaN = unknown (not estimated,
+  /// synthetic map, file written before these existed).
+  double estimated_relative_error = std::numeric_limits<double>::quiet_NaN();
+  double estimated_deflection_relative_error = std::numeric_limits<double>::quiet_NaN();
   double rim_margin_m = 0.0;       ///< positions closer than this to the rim are masked out
   std::string description;         ///< free text
 
