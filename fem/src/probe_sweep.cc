@@ -210,7 +210,12 @@ ProbeSweep::ProbeSweep(const pvdf::Scene& scene, const SweepOptions& options) : 
     // factor (the checks' own references are direct solves with error <= 1.4e-3).
     constexpr double worst_case_factor = 2.5;
     im.setup.estimated_relative_error = failed ? 1.0 : std::min(1.0, worst_case_factor * err);
-    im.setup.estimated_deflection_relative_error = failed ? 1.0 : err_w;
+    // The deflection under the probe is resolved far worse than the charges (the mesh is graded
+    // to the electrodes, not to the probe): on seed 001 five map nodes off the checks against
+    // direct adaptive solves were up to 14x the check maximum (9.4 % at (-36, 12) mm against
+    // 0.67 %; docs/map-generation.md), hence its own factor.
+    constexpr double deflection_worst_case_factor = 15.0;
+    im.setup.estimated_deflection_relative_error = failed ? 1.0 : std::min(1.0, deflection_worst_case_factor * err_w);
     im.setup.error_estimator =
         "max over " + std::to_string(checks.size()) + " probe positions (centre, on an electrode, beside one, far) at " +
         fmt(f_max) + " N of max_k |dQ_k| / max_k |Q_k| against direct solves on meshes graded to each probe (" +

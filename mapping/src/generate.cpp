@@ -599,9 +599,12 @@ void Generator::run_blocks(const std::vector<Block>& blocks) {
   auto worker = [&](int t) {
     try {
       if (!sweeps_[std::size_t(t)]) {
-        // Same mesh as the first sweep; its setup check already measured the error.
+        // Same mesh as the first sweep (its final sizes: the setup halves them when a check
+        // fails), whose setup check already measured the error.
         fem::SweepOptions options = sweep_options_;
         options.n_setup_checks = 0;
+        options.region_size_m = sweeps_[0]->setup().region_size_m;
+        options.electrode_size_m = sweeps_[0]->setup().electrode_size_m;
         sweeps_[std::size_t(t)] = std::make_unique<fem::ProbeSweep>(scene_, options);
       }
       std::vector<double> records;

@@ -43,7 +43,7 @@ struct SweepSetup {
   std::size_t n_cells = 0;
   double estimated_relative_error = 1;  ///< of electrode charges on the sweep mesh (setup check)
   std::string error_estimator;          ///< how it was obtained
-  double estimated_deflection_relative_error = 1;  ///< of deflection_at_load_m at the same checks
+  double estimated_deflection_relative_error = 1;  ///< of deflection_at_load_m: the checks' maximum × 15 (calibrated)
   double region_size_m = 0;             ///< largest cell size of the sweep mesh (also under any probe)
   double electrode_size_m = 0;          ///< cell size on the electrodes
   double setup_s = 0;                   ///< wall time of the setup
