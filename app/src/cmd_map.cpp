@@ -156,8 +156,8 @@ int run_map(const MapCommandOptions& o) {
     if (std::isnan(map.estimated_deflection_relative_error)) {
       std::printf("estimated error: not estimated (--setup-checks 0)\n");
     } else {
-      std::printf("estimated error (sweep setup): charge %.2g %%, deflection at the load %.2g %% (a lower bound: the "
-                  "sweep mesh is graded to the electrodes, not to the probe)\n",
+      std::printf("estimated error (sweep setup): charge %.2g %%, deflection at the load %.2g %% (the sweep mesh is "
+                  "graded to the electrodes, not to the probe: the checks' maximum x 15)\n",
                   100 * map.estimated_relative_error, 100 * map.estimated_deflection_relative_error);
     }
     std::printf("symmetry: %s\n", report.symmetry_reason.c_str());

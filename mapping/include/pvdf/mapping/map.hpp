@@ -42,8 +42,8 @@ struct ChargeMap {
   /// Estimated relative error of the charges (max_k |dQ_k| / max_k |Q_k|) and of
   /// deflection_at_load_m, measured by the FEM sweep setup against direct solves
   /// (pvdf::fem::SweepSetup). The deflection is the less accurate output (the sweep mesh is graded
-  /// to the electrodes, not to the probe) and its estimate, the largest error at the check
-  /// positions, is a lower bound (docs/map-generation.md §9). NaN = unknown (not estimated,
+  /// to the electrodes, not to the probe): its estimate is the largest error at the check
+  /// positions × 15, calibrated on seed 001 (docs/map-generation.md §9). NaN = unknown (not estimated,
   /// synthetic map, file written before these existed).
   double estimated_relative_error = std::numeric_limits<double>::quiet_NaN();
   double estimated_deflection_relative_error = std::numeric_limits<double>::quiet_NaN();
