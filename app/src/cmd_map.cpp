@@ -159,6 +159,8 @@ int run_map(const MapCommandOptions& o) {
       std::printf("estimated error (sweep setup): charge %.2g %%, deflection at the load %.2g %% (the sweep mesh is "
                   "graded to the electrodes, not to the probe: the checks' maximum x 15)\n",
                   100 * map.estimated_relative_error, 100 * map.estimated_deflection_relative_error);
+      std::printf("  caution: the charge estimate comes from 4 check positions; an audit of seed 001 found up to 3.5x it "
+                  "near the rim (docs/map-generation.md section 9; check a map with bench/mapping/audit_map.py)\n");
     }
     std::printf("symmetry: %s\n", report.symmetry_reason.c_str());
     std::printf("%d rank(s) x %d thread(s), %.1f s, %.3g s per solved position and core\n", report.ranks,
