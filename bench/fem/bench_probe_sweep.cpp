@@ -28,15 +28,6 @@ using Clock = std::chrono::steady_clock;
 double cpu_s() { return static_cast<double>(std::clock()) / CLOCKS_PER_SEC; }
 double wall_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-pvdf::Scene with_probe(const pvdf::Scene& scene, double x, double y, double F) {
-  pvdf::Scene s = scene;
-  pvdf::Load l;
-  l.kind = pvdf::Load::Kind::probe;
-  l.position_m = {x, y};
-  l.force_N = F;
-  s.loads = {l};
-  return s;
-}
 
 double charge_difference(const std::vector<double>& a, const std::vector<double>& ref) {
   double d = 0, scale = 0;
@@ -98,7 +89,7 @@ int main(int argc, char** argv) {
         o.adaptive = adaptive;
         c0 = cpu_s();
         t0 = Clock::now();
-        const auto r = pvdf::fem::solve(with_probe(scene, p[0], p[1], F), o);
+        const auto r = pvdf::fem::solve(pvdf::with_probe_load(scene, p[0], p[1], F), o);
         l.wall += wall_since(t0);
         l.cpu += cpu_s() - c0;
         l.its += r.summary.newton_iterations;

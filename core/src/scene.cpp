@@ -403,6 +403,16 @@ const char* default_scene_json() {
 })";
 }
 
+Scene with_probe_load(const Scene& scene, double x_m, double y_m, double force_N) {
+  Scene s = scene;
+  Load load;
+  load.kind = Load::Kind::probe;
+  load.position_m = {x_m, y_m};
+  load.force_N = force_N;
+  s.loads = {load};
+  return s;
+}
+
 Scene default_scene() { return parse_scene(parse_json_text(default_scene_json(), "<built-in seed-001 scene>"), "<built-in seed-001 scene>"); }
 
 nlohmann::json scene_to_json(const Scene& s) {

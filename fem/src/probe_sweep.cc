@@ -31,15 +31,6 @@ std::string fmt(double x, int precision = 3) {
   return os.str();
 }
 
-pvdf::Scene with_probe(const pvdf::Scene& scene, double x_m, double y_m, double force_N) {
-  pvdf::Scene s = scene;
-  pvdf::Load load;
-  load.kind = pvdf::Load::Kind::probe;
-  load.position_m = {x_m, y_m};
-  load.force_N = force_N;
-  s.loads = {load};
-  return s;
-}
 
 double smallest_electrode_side(const pvdf::Scene& scene) {
   double side = std::numeric_limits<double>::max();
@@ -99,7 +90,7 @@ ProbeSweep::ProbeSweep(const pvdf::Scene& scene, const SweepOptions& options) : 
   Model model = so.model;
   bool bending = so.include_bending;
   if (so.model == Model::automatic) {
-    const std::string reason = detail::bending_negligible_reason(with_probe(scene, 0, 0, f_min), so);
+    const std::string reason = detail::bending_negligible_reason(pvdf::with_probe_load(scene, 0, 0, f_min), so);
     if (!reason.empty()) {
       model = Model::large_rotation;
       bending = false;
@@ -108,7 +99,7 @@ ProbeSweep::ProbeSweep(const pvdf::Scene& scene, const SweepOptions& options) : 
       // Bending kept: the kinematics from a direct auto solve at the largest force, centred probe.
       Options o = so;
       o.adaptive = false;
-      const Result r = pvdf::fem::solve(with_probe(scene, 0, 0, f_max), o);
+      const Result r = pvdf::fem::solve(pvdf::with_probe_load(scene, 0, 0, f_max), o);
       if (usable(r.summary.status)) {
         model = r.summary.model;
         im.setup.model_reason = "auto solve at " + fmt(f_max) + " N, centred probe: " + r.summary.model_reason;
@@ -182,7 +173,7 @@ ProbeSweep::ProbeSweep(const pvdf::Scene& scene, const SweepOptions& options) : 
       o.model = model;
       o.include_bending = bending;
       o.adaptive = false;
-      const Result r = pvdf::fem::solve(with_probe(scene, p[0], p[1], f_max), o);
+      const Result r = pvdf::fem::solve(pvdf::with_probe_load(scene, p[0], p[1], f_max), o);
       if (!usable(s.status) || !usable(r.summary.status)) {
         failed = true;
         where = "check solve at (" + fmt(p[0]) + ", " + fmt(p[1]) + ") m did not converge";

@@ -193,20 +193,9 @@ bool MapInterpolant::evaluate(double x_m, double y_m, double log_force, double* 
 
   // Bracket the force level in ln F.
   std::size_t f0 = 0;
-  double w = 0, dw = 0;  // G = (1 − w) G_f0 + w G_f0+1, dw = ∂w/∂ln F
-  if (nf_ > 1) {
-    if (log_force <= log_f_.front()) {
-      f0 = 0;
-    } else if (log_force >= log_f_.back()) {
-      f0 = nf_ - 2;
-      w = 1;
-    } else {
-      while (f0 + 2 < nf_ && log_force > log_f_[f0 + 1]) ++f0;
-      const double span = log_f_[f0 + 1] - log_f_[f0];
-      w = (log_force - log_f_[f0]) / span;
-      dw = 1.0 / span;
-    }
-  }
+  double w = 0, dw = 0;  // G = (1 − w) G_f0 + w G_f0+1, dw = ∂w/∂ln F (0 where w is clamped)
+  level_bracket(log_force, f0, w);
+  if (nf_ > 1 && log_force > log_f_.front() && log_force < log_f_.back()) dw = 1.0 / (log_f_[f0 + 1] - log_f_[f0]);
   const double* cell = &coef_[(j * (nx_ - 1) + i) * nf_ * 16 * ne_];
   const std::size_t level_stride = 16 * ne_;
   std::array<double, max_electrodes> g0, gx0, gy0, g1, gx1, gy1;

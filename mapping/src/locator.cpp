@@ -258,14 +258,18 @@ Locator::Locator(const ChargeMap& map, const LocatorOptions& options)
     }
     return worst;
   };
-  pred_stride_ = 5 * ne_ + 3;
+  // Working tables of the constructor (condensed into scan_ and model_ below). pred, per cell and
+  // level: unit direction d (ne), its tangential derivatives J = ∂d/∂(t, s) in cell units
+  // ([k][2]), the least-squares inverse P = (JᵀJ)⁻¹Jᵀ (2 × ne), ln |G| at the centre and its
+  // gradient ∂ln|G|/∂(t, s). quad: second derivatives of d ([k][tt, ts, ss]) and of ln |G|.
+  const std::size_t pred_stride = 5 * ne_ + 3;
   for (double F : map.forces_N) level_log_.push_back(std::log(F));
-  pred_.assign(cells_.size() * nf * pred_stride_, 0.0);
-  quad_stride_ = 3 * ne_ + 3;
-  quad_.assign(cells_.size() * nf * quad_stride_, 0.0);
+  std::vector<double> pred(cells_.size() * nf * pred_stride, 0.0);
+  const std::size_t quad_stride = 3 * ne_ + 3;
+  std::vector<double> quad(cells_.size() * nf * quad_stride, 0.0);
   cell_slot_.assign((nx - 1) * (ny - 1), -1);
   for (std::size_t c = 0; c < cells_.size(); ++c) cell_slot_[cells_[c]] = std::int32_t(c);
-  cell_lin_err2_.assign(cells_.size(), 0.0);
+  std::vector<double> cell_lin_err2(cells_.size(), 0.0);
   cell_log_norm_.assign(cells_.size(), 0.0);
   for (std::size_t c = 0; c < cells_.size(); ++c) {
     const std::size_t i = cells_[c] % (nx - 1), j = cells_[c] / (nx - 1);
@@ -277,7 +281,7 @@ Locator::Locator(const ChargeMap& map, const LocatorOptions& options)
       interp_.evaluate(cell_xy_[c][0], cell_xy_[c][1], lf, qc.data(), dq.data());
       const double norm = normalize(qc.data(), ne_);  // qc is now the unit direction d
       log_norm += (std::log(norm) - interp_.force_exponent() * lf) / double(nf);
-      double* rec = &pred_[(c * nf + f) * pred_stride_];
+      double* rec = &pred[(c * nf + f) * pred_stride];
       double* d = rec;
       double* J = rec + ne_;
       double* P = rec + 3 * ne_;
@@ -312,7 +316,7 @@ Locator::Locator(const ChargeMap& map, const LocatorOptions& options)
       // Second derivatives of d and ln |G| in cell units, by central differences of the cell's
       // own patch at ±a (inside the cell): the quadratic model that refines a start (§1.2).
       {
-        double* H = &quad_[(c * nf + f) * quad_stride_];
+        double* H = &quad[(c * nf + f) * quad_stride];
         const double a = 0.45, xc = cell_xy_[c][0], yc = cell_xy_[c][1], hx = interp_.hx(), hy = interp_.hy();
         auto dir_at = [&](double dt, double ds, Vec& n, double& log_g) {
           interp_.evaluate(xc + dt * hx, yc + ds * hy, lf, n.data(), nullptr);
@@ -340,7 +344,7 @@ Locator::Locator(const ChargeMap& map, const LocatorOptions& options)
         H[3 * ne_ + 2] = (gps + gms - 2 * g0) * ia2;
       }
       // Error of the linear model at the four corners (|offset| = ½ cell each way).
-      cell_lin_err2_[c] = std::max(cell_lin_err2_[c], corner_error2(f, i, j, [&](std::size_t k, double dt, double ds) {
+      cell_lin_err2[c] = std::max(cell_lin_err2[c], corner_error2(f, i, j, [&](std::size_t k, double dt, double ds) {
                                      return d[k] + J[k * 2] * dt + J[k * 2 + 1] * ds;
                                    }));
     }
@@ -356,9 +360,9 @@ Locator::Locator(const ChargeMap& map, const LocatorOptions& options)
     const double span = nf > 1 ? level_log_[nf - 1] - level_log_[0] : 1.0;
     for (std::size_t c = 0; c < cells_.size(); ++c) {
       const std::size_t i = cells_[c] % (nx - 1), j = cells_[c] / (nx - 1);
-      const double* rm = &pred_[(c * nf + fm) * pred_stride_];
-      const double* ra = &pred_[(c * nf) * pred_stride_];
-      const double* rb = &pred_[(c * nf + nf - 1) * pred_stride_];
+      const double* rm = &pred[(c * nf + fm) * pred_stride];
+      const double* ra = &pred[(c * nf) * pred_stride];
+      const double* rb = &pred[(c * nf + nf - 1) * pred_stride];
       float* sc = &scan_[c * scan_stride_];
       std::array<double, max_electrodes> dl{};
       for (std::size_t k = 0; k < ne_; ++k) {
@@ -377,7 +381,7 @@ Locator::Locator(const ChargeMap& map, const LocatorOptions& options)
       tail[3] = float(rm[5 * ne_ + 1]);
       tail[4] = float(rm[5 * ne_ + 2]);
       tail[5] = nf > 1 ? float((rb[5 * ne_] - ra[5 * ne_]) / span) : 0.0f;
-      double err2 = cell_lin_err2_[c];
+      double err2 = cell_lin_err2[c];
       for (std::size_t f = 0; f < nf; ++f) {
         const double dlf = level_log_[f] - level_log_[fm];
         err2 = std::max(err2, corner_error2(f, i, j, [&](std::size_t k, double dt, double ds) {
@@ -389,8 +393,8 @@ Locator::Locator(const ChargeMap& map, const LocatorOptions& options)
       // error ≈ κ δ² / 2 (levenberg_marquardt's unevaluated last step).
       double kappa = 0;
       for (std::size_t f = 0; f < nf; ++f) {
-        const double* r = &pred_[(c * nf + f) * pred_stride_];
-        const double* H = &quad_[(c * nf + f) * quad_stride_];
+        const double* r = &pred[(c * nf + f) * pred_stride];
+        const double* H = &quad[(c * nf + f) * quad_stride];
         double a00 = 0, a01 = 0, a11 = 0, h2 = 0;
         for (std::size_t k = 0; k < ne_; ++k) {
           const double jt = r[ne_ + 2 * k], js = r[ne_ + 2 * k + 1];
@@ -414,8 +418,8 @@ Locator::Locator(const ChargeMap& map, const LocatorOptions& options)
   model_.assign(cells_.size() * nf * model_stride_, 0.0f);
   for (std::size_t c = 0; c < cells_.size(); ++c) {
     for (std::size_t f = 0; f < nf; ++f) {
-      const double* r = &pred_[(c * nf + f) * pred_stride_];
-      const double* H = &quad_[(c * nf + f) * quad_stride_];
+      const double* r = &pred[(c * nf + f) * pred_stride];
+      const double* H = &quad[(c * nf + f) * quad_stride];
       float* m = &model_[(c * nf + f) * model_stride_];
       for (std::size_t k = 0; k < ne_; ++k) {
         m[k] = float(r[k]);
@@ -441,7 +445,7 @@ Locator::Locator(const ChargeMap& map, const LocatorOptions& options)
     std::vector<signed char> orient(cells_.size() * nf, 0);
     for (std::size_t c = 0; c < cells_.size(); ++c) {
       for (std::size_t f = 0; f < nf; ++f) {
-        const double* r = &pred_[(c * nf + f) * pred_stride_];
+        const double* r = &pred[(c * nf + f) * pred_stride];
         if (ne_ == 3) {
           const double jt[3] = {r[3], r[5], r[7]}, js[3] = {r[4], r[6], r[8]};
           const double t = r[0] * (jt[1] * js[2] - jt[2] * js[1]) + r[1] * (jt[2] * js[0] - jt[0] * js[2]) +
@@ -479,8 +483,6 @@ Locator::Locator(const ChargeMap& map, const LocatorOptions& options)
     std::size_t n_fold = 0;
     for (auto v : cell_fold_) n_fold += v;
   }
-  pred_ = {};
-  quad_ = {};
   if (cells_.empty()) throw InputError("map has no usable cell (four ok nodes with non-zero charge); nothing can be located");
   bins_ = options.direction_bins > 0 ? options.direction_bins
                                      : std::clamp(int(3.0 * std::sqrt(double(cells_.size()))), 16, 512);
@@ -721,15 +723,7 @@ bool Locator::cell_model(double x, double y, double l, CellModel& m) const {
   m.ds = v - double(j) - 0.5;
   std::size_t f0 = 0;
   double w = 0;
-  if (nf > 1) {
-    if (l >= level_log_[nf - 1]) {
-      f0 = nf - 2;
-      w = 1;
-    } else if (l > level_log_[0]) {
-      while (f0 + 2 < nf && l > level_log_[f0 + 1]) ++f0;
-      w = (l - level_log_[f0]) / (level_log_[f0 + 1] - level_log_[f0]);
-    }
-  }
+  interp_.level_bracket(l, f0, w);
   const float* m0 = &model_[(m.cell * nf + f0) * model_stride_];
   const float* m1 = nf > 1 ? m0 + model_stride_ : m0;
   const std::size_t n = 6 * ne_ + 6;

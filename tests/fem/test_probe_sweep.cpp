@@ -40,12 +40,7 @@ double charge_difference(const std::vector<double>& a, const std::vector<double>
 }
 
 pvdf::fem::Result direct_solve(double x, double y, double F) {
-  pvdf::Scene s = seed001();
-  pvdf::Load load;
-  load.kind = pvdf::Load::Kind::probe;
-  load.position_m = {x, y};
-  load.force_N = F;
-  s.loads = {load};
+  const pvdf::Scene s = pvdf::with_probe_load(seed001(), x, y, F);
   pvdf::fem::Options o = pvdf::fem::options_from_scene(s);
   o.adaptive = false;  // the default mesh graded to this probe (error ~1e-3, docs/bench-fem.md)
   return pvdf::fem::solve(s, o);

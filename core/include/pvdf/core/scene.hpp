@@ -116,6 +116,9 @@ Scene parse_scene(const nlohmann::json& json, const std::string& source);
 Scene default_scene();
 /// The built-in default scene as JSON text.
 const char* default_scene_json();
+/// The scene with its loads replaced by one probe of force_N at (x_m, y_m) (the scene's probe
+/// radius): what a probe sweep or a map solves at each position.
+Scene with_probe_load(const Scene& scene, double x_m, double y_m, double force_N);
 /// Serializes a scene back to JSON (all keys, defaults filled in).
 nlohmann::json scene_to_json(const Scene& scene);
 

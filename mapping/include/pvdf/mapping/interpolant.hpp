@@ -48,6 +48,20 @@ class MapInterpolant {
   double inv_hy() const { return ihy_; }  ///< 1 / hy
   double force_exponent() const { return p_; }
   double min_log_force() const { return log_f_.front(); }
+  /// The force levels around ln F: G = (1 − w) G_f0 + w G_f0+1 (w clamped to [0, 1]: constant
+  /// beyond the first and last level); f0 = 0, w = 0 for a one-level map.
+  void level_bracket(double log_force, std::size_t& f0, double& w) const {
+    f0 = 0;
+    w = 0;
+    if (nf_ < 2 || log_force <= log_f_.front()) return;
+    if (log_force >= log_f_.back()) {
+      f0 = nf_ - 2;
+      w = 1;
+      return;
+    }
+    while (f0 + 2 < nf_ && log_force > log_f_[f0 + 1]) ++f0;
+    w = (log_force - log_f_[f0]) / (log_f_[f0 + 1] - log_f_[f0]);
+  }
   double max_log_force() const { return log_f_.back(); }
   /// Reduced charge G (C/N^p) of node (i, j), level f, electrode k.
   double node_value(std::size_t f, std::size_t i, std::size_t j, std::size_t k) const {

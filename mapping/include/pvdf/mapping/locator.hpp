@@ -197,17 +197,8 @@ class Locator {
   std::vector<double> cell_norm_;           ///< |G| at the centre (C/N^p), mean over levels
   std::vector<double> cell_radius2_;        ///< max 1 − (ĉ·n̂)² over corners and levels
   std::vector<std::array<double, 2>> cell_xy_;
-  /// Per cell and level (stride pred_stride_): unit direction d (ne), its tangential derivatives
-  /// J = ∂d/∂(t, s) in cell units (ne × 2, [k][2]), the least-squares inverse P = (JᵀJ)⁻¹Jᵀ
-  /// (2 × ne), ln |G| at the centre and its gradient ∂ln|G|/∂(t, s). With them a query direction q̂ predicts the offset
-  /// δ = P (q̂ − d) from the centre and the residual |q̂ − d − J δ| of the linear model.
-  std::vector<double> pred_;
-  std::size_t pred_stride_ = 0;
-  /// Per cell and level (stride quad_stride_): second derivatives of d in cell units, [k][tt, ts,
-  /// ss], then those of ln |G| (tt, ts, ss): the quadratic model that refines a start. pred_ and
-  /// quad_ are built in the constructor and released once model_ and scan_ hold what locate needs.
-  std::vector<double> quad_;
-  std::size_t quad_stride_ = 0;
+  // (The constructor's working tables — per cell and level the linear direction model d, J, P,
+  // ln |G| and its gradient, and the second derivatives — are condensed into model_ and scan_.)
   /// The same per cell and level as float rows of model_stride_ (what locate() reads): d, Jt, Js,
   /// Htt, Hts, Hss (ne each), then ln |G| and its derivatives t, s, tt, ts, ss.
   std::vector<float> model_;
@@ -215,7 +206,6 @@ class Locator {
   std::vector<std::int32_t> cell_slot_;     ///< grid cell j*(nx−1)+i → index into cells_, −1 if none
   std::vector<std::uint8_t> cell_fold_;     ///< per cell: a fold of the direction map passes within ~1 cell
   std::vector<double> level_log_;           ///< ln of the map's force levels
-  std::vector<double> cell_lin_err2_;       ///< max squared error of the linear direction model at the corners
   std::vector<double> cell_log_norm_;       ///< ln of the mean |G| over levels (first guess of ln F)
   int bins_ = 0;
   double phi0_ = 0, phi1_ = 1, theta0_ = 0, theta1_ = 1;
