@@ -1214,6 +1214,24 @@ Location Locator::locate_impl(const double* charges_C, bool fixed_force, double 
   return finish(Q, fits, n_starts);
 }
 
+Location Locator::locate_from(const double* charges_C, const std::array<double, 3>* starts, int n_starts) const {
+  Query Q;
+  Location early;
+  if (!prepare(charges_C, fixed_force_, fixed_force_ ? log_force_lo_ : 0.0, Q, early)) return early;
+  std::array<Fit, 8> fits{};
+  int n = 0;
+  for (int s = 0; s < n_starts && n < int(fits.size()); ++s) {
+    const std::array<double, 3>& st = starts[s];
+    if (!(st[2] > 0) || !std::isfinite(st[2]) || !interp_.inside(st[0], st[1])) continue;
+    const double l = Q.fixed_force ? Q.log_known_force : std::clamp(std::log(st[2]), Q.log_lo, Q.log_hi);
+    fits[std::size_t(n)] =
+        levenberg_marquardt(Q.q.data(), Q.w.data(), st[0], st[1], l, Q.fixed_force, Q.log_lo, Q.log_hi, fits.data(), n);
+    ++n;
+  }
+  Location out = finish(Q, fits, n);
+  return out;
+}
+
 Location Locator::finish(const Query& Q, std::array<Fit, 8>& fits, int n_starts) const {
   const bool fixed_force = Q.fixed_force;
   const double limit = Q.limit;

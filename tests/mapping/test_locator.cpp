@@ -367,3 +367,85 @@ TEST_CASE("bad locator input is refused with a message", "[mapping][locator]") {
   o.noise_C = {-1.0};
   CHECK_THROWS_AS(Locator(map, o), pvdf::InputError);
 }
+
+TEST_CASE("locate_from fits only its starts: from the lookup's answers it reproduces them, and says no more than "
+          "it was given",
+          "[mapping][locator]") {
+  const SyntheticModel model = skewed_model();
+  const ChargeMap map = build_synthetic_map(model, 1e-3, 3e-3, levels, 0.05e-12);
+  LocatorOptions options;
+  options.min_force_N = levels.front();
+  options.max_force_N = levels.back();
+  const Locator locator(map, options);
+  // Two fits of one solution from different starts agree to within their convergence
+  // tolerance, which is loose along a weakly determined direction (near a fold: measured up to
+  // 5e-3 cell there): within a tenth of the reported σ, plus 1e-3 cell (the map's own
+  // interpolation error).
+  const double cell = 1e-3;
+  auto answers = [](const Location& r) {
+    std::vector<Location::Alternative> a{{r.x_m, r.y_m, r.force_N, r.residual, r.sigma_x_m, r.sigma_y_m, r.sigma_F_N}};
+    for (int k = 0; k < r.n_alternatives; ++k) a.push_back(r.alternatives[std::size_t(k)]);
+    return a;
+  };
+  auto same_solution = [&](const Location::Alternative& a, const Location::Alternative& b) {
+    return std::abs(a.x_m - b.x_m) < 0.1 * std::max(a.sigma_x_m, b.sigma_x_m) + 1e-3 * cell &&
+           std::abs(a.y_m - b.y_m) < 0.1 * std::max(a.sigma_y_m, b.sigma_y_m) + 1e-3 * cell &&
+           std::abs(a.force_N - b.force_N) < 0.1 * std::max(a.sigma_F_N, b.sigma_F_N) + 5e-4 * a.force_N;
+  };
+  auto contains = [&](const std::vector<Location::Alternative>& set, const Location::Alternative& s) {
+    for (const auto& e : set) {
+      if (same_solution(e, s)) return true;
+    }
+    return false;
+  };
+  const auto presses = pvdf_test::random_presses(300, 0.015, 0.3, 3.0, 11);
+  int n_compared = 0, n_same = 0, n_ambiguous = 0, n_single = 0;
+  for (const auto& p : presses) {
+    std::array<double, 3> q{};
+    for (std::size_t k = 0; k < 3; ++k) q[k] = model.charge_C(p.x_m, p.y_m, p.force_N, k);
+    const Location r = locator.locate(q.data());
+    REQUIRE(r.has_position());
+    if (r.n_solutions > 4) continue;  // only four are reported: the others cannot be started from
+    const auto solutions = answers(r);
+    std::vector<std::array<double, 3>> starts;
+    for (const auto& a : solutions) starts.push_back({a.x_m, a.y_m, a.force_N});
+    ++n_compared;
+    // Started at every reported solution: the same solutions and flags (which of two exact,
+    // noise-free solutions is called "best" may swap: both χ² are at rounding level).
+    const Location f = locator.locate_from(q.data(), starts.data(), int(starts.size()));
+    const auto found = answers(f);
+    bool same = f.flags == r.flags && f.n_solutions == r.n_solutions && found.size() == solutions.size();
+    for (const auto& s : solutions) same = same && contains(found, s);
+    n_same += same ? 1 : 0;
+    // Started at one of them only: that one, and no claim of an ambiguity it cannot know about.
+    if (r.flags & flag::ambiguous) {
+      ++n_ambiguous;
+      const Location one = locator.locate_from(q.data(), &starts[1], 1);
+      n_single += one.has_position() && !(one.flags & flag::ambiguous) && one.n_solutions == 1 &&
+                          same_solution(solutions[1], answers(one)[0])
+                      ? 1
+                      : 0;
+    }
+  }
+  INFO(n_same << " of " << n_compared << " reproduced; " << n_single << " of " << n_ambiguous
+              << " ambiguous presses reported as one solution from one start");
+  CHECK(n_compared > 250);
+  CHECK(n_same == n_compared);
+  CHECK(n_ambiguous > 0);
+  CHECK(n_single == n_ambiguous);
+
+  // Nothing to fit from: starts off the map or with no force, or none at all → outside_map.
+  std::array<double, 3> q{};
+  for (std::size_t k = 0; k < 3; ++k) q[k] = model.charge_C(0.002, 0.003, 1.0, k);
+  const std::array<std::array<double, 3>, 3> bad{{{0.5, 0.0, 1.0}, {0.0, 0.0, 0.0}, {0.0, 0.0, -1.0}}};
+  for (int n = 0; n <= 3; ++n) {
+    const Location r = locator.locate_from(q.data(), bad.data(), n);
+    CHECK(r.flags == flag::outside_map);
+    CHECK(!r.has_position());
+    CHECK(r.n_starts == 0);
+  }
+  // Charges at the noise level stay no_press, whatever the starts.
+  const std::array<double, 3> quiet{1e-16, -1e-16, 0.0};
+  const std::array<double, 3> good{0.002, 0.003, 1.0};
+  CHECK((locator.locate_from(quiet.data(), &good, 1).flags & flag::no_press) != 0);
+}

@@ -101,6 +101,14 @@ class Locator {
     return locate(charges_C.data(), known_force_N);
   }
 
+  /// Fits from the given starts only — (x_m, y_m, force_N) each, e.g. the previous sample's
+  /// answers of a tracked press — with no coarse search, no fold-twin search and no fallback:
+  /// the same fits, choice, flags and σ's as locate() otherwise (force known when the options
+  /// say so). `ambiguous` is only as complete as the starts: a solution no start leads to is not
+  /// reported. Starts off the map or with a non-positive force are skipped (at most 8 are
+  /// fitted); none left gives outside_map. Thread-safe, no allocation.
+  Location locate_from(const double* charges_C, const std::array<double, 3>* starts, int n_starts) const;
+
   /// The map's (calibrated, if enabled) charges for a press at (x, y) with force F; false outside.
   bool predict(double x_m, double y_m, double force_N, double* charges_C) const;
 
