@@ -1009,52 +1009,37 @@ Locator::Fit Locator::levenberg_marquardt(const double* q, const double* w, doub
 }
 
 void Locator::covariance(Fit& fit, bool fixed_force) const {
-  // Covariance of (x, y, ln F): (JᵀWJ)⁻¹ with the weights already in J.
-  // Equilibrate first: the x, y columns (C/m) and the ln F column (C) differ by ~1e3.
-  Eigen::Matrix3d JtJ;
-  JtJ << fit.jtj[0], fit.jtj[1], fit.jtj[2], fit.jtj[1], fit.jtj[3], fit.jtj[4], fit.jtj[2], fit.jtj[4], fit.jtj[5];
-  Eigen::Vector3d d = JtJ.diagonal().cwiseMax(1e-300).cwiseSqrt().cwiseInverse();
-  Eigen::Matrix3d S = d.asDiagonal() * JtJ * d.asDiagonal();
-  if (fixed_force) {  // σ of (x, y) only; the force is given
-    S.row(2).setZero();
-    S.col(2).setZero();
-    S(2, 2) = 1.0;
-    d[2] = 0.0;
-  }
-  // S is symmetric with unit diagonal, so a fully pivoted LU of it is a diagonally pivoted
-  // LDLᵀ (the largest remaining element sits on the diagonal): its pivots, in closed form, say
-  // whether S is invertible (every pivot above 1e-12 of the first, as the LU threshold had it),
-  // and only the diagonal of S⁻¹ (cofactor / determinant) is needed.
+  // Covariance of (x, y, ln F): (JᵀWJ)⁻¹ with the weights already in J. Equilibrated first
+  // (S = D JᵀWJ D, D = diag(JᵀWJ)^−½: the x, y columns (C/m) and the ln F column (C) differ by
+  // ~1e3), so S has a unit diagonal; with the force known only the (x, y) block counts.
+  const auto& m = fit.jtj;  // 00 01 02 11 12 22
   fit.singular = false;
-  {
-    std::array<int, 3> order{0, 1, 2};
-    auto at = [&](int r, int c) { return S(order[std::size_t(r)], order[std::size_t(c)]); };
-    int p0 = 0;
-    for (int k = 1; k < 3; ++k) {
-      if (std::abs(S(k, k)) > std::abs(S(p0, p0))) p0 = k;
-    }
-    std::swap(order[0], order[std::size_t(p0)]);
-    const double d0 = at(0, 0);
-    double s11 = at(1, 1) - at(1, 0) * at(0, 1) / d0, s22 = at(2, 2) - at(2, 0) * at(0, 2) / d0;
-    const double s12 = at(1, 2) - at(1, 0) * at(0, 2) / d0;
-    if (std::abs(s22) > std::abs(s11)) std::swap(s11, s22);
-    const double d1 = s11, d2 = s22 - s12 * s12 / s11;
-    const double tol = 1e-12 * std::abs(d0);
-    if (!(std::abs(d0) > tol && std::abs(d1) > tol && std::abs(d2) > tol)) fit.singular = true;
+  fit.sigma = {0, 0, 0};
+  if (!(m[0] > 0 && m[3] > 0 && (fixed_force || m[5] > 0))) {  // a parameter the charges do not see
+    fit.singular = true;
+    return;
   }
-  if (!fit.singular) {
-    const double det = S(0, 0) * (S(1, 1) * S(2, 2) - S(1, 2) * S(2, 1)) - S(0, 1) * (S(1, 0) * S(2, 2) - S(1, 2) * S(2, 0)) +
-                       S(0, 2) * (S(1, 0) * S(2, 1) - S(1, 1) * S(2, 0));
-    const std::array<double, 3> cof{S(1, 1) * S(2, 2) - S(1, 2) * S(2, 1), S(0, 0) * S(2, 2) - S(0, 2) * S(2, 0),
-                                    S(0, 0) * S(1, 1) - S(0, 1) * S(1, 0)};
-    for (int k = 0; k < 3; ++k) {
-      const double c = d[k] * d[k] * cof[std::size_t(k)] / det;
-      fit.sigma[std::size_t(k)] = c > 0 ? std::sqrt(c) : 0.0;
-    }
-    fit.singular = !(std::isfinite(fit.sigma[0]) && std::isfinite(fit.sigma[1]) && std::isfinite(fit.sigma[2]));
+  const double j00 = m[0], j11 = m[3], j22 = std::max(m[5], 1e-300);
+  const double d0 = 1.0 / std::sqrt(j00), d1 = 1.0 / std::sqrt(j11), d2 = fixed_force ? 0.0 : 1.0 / std::sqrt(j22);
+  const double s01 = m[1] * d0 * d1, s02 = m[2] * d0 * d2, s12 = m[4] * d1 * d2;
+  // S is symmetric with a unit diagonal, so an LDLᵀ with diagonal pivoting starts with pivot 1;
+  // its other two pivots (closed form) say whether S is invertible (each above 1e-12 of the
+  // first), and only the diagonal of S⁻¹ (cofactor / determinant) is needed.
+  const double a11 = 1.0 - s01 * s01, a22 = 1.0 - s02 * s02, a12 = s12 - s01 * s02;  // after pivot 0
+  const double p1 = std::max(a11, a22), p2 = std::min(a11, a22) - a12 * a12 / p1;
+  if (!(p1 > 1e-12 && std::abs(p2) > 1e-12)) {
+    fit.singular = true;
+    return;
   }
-  if (fit.singular) fit.sigma = {0, 0, 0};
-  if (fixed_force) fit.sigma[2] = 0;
+  const double c00 = 1.0 - s12 * s12, c11 = 1.0 - s02 * s02, c22 = 1.0 - s01 * s01;
+  const double det = c00 - s01 * (s01 - s12 * s02) + s02 * (s01 * s12 - s02);
+  const double inv_det = 1.0 / det;
+  const double v0 = d0 * d0 * c00 * inv_det, v1 = d1 * d1 * c11 * inv_det, v2 = d2 * d2 * c22 * inv_det;
+  fit.sigma = {v0 > 0 ? std::sqrt(v0) : 0.0, v1 > 0 ? std::sqrt(v1) : 0.0, v2 > 0 ? std::sqrt(v2) : 0.0};
+  if (!(std::isfinite(fit.sigma[0]) && std::isfinite(fit.sigma[1]) && std::isfinite(fit.sigma[2]))) {
+    fit.singular = true;
+    fit.sigma = {0, 0, 0};
+  }
 }
 
 bool Locator::distinct_minima(const double* q, const double* w, const Fit& a, const Fit& b, double separation,
