@@ -3,9 +3,6 @@
 
 #include "pvdf/core/error.hpp"
 
-#include <Eigen/Cholesky>
-#include <Eigen/Core>
-#include <Eigen/LU>
 
 #include <algorithm>
 #include <cmath>
@@ -46,16 +43,20 @@ inline void direction_key(const double* n, double& phi, double& theta) {
 /// pivoting, no square roots: the damped normal equations are SPD; three reciprocals instead
 /// of Cholesky's three square roots and nine divisions, which sat on the critical path).
 /// Returns a non-finite x if A is not SPD (a pivot ≤ 0 or NaN).
-inline Eigen::Vector3d solve_spd3(const Eigen::Matrix3d& A, const Eigen::Vector3d& b) {
-  const double d0 = A(0, 0), i0 = 1.0 / d0;
-  const double l10 = A(1, 0) * i0, l20 = A(2, 0) * i0;
-  const double d1 = A(1, 1) - l10 * A(1, 0), i1 = 1.0 / d1;
-  const double l21 = (A(2, 1) - l20 * A(1, 0)) * i1;
-  const double d2 = A(2, 2) - l20 * A(2, 0) - l21 * l21 * d1, i2 = 1.0 / d2;
-  if (!(d0 > 0 && d1 > 0 && d2 > 0)) return Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+inline std::array<double, 3> solve_spd3(const std::array<double, 6>& A, const std::array<double, 3>& b) {
+  // A: upper triangle 00 01 02 11 12 22.
+  const double d0 = A[0], i0 = 1.0 / d0;
+  const double l10 = A[1] * i0, l20 = A[2] * i0;
+  const double d1 = A[3] - l10 * A[1], i1 = 1.0 / d1;
+  const double l21 = (A[4] - l20 * A[1]) * i1;
+  const double d2 = A[5] - l20 * A[2] - l21 * l21 * d1, i2 = 1.0 / d2;
+  if (!(d0 > 0 && d1 > 0 && d2 > 0)) {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    return {nan, nan, nan};
+  }
   const double y0 = b[0], y1 = b[1] - l10 * y0, y2 = b[2] - l20 * y0 - l21 * y1;
   const double x2 = y2 * i2, x1 = y1 * i1 - l21 * x2, x0 = y0 * i0 - l10 * x1 - l20 * x2;
-  return Eigen::Vector3d(x0, x1, x2);
+  return {x0, x1, x2};
 }
 
 /// The coarse search's test of one candidate cell against the query direction (compact float
@@ -864,15 +865,24 @@ Locator::Fit Locator::levenberg_marquardt(const double* q, const double* w, doub
   };
   double chi2 = chi2_of(model);
   double lambda = 1e-3;
-  Eigen::Matrix3d JtJ;
-  Eigen::Vector3d Jtr;
+  // Normal equations of the weighted residual: JᵀJ (upper triangle 00 01 02 11 12 22) and Jᵀr.
+  std::array<double, 6> JtJ;
+  std::array<double, 3> Jtr;
   auto normal_equations = [&]() {
-    JtJ.setZero();
-    Jtr.setZero();
+    JtJ = {0, 0, 0, 0, 0, 0};
+    Jtr = {0, 0, 0};
     for (std::size_t k = 0; k < ne_; ++k) {
-      const Eigen::Vector3d g(grad[k][0] * w[k], grad[k][1] * w[k], grad[k][2] * w[k]);
-      JtJ.noalias() += g * g.transpose();
-      Jtr += g * ((model[k] - q[k]) * w[k]);
+      const double g0 = grad[k][0] * w[k], g1 = grad[k][1] * w[k], g2 = grad[k][2] * w[k];
+      const double r = (model[k] - q[k]) * w[k];
+      JtJ[0] += g0 * g0;
+      JtJ[1] += g0 * g1;
+      JtJ[2] += g0 * g2;
+      JtJ[3] += g1 * g1;
+      JtJ[4] += g1 * g2;
+      JtJ[5] += g2 * g2;
+      Jtr[0] += g0 * r;
+      Jtr[1] += g1 * r;
+      Jtr[2] += g2 * r;
     }
   };
   if (fixed_force) {  // only (x, y) move: drop the ln F column
@@ -880,14 +890,25 @@ Locator::Fit Locator::levenberg_marquardt(const double* q, const double* w, doub
   }
   normal_equations();
   const double hx = interp_.hx(), hy = interp_.hy();
+  // The damped system (JᵀJ + λ diag JᵀJ) step = −Jᵀr; with the force fixed its ln F row is 1.
+  auto damped = [&](double lam, double boost, std::array<double, 6>& A) {
+    A = JtJ;
+    A[0] += lam * JtJ[0] + boost;
+    A[3] += lam * JtJ[3] + boost;
+    A[5] += lam * JtJ[5] + boost;
+    if (fixed_force) A[5] = 1.0;
+  };
+  auto quad = [&](const std::array<double, 3>& v) {  // vᵀ JᵀJ v
+    return JtJ[0] * v[0] * v[0] + JtJ[3] * v[1] * v[1] + JtJ[5] * v[2] * v[2] +
+           2.0 * (JtJ[1] * v[0] * v[1] + JtJ[2] * v[0] * v[2] + JtJ[4] * v[1] * v[2]);
+  };
   int it = 0;
   bool quadratic_exit = false;
   for (; it < options_.max_iterations; ++it) {
-    Eigen::Matrix3d A = JtJ;
-    for (int d = 0; d < 3; ++d) A(d, d) += lambda * JtJ(d, d) + 1e-300;
-    if (fixed_force) A(2, 2) = 1.0;
-    Eigen::Vector3d step = solve_spd3(A, -Jtr);
-    if (!step.allFinite()) {
+    std::array<double, 6> A;
+    damped(lambda, 1e-300, A);
+    std::array<double, 3> step = solve_spd3(A, {-Jtr[0], -Jtr[1], -Jtr[2]});
+    if (!(std::isfinite(step[0]) && std::isfinite(step[1]) && std::isfinite(step[2]))) {
       lambda *= 10;
       if (lambda > 1e12) break;
       continue;
@@ -896,11 +917,9 @@ Locator::Fit Locator::levenberg_marquardt(const double* q, const double* w, doub
       // The step leaves the plausible force range: move ln F to the bound and solve for (x, y)
       // with it held there (a projected step; it keeps the fit from spinning against the bound).
       const double dl = (l + step[2] < log_lo ? log_lo : log_hi) - l;
-      const double b0 = -Jtr[0] - A(0, 2) * dl, b1 = -Jtr[1] - A(1, 2) * dl;
-      const double det = A(0, 0) * A(1, 1) - A(0, 1) * A(0, 1);
-      if (det > 0) {
-        step = Eigen::Vector3d((A(1, 1) * b0 - A(0, 1) * b1) / det, (A(0, 0) * b1 - A(0, 1) * b0) / det, dl);
-      }
+      const double b0 = -Jtr[0] - A[2] * dl, b1 = -Jtr[1] - A[4] * dl;
+      const double det = A[0] * A[3] - A[1] * A[1];
+      if (det > 0) step = {(A[3] * b0 - A[1] * b1) / det, (A[0] * b1 - A[1] * b0) / det, dl};
     }
     // Keep steps within a few cells: the interpolant is only trusted where it is defined.
     double limit = 1.0;
@@ -912,25 +931,25 @@ Locator::Fit Locator::levenberg_marquardt(const double* q, const double* w, doub
     // (the threshold on δ clamped to 1e-3…1e-2 cell, 1e-3 in ln F; the map's own interpolation
     // error is ~1e-3 cell) take it without evaluating the model there; χ² from the linear model,
     // χ² + 2 stepᵀJᵀr + stepᵀJᵀJ step (its change is second order too).
-    double accept = 1e-3;
-    {
+    if (lambda < 1e-2 && std::abs(step[2]) < 1e-3) {
+      double accept = 1e-3;
       const double u = (x - interp_.x0()) * interp_.inv_hx(), v = (y - interp_.y0()) * interp_.inv_hy();
-      const std::size_t gc = std::size_t(std::max(u, 0.0)) + std::size_t(std::max(v, 0.0)) * (interp_.nx() - 1);
-      if (u >= 0 && v >= 0 && u < double(interp_.nx() - 1) && v < double(interp_.ny() - 1) && cell_slot_[gc] >= 0) {
-        accept = double(scan_[std::size_t(cell_slot_[gc]) * scan_stride_ + 6 * ne_ + 7]);
+      if (u >= 0 && v >= 0 && u < double(interp_.nx() - 1) && v < double(interp_.ny() - 1)) {
+        const std::int32_t slot = cell_slot_[std::size_t(u) + std::size_t(v) * (interp_.nx() - 1)];
+        if (slot >= 0) accept = double(scan_[std::size_t(slot) * scan_stride_ + 6 * ne_ + 7]);
       }
-    }
-    if (lambda < 1e-2 && std::abs(step[0]) < accept * hx && std::abs(step[1]) < accept * hy && std::abs(step[2]) < 1e-3 &&
-        interp_.inside(x + step[0], y + step[1]) && l + step[2] >= log_lo && l + step[2] <= log_hi) {
-      x += step[0];
-      y += step[1];
-      l += step[2];
-      chi2 = std::max(0.0, chi2 + 2.0 * Jtr.dot(step) + step.dot(JtJ * step));
-      fit.converged = true;
-      fit.blocked = false;
-      quadratic_exit = true;
-      ++it;
-      break;
+      if (std::abs(step[0]) < accept * hx && std::abs(step[1]) < accept * hy && interp_.inside(x + step[0], y + step[1]) &&
+          l + step[2] >= log_lo && l + step[2] <= log_hi) {
+        x += step[0];
+        y += step[1];
+        l += step[2];
+        chi2 = std::max(0.0, chi2 + 2.0 * (Jtr[0] * step[0] + Jtr[1] * step[1] + Jtr[2] * step[2]) + quad(step));
+        fit.converged = true;
+        fit.blocked = false;
+        quadratic_exit = true;
+        ++it;
+        break;
+      }
     }
     const double nx = x + limit * step[0], ny = y + limit * step[1], nl = l + limit * step[2];
     Vec trial;
@@ -989,12 +1008,14 @@ Locator::Fit Locator::levenberg_marquardt(const double* q, const double* w, doub
   // fits that do not fit within noise — outside_map or poor_fit — so it is skipped after a
   // quadratic-phase exit within noise, the common case.)
   if (!quadratic_exit || chi2 > (fixed_force ? chi2_limit_fixed_ : chi2_limit_free_)) {
-    Eigen::Matrix3d A = JtJ;
-    for (int d = 0; d < 3; ++d) A(d, d) *= 1.0 + 1e-9;
-    if (fixed_force) A(2, 2) = 1.0;
-    const Eigen::Vector3d step = solve_spd3(A, -Jtr);
-    if (step.allFinite() && (!interp_.inside(x + step[0], y + step[1]) || l + step[2] < log_lo ||
-                             l + step[2] > log_hi)) {
+    std::array<double, 6> A = JtJ;
+    A[0] *= 1.0 + 1e-9;
+    A[3] *= 1.0 + 1e-9;
+    A[5] *= 1.0 + 1e-9;
+    if (fixed_force) A[5] = 1.0;
+    const std::array<double, 3> step = solve_spd3(A, {-Jtr[0], -Jtr[1], -Jtr[2]});
+    if (std::isfinite(step[0]) && std::isfinite(step[1]) && std::isfinite(step[2]) &&
+        (!interp_.inside(x + step[0], y + step[1]) || l + step[2] < log_lo || l + step[2] > log_hi)) {
       fit.blocked = true;
     }
   }
@@ -1003,7 +1024,7 @@ Locator::Fit Locator::levenberg_marquardt(const double* q, const double* w, doub
   fit.l = l;
   fit.chi2 = chi2;
   fit.iterations = it;
-  fit.jtj = {JtJ(0, 0), JtJ(0, 1), JtJ(0, 2), JtJ(1, 1), JtJ(1, 2), JtJ(2, 2)};
+  fit.jtj = JtJ;
   fit.ok = std::isfinite(chi2) && std::isfinite(x) && std::isfinite(y) && std::isfinite(l);
   return fit;
 }
