@@ -145,13 +145,6 @@ MapInterpolant::MapInterpolant(const ChargeMap& map)
   }
 }
 
-bool MapInterpolant::inside(double x_m, double y_m) const {
-  const double u = (x_m - x0_) * ihx_, v = (y_m - y0_) * ihy_;
-  if (!(u >= 0) || !(v >= 0) || u > double(nx_ - 1) || v > double(ny_ - 1)) return false;
-  const std::size_t i = std::min(std::size_t(u), nx_ - 2), j = std::min(std::size_t(v), ny_ - 2);
-  return cell_ok_[j * (nx_ - 1) + i] != 0;
-}
-
 namespace {
 
 /// Value and gradient (cell units) of the NE electrodes (NE = 0: runtime count) of one level of

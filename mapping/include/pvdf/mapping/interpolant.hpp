@@ -4,6 +4,7 @@
 
 #include "pvdf/mapping/map.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -32,7 +33,22 @@ class MapInterpolant {
   /// position is not in a usable cell. `dq` may be null.
   bool evaluate(double x_m, double y_m, double log_force, double* q, std::array<double, 3>* dq) const;
   /// True when (x_m, y_m) lies in a usable cell.
-  bool inside(double x_m, double y_m) const;
+  bool inside(double x_m, double y_m) const {
+    const double u = (x_m - x0_) * ihx_, v = (y_m - y0_) * ihy_;
+    if (!(u >= 0) || !(v >= 0) || u > double(nx_ - 1) || v > double(ny_ - 1)) return false;
+    const std::size_t i = std::min(std::size_t(u), nx_ - 2), j = std::min(std::size_t(v), ny_ - 2);
+    return cell_ok_[j * (nx_ - 1) + i] != 0;
+  }
+  /// Asks the memory system for the coefficients evaluate() will read at (x_m, y_m, ln F) (all
+  /// levels of the cell: cheap, and right for any force); no effect off the map.
+  void prefetch(double x_m, double y_m) const {
+    const double u = (x_m - x0_) * ihx_, v = (y_m - y0_) * ihy_;
+    if (!(u >= 0) || !(v >= 0) || u > double(nx_ - 1) || v > double(ny_ - 1)) return;
+    const std::size_t i = std::min(std::size_t(u), nx_ - 2), j = std::min(std::size_t(v), ny_ - 2);
+    const char* p = reinterpret_cast<const char*>(&coef_[(j * (nx_ - 1) + i) * nf_ * 16 * ne_]);
+    const std::size_t bytes = nf_ * 16 * ne_ * sizeof(double);
+    for (std::size_t b = 0; b < bytes; b += 64) __builtin_prefetch(p + b);
+  }
   /// True when the cell (i, j) (lower-left node i, j) is usable.
   bool cell_usable(std::size_t i, std::size_t j) const { return cell_ok_[j * (nx_ - 1) + i] != 0; }
 
