@@ -161,6 +161,11 @@ int run_map(const MapCommandOptions& o) {
                   100 * map.estimated_relative_error, 100 * map.estimated_deflection_relative_error);
       std::printf("  caution: the charge estimate comes from 4 check positions; an audit of seed 001 found up to 3.5x it "
                   "near the rim (docs/map-generation.md section 9; check a map with bench/mapping/audit_map.py)\n");
+      if (report.model_reason.find("bending neglected") != std::string::npos) {
+        std::printf("  caution: the estimate covers the sweep mesh only, not the neglected bending, which matters near "
+                    "the clamped rim (seed 001: charges 2.5 %% high 5 mm from the rim, 5.9 %% at 2 mm, against solves "
+                    "with bending; docs/map-generation.md section 9)\n");
+      }
     }
     std::printf("symmetry: %s\n", report.symmetry_reason.c_str());
     std::printf("%d rank(s) x %d thread(s), %.1f s, %.3g s per solved position and core\n", report.ranks,
