@@ -740,17 +740,10 @@ bool Locator::cell_model(double x, double y, double l, CellModel& m) const {
   return true;
 }
 
-void Locator::refine_start(const double* q_unit, double log_q_norm, bool fixed_force, double log_lo, double log_hi,
-                           Start& st) const {
-  if (ne_ == 3) {
-    refine_start_n<3>(q_unit, log_q_norm, fixed_force, log_lo, log_hi, st);
-  } else {
-    refine_start_n<0>(q_unit, log_q_norm, fixed_force, log_lo, log_hi, st);
-  }
-}
-
+// (Inlined into refine_start, whose clones then carry it: target_clones does not apply to a
+// template's instantiations.)
 template <std::size_t NE>
-PVDF_CLONES void Locator::refine_start_n(const double* q_unit, double log_q_norm, bool fixed_force, double log_lo, double log_hi,
+__attribute__((always_inline)) inline void Locator::refine_start_n(const double* q_unit, double log_q_norm, bool fixed_force, double log_lo, double log_hi,
                              Start& st) const {
   const std::size_t ne = NE > 0 ? NE : ne_;
   const double hx = interp_.hx(), hy = interp_.hy(), p_exp = interp_.force_exponent();
@@ -819,6 +812,15 @@ PVDF_CLONES void Locator::refine_start_n(const double* q_unit, double log_q_norm
       const double log_g = g[0] + g[1] * dt + g[2] * ds + 0.5 * (g[3] * dt * dt + 2 * g[4] * dt * ds + g[5] * ds * ds);
       st.l = std::clamp((log_q_norm - log_g) * (1.0 / p_exp), log_lo, log_hi);
     }
+  }
+}
+
+PVDF_CLONES void Locator::refine_start(const double* q_unit, double log_q_norm, bool fixed_force, double log_lo, double log_hi,
+                           Start& st) const {
+  if (ne_ == 3) {
+    refine_start_n<3>(q_unit, log_q_norm, fixed_force, log_lo, log_hi, st);
+  } else {
+    refine_start_n<0>(q_unit, log_q_norm, fixed_force, log_lo, log_hi, st);
   }
 }
 
@@ -1215,8 +1217,22 @@ PVDF_CLONES Location Locator::locate_impl(const double* charges_C, bool fixed_fo
   // Coarse search by the linearized direction model: one start per distinct predicted solution.
   StartList predicted;
   if (predicted_starts(q_unit.data(), log_q_norm, noise2, fixed_force, log_known_force, log_lo, log_hi, predicted)) {
+    // Ask early for what each start's refinement and first fit read: its cell's model rows (the
+    // two levels around its force) and the interpolant's coefficients.
     for (int s = 0; s < predicted.n && s < options_.max_starts; ++s) {
-      interp_.prefetch(predicted.start[std::size_t(s)].x, predicted.start[std::size_t(s)].y);
+      const Start& st = predicted.start[std::size_t(s)];
+      interp_.prefetch(st.x, st.y);
+      const double u = (st.x - interp_.x0()) * interp_.inv_hx(), v = (st.y - interp_.y0()) * interp_.inv_hy();
+      if (u >= 0 && v >= 0 && u < double(interp_.nx() - 1) && v < double(interp_.ny() - 1)) {
+        const std::int32_t slot = cell_slot_[std::size_t(v) * (interp_.nx() - 1) + std::size_t(u)];
+        if (slot >= 0) {
+          std::size_t f0 = 0;
+          double w = 0;
+          interp_.level_bracket(st.l, f0, w);
+          const char* row = reinterpret_cast<const char*>(&model_[(std::size_t(slot) * interp_.n_levels() + f0) * model_stride_]);
+          for (std::size_t b = 0; b < 2 * model_stride_ * sizeof(float); b += 64) __builtin_prefetch(row + b);
+        }
+      }
     }
     for (int s = 0; s < predicted.n && n_starts < options_.max_starts; ++s) {
       Start st = predicted.start[std::size_t(s)];
