@@ -720,7 +720,7 @@ PVDF_CLONES bool Locator::predicted_starts(const double* q_unit, double log_q_no
   return starts.n > 0;
 }
 
-bool Locator::cell_model(double x, double y, double l, CellModel& m) const {
+PVDF_CLONES bool Locator::cell_model(double x, double y, double l, CellModel& m) const {
   const std::size_t nx = interp_.nx(), ny = interp_.ny(), nf = interp_.n_levels();
   const double u = (x - interp_.x0()) * interp_.inv_hx(), v = (y - interp_.y0()) * interp_.inv_hy();
   if (!(u >= 0 && v >= 0 && u < double(nx - 1) && v < double(ny - 1))) return false;
@@ -740,47 +740,26 @@ bool Locator::cell_model(double x, double y, double l, CellModel& m) const {
   return true;
 }
 
-// (Inlined into refine_start, whose clones then carry it: target_clones does not apply to a
-// template's instantiations.)
-template <std::size_t NE>
-__attribute__((always_inline)) inline void Locator::refine_start_n(const double* q_unit, double log_q_norm, bool fixed_force, double log_lo, double log_hi,
-                             Start& st) const {
-  const std::size_t ne = NE > 0 ? NE : ne_;
+PVDF_CLONES void Locator::refine_start(const double* q_unit, double log_q_norm, bool fixed_force, double log_lo, double log_hi,
+                           Start& st) const {
   const double hx = interp_.hx(), hy = interp_.hy(), p_exp = interp_.force_exponent();
-  const std::size_t nx = interp_.nx(), ny = interp_.ny(), nf = interp_.n_levels();
-  long last_i = -1, last_j = -1;
+  double last_u = -1, last_v = -1;
   for (int pass = 0; pass < 2; ++pass) {
-    // The cell holding the start (the second pass only when the start moved to another cell).
-    const double u = (st.x - interp_.x0()) * interp_.inv_hx(), v = (st.y - interp_.y0()) * interp_.inv_hy();
-    if (!(u >= 0 && v >= 0 && u < double(nx - 1) && v < double(ny - 1))) return;
-    const long ci = long(u), cj = long(v);
-    if (ci == last_i && cj == last_j) return;
-    last_i = ci;
-    last_j = cj;
-    const std::int32_t slot = cell_slot_[std::size_t(cj) * (nx - 1) + std::size_t(ci)];
-    if (slot < 0) return;
-    const std::size_t c = std::size_t(slot);
-    // The cell's quadratic direction model blended between the force levels around ln F.
-    std::size_t f0 = 0;
-    double w = 0;
-    interp_.level_bracket(st.l, f0, w);
-    const float* m0 = &model_[(c * nf + f0) * model_stride_];
-    const float* m1 = nf > 1 ? m0 + model_stride_ : m0;
-    constexpr std::size_t cap = NE > 0 ? NE : max_electrodes;
-    double d[cap], jt[cap], js[cap], htt[cap], hts[cap], hss[cap];
-    for (std::size_t k = 0; k < ne; ++k) {
-      d[k] = double(m0[k]) + w * double(m1[k] - m0[k]);
-      jt[k] = double(m0[ne + k]) + w * double(m1[ne + k] - m0[ne + k]);
-      js[k] = double(m0[2 * ne + k]) + w * double(m1[2 * ne + k] - m0[2 * ne + k]);
-      htt[k] = double(m0[3 * ne + k]) + w * double(m1[3 * ne + k] - m0[3 * ne + k]);
-      hts[k] = double(m0[4 * ne + k]) + w * double(m1[4 * ne + k] - m0[4 * ne + k]);
-      hss[k] = double(m0[5 * ne + k]) + w * double(m1[5 * ne + k] - m0[5 * ne + k]);
+    if (pass > 0) {  // the second pass only when the start moved to another cell
+      const double u = (st.x - interp_.x0()) * interp_.inv_hx(), v = (st.y - interp_.y0()) * interp_.inv_hy();
+      if (std::floor(u) == last_u && std::floor(v) == last_v) return;
     }
-    double dt = u - double(ci) - 0.5, ds = v - double(cj) - 0.5;
+    CellModel m;
+    if (!cell_model(st.x, st.y, st.l, m)) return;
+    last_u = std::floor((st.x - interp_.x0()) * interp_.inv_hx());
+    last_v = std::floor((st.y - interp_.y0()) * interp_.inv_hy());
+    const double* d = m.v.data();
+    const double *jt = d + ne_, *js = d + 2 * ne_, *htt = d + 3 * ne_, *hts = d + 4 * ne_, *hss = d + 5 * ne_;
+    double dt = m.dt, ds = m.ds;
     // Two Newton steps on q̂ = d + J δ + ½ H(δ, δ) in least squares.
     for (int it = 0; it < 2; ++it) {
       double a00 = 0, a01 = 0, a11 = 0, b0 = 0, b1 = 0;
-      for (std::size_t k = 0; k < ne; ++k) {
+      for (std::size_t k = 0; k < ne_; ++k) {
         const double e = q_unit[k] - d[k] - jt[k] * dt - js[k] * ds -
                          0.5 * (htt[k] * dt * dt + 2 * hts[k] * dt * ds + hss[k] * ds * ds);
         const double ct = jt[k] + htt[k] * dt + hts[k] * ds, cs = js[k] + hts[k] * dt + hss[k] * ds;
@@ -800,27 +779,15 @@ __attribute__((always_inline)) inline void Locator::refine_start_n(const double*
     }
     if (!(std::abs(dt) < 1.5 && std::abs(ds) < 1.5)) return;
     // Never off the map: a solution on the map's edge stays a start the fit can evaluate.
-    const double px = cell_xy_[c][0] + dt * hx, py = cell_xy_[c][1] + ds * hy;
-    if (!interp_.inside(px, py)) return;
-    st.x = px;
-    st.y = py;
+    const double nx = cell_xy_[m.cell][0] + dt * hx, ny = cell_xy_[m.cell][1] + ds * hy;
+    if (!interp_.inside(nx, ny)) return;
+    st.x = nx;
+    st.y = ny;
     if (!fixed_force) {
-      const float* g0 = m0 + 6 * ne;
-      const float* g1 = m1 + 6 * ne;
-      double g[6];
-      for (int a = 0; a < 6; ++a) g[a] = double(g0[a]) + w * double(g1[a] - g0[a]);
+      const double* g = d + 6 * ne_;
       const double log_g = g[0] + g[1] * dt + g[2] * ds + 0.5 * (g[3] * dt * dt + 2 * g[4] * dt * ds + g[5] * ds * ds);
       st.l = std::clamp((log_q_norm - log_g) * (1.0 / p_exp), log_lo, log_hi);
     }
-  }
-}
-
-PVDF_CLONES void Locator::refine_start(const double* q_unit, double log_q_norm, bool fixed_force, double log_lo, double log_hi,
-                           Start& st) const {
-  if (ne_ == 3) {
-    refine_start_n<3>(q_unit, log_q_norm, fixed_force, log_lo, log_hi, st);
-  } else {
-    refine_start_n<0>(q_unit, log_q_norm, fixed_force, log_lo, log_hi, st);
   }
 }
 

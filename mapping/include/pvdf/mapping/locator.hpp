@@ -179,9 +179,6 @@ class Locator {
   /// of the interpolant; leaves the start as it is where the model has no solution nearby.
   void refine_start(const double* q_unit, double log_q_norm, bool fixed_force, double log_lo, double log_hi,
                     Start& start) const;
-  template <std::size_t NE>
-  void refine_start_n(const double* q_unit, double log_q_norm, bool fixed_force, double log_lo, double log_hi,
-                      Start& start) const;
   /// Starts for a fold's twin of a solution: guesses of the other zero of its cell's quadratic
   /// direction model along the weak direction, less than 1.5 cells away (0, 1 or 2 of them).
   int fold_twins(const Fit& fit, std::array<Start, 2>& twins) const;
