@@ -1197,7 +1197,8 @@ PVDF_CLONES Location Locator::locate_impl(const double* charges_C, bool fixed_fo
           double w = 0;
           interp_.level_bracket(st.l, f0, w);
           const char* row = reinterpret_cast<const char*>(&model_[(std::size_t(slot) * interp_.n_levels() + f0) * model_stride_]);
-          for (std::size_t b = 0; b < 2 * model_stride_ * sizeof(float); b += 64) __builtin_prefetch(row + b);
+          const std::size_t rows = interp_.n_levels() > 1 ? 2 : 1;  // f0 + 1 exists when there are two levels
+          for (std::size_t b = 0; b < rows * model_stride_ * sizeof(float); b += 64) __builtin_prefetch(row + b);
         }
       }
     }
