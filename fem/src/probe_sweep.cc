@@ -31,7 +31,6 @@ std::string fmt(double x, int precision = 3) {
   return os.str();
 }
 
-
 double smallest_electrode_side(const pvdf::Scene& scene) {
   double side = std::numeric_limits<double>::max();
   for (const auto& e : scene.electrodes) {

@@ -793,9 +793,7 @@ PVDF_CLONES void Locator::refine_start(const double* q_unit, double log_q_norm, 
 
 PVDF_CLONES int Locator::fold_twins(const Fit& fit, std::array<Start, 2>& twins) const {
   {
-    const double u = (fit.x - interp_.x0()) * interp_.inv_hx(), v = (fit.y - interp_.y0()) * interp_.inv_hy();
-    if (!(u >= 0 && v >= 0 && u < double(interp_.nx() - 1) && v < double(interp_.ny() - 1))) return 0;
-    const std::int32_t slot = cell_slot_[std::size_t(v) * (interp_.nx() - 1) + std::size_t(u)];
+    const std::int32_t slot = slot_at(fit.x, fit.y);
     if (slot < 0 || !cell_fold_[std::size_t(slot)]) return 0;  // no fold nearby: no twin to look for
   }
   CellModel m;
@@ -940,12 +938,8 @@ PVDF_CLONES Locator::Fit Locator::levenberg_marquardt(const double* q, const dou
     // error is ~1e-3 cell) take it without evaluating the model there; χ² from the linear model,
     // χ² + 2 stepᵀJᵀr + stepᵀJᵀJ step (its change is second order too).
     if (lambda < 1e-2 && std::abs(step[2]) < 1e-3) {
-      double accept = 1e-3;
-      const double u = (x - interp_.x0()) * interp_.inv_hx(), v = (y - interp_.y0()) * interp_.inv_hy();
-      if (u >= 0 && v >= 0 && u < double(interp_.nx() - 1) && v < double(interp_.ny() - 1)) {
-        const std::int32_t slot = cell_slot_[std::size_t(u) + std::size_t(v) * (interp_.nx() - 1)];
-        if (slot >= 0) accept = double(scan_[std::size_t(slot) * scan_stride_ + 6 * ne_ + 7]);
-      }
+      const std::int32_t slot = slot_at(x, y);
+      const double accept = slot >= 0 ? double(scan_[std::size_t(slot) * scan_stride_ + 6 * ne_ + 7]) : 1e-3;
       if (std::abs(step[0]) < accept * hx && std::abs(step[1]) < accept * hy && interp_.inside(x + step[0], y + step[1]) &&
           l + step[2] >= log_lo && l + step[2] <= log_hi) {
         x += step[0];
@@ -1189,17 +1183,14 @@ PVDF_CLONES Location Locator::locate_impl(const double* charges_C, bool fixed_fo
     for (int s = 0; s < predicted.n && s < options_.max_starts; ++s) {
       const Start& st = predicted.start[std::size_t(s)];
       interp_.prefetch(st.x, st.y);
-      const double u = (st.x - interp_.x0()) * interp_.inv_hx(), v = (st.y - interp_.y0()) * interp_.inv_hy();
-      if (u >= 0 && v >= 0 && u < double(interp_.nx() - 1) && v < double(interp_.ny() - 1)) {
-        const std::int32_t slot = cell_slot_[std::size_t(v) * (interp_.nx() - 1) + std::size_t(u)];
-        if (slot >= 0) {
-          std::size_t f0 = 0;
-          double w = 0;
-          interp_.level_bracket(st.l, f0, w);
-          const char* row = reinterpret_cast<const char*>(&model_[(std::size_t(slot) * interp_.n_levels() + f0) * model_stride_]);
-          const std::size_t rows = interp_.n_levels() > 1 ? 2 : 1;  // f0 + 1 exists when there are two levels
-          for (std::size_t b = 0; b < rows * model_stride_ * sizeof(float); b += 64) __builtin_prefetch(row + b);
-        }
+      const std::int32_t slot = slot_at(st.x, st.y);
+      if (slot >= 0) {
+        std::size_t f0 = 0;
+        double w = 0;
+        interp_.level_bracket(st.l, f0, w);
+        const char* row = reinterpret_cast<const char*>(&model_[(std::size_t(slot) * interp_.n_levels() + f0) * model_stride_]);
+        const std::size_t rows = interp_.n_levels() > 1 ? 2 : 1;  // f0 + 1 exists when there are two levels
+        for (std::size_t b = 0; b < rows * model_stride_ * sizeof(float); b += 64) __builtin_prefetch(row + b);
       }
     }
     for (int s = 0; s < predicted.n && n_starts < options_.max_starts; ++s) {

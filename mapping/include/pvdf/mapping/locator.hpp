@@ -174,6 +174,12 @@ class Locator {
     std::array<double, 6 * max_electrodes + 6> v;  ///< d, Jt, Js, Htt, Hts, Hss (ne each), ln|G| terms (6)
   };
   bool cell_model(double x, double y, double l, CellModel& m) const;
+  /// Index into cells_ of the usable cell holding (x, y); −1 off the map or in an unusable cell.
+  std::int32_t slot_at(double x, double y) const {
+    const double u = (x - interp_.x0()) * interp_.inv_hx(), v = (y - interp_.y0()) * interp_.inv_hy();
+    if (!(u >= 0 && v >= 0 && u < double(interp_.nx() - 1) && v < double(interp_.ny() - 1))) return -1;
+    return cell_slot_[std::size_t(v) * (interp_.nx() - 1) + std::size_t(u)];
+  }
   /// Moves a start to the solution of the quadratic direction model of the cell that holds it
   /// (two passes: the point may move into a neighbour), with the force from |q|. No evaluation
   /// of the interpolant; leaves the start as it is where the model has no solution nearby.
