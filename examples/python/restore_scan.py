@@ -68,7 +68,7 @@ def main():
         near = np.abs(forces.x_m - x_edge) < 0.004
         i = np.flatnonzero(near)[np.argmax(forces.fz_N[near])]
         print(f"edge near {x_edge * 1e3:.0f} mm: restored at {forces.x_m[i] * 1e3:.2f} mm, "
-              f"f_z {forces.fz_N[near].sum():.3f} N, f_x {forces.fx_N[near].sum():.3f} N, mu {forces.mu[i]:.3f}")
+              f"peak f_z {forces.fz_N[i] / dx / 1e3:.3f} N/mm, mu {forces.mu[i]:.3f}")
     with open(os.path.join(a.out, "forces.csv"), "w") as f:
         f.write("x_m,fx_N,fz_N,mu,mu_valid\n")
         for row in zip(forces.x_m, forces.fx_N, forces.fz_N, forces.mu, forces.mu_valid.astype(int)):
@@ -92,15 +92,14 @@ def main():
     ax.plot(x, forces.fz_N * per_mm, "k-", lw=0.8, label="restored $f_z$ (normal)")
     ax.plot(x, forces.fx_N * per_mm, "-", color="tab:red", lw=0.8, label="restored $f_x$ (shear)")
     ax.set_ylabel("force per scan length (N/mm)")
-    ax.set_title(f"Restored forces; both curves blurred to the {resolution * mm:g} mm target resolution", fontsize=10)
+    ax.set_title(f"Restored forces against the true ones blurred to the filters' {resolution * mm:g} mm "
+                 "target resolution", fontsize=10)
     ax.legend(fontsize=8, ncol=2, loc="upper right")
     ax = axes[2]
     valid = forces.mu_valid
     ax.plot(x[valid], forces.mu[valid], ".", ms=2, label=r"restored $\mu = f_x/f_z$")
-    for xe, mu in ((-30, 0.3 / 0.8), (-15, 0.55 / 0.7)):
-        ax.plot([xe], [mu], "kD", ms=5, mfc="none")
-    ax.plot([0, 30], [0.2, 0.8], "k--", lw=0.8, label=r"true $\mu$ (edges ◇, texture --)")
-    ax.plot([], [], "kD", mfc="none", ms=5)
+    ax.plot([-30, -15], [0.3 / 0.8, 0.55 / 0.7], "kD", ms=6, mfc="none", ls="none", label=r"true $\mu$ of the edges")
+    ax.plot([0, 30], [0.2, 0.8], "k--", lw=0.8, label=r"true $\mu$ along the texture")
     ax.set_ylim(0, 1.2)
     ax.set_ylabel(r"friction coefficient $\mu$ (–)")
     ax.set_xlabel("scanner position $x$ (mm)")
