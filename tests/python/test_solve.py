@@ -6,7 +6,9 @@ import pytest
 
 import pvdfkit
 
-pytestmark = pytest.mark.skipif(not pvdfkit.has_fem, reason="built without the FEM modules")
+
+def test_the_solver_is_built():
+    assert pvdfkit.has_fem, "pvdfkit was built without the FEM modules; ctest registers this file only with them"
 
 A, H, E, NU, C = 0.045, 1e-3, 2e9, 0.3, 4e-3
 
