@@ -116,6 +116,10 @@ def main():
     norm = matplotlib.colors.LogNorm(vmin=1, vmax=max(1e3, np.nanmax(err_k[ok]) * um))
     sc = ax1.scatter(known.x_m[ok] * mm, known.y_m[ok] * mm, c=err_k[ok] * um, s=12, cmap="viridis", norm=norm,
                      label="located (force known)")
+    flagged = ok & (known.flags != 0)  # poor_fit, ambiguous, ...: the lookup warns about these answers
+    if flagged.any():
+        ax1.plot(known.x_m[flagged] * mm, known.y_m[flagged] * mm, "s", mfc="none", color="tab:red", ms=8, mew=0.8,
+                 label="located, with a flag (e.g. poor_fit)")
     far = ok & (err_k > 1e-3)
     if far.any():
         ax1.plot([x_true[far] * mm, known.x_m[far] * mm], [y_true[far] * mm, known.y_m[far] * mm], "r-", lw=0.8)
@@ -130,7 +134,7 @@ def main():
     ax1.set_ylabel("$y$ (mm)")
     ax1.set_title(f"{n} presses of 0.6–1.8 N, charge noise {locator.noise_C[0] * 1e12:.2f} pC (1σ)\n"
                   f"map step {(cmap.x_m[1] - cmap.x_m[0]) * mm:g} mm; force known", fontsize=10)
-    ax1.legend(fontsize=7, loc="lower left", framealpha=0.9)
+    ax1.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=3, frameon=False)
 
     sig_u = np.hypot(out.sigma_x_m, out.sigma_y_m) * um
     err_u = np.hypot(out.x_m - x_true, out.y_m - y_true) * um
@@ -138,7 +142,11 @@ def main():
     single = out.has_position & ~amb
     lim = [0.5, 3e4]
     ax2.loglog(lim, lim, "k-", lw=0.8, label="error = reported 1σ")
-    ax2.loglog(sig_k[ok], np.maximum(err_k[ok] * um, 0.6), "s", ms=3, color="tab:green", label="force known")
+    clean = ok & ~flagged
+    ax2.loglog(sig_k[clean], np.maximum(err_k[clean] * um, 0.6), "s", ms=3, color="tab:green",
+               label="force known, no flag")
+    ax2.loglog(sig_k[flagged], np.maximum(err_k[flagged] * um, 0.6), "s", ms=4, mfc="none", color="tab:green",
+               label="force known, flagged (poor_fit, ...)")
     ax2.loglog(sig_u[single], np.maximum(err_u[single], 0.6), "o", ms=3, color="tab:blue",
                label="force unknown, one solution")
     ax2.loglog(sig_u[amb], np.maximum(err_u[amb], 0.6), "x", ms=5, color="tab:red",
