@@ -101,3 +101,24 @@ def test_probe_sweep_equals_direct_solves_within_its_estimate():
     assert err < 3 * max(setup["estimated_relative_error"], 0.01)
     with pytest.raises(pvdfkit.InputError):
         sweep.solve([0.0, 0.0], [0.0, 0.0, 0.0], 1.0)
+
+
+def test_generate_map_agrees_with_direct_solves(tmp_path):
+    """A small FEM map: its charges at a grid node equal a direct solve there within the estimates."""
+    scene = pvdfkit.default_scene()
+    cmap, report = pvdfkit.generate_map(scene, spacing_m=0.006, forces_N=[1.0], region_m=(-0.006, 0.006, -0.006, 0.006),
+                                        tolerance=0.02, n_setup_checks=1, threads=1)
+    assert (cmap.nx, cmap.ny, cmap.nf, cmap.n_electrodes) == (3, 3, 1, 3)
+    assert report["n_failed"] == 0 and report["n_positions"] == 9
+    assert cmap.charge_C.shape == (1, 3, 3, 3) and (cmap.status == 0).all()
+    i, j = 2, 1  # node (6 mm, 0)
+    assert (cmap.x_m[i], cmap.y_m[j]) == pytest.approx((0.006, 0.0))
+    direct = pvdfkit.solve(scene, loads=[[0.006, 0.0, 1.0]], tolerance=0.01)
+    q_map = cmap.charge_C[0, j, i]
+    tol = 3 * max(cmap.estimated_relative_error, direct.estimated_relative_error, 0.005)
+    assert np.abs(q_map - direct.charge_C).max() < tol * np.abs(direct.charge_C).max()
+    assert cmap.deflection_at_load_m[0, j, i] == pytest.approx(direct.deflection_at_load_m, rel=0.05)
+    path = tmp_path / "fem.h5"
+    pvdfkit.write_map(str(path), cmap)
+    back = pvdfkit.read_map(str(path))
+    assert np.array_equal(back.charge_C, cmap.charge_C) and back.model == cmap.model
