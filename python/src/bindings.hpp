@@ -1,0 +1,56 @@
+// Shared pieces of the pybind11 bindings: numpy conversion helpers and the per-file bind functions.
+#pragma once
+
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <algorithm>
+#include <array>
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace pvdf::python {
+
+namespace py = pybind11;
+
+/// A new C-contiguous numpy array of `shape` holding a copy of `values` (sizes must agree).
+template <class T>
+py::array_t<T> to_array(const std::vector<T>& values, std::vector<py::ssize_t> shape) {
+  py::array_t<T> out(shape);
+  std::copy(values.begin(), values.end(), out.mutable_data());
+  return out;
+}
+/// 1-D copy.
+template <class T>
+py::array_t<T> to_array(const std::vector<T>& values) {
+  return to_array(values, {py::ssize_t(values.size())});
+}
+/// n × N copy of a vector of fixed-size rows.
+template <class T, std::size_t N>
+py::array_t<T> to_array(const std::vector<std::array<T, N>>& rows) {
+  py::array_t<T> out({py::ssize_t(rows.size()), py::ssize_t(N)});
+  T* p = out.mutable_data();
+  for (const auto& r : rows) p = std::copy(r.begin(), r.end(), p);
+  return out;
+}
+
+/// A float64 C-contiguous view/copy of any array-like (lists, ints, float32 are converted).
+using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
+
+/// "(3, 2)": the shape of an array as numpy prints it, for messages.
+std::string shape_text(const py::array& a);
+/// The values of a 1-D array-like, `what` naming it in the InputError for another shape.
+std::vector<double> to_vector(const DoubleArray& a, const std::string& what);
+/// The rows of an n × 2 array-like (one [x, y] also accepted as 1 × 2).
+std::vector<std::array<double, 2>> to_points(const DoubleArray& a, const std::string& what);
+
+void bind_errors(py::module_& m);
+void bind_results(py::module_& m);
+void bind_scene(py::module_& m);
+void bind_fem(py::module_& m);
+void bind_maps(py::module_& m);
+void bind_restore(py::module_& m);
+
+}  // namespace pvdf::python

@@ -1,0 +1,124 @@
+"""pvdfkit.solve and ProbeSweep against Timoshenko's clamped plate and equilibrium."""
+import math
+
+import numpy as np
+import pytest
+
+import pvdfkit
+
+
+def test_the_solver_is_built():
+    assert pvdfkit.has_fem, "pvdfkit was built without the FEM modules; ctest registers this file only with them"
+
+A, H, E, NU, C = 0.045, 1e-3, 2e9, 0.3, 4e-3
+
+
+def plate_scene(force_N=0.01):
+    """An isotropic 1 mm plate (bending dominated: the linear plate oracle applies)."""
+    return {
+        "membrane": {"radius_m": A, "thickness_m": H},
+        "material": {"E_Pa": E, "nu": NU, "d31_C_per_N": 6.5e-12, "d32_C_per_N": 6.5e-12},
+        "electrodes": [{"name": "ring", "shape": "circle", "center_m": [0.012, 0.0], "radius_m": 0.003},
+                       {"name": "mirror", "shape": "circle", "center_m": [-0.012, 0.0], "radius_m": 0.003}],
+        "probe": {"radius_m": C},
+        "loads": [{"position_m": [0.0, 0.0], "force_N": force_N}],
+    }
+
+
+def timoshenko_disk_load_centre_m(P):
+    """Clamped circular plate, load P spread over r < c (Timoshenko & Woinowsky-Krieger §19)."""
+    D = E * H**3 / (12 * (1 - NU**2))
+    return P / (16 * math.pi * D) * (A**2 - 0.75 * C**2 + C**2 * math.log(C / A))
+
+
+def test_linear_plate_centre_deflection_matches_timoshenko():
+    F = 0.01
+    r = 0.004
+    samples = [[0, 0], [r, 0], [0, r], [-r, 0], [0, -r]]
+    res = pvdfkit.solve(plate_scene(F), samples=samples, model="linear", tolerance=2e-3)
+    assert res.ok and res.status in ("converged", "tolerance-not-met")
+    exact = timoshenko_disk_load_centre_m(F)
+    assert res.deflection_at_load_m == pytest.approx(exact, rel=5e-3)
+    # The estimate is honest: the true error is below 3x the estimated one (or below 1e-3).
+    true_err = abs(res.deflection_at_load_m - exact) / abs(exact)
+    assert true_err < max(3 * res.estimated_relative_error, 1e-3)
+    # Shapes and units of the sample fields.
+    assert res.sample_position_m.shape == (5, 2)
+    assert res.displacement_m.shape == (5, 3)
+    assert res.membrane_force_global_N_per_m.shape == (5, 3)
+    assert res.deflection_m[0] == pytest.approx(res.deflection_at_load_m, rel=1e-9)
+    # Isotropic plate, centred load: w is axisymmetric.
+    ring = res.deflection_m[1:]
+    assert np.ptp(ring) < 1e-3 * abs(ring.mean())
+    # Equilibrium: the clamped rim carries the applied force.
+    assert res.rim_reaction_N == pytest.approx(F, rel=1e-6)
+    assert res.load_force_N == pytest.approx([F])
+    # Linear plate theory leaves the mid-surface unstretched: no membrane force, no charge.
+    assert res.electrode_names == ["ring", "mirror"]
+    assert res.charge_C.shape == (2,)
+    assert np.all(res.charge_C == 0)
+
+
+def test_loads_argument_and_linearity():
+    """A linear model: twice the force gives twice the deflection."""
+    one = pvdfkit.solve(plate_scene(), loads=[[0.005, 0.002, 0.01]], model="linear", tolerance=5e-3)
+    two = pvdfkit.solve(plate_scene(), loads=[[0.005, 0.002, 0.02]], model="linear", tolerance=5e-3)
+    assert one.load_position_m == pytest.approx(np.array([[0.005, 0.002]]))
+    assert two.deflection_at_load_m == pytest.approx(2 * one.deflection_at_load_m, rel=1e-2)
+
+
+def test_bad_arguments_raise_input_errors():
+    with pytest.raises(pvdfkit.InputError, match="tolerance"):
+        pvdfkit.solve(plate_scene(), tolerance=2.0)
+    with pytest.raises(pvdfkit.InputError, match="model"):
+        pvdfkit.solve(plate_scene(), model="quadratic")
+    with pytest.raises(pvdfkit.InputError, match="n x 3"):
+        pvdfkit.solve(plate_scene(), loads=[[0.0, 1.0]])
+    with pytest.raises(pvdfkit.InputError, match="n x 2"):
+        pvdfkit.solve(plate_scene(), samples=[[0.0, 1.0, 2.0]])
+
+
+def test_probe_sweep_equals_direct_solves_within_its_estimate():
+    scene = pvdfkit.default_scene()
+    sweep = pvdfkit.ProbeSweep(scene, tolerance=0.02, n_setup_checks=1)
+    setup = sweep.setup
+    assert setup["n_dofs"] > 0 and 0 < setup["estimated_relative_error"] < 0.1
+    x = np.array([0.0, 0.004, -0.004])
+    y = np.array([0.0, 0.003, 0.003])
+    out = sweep.solve(x, y, 1.0)
+    assert len(out) == 3 and out.ok.all()
+    assert out.charge_C.shape == (3, 3)
+    assert out.rim_reaction_N == pytest.approx(np.ones(3), rel=1e-6)
+    # Seed 001 is mirror-symmetric about x = 0 (draw along x, A on the axis, B and C mirrored):
+    # a press at (-x, y) gives A the same charge and swaps B and C.
+    tol = 2 * max(setup["estimated_relative_error"], 0.005)
+    mirrored = out.charge_C[2][[0, 2, 1]]
+    assert np.abs(mirrored - out.charge_C[1]).max() < tol * np.abs(out.charge_C[1]).max()
+    assert out.charge_C[0, 1] == pytest.approx(out.charge_C[0, 2], rel=tol)
+    direct = pvdfkit.solve(scene, loads=[[x[1], y[1], 1.0]], tolerance=0.01)
+    scale = np.abs(direct.charge_C).max()
+    err = np.abs(out.charge_C[1] - direct.charge_C).max() / scale
+    assert err < 3 * max(setup["estimated_relative_error"], 0.01)
+    with pytest.raises(pvdfkit.InputError):
+        sweep.solve([0.0, 0.0], [0.0, 0.0, 0.0], 1.0)
+
+
+def test_generate_map_agrees_with_direct_solves(tmp_path):
+    """A small FEM map: its charges at a grid node equal a direct solve there within the estimates."""
+    scene = pvdfkit.default_scene()
+    cmap, report = pvdfkit.generate_map(scene, spacing_m=0.006, forces_N=[1.0], region_m=(-0.006, 0.006, -0.006, 0.006),
+                                        tolerance=0.02, n_setup_checks=1, threads=1)
+    assert (cmap.nx, cmap.ny, cmap.nf, cmap.n_electrodes) == (3, 3, 1, 3)
+    assert report["n_failed"] == 0 and report["n_positions"] == 9
+    assert cmap.charge_C.shape == (1, 3, 3, 3) and (cmap.status == 0).all()
+    i, j = 2, 1  # node (6 mm, 0)
+    assert (cmap.x_m[i], cmap.y_m[j]) == pytest.approx((0.006, 0.0))
+    direct = pvdfkit.solve(scene, loads=[[0.006, 0.0, 1.0]], tolerance=0.01)
+    q_map = cmap.charge_C[0, j, i]
+    tol = 3 * max(cmap.estimated_relative_error, direct.estimated_relative_error, 0.005)
+    assert np.abs(q_map - direct.charge_C).max() < tol * np.abs(direct.charge_C).max()
+    assert cmap.deflection_at_load_m[0, j, i] == pytest.approx(direct.deflection_at_load_m, rel=0.05)
+    path = tmp_path / "fem.h5"
+    pvdfkit.write_map(str(path), cmap)
+    back = pvdfkit.read_map(str(path))
+    assert np.array_equal(back.charge_C, cmap.charge_C) and back.model == cmap.model
