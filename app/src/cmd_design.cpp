@@ -6,7 +6,7 @@
 
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
-#include "pvdf/core/plot.hpp"
+#include "pvdf/plot/plot.hpp"
 #include "pvdf/core/progress.hpp"
 #include "pvdf/core/scene.hpp"
 #include "pvdf/mapping/design.hpp"

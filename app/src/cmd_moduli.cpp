@@ -5,7 +5,7 @@
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
 #include "pvdf/core/material.hpp"
-#include "pvdf/core/plot.hpp"
+#include "pvdf/plot/plot.hpp"
 #include "pvdf/core/scene.hpp"
 
 #include <nlohmann/json.hpp>

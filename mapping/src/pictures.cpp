@@ -3,7 +3,7 @@
 
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
-#include "pvdf/core/plot.hpp"
+#include "pvdf/plot/plot.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,6 +1,6 @@
 // PNG preview of a film mesh: the whole film and a zoom on the electrodes, cell edges drawn,
 // electrodes filled in their own colours with a legend, probe footprints outlined, axes in mm.
-#include "pvdf/core/plot.hpp"
+#include "pvdf/plot/plot.hpp"
 #include "pvdf/mesh/mesher.hpp"
 
 #include <algorithm>
