@@ -261,6 +261,27 @@ void PanelPainter::draw_panel(const Axes::Impl& a, const PanelLayout& p) {
   clip_box_ = {L - 1000, T - 1000, R + 1000, B + 1000};
   placed_labels_.clear();
   std::vector<P2> data_points;  // for legend placement
+  // Contour labels keep clear of small filled polygons (electrodes) and text annotations.
+  const bool labelled_contours = std::any_of(a.items.begin(), a.items.end(),
+                                             [](const Item& it) { return it.kind == Kind::contour && !it.format.empty(); });
+  for (const auto& it : a.items) {
+    if (!labelled_contours) break;
+    if (it.kind == Kind::polygon && it.fill && !it.vertices.empty()) {
+      double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
+      for (const auto& v : it.vertices) {
+        const double x = p.xs.to_px(v[0]), y = p.ys.to_px(v[1]);
+        x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
+      }
+      if (finite(x0) && finite(y0) && (x1 - x0) * (y1 - y0) < 0.05 * (R - L) * (B - T))
+        placed_labels_.push_back({(x0 + x1) / 2, (y0 + y1) / 2, (x1 - x0) / 2, (y1 - y0) / 2});
+    } else if (it.kind == Kind::scatter && it.x.size() <= 200) {
+      for (std::size_t i = 0; i < it.x.size(); ++i)
+        placed_labels_.push_back({p.xs.to_px(it.x[i]), p.ys.to_px(it.y[i]), it.size / 2 + 2, it.size / 2 + 2});
+    } else if (it.kind == Kind::text) {
+      const double x = p.xs.to_px(it.x[0]), y = p.ys.to_px(it.y[0]), w = text_.width(it.label, it.font_px);
+      if (finite(x) && finite(y)) placed_labels_.push_back({x + w / 2, y - it.font_px * 0.4, w / 2, it.font_px * 0.5});
+    }
+  }
   cairo_save(cr_);
   cairo_rectangle(cr_, L, T, R - L, B - T);
   cairo_clip(cr_);
@@ -304,6 +325,9 @@ void PanelPainter::draw_panel(const Axes::Impl& a, const PanelLayout& p) {
       case Kind::field: break;
     }
   }
+  // Contour labels on top of everything drawn in the panel (markers, electrodes).
+  for (const auto& l : pending_labels_) text_.draw(l.x, l.y, l.text, kContourPx, l.color, l.angle_deg, 0.5, VAlign::center);
+  pending_labels_.clear();
   cairo_restore(cr_);
   draw_frame_and_ticks(a, p);
   if (p.cbar.on) draw_colorbar(p.cbar);
@@ -420,12 +444,16 @@ void PanelPainter::draw_contour(const Item& it, const PanelLayout& p, std::vecto
       for (std::size_t k = 0; k < q.size(); k += 8) pts.push_back(q[k]);
       const auto cum = cumulative_length(q);
       const double total = cum.back();
-      std::vector<std::pair<double, double>> keep{{0, total}};
-      if (!label.empty() && total > 2.5 * tw + 20) {
-        // The first position along the line whose label box is inside the panel and clear of
-        // every label already placed in this panel (of any contour family).
+      std::vector<std::pair<double, double>> gaps;  // arc-length intervals under labels
+      // One label per ~350 px of line. In each stretch, the first position whose label box is
+      // inside the panel and clear of every label already placed in this panel (of any
+      // contour family).
+      const int n_labels = label.empty() || !(total > 2.5 * tw + 20) ? 0 : std::max(1, static_cast<int>(total / 350));
+      for (int n = 0; n < n_labels; ++n) {
+        const double s0 = total * n / n_labels, len = total / n_labels;
         for (double frac : {0.5, 0.3, 0.7, 0.15, 0.85, 0.4, 0.6, 0.22, 0.78, 0.08, 0.92}) {
-          const double s = frac * total;
+          const double s = s0 + frac * len;
+          if (s - tw / 2 - 4 < 0 || s + tw / 2 + 4 > total) continue;
           const P2 c = point_at(q, cum, s);
           const P2 a = point_at(q, cum, s - tw / 2), b = point_at(q, cum, s + tw / 2);
           if (c[0] < p.L + tw / 2 + 2 || c[0] > p.R - tw / 2 - 2 || c[1] < p.T + 8 || c[1] > p.B - 8) continue;
@@ -436,14 +464,18 @@ void PanelPainter::draw_contour(const Item& it, const PanelLayout& p, std::vecto
           double angle = std::atan2(-(b[1] - a[1]), b[0] - a[0]) * 180 / kPi;
           if (angle > 90) angle -= 180;
           if (angle < -90) angle += 180;
-          text_.draw(c[0], c[1], label, kContourPx, it.color, angle, 0.5, VAlign::center);
+          pending_labels_.push_back({c[0], c[1], label, it.color, angle});
           // The box of a rotated label, for the clash test.
           const double ca = std::abs(std::cos(angle * kPi / 180)), sa = std::abs(std::sin(angle * kPi / 180));
           placed_labels_.push_back({c[0], c[1], (tw * ca + kContourPx * sa) / 2, (tw * sa + kContourPx * ca) / 2});
-          keep = {{0, s - tw / 2 - 4}, {s + tw / 2 + 4, total}};
+          gaps.push_back({s - tw / 2 - 4, s + tw / 2 + 4});
           break;
         }
       }
+      std::vector<std::pair<double, double>> keep;
+      double from = 0;
+      for (const auto& g : gaps) keep.push_back({from, g.first}), from = g.second;
+      keep.push_back({from, total});
       const bool closed = std::hypot(q.front()[0] - q.back()[0], q.front()[1] - q.back()[1]) < 1e-6;
       if (keep.size() == 1) {
         stroke_polyline(q, it.width, it.color, it.style, closed);

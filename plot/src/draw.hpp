@@ -31,7 +31,14 @@ class PanelPainter {
   cairo_t* cr_;
   TextEngine& text_;
   std::vector<std::array<double, 4>> placed_labels_;  // contour label boxes of the panel (cx, cy, hw, hh)
-  std::array<double, 4> clip_box_{};                  // far box against which geometry is clipped
+  std::array<double, 4> clip_box_{};
+  struct PendingLabel {
+    double x, y;
+    std::string text;
+    Color color;
+    double angle_deg;
+  };
+  std::vector<PendingLabel> pending_labels_;  // contour labels, drawn after the panel's items                  // far box against which geometry is clipped
 };
 
 }  // namespace pvdf::plot::detail

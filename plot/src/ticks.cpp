@@ -81,6 +81,37 @@ std::vector<Tick> log_ticks(double lo, double hi, int target) {
   const double l0 = std::log10(lo), l1 = std::log10(hi);
   const int k0 = static_cast<int>(std::ceil(l0 - 1e-9)), k1 = static_cast<int>(std::floor(l1 + 1e-9));
   if (k1 - k0 + 1 < 2) {
+    // Less than two decades: label 1, 2, 5 × 10^k (or 1, 2, 3, 5, or every mantissa, until
+    // there are enough labels), minor ticks at the other mantissas, so that the labels stay
+    // evenly spread on the log scale.
+    const std::vector<int> sets[] = {{1, 2, 5}, {1, 2, 3, 5}, {1, 2, 3, 4, 5, 6, 7, 8, 9}};
+    const int enough[] = {4, 3, 2};
+    for (int s = 0; s < 3; ++s) {
+      const std::vector<int>& labelled = sets[s];
+      std::vector<Tick> ticks;
+      int n_major = 0;
+      for (int k = static_cast<int>(std::floor(l0)); k <= static_cast<int>(std::floor(l1)); ++k) {
+        for (int m = 1; m <= 9; ++m) {
+          const double v = m * std::pow(10.0, k);
+          if (v < lo * (1 - 1e-9) || v > hi * (1 + 1e-9)) continue;
+          const bool major = std::find(labelled.begin(), labelled.end(), m) != labelled.end();
+          Tick t{v, {}, major};
+          if (major) {
+            char buf[32];
+            if (k >= 5 || k < -3) {
+              std::snprintf(buf, sizeof buf, "%d\xC3\x97" "10", m);  // m×10^k
+              t.label = power_of_ten(buf, k);
+            } else {
+              std::snprintf(buf, sizeof buf, "%.*f", std::max(0, -k), v);
+              t.label = buf;
+            }
+            ++n_major;
+          }
+          ticks.push_back(t);
+        }
+      }
+      if (n_major >= enough[s]) return ticks;
+    }
     auto t = linear_ticks(lo, hi, target);
     t.erase(std::remove_if(t.begin(), t.end(), [](const Tick& x) { return !(x.value > 0); }), t.end());
     return t;
