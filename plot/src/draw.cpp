@@ -264,8 +264,34 @@ void PanelPainter::draw_panel(const Axes::Impl& a, const PanelLayout& p) {
   // Contour labels keep clear of small filled polygons (electrodes) and text annotations.
   const bool labelled_contours = std::any_of(a.items.begin(), a.items.end(),
                                              [](const Item& it) { return it.kind == Kind::contour && !it.format.empty(); });
+  line_points_.clear();
+  line_counter_ = 0;
+  std::size_t line_id = 0;
   for (const auto& it : a.items) {
     if (!labelled_contours) break;
+    if (it.kind == Kind::contour) {
+      // Labels also keep clear of the other contour lines (sampled densely enough that a line
+      // cannot cross a label box between two samples).
+      for (const auto& level : it.contours) {
+        for (const auto& line : level) {
+          std::vector<P2> run;
+          for (const auto& v : line) run.push_back({p.xs.to_px(v[0]), p.ys.to_px(v[1])});
+          std::vector<P2> dense;
+          if (run.size() >= 2 && std::all_of(run.begin(), run.end(), [](const P2& q) { return finite(q[0]) && finite(q[1]); })) {
+            for (std::size_t i = 1; i < run.size(); ++i) {
+              const int n = std::min(1000, 1 + static_cast<int>(std::hypot(run[i][0] - run[i - 1][0], run[i][1] - run[i - 1][1]) / 3));
+              for (int k = 0; k < n; ++k) {
+                const double t = static_cast<double>(k) / n;
+                line_points_.push_back({run[i - 1][0] + t * (run[i][0] - run[i - 1][0]),
+                                        run[i - 1][1] + t * (run[i][1] - run[i - 1][1]), line_id});
+              }
+            }
+          }
+          ++line_id;
+        }
+      }
+      continue;
+    }
     if (it.kind == Kind::polygon && it.fill && !it.vertices.empty()) {
       double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
       for (const auto& v : it.vertices) {
@@ -435,6 +461,7 @@ void PanelPainter::draw_contour(const Item& it, const PanelLayout& p, std::vecto
     }
     const double tw = label.empty() ? 0 : text_.width(label, kContourPx);
     for (const auto& line : it.contours[l]) {
+      const std::size_t this_line = line_counter_++;
       std::vector<P2> q;
       for (const auto& v : line) {
         const P2 a{p.xs.to_px(v[0]), p.ys.to_px(v[1])};
@@ -464,6 +491,18 @@ void PanelPainter::draw_contour(const Item& it, const PanelLayout& p, std::vecto
           double angle = std::atan2(-(b[1] - a[1]), b[0] - a[0]) * 180 / kPi;
           if (angle > 90) angle -= 180;
           if (angle < -90) angle += 180;
+          // No other contour line through the label (tested in the label's own frame).
+          const double ca0 = std::cos(angle * kPi / 180), sa0 = std::sin(angle * kPi / 180);
+          for (const auto& lp : line_points_) {
+            if (lp.line == this_line) continue;
+            const double dx = lp.x - c[0], dy = lp.y - c[1];
+            const double along = dx * ca0 - dy * sa0, across = dx * sa0 + dy * ca0;
+            if (std::abs(along) < tw / 2 + 2 && std::abs(across) < kContourPx * 0.6) {
+              clash = true;
+              break;
+            }
+          }
+          if (clash) continue;
           pending_labels_.push_back({c[0], c[1], label, it.color, angle});
           // The box of a rotated label, for the clash test.
           const double ca = std::abs(std::cos(angle * kPi / 180)), sa = std::abs(std::sin(angle * kPi / 180));

@@ -38,7 +38,13 @@ class PanelPainter {
     Color color;
     double angle_deg;
   };
-  std::vector<PendingLabel> pending_labels_;  // contour labels, drawn after the panel's items                  // far box against which geometry is clipped
+  std::vector<PendingLabel> pending_labels_;  // contour labels, drawn after the panel's items
+  struct LinePoint {
+    double x, y;
+    std::size_t line;
+  };
+  std::vector<LinePoint> line_points_;  // every contour line of the panel, sampled every ~3 px
+  std::size_t line_counter_ = 0;        // which contour line draw_contour is at                  // far box against which geometry is clipped
 };
 
 }  // namespace pvdf::plot::detail
