@@ -84,8 +84,10 @@ std::vector<double> nice_levels(double lo, double hi, int target) {
 std::string format_number(const char* fmt, double v) {
   char buffer[64];
   std::snprintf(buffer, sizeof buffer, fmt, v);
+  // "-0.00" (a tiny negative value rounded away) is written as 0.00.
+  const bool negative_zero = buffer[0] == '-' && std::strspn(buffer + 1, "0.") > 0 && !std::strpbrk(buffer + 1, "123456789");
   std::string out;
-  for (const char* c = buffer; *c; ++c) {
+  for (const char* c = buffer + (negative_zero ? 1 : 0); *c; ++c) {
     if (*c == '-' && (std::isdigit(static_cast<unsigned char>(c[1])) || c[1] == '.')) out += "\u2212";
     else out += *c;
   }
