@@ -13,6 +13,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <ostream>
@@ -126,7 +127,7 @@ int run_compare(const CompareCliOptions& o) {
                 c.mean_abs_difference_pct, c.n_compared_values, paper_mean_difference_pct, c.n_outside, c.n_presses);
   }
   if (!o.plot_path.empty() && c.n_compared_values > 0) {
-    write_comparison_png(c, o.plot_path);
+    write_comparison_png(c, o.plot_path, std::filesystem::path(o.measured_path).filename().string());
     if (!o.json) std::printf("plot written to %s\n", o.plot_path.c_str());
   }
   if (!o.report_path.empty() && !o.json) std::printf("report written to %s\n", o.report_path.c_str());
@@ -150,7 +151,7 @@ PVDF_COMMAND(66, [](CLI::App& root) {
                   "CSV with columns x_m,y_m,force_N and charge_<name>_C per electrode of the map (docs/seed001-reproduction.md)")
       ->required();
   sub->add_flag("--json", o->json, "Print the comparison as JSON (summary, per electrode, per press)");
-  sub->add_option("--plot", o->plot_path, "PNG: measured against map charge, and % difference per press");
+  sub->add_option("--plot", o->plot_path, "Figure (.png, .svg or .pdf): CSV against map charge, and % difference per press");
   sub->add_option("-o,--report", o->report_path, "Write the per-press report as CSV");
   sub->add_option("--min-map-charge-C", o->min_map_charge_C,
                   "Map charges smaller than this are not compared as a percentage (C); default 3x the map's noise_C");

@@ -6,7 +6,7 @@
 
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
-#include "pvdf/core/plot.hpp"
+#include "pvdf/plot/plot.hpp"
 #include "pvdf/core/progress.hpp"
 #include "pvdf/core/scene.hpp"
 #include "pvdf/mapping/design.hpp"
@@ -248,7 +248,9 @@ void map_panel(pvdf::plot::Axes& ax, const Candidate& c, const std::vector<doubl
   for (std::size_t p = 0; p < g.values.size(); ++p) {
     if (!m.evaluated[p]) continue;
     const double v = values[p] * scale;
-    g.values[p] = std::isfinite(v) && v > 0 ? std::clamp(std::log10(v), vmin, vmax) : vmax;  // unbounded → top colour
+    // Not clamped: values beyond [vmin, vmax] take the end colours and the colour bar marks that
+    // with a triangle. Unbounded (no finite bound) is drawn as beyond the top.
+    g.values[p] = std::isfinite(v) && v > 0 ? std::log10(v) : vmax + 1;
     const double x = m.x_m[p % g.nx] * 1e3, y = m.y_m[p / g.nx] * 1e3;
     if (m.ambiguous[p]) {
       ax_x.push_back(x);
@@ -260,9 +262,10 @@ void map_panel(pvdf::plot::Axes& ax, const Candidate& c, const std::vector<doubl
     }
   }
   ax.field(g, bar_label, false, vmin, vmax);
-  if (contour_at > vmin && contour_at < vmax) ax.contour(g, {contour_at}, pvdf::plot::Color{255, 255, 255}, 2.0);
   if (!ax_x.empty()) ax.scatter(ax_x, ax_y, "ambiguous", pvdf::plot::Color{220, 30, 30}, pvdf::plot::Marker::cross, 2.0);
   if (!dx.empty()) ax.scatter(dx, dy, "dead zone", pvdf::plot::Color{150, 150, 150}, pvdf::plot::Marker::square, 2.0);
+  // The target line last, so that the markers do not hide it.
+  if (contour_at > vmin && contour_at < vmax) ax.contour(g, {contour_at}, pvdf::plot::Color{255, 255, 255}, 2.0);
   try {
     const pvdf::Scene scene = pvdf::parse_scene(nlohmann::json::parse(c.map.scene_json), c.source);
     ax.polygon(outline_mm(scene.membrane.outline), std::nullopt, pvdf::plot::Color{0, 0, 0}, 1.5);
@@ -291,7 +294,8 @@ void write_map_figures(const std::vector<const Candidate*>& ranked, const Design
   const std::string kind = any_synthetic ? " — SYNTHETIC maps" : "";
   const double target = o.target_mm;
   for (int which = 0; which < 2; ++which) {
-    pvdf::plot::Figure fig(std::max(1100, 460 * cols), 430 * rows + 40, rows, cols);
+    pvdf::plot::Figure fig(std::max(1100, 460 * cols + 110), 430 * rows + 40, rows, cols);
+    fig.shared_colorbar();  // every panel uses the same colour scale
     for (std::size_t i = 0; i < n; ++i) {
       const Candidate& c = *ranked[i];
       auto& ax = fig.axes(int(i) / 4, int(i) % 4);
@@ -308,14 +312,48 @@ void write_map_figures(const std::vector<const Candidate*>& ranked, const Design
     fig.suptitle(what + std::string(o.force_known ? " (force known), " : " (force unknown), ") + noise_text + ", " +
                  fmt("%.3g N", o.force_N) + (which == 0 ? ", white line " + fmt("%.3g mm", target) : ", white line 1 %") + kind);
     const std::string path = o.out_dir + (which == 0 ? "/design_position.png" : "/design_force.png");
-    fig.save_png(path);
+    fig.save(path);
     written.push_back(path);
   }
+}
+
+/// Axis label and scale for a swept scene key: words and a display unit instead of the CLI key
+/// ("@layout_radius_m" → "electrode layout radius (mm)", values × 1000).
+struct SweepAxis {
+  std::string name, unit;  // "electrode layout radius", "mm"
+  double scale = 1;        // display value = scene value × scale
+  std::string label() const { return name + (unit.empty() ? "" : " (" + unit + ")"); }
+};
+
+SweepAxis sweep_axis(const std::string& key) {
+  if (key == "@layout_scale") return {"electrode layout scale factor", "", 1};
+  if (key == "@layout_radius_m") return {"electrode layout radius", "mm", 1e3};
+  if (key == "@rotation_deg") return {"layout rotation", "°", 1};
+  if (key == "@electrode_size_m") return {"electrode size", "mm", 1e3};
+  // A path into the scene: its last name, the SI suffix turned into a display unit.
+  std::string name = key.substr(key.find_last_of('.') == std::string::npos ? 0 : key.find_last_of('.') + 1);
+  name = name.substr(0, name.find('['));
+  const struct { const char* suffix; const char* unit; double scale; } units[] = {
+      {"_N_per_m", "N/m", 1}, {"_deg", "°", 1}, {"_Pa", "GPa", 1e-9}, {"_m", "mm", 1e3}, {"_N", "N", 1}, {"_C", "pC", 1e12}};
+  std::string unit;
+  double scale = 1;
+  for (const auto& u : units) {
+    const std::string s = u.suffix;
+    if (name.size() > s.size() && name.compare(name.size() - s.size(), s.size(), s) == 0) {
+      name.erase(name.size() - s.size());
+      unit = u.unit;
+      scale = u.scale;
+      break;
+    }
+  }
+  std::replace(name.begin(), name.end(), '_', ' ');
+  return {name, unit, scale};
 }
 
 void write_sweep_figure(const std::vector<Candidate>& all, const std::vector<std::string>& series_names,
                         const DesignCommandOptions& o, const std::string& key, std::vector<std::string>& written) {
   pvdf::plot::Figure fig(1200, 520, 1, 2);
+  const SweepAxis axis = sweep_axis(key);
   auto& a = fig.axes(0, 0);
   auto& b = fig.axes(0, 1);
   bool synthetic = false;
@@ -325,7 +363,7 @@ void write_sweep_figure(const std::vector<Candidate>& all, const std::vector<std
     for (const auto& c : all) {
       if (c.series != int(s) || c.refined) continue;
       synthetic |= c.summary.synthetic;
-      x.push_back(c.sweep_value);
+      x.push_back(c.sweep_value * axis.scale);
       usable.push_back(100 * c.summary.usable_fraction);
       coverage.push_back(100 * c.summary.coverage);
       median.push_back(std::isfinite(c.summary.median_sigma_pos_m) ? c.summary.median_sigma_pos_m * 1e3 : std::nan(""));
@@ -336,16 +374,18 @@ void write_sweep_figure(const std::vector<Candidate>& all, const std::vector<std
     a.line(x, coverage, series_names[s] + ": coverage", color, pvdf::plot::LineStyle::dashed, pvdf::plot::Marker::none);
     b.line(x, median, series_names[s], color, pvdf::plot::LineStyle::solid, pvdf::plot::Marker::circle);
     if (best) {
-      a.scatter({best->sweep_value}, {100 * best->summary.usable_fraction}, "best: " + fmt("%.4g", best->sweep_value),
-                pvdf::plot::Color{220, 30, 30}, pvdf::plot::Marker::square, 12);
-      a.vline(best->sweep_value, pvdf::plot::Color{220, 30, 30});
+      a.scatter({best->sweep_value * axis.scale}, {100 * best->summary.usable_fraction},
+                "best: " + fmt("%.4g", best->sweep_value * axis.scale) + (axis.unit.empty() ? "" : " " + axis.unit), pvdf::plot::Color{220, 30, 30},
+                pvdf::plot::Marker::square, 12);
+      a.vline(best->sweep_value * axis.scale, pvdf::plot::Color{220, 30, 30});
     }
   }
-  a.xlabel(key).ylabel("area fraction (%)").title(fmt("usable and covered area (σ$_{pos}$ ≤ %.3g mm)", o.target_mm)).grid_lines().legend("best");
-  b.xlabel(key).ylabel("median σ$_{pos}$ (mm)").log_y().title("median position bound").grid_lines().legend("best");
-  fig.suptitle("pvdfkit design --vary " + key + (synthetic ? " — SYNTHETIC stand-in maps, not FEM" : ""));
+  a.xlabel(axis.label()).ylabel("area fraction (%)").title(fmt("usable and covered area (σ$_{pos}$ ≤ %.3g mm)", o.target_mm)).grid_lines().legend("best");
+  b.xlabel(axis.label()).ylabel("median σ$_{pos}$ (mm)").log_y().title("median position bound").grid_lines().legend("best");
+  fig.suptitle("Design sweep of the " + axis.name + " (--vary " + key + ")" +
+               (synthetic ? " — SYNTHETIC stand-in maps, not FEM" : ""));
   const std::string path = o.out_dir + "/design_sweep.png";
-  fig.save_png(path);
+  fig.save(path);
   written.push_back(path);
 }
 

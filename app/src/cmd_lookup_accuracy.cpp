@@ -6,7 +6,7 @@
 
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
-#include "pvdf/core/plot.hpp"
+#include "pvdf/plot/plot.hpp"
 #include "pvdf/mapping/locator.hpp"
 #include "pvdf/mapping/map.hpp"
 #include "pvdf/mapping/triangulation.hpp"
@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstdio>
 #include <ctime>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <random>
@@ -137,7 +138,7 @@ int run_compare(const CompareOptions& o) {
     fig.axes()
         .line(noise_pC, e_known, "lookup, force known (median error)", std::nullopt, pvdf::plot::LineStyle::solid,
               pvdf::plot::Marker::circle)
-        .line(noise_pC, s_known, "lookup, force known (median reported 1-sigma)", std::nullopt,
+        .line(noise_pC, s_known, "lookup, force known (median reported 1σ)", std::nullopt,
               pvdf::plot::LineStyle::dashed)
         .line(noise_pC, e_free, "lookup, force unknown (nearest reported answer)", std::nullopt,
               pvdf::plot::LineStyle::solid, pvdf::plot::Marker::square)
@@ -145,12 +146,12 @@ int run_compare(const CompareOptions& o) {
               pvdf::plot::Marker::triangle)
         .log_x()
         .log_y()
-        .title("Position error against charge noise: " + o.map_path)
-        .xlabel("1-sigma charge noise per electrode (pC)")
+        .title("Position error against charge noise: " + std::filesystem::path(o.map_path).filename().string())
+        .xlabel("1σ charge noise per electrode (pC)")
         .ylabel("median position error (mm)")
         .grid_lines()
         .legend("upper left");
-    fig.save_png(o.plot_path);
+    fig.save(o.plot_path);
     if (!o.json) std::printf("plot written to %s\n", o.plot_path.c_str());
   }
   return pvdf::exit_code::success;
@@ -168,7 +169,7 @@ PVDF_COMMAND(62, [](CLI::App& root) {
   sub->add_option("--radius-m", o->radius_m, "Presses within this distance of the centre (m)")->capture_default_str();
   sub->add_option("--noise-C", o->noise, "Charge-noise levels, 1-sigma per electrode (C)")->capture_default_str();
   sub->add_option("--seed", o->seed, "Random seed")->capture_default_str();
-  sub->add_option("--plot", o->plot_path, "PNG of median position error against noise");
+  sub->add_option("--plot", o->plot_path, "Figure of median position error against noise (.png, .svg or .pdf)");
   sub->add_flag("--json", o->json, "Print the table as JSON");
   return pvdf::app::Subcommand{sub, [o] { return run_compare(*o); }};
 });

@@ -5,7 +5,7 @@
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
 #include "pvdf/core/material.hpp"
-#include "pvdf/core/plot.hpp"
+#include "pvdf/plot/plot.hpp"
 #include "pvdf/core/scene.hpp"
 
 #include <nlohmann/json.hpp>
@@ -46,26 +46,28 @@ void write_plot(const std::string& path, const pvdf::Material& material, const s
     nuxy_printed.push_back(p.nuxy);
   }
   pvdf::plot::Figure fig(1400, 600, 1, 2);
-  fig.suptitle("PVDF film off-axis constants (E1 = " + std::to_string(material.E1_Pa / 1e9).substr(0, 4) +
-               " GPa, E2 = " + std::to_string(material.E2_Pa / 1e9).substr(0, 4) + " GPa)");
+  char constants[96];
+  std::snprintf(constants, sizeof constants, "$E_1$ = %.2f GPa, $E_2$ = %.2f GPa", material.E1_Pa / 1e9,
+                material.E2_Pa / 1e9);
+  fig.suptitle(std::string("PVDF film off-axis constants (") + constants + ")");
   auto& left = fig.axes(0, 0);
-  left.line(a, ex, "E_x (seed 001 Fig. 2)")
-      .line(a, ey, "E_y (seed 001 Fig. 2)")
-      .line(a, gxy, "G_xy", std::nullopt, pvdf::plot::LineStyle::dashed)
+  left.line(a, ex, "$E_x$ (seed 001 Fig. 2)")
+      .line(a, ey, "$E_y$ (seed 001 Fig. 2)")
+      .line(a, gxy, "$G_{xy}$", std::nullopt, pvdf::plot::LineStyle::dashed)
       .title("Moduli against angle from the draw direction")
-      .xlabel("angle from draw direction beta (deg)")
+      .xlabel("angle β from the draw direction (°)")
       .ylabel("modulus (GPa)")
       .xlim(lo, hi)
       .ylim(0.0, 1.3 * std::max(material.E1_Pa, material.E2_Pa) / 1e9)
       .grid_lines()
       .legend("upper right");
   auto& right = fig.axes(0, 1);
-  right.line(a, nuxy, "nu_xy (tensor rotation)")
-      .line(a, nuyx, "nu_yx (tensor rotation)")
-      .line(a, nuxy_printed, "nu_xy by eq. 5 as printed (sign error)", std::nullopt, pvdf::plot::LineStyle::dotted)
+  right.line(a, nuxy, "$\\nu_{xy}$ (tensor rotation)")
+      .line(a, nuyx, "$\\nu_{yx}$ (tensor rotation)")
+      .line(a, nuxy_printed, "$\\nu_{xy}$ by eq. 5 as printed (sign error)", std::nullopt, pvdf::plot::LineStyle::dotted)
       .title("Poisson ratios")
-      .xlabel("angle from draw direction beta (deg)")
-      .ylabel("Poisson ratio (-)")
+      .xlabel("angle β from the draw direction (°)")
+      .ylabel("Poisson's ratio (−)")
       .xlim(lo, hi)
       .ylim(std::min(0.0, *std::min_element(nuxy_printed.begin(), nuxy_printed.end())),
             1.35 * std::max({*std::max_element(nuxy_printed.begin(), nuxy_printed.end()),
@@ -73,7 +75,7 @@ void write_plot(const std::string& path, const pvdf::Material& material, const s
                              *std::max_element(nuyx.begin(), nuyx.end())}))
       .grid_lines()
       .legend("upper right");
-  fig.save_png(path);
+  fig.save(path);
 }
 
 int run_moduli(const ModuliOptions& o) {
@@ -125,6 +127,6 @@ PVDF_COMMAND(10, [](CLI::App& root) {
   sub->add_option("--angles-deg", o->angles, "Angles as START:STEP:STOP in degrees")->capture_default_str();
   sub->add_flag("--json", o->json, "Print a JSON array of {angle_deg, Ex_Pa, Ey_Pa, Gxy_Pa, nuxy, nuyx}");
   sub->add_flag("--csv", o->csv, "Print CSV with the same columns");
-  sub->add_option("--plot", o->plot_path, "Write the moduli against angle as a PNG (seed 001 Fig. 2)");
+  sub->add_option("--plot", o->plot_path, "Write the moduli against angle (seed 001 Fig. 2) as .png, .svg or .pdf");
   return pvdf::app::Subcommand{sub, [o] { return run_moduli(*o); }};
 });

@@ -73,7 +73,7 @@ int run_rays(const RaysOptions& o) {
     plot_angles = pvdf::parse_number_list(o.plot_angles, "--plot-angles-deg");
     if (!o.measured_path.empty()) measured = read_measured_csv(o.measured_path, map.electrode_names);
   } else if (!o.measured_path.empty() || !o.electrode.empty()) {
-    throw pvdf::InputError("--measured and --electrode choose what --plot draws; give --plot FILE.png too");
+    throw pvdf::InputError("--measured and --electrode choose what --plot draws; give --plot FILE.png (or .svg, .pdf) too");
   }
 
   const RayAnalysis a = analyse_rays(map, interpolant, ro);
@@ -194,7 +194,7 @@ PVDF_COMMAND(64, [](CLI::App& root) {
   sub->add_option("--min-points", o->min_points, "Fewer usable samples (in the map, Q > 0) and the ray is not fitted; default 6");
   sub->add_flag("--json", o->json, "Print the fit table and the per-electrode summary as JSON");
   sub->add_option("--csv", o->csv_path, "Write the fit table as CSV (electrode,beta_deg,fitted,C1_C,C2,...)");
-  sub->add_option("--plot", o->plot_path, "PNG like seed 001 Fig. 7: Q(d) and the fits of one electrode, log-log");
+  sub->add_option("--plot", o->plot_path, "Figure like seed 001 Fig. 7 (.png, .svg or .pdf): Q(d) and the fits of one electrode, log-log");
   sub->add_option("--electrode", o->electrode, "Electrode drawn by --plot (default B if the map has one, else the first)");
   sub->add_option("--plot-angles-deg", o->plot_angles, "Rays drawn by --plot, e.g. 45,65,85 (default 0,10,...,90)");
   sub->add_option("--measured", o->measured_path, "Add measured presses on the drawn rays to --plot (CSV as for `compare`; Fig. 12)");

@@ -19,7 +19,7 @@
 #include "ccx_peer.hpp"
 
 #include "pvdf/core/io.hpp"
-#include "pvdf/core/plot.hpp"
+#include "pvdf/plot/plot.hpp"
 #include "pvdf/core/scene.hpp"
 
 #ifdef PVDF_BENCH_HAVE_FEM

@@ -4,7 +4,7 @@
 // noise (optionally plotted: --plot PNG).
 //   bench_locate [--presses N] [--plot docs/img/lookup_error_vs_noise.png]
 //   bench_locate --profile   (only the 6-start lookup, 50 passes: for perf record)
-#include "pvdf/core/plot.hpp"
+#include "pvdf/plot/plot.hpp"
 #include "pvdf/mapping/locator.hpp"
 #include "pvdf/mapping/synthetic.hpp"
 #include "pvdf/mapping/triangulation.hpp"

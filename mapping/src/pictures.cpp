@@ -1,11 +1,12 @@
-// Isocharge pictures (pvdf::plot) and VTK export of charge maps.
+// Isocharge pictures (pvdf::plot; PNG, SVG or PDF by the file extension) and VTK export of charge maps.
 #include "pvdf/mapping/pictures.hpp"
 
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
-#include "pvdf/core/plot.hpp"
+#include "pvdf/plot/plot.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -79,10 +80,18 @@ std::vector<double> nice_levels(double lo, double hi, int target) {
   return levels;
 }
 
+/// printf of one number, with a typographic minus sign (U+2212) for negative values.
 std::string format_number(const char* fmt, double v) {
   char buffer[64];
   std::snprintf(buffer, sizeof buffer, fmt, v);
-  return buffer;
+  // "-0.00" (a tiny negative value rounded away) is written as 0.00.
+  const bool negative_zero = buffer[0] == '-' && std::strspn(buffer + 1, "0.") > 0 && !std::strpbrk(buffer + 1, "123456789");
+  std::string out;
+  for (const char* c = buffer + (negative_zero ? 1 : 0); *c; ++c) {
+    if (*c == '-' && (std::isdigit(static_cast<unsigned char>(c[1])) || c[1] == '.')) out += "\u2212";
+    else out += *c;
+  }
+  return out;
 }
 
 }  // namespace
@@ -102,9 +111,13 @@ void write_isocharge_png(const Locator& locator, const ChargeMap& map, std::size
   if (v.empty()) throw InputError("isocharge picture: the map has no value to draw");
   std::sort(v.begin(), v.end());
   const double lo = v[v.size() / 20], hi = v[v.size() * 19 / 20];
+  // The colour scale spans the same 5th–95th percentiles; the bar's end triangles mark the
+  // clipping and its label gives the full range of the data.
+  const std::string bar = "charge of " + map.electrode_names[electrode] + " (pC); colours clipped to the 5th–95th " +
+                          "percentile, data " + format_number("%.3g", v.front()) + " to " + format_number("%.3g", v.back());
   plot::Figure fig(900, 800);
   auto& ax = fig.axes();
-  ax.field(g, "charge of " + map.electrode_names[electrode] + " (pC)", false, lo, hi)
+  ax.field(g, bar, false, lo, hi)
       .contour(g, nice_levels(lo, hi, 8), plot::Color{255, 255, 255}, 1.2, "%.3g pC")
       .title("Isocharge contours of electrode " + map.electrode_names[electrode] + " at " + format_number("%.3g", force_N) +
              " N (" + map.model + " map)")
@@ -112,7 +125,7 @@ void write_isocharge_png(const Locator& locator, const ChargeMap& map, std::size
       .ylabel("probe y (mm)")
       .equal_aspect();
   mark_electrodes(ax, map);
-  fig.save_png(path);
+  fig.save(path);
 }
 
 void write_intersection_png(const Locator& locator, const ChargeMap& map, const double* charges_C,
@@ -138,7 +151,7 @@ void write_intersection_png(const Locator& locator, const ChargeMap& map, const 
   }
   mark_electrodes(ax, map);
   const double R = std::max(std::abs(map.x_m.front()), std::abs(map.x_m.back())) * 1e3;
-  ax.title("Isocharge contours of the measured charges at the located force")
+  ax.title("Isocharge contours Q$_k$ = q$_k$ of the given charges, at the located force")
       .xlabel("probe x (mm)")
       .ylabel("probe y (mm)")
       .xlim(-R, R)
@@ -146,7 +159,7 @@ void write_intersection_png(const Locator& locator, const ChargeMap& map, const 
       .equal_aspect()
       .grid_lines()
       .legend("lower right");
-  fig.save_png(path);
+  fig.save(path);
 }
 
 // Legacy VTK in BINARY form (big-endian IEEE): VTK's ASCII reader cannot parse "nan", and
@@ -217,7 +230,7 @@ void write_isocharge_overlay_png(const Locator& locator, const ChargeMap& map, d
   if (half_width_m > 0) {
     ax.xlim(-half_width_m * 1e3, half_width_m * 1e3).ylim(-half_width_m * 1e3, half_width_m * 1e3);
   }
-  fig.save_png(path);
+  fig.save(path);
 }
 
 void write_rays_png(const RayAnalysis& analysis, const ChargeMap& map, std::size_t electrode,
@@ -227,7 +240,13 @@ void write_rays_png(const RayAnalysis& analysis, const ChargeMap& map, std::size
   plot::Figure fig(1000, 750);
   auto& ax = fig.axes();
   constexpr double pi = 3.14159265358979323846;
-  std::size_t colour = 0;
+  // Colours follow β along the sequential colour map (dark violet … yellow-green), so that ten
+  // or more rays stay distinct and neighbouring angles look alike.
+  double beta_lo = std::numeric_limits<double>::infinity(), beta_hi = -beta_lo;
+  for (double beta : beta_deg) beta_lo = std::min(beta_lo, beta), beta_hi = std::max(beta_hi, beta);
+  auto beta_colour = [&](double beta) {
+    return plot::colormap(beta_hi > beta_lo ? 0.88 * (beta - beta_lo) / (beta_hi - beta_lo) : 0.0);
+  };
   bool any = false;
   for (double beta : beta_deg) {
     const RayChargeFit* ray = nullptr;
@@ -236,7 +255,7 @@ void write_rays_png(const RayAnalysis& analysis, const ChargeMap& map, std::size
     }
     if (!ray || ray->d_m.empty()) continue;
     any = true;
-    const plot::Color c = plot::cycle_color(colour++);
+    const plot::Color c = beta_colour(beta);
     std::vector<double> d_mm, q_pC;
     for (std::size_t i = 0; i < ray->d_m.size(); ++i) {
       if (ray->charge_C[i] > 0) {
@@ -244,7 +263,7 @@ void write_rays_png(const RayAnalysis& analysis, const ChargeMap& map, std::size
         q_pC.push_back(ray->charge_C[i] * 1e12);
       }
     }
-    std::string label = format_number("β = %.0f°", beta);
+    std::string label = (measured ? "map, " : "") + format_number("β = %.0f°", beta);
     if (ray->fitted) {
       label += format_number(": C$_2$ = %.3f", ray->C2);
       std::vector<double> fd, fq;
@@ -271,7 +290,7 @@ void write_rays_png(const RayAnalysis& analysis, const ChargeMap& map, std::size
           mq.push_back(m.charge_C[electrode] * 1e12);
         }
       }
-      if (!md.empty()) ax.scatter(md, mq, format_number("measured, β = %.0f°", beta), c, plot::Marker::square, 8.0);
+      if (!md.empty()) ax.scatter(md, mq, format_number("CSV presses, β = %.0f°", beta), c, plot::Marker::square, 8.0);
     }
   }
   if (!any) throw InputError("rays picture: electrode " + map.electrode_names[electrode] + " has no sampled ray at the requested angles");
@@ -283,10 +302,11 @@ void write_rays_png(const RayAnalysis& analysis, const ChargeMap& map, std::size
       .log_y()
       .grid_lines()
       .legend("upper right");
-  fig.save_png(path);
+  fig.save(path);
 }
 
-void write_comparison_png(const Comparison& comparison, const std::string& path) {
+void write_comparison_png(const Comparison& comparison, const std::string& path, const std::string& csv_name) {
+  const std::string csv = csv_name.empty() ? std::string("CSV") : csv_name;
   plot::Figure fig(1400, 650, 1, 2);
   auto& left = fig.axes(0, 0);
   auto& right = fig.axes(0, 1);
@@ -316,14 +336,14 @@ void write_comparison_png(const Comparison& comparison, const std::string& path)
   if (hi > 0 && std::isfinite(lo)) {
     const double a = lo / 1.3, b = hi * 1.3;
     const double f = 1.0 + paper_mean_difference_pct / 100.0;
-    left.line({a, b}, {a, b}, "measured = map", plot::Color{0, 0, 0}, plot::LineStyle::solid);
+    left.line({a, b}, {a, b}, "CSV = map", plot::Color{0, 0, 0}, plot::LineStyle::solid);
     left.line({a, b}, {a * f, b * f}, "±18 % (seed 001 mean)", plot::Color{120, 120, 120}, plot::LineStyle::dashed);
     left.line({a, b}, {a / f, b / f}, "", plot::Color{120, 120, 120}, plot::LineStyle::dashed);
     left.xlim(a, b).ylim(a, b).log_x().log_y();
   }
-  left.title("Measured against FEM-map charge")
-      .xlabel("map (FEM) charge (pC)")
-      .ylabel("measured charge (pC)")
+  left.title("Charges of the CSV against the map's")
+      .xlabel("map charge (pC)")
+      .ylabel("charge in " + csv + " (pC)")
       .grid_lines()
       .legend("upper left");
   right.hline(0.0, plot::Color{0, 0, 0}, plot::LineStyle::solid)
@@ -331,10 +351,10 @@ void write_comparison_png(const Comparison& comparison, const std::string& path)
       .hline(-paper_mean_difference_pct, plot::Color{120, 120, 120}, plot::LineStyle::dashed)
       .title(format_number("Difference per press (mean |diff| %.1f %%)", comparison.mean_abs_difference_pct))
       .xlabel("press number (CSV data row)")
-      .ylabel("100·(measured − map)/map (%)")
+      .ylabel("100·(CSV − map)/map (%)")
       .grid_lines()
       .legend("upper right");
-  fig.save_png(path);
+  fig.save(path);
 }
 
 }  // namespace pvdf::mapping

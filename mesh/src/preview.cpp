@@ -1,11 +1,12 @@
-// PNG preview of a film mesh: the whole film and a zoom on the electrodes, cell edges drawn,
+// Preview of a film mesh (PNG, SVG or PDF by extension): the whole film and a zoom on the electrodes, cell edges drawn,
 // electrodes filled in their own colours with a legend, probe footprints outlined, axes in mm.
-#include "pvdf/core/plot.hpp"
+#include "pvdf/plot/plot.hpp"
 #include "pvdf/mesh/mesher.hpp"
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 
 namespace pvdf::mesh {
 
@@ -59,7 +60,7 @@ void write_preview_png(const pvdf::Scene& scene, const FilmMesh& mesh, const std
   char title[240];
   std::snprintf(title, sizeof title,
                 "Film mesh of %s: %zu quads, %zu vertices, min scaled Jacobian %.2f, worst aspect ratio %.1f",
-                scene.source.c_str(), report.n_cells, report.n_vertices, report.min_scaled_jacobian,
+                std::filesystem::path(scene.source).filename().string().c_str(), report.n_cells, report.n_vertices, report.min_scaled_jacobian,
                 report.max_aspect_ratio);
   figure.suptitle(title);
   auto& whole = figure.axes(0, 0);
@@ -90,7 +91,7 @@ void write_preview_png(const pvdf::Scene& scene, const FilmMesh& mesh, const std
     zoom.xlim((cx - half) * mm, (cx + half) * mm).ylim((cy - half) * mm, (cy + half) * mm);
   }
   zoom.title("electrodes and probe footprints");
-  figure.save_png(path);
+  figure.save(path);
 }
 
 }  // namespace pvdf::mesh

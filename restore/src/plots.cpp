@@ -2,7 +2,7 @@
 #include "pvdf/restore/plots.hpp"
 
 #include "fft.hpp"
-#include "pvdf/core/plot.hpp"
+#include "pvdf/plot/plot.hpp"
 
 #include <algorithm>
 #include <cmath>

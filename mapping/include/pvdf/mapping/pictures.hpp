@@ -1,5 +1,6 @@
 // Pictures of charge maps: isocharge contour maps per electrode (seed 001 Figs 6, 8), a charge
-// triple's isocharge contours with their intersection, and VTK image data for ParaView.
+// triple's isocharge contours with their intersection, and VTK image data for ParaView. The
+// figures are PNG, SVG or PDF, chosen by the extension of `path` (pvdf::plot).
 #pragma once
 
 #include "pvdf/mapping/analysis.hpp"
@@ -42,9 +43,10 @@ void write_rays_png(const RayAnalysis& analysis, const ChargeMap& map, std::size
                     const std::vector<double>& beta_deg, const std::vector<MeasuredPress>* measured,
                     double angle_tolerance_deg, const std::string& path);
 
-/// FEM map against measurement (seed 001 Fig. 12): left, measured against map charge per
+/// Map against a CSV of presses (seed 001 Fig. 12): left, the CSV's charge against the map's per
 /// electrode (pC) with the identity and ±18 % lines; right, the % difference of every compared
-/// value against the press number. PNG, written atomically.
-void write_comparison_png(const Comparison& comparison, const std::string& path);
+/// value against the press number. `csv_name` (e.g. the file name) labels the CSV's axis; the
+/// plot never calls the values "measured", since the CSV may hold synthetic or map values.
+void write_comparison_png(const Comparison& comparison, const std::string& path, const std::string& csv_name = "");
 
 }  // namespace pvdf::mapping

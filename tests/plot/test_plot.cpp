@@ -1,16 +1,22 @@
-// PNG figures: written files are re-read with libpng and checked pixel by pixel against where the
-// data must land (Figure::data_to_pixel) and against the colour maps; contour extraction against
-// an analytic circle; degenerate data must never throw.
+// Figures: written PNGs are re-read (Cairo's PNG reader) and checked pixel by pixel against where
+// the data must land (Figure::data_to_pixel) and against the colour maps; contour extraction
+// against an analytic circle; degenerate data must never throw; SVG and PDF files open and hold
+// the figure's text.
 #include "pvdf/core/error.hpp"
-#include "pvdf/core/plot.hpp"
+#include "pvdf/plot/plot.hpp"
 
 #include <catch2/catch.hpp>
-#include <png.h>
+#include <cairo.h>
 
 #include <ctime>
 #include <cmath>
 #include <cstring>
+#include <algorithm>
+#include <cstdint>
+#include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <limits>
 
 namespace fs = std::filesystem;
@@ -28,16 +34,24 @@ struct Png {
 };
 
 Png read_png(const std::string& path) {
-  png_image image;
-  std::memset(&image, 0, sizeof image);
-  image.version = PNG_IMAGE_VERSION;
-  REQUIRE(png_image_begin_read_from_file(&image, path.c_str()) != 0);
-  image.format = PNG_FORMAT_RGB;
+  cairo_surface_t* img = cairo_image_surface_create_from_png(path.c_str());
+  REQUIRE(cairo_surface_status(img) == CAIRO_STATUS_SUCCESS);
   Png out;
-  out.w = static_cast<int>(image.width);
-  out.h = static_cast<int>(image.height);
-  out.rgb.resize(PNG_IMAGE_SIZE(image));
-  REQUIRE(png_image_finish_read(&image, nullptr, out.rgb.data(), 0, nullptr) != 0);
+  out.w = cairo_image_surface_get_width(img);
+  out.h = cairo_image_surface_get_height(img);
+  const unsigned char* data = cairo_image_surface_get_data(img);
+  const int stride = cairo_image_surface_get_stride(img);
+  out.rgb.resize(static_cast<std::size_t>(out.w) * out.h * 3);
+  for (int y = 0; y < out.h; ++y) {
+    const auto* row = reinterpret_cast<const std::uint32_t*>(data + static_cast<std::ptrdiff_t>(y) * stride);
+    for (int x = 0; x < out.w; ++x) {
+      unsigned char* p = &out.rgb[(static_cast<std::size_t>(y) * out.w + x) * 3];
+      p[0] = static_cast<unsigned char>(row[x] >> 16);
+      p[1] = static_cast<unsigned char>(row[x] >> 8);
+      p[2] = static_cast<unsigned char>(row[x]);
+    }
+  }
+  cairo_surface_destroy(img);
   return out;
 }
 
@@ -357,4 +371,146 @@ TEST_CASE("math markup: $\\sigma$ draws the same pixels as σ, and odd markup do
   CHECK(render("stress $\\sigma_{xx}$") != render("stress σxx"));  // the subscript is smaller and lower
   for (const char* odd : {"$x_{ab$", "$\\$", "$^$", "\\", "$\\unknown_\\$", "$a$ $b", "$_{}^{}$", "$\xff$"})
     CHECK_NOTHROW(render(odd));
+}
+
+TEST_CASE("markup resolves to the characters shown; nested scripts and underscores outside math", "[plot]") {
+  pvdf::plot::Figure fig(500, 350);
+  fig.axes()
+      .line({1, 2}, {1, 2}, "Q = C$_1$ d$^{C_2}$")
+      .xlabel("Poisson's ratio $\\nu_{xy}$")
+      .ylabel("angle $\\beta$ (°)")
+      .title("file_name_with_underscores.csv");
+  const auto t = fig.texts();
+  auto has = [&](const std::string& s) { return std::find(t.begin(), t.end(), s) != t.end(); };
+  CHECK(has("Q = C1 dC2"));  // no "_" or "^{" left over
+  CHECK(has("Poisson's ratio \xCE\xBDxy"));
+  CHECK(has("angle \xCE\xB2 (\xC2\xB0)"));
+  CHECK(has("file_name_with_underscores.csv"));
+  // The nested subscript is drawn: "d$^{C_2}$" differs from "d$^{C2}$" (a smaller, lower 2).
+  auto render = [](const std::string& label) {
+    pvdf::plot::Figure f(300, 200);
+    f.axes().line({0, 1}, {0, 1}).title(label).legend("none");
+    const auto path = (temp_dir() / "nested.png").string();
+    f.save(path);
+    return read_png(path).rgb;
+  };
+  CHECK(render("d$^{C_2}$") != render("d$^{C2}$"));
+  CHECK(render("d$^{C_{2}}$") == render("d$^{C_2}$"));
+}
+
+namespace {
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+/// Runs a command, returns its standard output (empty if it failed).
+std::string run(const std::string& cmd) {
+  std::string out;
+  if (FILE* f = popen(cmd.c_str(), "r")) {
+    char buf[4096];
+    std::size_t n;
+    while ((n = fread(buf, 1, sizeof buf, f)) > 0) out.append(buf, n);
+    if (pclose(f) != 0) out.clear();
+  }
+  return out;
+}
+
+pvdf::plot::Figure& labelled_figure(pvdf::plot::Figure& fig) {
+  pvdf::plot::Grid g;
+  g.nx = 30, g.ny = 30;
+  g.x0 = -1, g.x1 = 1, g.y0 = -1, g.y1 = 1;
+  for (std::size_t j = 0; j < g.ny; ++j)
+    for (std::size_t i = 0; i < g.nx; ++i) g.values.push_back(g.x0 + 2.0 * double(i) / double(g.nx - 1));
+  fig.axes(0, 0).line({0, 1, 2}, {0, 1, 4}, "measured <&> model").xlabel("Poisson's ratio $\\nu_{xy}$").ylabel("E (GPa)");
+  fig.axes(0, 1).field(g, "charge (pC)").title("Isocharge map").equal_aspect();
+  fig.suptitle("Moduli against angle $\\beta$");
+  return fig;
+}
+
+}  // namespace
+
+TEST_CASE("SVG output is XML with the figure's text; PDF output is a PDF with the text", "[plot]") {
+  pvdf::plot::Figure fig(900, 400, 1, 2);
+  labelled_figure(fig);
+  const auto svg = temp_dir() / "figure.svg";
+  const auto pdf = temp_dir() / "figure.PDF";  // the extension is read in any case
+  fs::remove(svg);
+  fs::remove(pdf);
+  fig.save(svg.string());
+  fig.save(pdf.string());
+  // SVG: a well-formed XML document (parsed by Python's XML parser) with the title and texts.
+  const std::string py = "/usr/bin/python3 -c \"import sys, xml.etree.ElementTree as E; r = E.parse(sys.argv[1]).getroot(); "
+                         "ns = '{http://www.w3.org/2000/svg}'; print(r.tag); print(r.find(ns + 'title').text); "
+                         "[print(t.text) for t in r.iter(ns + 'text')]\" " + svg.string();
+  const std::string parsed = run(py);
+  REQUIRE_FALSE(parsed.empty());
+  CHECK(parsed.find("{http://www.w3.org/2000/svg}svg") == 0);
+  CHECK(parsed.find("Moduli against angle \xCE\xB2\n") != std::string::npos);       // <title>
+  CHECK(parsed.find("Poisson's ratio \xCE\xBDxy\n") != std::string::npos);          // axis label
+  CHECK(parsed.find("measured <&> model\n") != std::string::npos);                 // escaped and back
+  CHECK(parsed.find("charge (pC)\n") != std::string::npos);                        // colour bar label
+  CHECK(slurp(svg).find("<path") != std::string::npos);                            // drawn, not only text
+  // PDF: header and trailer; pdftotext (poppler-utils, in scripts/install-deps) finds the text.
+  const std::string bytes = slurp(pdf);
+  REQUIRE(bytes.size() > 1000);
+  CHECK(bytes.rfind("%PDF-", 0) == 0);
+  CHECK(bytes.find("%%EOF") != std::string::npos);
+  REQUIRE(!run("command -v pdftotext").empty());  // a missing tool fails: run scripts/install-deps
+  const std::string text = run("pdftotext -layout " + pdf.string() + " -");
+  CHECK(text.find("Moduli against angle \xCE\xB2") != std::string::npos);
+  CHECK(text.find("Isocharge map") != std::string::npos);
+  CHECK(text.find("charge (pC)") != std::string::npos);
+  // The page is the PNG layout at 0.75 pt per pixel.
+  CHECK(run("pdfinfo " + pdf.string()).find("675 x 300 pts") != std::string::npos);
+  // Other extensions are refused, naming the path and the choices.
+  try {
+    fig.save((temp_dir() / "figure.jpg").string());
+    FAIL("no exception for .jpg");
+  } catch (const pvdf::InputError& e) {
+    CHECK(std::string(e.what()).find(".png, .svg or .pdf") != std::string::npos);
+  }
+}
+
+TEST_CASE("a clipped colour scale ends in a triangle on the clipped side only", "[plot]") {
+  // A field of 0..1 drawn with the full range, and with vmax = 0.5 (the top half clipped).
+  pvdf::plot::Grid g;
+  g.nx = 2, g.ny = 2;
+  g.values = {0, 1, 0, 1};
+  for (std::optional<double> vmax : {std::optional<double>{}, std::optional<double>{0.5}}) {
+    pvdf::plot::Figure fig(500, 400);
+    fig.axes().field(g, "v", false, 0.0, vmax);
+    const auto path = (temp_dir() / "extend.png").string();
+    fig.save(path);
+    const Png png = read_png(path);
+    const auto top_right = fig.data_to_pixel(0, 0, 1, 1), bottom_right = fig.data_to_pixel(0, 0, 1, 0);
+    const int bar_left = int(top_right[0]) + 16, bar_mid = bar_left + 9;
+    const int top = int(top_right[1]), bottom = int(bottom_right[1]);
+    // Near the top: the centre column is the top colour either way (bar or triangle apex) ...
+    CHECK(colour_distance(png.at(bar_mid, top + 3), pvdf::plot::colormap(1.0)) < 40);
+    // ... but the corner beside the apex is background only when the triangle marks clipping.
+    const Color corner = png.at(bar_left + 2, top + 2);
+    if (vmax) CHECK(colour_distance(corner, Color{255, 255, 255}) < 30);
+    else CHECK(colour_distance(corner, Color{255, 255, 255}) > 60);
+    // The low end is not clipped: a square end in both cases.
+    CHECK(colour_distance(png.at(bar_left + 2, bottom - 2), pvdf::plot::colormap(0.0)) < 40);
+  }
+}
+
+TEST_CASE("one shared colour bar for panels with a common scale", "[plot]") {
+  pvdf::plot::Grid g;
+  g.nx = 2, g.ny = 2;
+  g.values = {0, 1, 0, 1};
+  pvdf::plot::Figure fig(900, 400, 1, 3);
+  for (int c = 0; c < 3; ++c) fig.axes(0, c).field(g, "shared scale (pC)", false, 0.0, 1.0);
+  fig.shared_colorbar();
+  const auto t = fig.texts();
+  CHECK(std::count(t.begin(), t.end(), "shared scale (pC)") == 1);
+  pvdf::plot::Figure separate(900, 400, 1, 3);
+  for (int c = 0; c < 3; ++c) separate.axes(0, c).field(g, "shared scale (pC)", false, 0.0, 1.0);
+  const auto ts = separate.texts();
+  CHECK(std::count(ts.begin(), ts.end(), "shared scale (pC)") == 3);
 }

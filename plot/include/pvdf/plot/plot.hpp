@@ -1,6 +1,6 @@
-// PNG figures a person wants to look at: line plots, scatter, filled fields with contours,
-// polygons (mesh previews), with labelled axes, ticks, legends and titles. No external
-// plotting program: rasterized here, text through FreeType with the DejaVu fonts, PNG via libpng.
+// Figures a person wants to look at — line plots, scatter, filled fields with contours, polygons
+// (mesh previews) with labelled axes, ticks, legends and titles — drawn with Cairo and saved as
+// PNG, SVG or PDF (chosen by the file extension).
 #pragma once
 
 #include <array>
@@ -41,8 +41,9 @@ struct Grid {
 std::vector<std::vector<std::array<double, 2>>> contour_lines(const Grid& grid, double level);
 
 /// One panel of a figure: data coordinates, axes, ticks, labels, legend.
-/// Every label and text is UTF-8 ("µm", "β") and may hold math between dollars: "$E_x$",
-/// "$\\nu_{xy}$", "m$^2$", "$\\sigma$ (MPa)" give sub/superscripts and Greek letters.
+/// Every label and text is UTF-8 ("µm", "β", "ν") and may hold math between dollars: "$E_x$",
+/// "$\\nu_{xy}$", "m$^2$", "$d^{C_2}$", "$\\sigma$ (MPa)" give (nested) sub/superscripts and Greek
+/// letters. Outside dollars every character is drawn as written (file names keep their "_").
 class Axes {
  public:
   /// Line and/or markers through points (NaN breaks the line).
@@ -55,7 +56,9 @@ class Axes {
   /// Error bars (vertical, ± err).
   Axes& error_bars(const std::vector<double>& x, const std::vector<double>& y, const std::vector<double>& err,
                    std::optional<Color> color = std::nullopt);
-  /// Filled field (colour map) with a colour bar labelled `colorbar_label`.
+  /// Filled field (colour map) with a colour bar labelled `colorbar_label`. Values outside
+  /// [vmin, vmax] take the end colours, and the colour bar then ends in a triangle on that side
+  /// (the usual mark of a clipped scale).
   Axes& field(const Grid& grid, const std::string& colorbar_label, bool diverging = false,
               std::optional<double> vmin = std::nullopt, std::optional<double> vmax = std::nullopt);
   /// Contour lines of a grid at `levels`, optionally labelled with their value (`label_format`
@@ -84,6 +87,8 @@ class Axes {
   Axes& grid_lines(bool on = true);
   /// Legend placement: "best", "upper right", "upper left", "lower right", "lower left", "none".
   Axes& legend(const std::string& where = "best");
+  /// Show (default) or hide this panel's colour bar.
+  Axes& colorbar(bool on = true);
 
   struct Impl;
   Impl* impl() const { return impl_; }
@@ -93,7 +98,8 @@ class Axes {
   Impl* impl_;
 };
 
-/// A figure of rows × cols panels, saved as PNG (written atomically).
+/// A figure of rows × cols panels, saved as PNG, SVG or PDF (written atomically). Sizes are in
+/// pixels of the PNG; SVG and PDF pages have the same layout at 0.75 pt per pixel (96 dpi).
 class Figure {
  public:
   Figure(int width_px = 1000, int height_px = 700, int rows = 1, int cols = 1);
@@ -105,8 +111,17 @@ class Figure {
   Axes& axes(int row = 0, int col = 0);
   /// Title over all panels.
   Figure& suptitle(const std::string& t);
-  /// Renders and writes the PNG. Throws InputError if the path cannot be written.
-  void save_png(const std::string& path) const;
+  /// One colour bar for the whole figure, at its right edge, instead of one per panel: for
+  /// panels that share a colour scale. It shows the first panel's field that has one.
+  Figure& shared_colorbar(bool on = true);
+  /// Renders and writes the file; the format follows the extension: .png, .svg or .pdf (any
+  /// case). Throws InputError for another extension or a path that cannot be written.
+  void save(const std::string& path) const;
+  /// Same as save() (the name predates SVG and PDF output; the extension still decides).
+  void save_png(const std::string& path) const { save(path); }
+  /// Every text drawn (titles, labels, tick labels, legend, annotations), with the math
+  /// markup resolved to the characters shown ("$\\nu_{xy}$" → "νxy"), in drawing order.
+  std::vector<std::string> texts() const;
   /// Where data point (x, y) of panel (row, col) lands in the saved PNG, in pixels (x right,
   /// y down, pixel (i, j) spans [i, i+1) × [j, j+1)), with the same layout as save_png.
   std::array<double, 2> data_to_pixel(int row, int col, double x, double y) const;
