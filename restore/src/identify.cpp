@@ -254,6 +254,11 @@ void check_design_options(const DesignOptions& o, std::size_t n_g) {
   if (o.window != "tukey" && o.window != "hann" && o.window != "none") {
     throw InputError("--window = " + o.window + " must be tukey, hann or none");
   }
+  if (!(o.predicted_beta_scale > 0 && o.predicted_beta_scale <= 1) || !(o.gcv_beta_min > 0 && o.gcv_beta_min < o.gcv_beta_max) ||
+      o.gcv_points < 3 || o.gcv_points > 10000) {
+    throw InputError("design: predicted_beta_scale = " + num(o.predicted_beta_scale) + " must be in (0, 1], the beta search range (" +
+                     num(o.gcv_beta_min) + ", " + num(o.gcv_beta_max) + ") increasing and positive, its points in [3, 10000]");
+  }
   if (!(o.resolution_m <= 1.0) || !(o.low_cut_wavelength_m <= 100.0) || !(o.corner_wavelength_m >= 0 && o.corner_wavelength_m <= 1.0)) {
     throw InputError("--resolution-m = " + num(o.resolution_m) + ", --low-cut-m = " + num(o.low_cut_wavelength_m) +
                      ", --beta-corner-m = " + num(o.corner_wavelength_m) + ": lengths must be <= 1, 100 and 1 m");
