@@ -12,6 +12,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <map>
 #include <memory>
 #include <string>
@@ -46,6 +47,9 @@ struct ApplyOptions {
   CLI::Option* block_flag = nullptr;
   CLI::Option* scale_flag = nullptr;
 };
+
+// Figure titles name files without their folders.
+std::string file_name(const std::string& path) { return std::filesystem::path(path).filename().string(); }
 
 // Bad flag values exit 2 with the flag, the value (%g), the rule and the fix.
 void check_range(const char* flag, double value, double lo, double hi, const char* fix) {
@@ -87,7 +91,7 @@ int run_simulate(const SimulateOptions& o) {
               o.output.c_str());
   if (p1 >= scene.adc_range_V || p2 >= scene.adc_range_V) pvdf::app::warn("the signal reaches the ADC range (clipped)");
   if (!o.plot.empty()) {
-    r::plot_scan(o.plot, scan, "Simulated scan: " + o.scene);
+    r::plot_scan(o.plot, scan, "Simulated scan: " + file_name(o.scene));
     std::printf("plot written to %s\n", o.plot.c_str());
   }
   return pvdf::exit_code::success;
@@ -178,7 +182,7 @@ int run_identify(const IdentifyOptions& o) {
     pvdf::make_directories(o.plot_dir);
     for (std::size_t i = 0; i < scans.size(); ++i) {
       r::plot_scan(o.plot_dir + "/fig11_12_scan" + std::to_string(i + 1) + ".png", scans[i].scan,
-                   "Identification scan " + std::to_string(i + 1) + ": " + o.scans[i] + ", force " + o.forces[i] + " N");
+                   "Identification scan " + std::to_string(i + 1) + ": " + file_name(o.scans[i]) + ", force (" + o.forces[i] + ") N");
     }
     r::plot_filters(o.plot_dir + "/fig13_inverse_filters.png", f);
     r::plot_transfer(o.plot_dir + "/transfer_G.png", f);
@@ -250,7 +254,7 @@ int run_apply(const ApplyOptions& o) {
                 "zero mean over the filter length and sags below zero around each feature\n");
   }
   if (!o.plot.empty()) {
-    r::plot_restored(o.plot, forces, scan, "Restored forces: " + o.scan, f.resolution_m);
+    r::plot_restored(o.plot, forces, scan, "Restored forces: " + file_name(o.scan), f.resolution_m);
     std::printf("plot written to %s\n", o.plot.c_str());
   }
   return pvdf::exit_code::success;

@@ -59,6 +59,47 @@ struct Selector {
   bool corner;          // frequency-dependent beta with the corner at the target resolution
 };
 
+// (2) Model mismatch: identify on the scene's scanner, restore scans of a modified one.
+void mismatch_study(int n_scenes, unsigned long first_seed) {
+  const int n_mis = std::max(2, n_scenes / 4);
+  struct Variant {
+    const char* name;
+    double depth, speed;
+    bool wide_edges;
+  };
+  const Variant variants[] = {{"matched", 1, 1, false},       {"depth -10 %", 0.9, 1, false}, {"depth +10 %", 1.1, 1, false},
+                              {"speed -20 % (resampled)", 1, 0.8, false}, {"speed +20 % (resampled)", 1, 1.2, false},
+                              {"edges 0.5 mm rectangles", 1, 1, true}};
+  std::printf("\n(2) model mismatch, default settings, %d scenes (seeds %lu..): mu error (mean of 3 edges) and the "
+              "largest edge position error\n%-28s %12s %12s %16s %16s\n",
+              n_mis, first_seed, "variant", "median mu", "max mu", "median pos (mm)", "max pos (mm)");
+  for (const Variant& v : variants) {
+    std::vector<double> m, p;
+    for (int q = 0; q < n_mis; ++q) {
+      const auto sc = family::draw_scene(first_seed + static_cast<unsigned long>(q));
+      const auto ids = family::identification_scans(sc);
+      const DesignOptions o;
+      const auto f = design_inverse(identify_transfer(ids, o), ids, o);
+      auto other = sc;
+      other.scanner.depth_m[0] *= v.depth;
+      other.scanner.depth_m[1] *= v.depth;
+      other.scanner.speed_m_per_s *= v.speed;
+      if (v.wide_edges)
+        for (auto& e : other.edges) {
+          e.shape = family::EdgeShape::rectangle;
+          e.width_m = 0.5e-3;
+        }
+      Scan test = family::test_scan(other);
+      if (v.speed != 1) test = resample_scan(test, f.sample_spacing_m);
+      const Score s = evaluate(f, other, test);
+      m.push_back(s.mu);
+      p.push_back(s.position_m);
+    }
+    std::printf("%-28s %12.4f %12.4f %16.3f %16.3f\n", v.name, quantile(m, 0.5), *std::max_element(m.begin(), m.end()),
+                quantile(p, 0.5) * 1e3, *std::max_element(p.begin(), p.end()) * 1e3);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -153,44 +194,7 @@ int main(int argc, char** argv) {
   std::printf("spread of the hindsight-best beta over the scenes: 10th-90th percentile %.2g .. %.2g (x%.0f)\n",
               quantile(best_beta, 0.1), quantile(best_beta, 0.9), quantile(best_beta, 0.9) / quantile(best_beta, 0.1));
 
-  // (2) Model mismatch: identify on the scene's scanner, restore scans of a modified one.
-  const int n_mis = std::max(2, n_scenes / 4);
-  struct Variant {
-    const char* name;
-    double depth, speed;
-    bool wide_edges;
-  };
-  const Variant variants[] = {{"matched", 1, 1, false},       {"depth -10 %", 0.9, 1, false}, {"depth +10 %", 1.1, 1, false},
-                              {"speed -20 % (resampled)", 1, 0.8, false}, {"speed +20 % (resampled)", 1, 1.2, false},
-                              {"edges 0.5 mm rectangles", 1, 1, true}};
-  std::printf("\n(2) model mismatch, default settings, %d scenes (seeds %lu..): mu error (mean of 3 edges) and the "
-              "largest edge position error\n%-28s %12s %12s %16s %16s\n",
-              n_mis, first_seed, "variant", "median mu", "max mu", "median pos (mm)", "max pos (mm)");
-  for (const Variant& v : variants) {
-    std::vector<double> m, p;
-    for (int q = 0; q < n_mis; ++q) {
-      const auto sc = family::draw_scene(first_seed + static_cast<unsigned long>(q));
-      const auto ids = family::identification_scans(sc);
-      const DesignOptions o;
-      const auto f = design_inverse(identify_transfer(ids, o), ids, o);
-      auto other = sc;
-      other.scanner.depth_m[0] *= v.depth;
-      other.scanner.depth_m[1] *= v.depth;
-      other.scanner.speed_m_per_s *= v.speed;
-      if (v.wide_edges)
-        for (auto& e : other.edges) {
-          e.shape = family::EdgeShape::rectangle;
-          e.width_m = 0.5e-3;
-        }
-      Scan test = family::test_scan(other);
-      if (v.speed != 1) test = resample_scan(test, f.sample_spacing_m);
-      const Score s = evaluate(f, other, test);
-      m.push_back(s.mu);
-      p.push_back(s.position_m);
-    }
-    std::printf("%-28s %12.4f %12.4f %16.3f %16.3f\n", v.name, quantile(m, 0.5), *std::max_element(m.begin(), m.end()),
-                quantile(p, 0.5) * 1e3, *std::max_element(p.begin(), p.end()) * 1e3);
-  }
+  mismatch_study(n_scenes, first_seed);
   std::printf("\nCPU time %.1f s\n", static_cast<double>(std::clock() - t0) / CLOCKS_PER_SEC);
   return 0;
 }
