@@ -66,7 +66,7 @@ int main() {
   test.edges = {{-0.03, 0.45, 0.9}, {0.015, 0.15, 1.0}};
   const Scan scan = simulate_scan(test);
 
-  std::printf("(1) identification + design (CPU time), 2 scans of %zu samples, automatic beta, 1.5 mm target, 10 mm low cut\n", ids[0].scan.size());
+  std::printf("(1) identification + design (CPU time), 2 scans of %zu samples, noise-floor beta, 1.5 mm target, 10 mm low cut\n", ids[0].scan.size());
   std::printf("%8s %12s %12s %12s %14s %14s\n", "N", "identify_ms", "design_ms", "beta_rel", "max|mu err|", "max|shift|smp");
   InverseFilter kept;
   for (std::size_t N : {2048u, 4096u, 8192u, 16384u}) {
@@ -129,7 +129,7 @@ int main() {
   tex.edges.clear();
   tex.textures.push_back({-0.01, 0.02, 0.005, 0.0025, 0.5, 0.2, 0.7});
   const Scan tscan = simulate_scan(tex);
-  std::printf("\n(3) beta policies (N = 8192)\n%-34s %10s %12s %14s %12s\n", "policy", "beta_rel", "max|mu err|",
+  std::printf("\n(3) beta policies (N = 8192); forces with the flat-surface level fixed\n%-34s %10s %12s %14s %12s\n", "policy", "beta_rel", "max|mu err|",
               "max|shift|smp", "texture L2");
   struct Case {
     const char* name;
@@ -141,8 +141,12 @@ int main() {
                         Case{"constant 1e-4, target, low cut", BetaPolicy::constant, 1e-4, 1.5e-3, 0.01},
                         Case{"constant 10, target, low cut", BetaPolicy::constant, 10.0, 1.5e-3, 0.01},
                         Case{"gcv, target, low cut", BetaPolicy::gcv, 0.0, 1.5e-3, 0.01},
-                        Case{"auto, target, no low cut", BetaPolicy::discrepancy, 0.0, 1.5e-3, 0.0},
-                        Case{"auto, target, low cut (recommended)", BetaPolicy::discrepancy, 0.0, 1.5e-3, 0.01}}) {
+                        Case{"lcurve, target, low cut", BetaPolicy::lcurve, 0.0, 1.5e-3, 0.01},
+                        Case{"morozov, target, low cut", BetaPolicy::morozov, 0.0, 1.5e-3, 0.01},
+                        Case{"noise floor, target, no low cut", BetaPolicy::discrepancy, 0.0, 1.5e-3, 0.0},
+                        Case{"noise floor, target, low cut", BetaPolicy::discrepancy, 0.0, 1.5e-3, 0.01},
+                        Case{"predicted, target, low cut", BetaPolicy::predicted, 0.0, 1.5e-3, 0.01},
+                        Case{"defaults (predicted, auto, auto)", BetaPolicy::predicted, 0.0, -1.0, -1.0}}) {
     DesignOptions o;
     o.beta_policy = c.policy;
     o.beta = c.beta;
@@ -154,8 +158,8 @@ int main() {
     // Texture error against the truth blurred by the same target (none: the truth itself).
     const auto r = restore_scan(f, tscan);
     std::vector<double> tx = tscan.fx_N, tz = tscan.fz_N;
-    if (c.resolution > 0) {
-      const double s = c.resolution / 2.3548200450309493, dx = tscan.sample_spacing_m();
+    if (f.resolution_m > 0) {
+      const double s = f.resolution_m / 2.3548200450309493, dx = tscan.sample_spacing_m();
       const long half = static_cast<long>(5 * s / dx);
       std::vector<double> w(2 * half + 1);
       double sum = 0;

@@ -7,12 +7,14 @@
 # identified from those two scans (eq. 6) and inverted with regularization (eq. 4) into four FIR
 # filters (Fig. 13); the filters then restore f_x, f_z and mu from a new scan of a surface with two
 # edges and a ridged texture whose friction rises from 0.2 to 0.8 (Fig. 14). Once with the paper's
-# constant beta = 1e-4, once with the automatic beta, a 1.5 mm target resolution and a 10 mm low cut.
+# settings (constant beta = 1e-4, no target, no low cut), once with the defaults (beta chosen by the
+# predicted mu error, a target resolution and a low cut from the strips' effective depth).
 #
 # Run:     examples/restore/run.sh [PVDFKIT] [OUTDIR]
 #          (defaults: pvdfkit from PATH, ./restore-example). About 2 s.
 # Expect:  the edges of the test surface restored at -30 mm and -15 mm (no shift), PNGs of Figs
-#          11-14 in OUTDIR/plots*, forces in OUTDIR/forces*.csv with columns x_m,fx_N,fz_N,mu,mu_valid.
+#          11-14 in OUTDIR/plots*, forces in OUTDIR/forces*.csv with columns
+#          x_m,fx_N,fz_N,mu,mu_valid,fx_N_per_m,fz_N_per_m (line forces in N/m, per sample in N).
 # ---------------------------------------------------------------------------------------------
 set -eu
 PVDFKIT=${1:-pvdfkit}
@@ -24,15 +26,15 @@ echo "== 1. Scan the two raised edges of seed 000 Fig. 6 (edge at x = -12.5 mm)"
 "$PVDFKIT" restore simulate "$HERE/edge_a.json" -o "$OUT/edge_a.csv" --plot "$OUT/fig11_edge_a.png"
 "$PVDFKIT" restore simulate "$HERE/edge_b.json" -o "$OUT/edge_b.csv" --plot "$OUT/fig12_edge_b.png"
 
-echo "== 2. Identify G and design the inverse filters as in the paper (constant beta = 1e-4)"
+echo "== 2. Identify G and design the inverse filters as in the paper (constant beta = 1e-4, no target, no low cut)"
 "$PVDFKIT" restore identify --scan "$OUT/edge_a.csv" --force 0.6,0.9 --edge-x-m -0.0125 \
   --scan "$OUT/edge_b.csv" --force 0.2,1.0 --edge-x-m -0.0125 \
-  --beta 1e-4 -o "$OUT/filter_paper.json" --plot-dir "$OUT/plots_paper"
+  --beta 1e-4 --resolution-m 0 --low-cut-m 0 -o "$OUT/filter_paper.json" --plot-dir "$OUT/plots_paper"
 
-echo "== 3. The same with the automatic beta (noise floor of G), a 1.5 mm target resolution and a 10 mm low cut"
+echo "== 3. The same with the default (recommended) settings: beta, target resolution and low cut chosen from the data"
 "$PVDFKIT" restore identify --scan "$OUT/edge_a.csv" --force 0.6,0.9 --edge-x-m -0.0125 \
   --scan "$OUT/edge_b.csv" --force 0.2,1.0 --edge-x-m -0.0125 \
-  --beta auto --resolution-m 1.5e-3 --low-cut-m 0.01 -o "$OUT/filter.json" --plot-dir "$OUT/plots"
+  -o "$OUT/filter.json" --plot-dir "$OUT/plots"
 
 echo "== 4. Scan a new surface: edges at -30 mm (mu 0.375) and -15 mm (mu 0.786), texture 0-30 mm"
 "$PVDFKIT" restore simulate "$HERE/scanner.json" -o "$OUT/surface.csv" --plot "$OUT/surface_signals.png"

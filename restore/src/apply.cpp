@@ -1,6 +1,7 @@
 // Offline and streaming application of the inverse filters.
 #include "pvdf/restore/apply.hpp"
 
+#include "baseline.hpp"
 #include "fft.hpp"
 #include "pvdf/core/error.hpp"
 
@@ -54,24 +55,102 @@ void friction_coefficient(RestoredForces& r, double threshold) {
   }
 }
 
-RestoredForces restore_scan(const InverseFilter& f, const Scan& scan, double mu_threshold_N) {
+RestoredForces restore_scan(const InverseFilter& f, const Scan& scan, const RestoreOptions& options) {
   const double dx = scan.sample_spacing_m();
   if (std::abs(dx - f.sample_spacing_m) > 0.01 * f.sample_spacing_m) {
     std::ostringstream msg;
     msg << scan.source << ": sample spacing " << dx << " m differs from the filter's " << f.sample_spacing_m
-        << " m by more than 1 %; scan at the identification speed and rate (or identify a new filter)";
+        << " m by more than 1 %; scan at the identification speed and rate, identify a new filter, or resample the "
+           "scan (restore apply --resample)";
     throw InputError(msg.str());
   }
   RestoredForces r;
   r.x_m = scan.x_m;
   restore_offline(f, scan.m1_V, scan.m2_V, r.fx_N, r.fz_N);
-  if (mu_threshold_N < 0) {
+  finish_forces(f, r, options);
+  return r;
+}
+
+RestoredForces restore_scan(const InverseFilter& f, const Scan& scan, double mu_threshold_N) {
+  RestoreOptions o;
+  o.mu_threshold_N = mu_threshold_N;
+  return restore_scan(f, scan, o);
+}
+
+void finish_forces(const InverseFilter& f, RestoredForces& r, const RestoreOptions& o) {
+  const std::size_t n = r.fx_N.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!std::isfinite(r.fx_N[i]) || !std::isfinite(r.fz_N[i])) {
+      throw NumericalError("restore: the restored force at sample " + std::to_string(i) +
+                           " is not finite; the filter's taps or the scan's signals are out of range");
+    }
+  }
+  const double dx = r.x_m.size() >= 2 ? (r.x_m.back() - r.x_m.front()) / static_cast<double>(r.x_m.size() - 1)
+                                      : f.sample_spacing_m;
+  r.sample_spacing_m = dx;
+  r.fx_N_per_m.resize(n);
+  r.fz_N_per_m.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    r.fx_N_per_m[i] = r.fx_N[i] / dx;
+    r.fz_N_per_m[i] = r.fz_N[i] / dx;
+  }
+  if (o.flat_baseline && n >= 16) {
+    double scale = o.baseline_scale_m;
+    if (!(scale > 0)) {
+      scale = f.low_cut_wavelength_m > 0 ? f.low_cut_wavelength_m / (2 * 3.14159265358979323846)
+                                         : std::max(1.5e-3, 4 * f.resolution_m);
+    }
+    detail::fit_flat_baseline(r, scale, f.resolution_m);
+    for (std::size_t i = 0; i < n; ++i) {
+      r.fx_N_per_m[i] -= r.baseline_fx_N_per_m[i];
+      r.fz_N_per_m[i] -= r.baseline_fz_N_per_m[i];
+      r.fx_N[i] = r.fx_N_per_m[i] * dx;
+      r.fz_N[i] = r.fz_N_per_m[i] * dx;
+    }
+  }
+  double threshold = o.mu_threshold_N;
+  if (threshold < 0) {
     double peak = 0;
     for (double v : r.fz_N) peak = std::max(peak, v);
-    mu_threshold_N = 0.3 * peak;
+    threshold = 0.3 * peak;
   }
-  friction_coefficient(r, mu_threshold_N);
-  return r;
+  friction_coefficient(r, threshold);
+}
+
+Scan resample_scan(const Scan& scan, double dx_new) {
+  const double dx = scan.sample_spacing_m();
+  if (!(dx > 0) || !(dx_new > 0)) throw InputError(scan.source + ": cannot resample a scan without a positive sample spacing");
+  Scan out;
+  out.source = scan.source;
+  const double span = scan.x_m.back() - scan.x_m.front();
+  const auto n = static_cast<std::size_t>(std::floor(span / dx_new + 1e-9)) + 1;
+  if (n < 16 || n > (std::size_t{1} << 28)) {
+    throw InputError(scan.source + ": resampling to " + std::to_string(dx_new) + " m gives " + std::to_string(n) +
+                     " samples; it must give 16 .. 2^28");
+  }
+  const double gain = dx_new / dx;
+  out.x_m.resize(n);
+  out.m1_V.resize(n);
+  out.m2_V.resize(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const double x = scan.x_m.front() + static_cast<double>(k) * dx_new;
+    const double p = (x - scan.x_m.front()) / dx;
+    const auto i = std::min(static_cast<std::size_t>(p), scan.size() - 2);
+    const double a = p - static_cast<double>(i);
+    out.x_m[k] = x;
+    out.m1_V[k] = gain * ((1 - a) * scan.m1_V[i] + a * scan.m1_V[i + 1]);
+    out.m2_V[k] = gain * ((1 - a) * scan.m2_V[i] + a * scan.m2_V[i + 1]);
+  }
+  if (scan.fx_N.size() == scan.size() && scan.fz_N.size() == scan.size()) {
+    out.fx_N.assign(n, 0.0);
+    out.fz_N.assign(n, 0.0);
+    for (std::size_t i = 0; i < scan.size(); ++i) {
+      const auto k = std::min(n - 1, static_cast<std::size_t>(std::lround((scan.x_m[i] - scan.x_m.front()) / dx_new)));
+      out.fx_N[k] += scan.fx_N[i];
+      out.fz_N[k] += scan.fz_N[i];
+    }
+  }
+  return out;
 }
 
 // Uniformly partitioned overlap-save: the N taps are cut into P = ceil(N / B) partitions of B taps; each

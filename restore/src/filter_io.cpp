@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <cstdio>
 #include <set>
 
 namespace pvdf::restore {
@@ -15,6 +16,7 @@ namespace {
 const char* const format_name = "pvdfkit-restore-filter";
 const char* const h_names[2][2] = {{"h11", "h12"}, {"h21", "h22"}};
 const char* const g_names[2][2] = {{"g11", "g12"}, {"g21", "g22"}};
+constexpr double max_tap = 1e12;
 
 std::vector<double> taps_of(const std::string& source, const nlohmann::json& j, const std::string& key,
                             std::size_t n) {
@@ -28,7 +30,15 @@ std::vector<double> taps_of(const std::string& source, const nlohmann::json& j, 
   for (std::size_t i = 0; i < n; ++i) {
     if (!a[i].is_number() || !std::isfinite(a[i].get<double>())) {
       throw InputError(source + ": " + key + "[" + std::to_string(i) + "] = " + json_excerpt(a[i]) +
-                       " must be a finite number");
+                       " must be a finite number; regenerate the filter with 'pvdfkit restore identify'");
+    }
+    // A tap of 1e12 N/V would turn a microvolt of noise into a meganewton: no identified filter comes near.
+    if (std::abs(a[i].get<double>()) > max_tap) {
+      char buf[64];
+      std::snprintf(buf, sizeof buf, "%g", a[i].get<double>());
+      throw InputError(source + ": " + key + "[" + std::to_string(i) + "] = " + buf +
+                       " must be within +-1e+12 (N/V for filter taps, V/N for G); regenerate the filter with "
+                       "'pvdfkit restore identify'");
     }
     out[i] = a[i].get<double>();
   }
@@ -42,18 +52,24 @@ void save_filter(const std::string& path, const InverseFilter& f) {
   j["format_version"] = 1;
   j["pvdfkit_version"] = f.pvdfkit_version;
   j["description"] = "2x2 inverse FIR filter: f[n] = sum_t h[t] m[n + D - t] (D = delay_samples); f_x from h11*m1 + "
-                     "h12*m2, f_z from h21*m1 + h22*m2; forces in N per sample at the scan's x_m";
+                     "h12*m2, f_z from h21*m1 + h22*m2; forces in N per sample at the scan's x_m (divide by sample_spacing_m for N/m)";
   j["sample_spacing_m"] = f.sample_spacing_m;
   j["taps"] = f.taps;
   j["delay_samples"] = f.delay_samples;
   j["design_fft_length"] = f.design_fft_length;
   j["window"] = f.window;
   j["resolution_m"] = f.resolution_m;
+  j["effective_depth_m"] = f.effective_depth_m;
   j["beta"] = {{"policy", f.beta_policy}, {"relative", f.beta}, {"absolute_V2_per_N2", f.beta_abs},
                {"corner_wavelength_m", f.corner_wavelength_m}, {"low_cut_wavelength_m", f.low_cut_wavelength_m}};
   nlohmann::json gcv = nlohmann::json::array();
   for (const auto& [b, v] : f.gcv_curve) gcv.push_back({b, v});
   j["beta"]["gcv_curve"] = gcv;
+  j["beta"]["reason"] = f.beta_reason;
+  j["beta"]["selection_criterion"] = f.selection_criterion;
+  nlohmann::json sel = nlohmann::json::array();
+  for (const auto& [b, v] : f.selection_curve) sel.push_back({b, v});
+  j["beta"]["selection_curve"] = sel;
   j["conditioning"] = {{"G_cond_min", f.conditioning.min},
                        {"G_cond_median", f.conditioning.median},
                        {"G_cond_max", f.conditioning.max},
@@ -87,22 +103,29 @@ InverseFilter load_filter(const std::string& path) {
   InverseFilter f;
   f.pvdfkit_version = top.string_or("pvdfkit_version", "");
   top.string_or("description", "");
-  f.sample_spacing_m = top.positive("sample_spacing_m");
+  f.sample_spacing_m = top.in_range_or("sample_spacing_m", 0, 1e-9, 1);
+  if (!(f.sample_spacing_m > 0)) top.fail("sample_spacing_m", "is missing; it must be in [1e-9, 1] m");
   f.taps = static_cast<std::size_t>(top.integer_or("taps", 0, 2, 1L << 24));
   if (f.taps < 2) top.fail("taps", "is missing or < 2");
   f.delay_samples = top.integer_or("delay_samples", -1, 0, static_cast<long>(f.taps) - 1);
   if (f.delay_samples < 0) top.fail("delay_samples", "is missing; it must be in [0, taps)");
   f.design_fft_length = static_cast<std::size_t>(top.integer_or("design_fft_length", 0, 0, 1L << 26));
   f.window = top.choice_or("window", "tukey", {"tukey", "hann", "none"});
-  f.resolution_m = top.non_negative_or("resolution_m", 0);
+  f.resolution_m = top.in_range_or("resolution_m", 0, 0, 1);
+  f.effective_depth_m = top.in_range_or("effective_depth_m", 0, 0, 1);
   const auto beta = top.object("beta");
-  f.beta_policy = beta.choice_or("policy", "constant", {"constant", "frequency", "gcv", "discrepancy"});
+  f.beta_policy = beta.choice_or("policy", "constant", {"constant", "frequency", "gcv", "discrepancy", "lcurve", "morozov", "predicted"});
   f.beta = beta.non_negative_or("relative", 0);
   f.beta_abs = beta.non_negative_or("absolute_V2_per_N2", 0);
   f.corner_wavelength_m = beta.non_negative_or("corner_wavelength_m", 0);
   f.low_cut_wavelength_m = beta.non_negative_or("low_cut_wavelength_m", 0);
   if (beta.has("gcv_curve")) {
     for (const auto& p : beta.points("gcv_curve", 0)) f.gcv_curve.emplace_back(p[0], p[1]);
+  }
+  f.beta_reason = beta.string_or("reason", "");
+  f.selection_criterion = beta.string_or("selection_criterion", "");
+  if (beta.has("selection_curve")) {
+    for (const auto& p : beta.points("selection_curve", 0)) f.selection_curve.emplace_back(p[0], p[1]);
   }
   beta.finish();
   if (auto c = top.object_if("conditioning")) {

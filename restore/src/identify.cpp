@@ -1,5 +1,6 @@
 // Identification of G (seed 000 eq. 6, least squares for more scans) and the regularized inverse (eq. 4).
 #include "fft.hpp"
+#include "select_beta.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/restore/filter.hpp"
 #include "pvdf/version.hpp"
@@ -42,55 +43,6 @@ std::vector<double> taper(const std::string& kind, std::size_t n) {
   return tukey(n, 0.125);
 }
 
-// G(k) on an FFT grid of length L from impulse responses starting at lag_min (placed circularly).
-std::array<std::array<std::vector<cd>, 2>, 2> spectrum(const TransferMatrix& t, detail::RealFft& fft) {
-  const std::size_t L = fft.size();
-  std::array<std::array<std::vector<cd>, 2>, 2> G;
-  std::vector<double> buf(L);
-  for (int i = 0; i < 2; ++i) {
-    for (int j = 0; j < 2; ++j) {
-      std::fill(buf.begin(), buf.end(), 0.0);
-      const auto& g = t.g[i][j];
-      for (std::size_t l = 0; l < g.size(); ++l) {
-        const long lag = t.lag_min + static_cast<long>(l);
-        const long idx = ((lag % static_cast<long>(L)) + static_cast<long>(L)) % static_cast<long>(L);
-        buf[static_cast<std::size_t>(idx)] += g[l];
-      }
-      G[i][j].resize(fft.bins());
-      fft.forward(buf.data(), L, G[i][j].data());
-    }
-  }
-  return G;
-}
-
-Eigen::Matrix2cd at(const std::array<std::array<std::vector<cd>, 2>, 2>& G, std::size_t k) {
-  Eigen::Matrix2cd m;
-  m << G[0][0][k], G[0][1][k], G[1][0][k], G[1][1][k];
-  return m;
-}
-
-double target(const DesignOptions& o, std::size_t bin, std::size_t L, double dx) {
-  if (o.resolution_m <= 0) return 1.0;
-  const double k = 2 * pi * static_cast<double>(bin) / (static_cast<double>(L) * dx);
-  const double s = o.resolution_m / 2.3548200450309493;
-  return std::exp(-0.5 * k * k * s * s);
-}
-
-double shape(const DesignOptions& o, std::size_t bin, std::size_t L, double dx) {
-  double s = 1.0;
-  if (o.corner_wavelength_m > 0) {
-    const double r = static_cast<double>(bin) * o.corner_wavelength_m / (static_cast<double>(L) * dx);
-    s *= 1.0 + r * r;
-  }
-  if (o.low_cut_wavelength_m > 0) {
-    // k_low / k = (L dx / lambda_low) / bin; at bin 0 the factor is infinite (H(0) = 0 anyway: G(0) = 0).
-    if (bin == 0) return 1e300;
-    const double r = static_cast<double>(L) * dx / (o.low_cut_wavelength_m * static_cast<double>(bin));
-    s *= 1.0 + r * r;
-  }
-  return s;
-}
-
 }  // namespace
 
 std::string to_string(BetaPolicy policy) {
@@ -99,6 +51,9 @@ std::string to_string(BetaPolicy policy) {
     case BetaPolicy::frequency: return "frequency";
     case BetaPolicy::gcv: return "gcv";
     case BetaPolicy::discrepancy: return "discrepancy";
+    case BetaPolicy::lcurve: return "lcurve";
+    case BetaPolicy::morozov: return "morozov";
+    case BetaPolicy::predicted: return "predicted";
   }
   return "constant";
 }
@@ -261,37 +216,85 @@ TransferMatrix identify_transfer(const std::vector<IdentificationScan>& scans, c
   return t;
 }
 
-InverseFilter design_inverse(const TransferMatrix& t, const std::vector<IdentificationScan>& scans,
-                             const DesignOptions& o_in) {
-  DesignOptions o = o_in;
+namespace detail {
+std::array<std::array<std::vector<std::complex<double>>, 2>, 2> transfer_spectrum(const TransferMatrix& t, RealFft& fft) {
+  const std::size_t L = fft.size();
+  std::array<std::array<std::vector<cd>, 2>, 2> G;
+  std::vector<double> buf(L);
+  for (int i = 0; i < 2; ++i) {
+    for (int j = 0; j < 2; ++j) {
+      std::fill(buf.begin(), buf.end(), 0.0);
+      const auto& g = t.g[i][j];
+      for (std::size_t l = 0; l < g.size(); ++l) {
+        const long lag = t.lag_min + static_cast<long>(l);
+        const long idx = ((lag % static_cast<long>(L)) + static_cast<long>(L)) % static_cast<long>(L);
+        buf[static_cast<std::size_t>(idx)] += g[l];
+      }
+      G[i][j].resize(fft.bins());
+      fft.forward(buf.data(), L, G[i][j].data());
+    }
+  }
+  return G;
+}
+}  // namespace detail
+
+namespace {
+void check_design_options(const DesignOptions& o, std::size_t n_g) {
   const std::size_t N = o.taps;
-  const std::size_t n_g = t.g[0][0].size();
   if (N < 64 || n_g < 64) throw InputError("design: need >= 64 taps and >= 64 lags of G");
-  if (o.delay_samples < 0) o.delay_samples = static_cast<long>(N / 2);
   if (o.delay_samples >= static_cast<long>(N)) {
     throw InputError("--delay-samples = " + std::to_string(o.delay_samples) + " must be < --taps = " + std::to_string(N));
   }
   if (o.beta_policy == BetaPolicy::frequency && !(o.corner_wavelength_m > 0)) {
     throw InputError("--beta-policy frequency needs --beta-corner-m > 0 (the wavelength where beta has doubled)");
   }
-  if ((o.beta_policy == BetaPolicy::constant || o.beta_policy == BetaPolicy::frequency) && !(o.beta > 0)) throw InputError("--beta = " + num(o.beta) + " must be > 0");
+  if ((o.beta_policy == BetaPolicy::constant || o.beta_policy == BetaPolicy::frequency) && !(o.beta > 0 && o.beta < 1e6)) {
+    throw InputError("--beta = " + num(o.beta) + " must be in (0, 1e6)");
+  }
   if (o.window != "tukey" && o.window != "hann" && o.window != "none") {
     throw InputError("--window = " + o.window + " must be tukey, hann or none");
   }
+  if (!(o.predicted_beta_scale > 0 && o.predicted_beta_scale <= 1) || !(o.gcv_beta_min > 0 && o.gcv_beta_min < o.gcv_beta_max) ||
+      o.gcv_points < 3 || o.gcv_points > 10000) {
+    throw InputError("design: predicted_beta_scale = " + num(o.predicted_beta_scale) + " must be in (0, 1], the beta search range (" +
+                     num(o.gcv_beta_min) + ", " + num(o.gcv_beta_max) + ") increasing and positive, its points in [3, 10000]");
+  }
+  if (!(o.resolution_m <= 1.0) || !(o.low_cut_wavelength_m <= 100.0) || !(o.corner_wavelength_m >= 0 && o.corner_wavelength_m <= 1.0)) {
+    throw InputError("--resolution-m = " + num(o.resolution_m) + ", --low-cut-m = " + num(o.low_cut_wavelength_m) +
+                     ", --beta-corner-m = " + num(o.corner_wavelength_m) + ": lengths must be <= 1, 100 and 1 m");
+  }
+}
+
+// Depth of a Flamant strip whose stress-rate response peaks at the same wavenumber as s_max(G(k)):
+// |k| (1 + |k| z) e^{-|k| z} peaks at k z = (1 + sqrt 5) / 2.
+double effective_depth(const detail::DesignGrid& g) {
+  std::size_t kp = 1;
+  for (std::size_t k = 1; k < g.s1.size(); ++k)
+    if (g.s1[k] > g.s1[kp]) kp = k;
+  const double k_peak = 2 * pi * static_cast<double>(kp) / (static_cast<double>(g.L) * g.dx);
+  return 1.6180339887498949 / k_peak;
+}
+}  // namespace
+
+InverseFilter design_inverse(const TransferMatrix& t, const std::vector<IdentificationScan>& scans,
+                             const DesignOptions& o_in) {
+  DesignOptions o = o_in;
+  const std::size_t N = o.taps;
+  const std::size_t n_g = t.g[0][0].size();
+  check_design_options(o, n_g);
+  if (o.delay_samples < 0) o.delay_samples = static_cast<long>(N / 2);
   const double dx = t.sample_spacing_m;
   // Design grid >= 2N: H sampled on it has an impulse response whose wrap-around is measured below.
   detail::RealFft fft(detail::good_fft_size(2 * std::max(N, n_g)));
   const std::size_t L = fft.size();
-  const auto G = spectrum(t, fft);
-
-  std::vector<Eigen::JacobiSVD<Eigen::Matrix2cd>> svds;
-  svds.reserve(fft.bins());
-  double smax = 0;
-  for (std::size_t k = 0; k < fft.bins(); ++k) {
-    svds.emplace_back(at(G, k), Eigen::ComputeFullU | Eigen::ComputeFullV);
-    smax = std::max(smax, svds.back().singularValues()(0));
+  detail::DesignGrid grid = detail::design_grid(t, fft, o);
+  if (!(grid.smax > 0)) throw NumericalError("design: the identified G is zero at every frequency");
+  const double depth = effective_depth(grid);
+  if (o.resolution_m < 0 || o.low_cut_wavelength_m < 0) {
+    if (o.resolution_m < 0) o.resolution_m = 1.5 * depth;
+    if (o.low_cut_wavelength_m < 0) o.low_cut_wavelength_m = 10 * depth;
+    grid = detail::design_grid(t, fft, o);
   }
-  if (!(smax > 0)) throw NumericalError("design: the identified G is zero at every frequency");
 
   InverseFilter f;
   f.sample_spacing_m = dx;
@@ -302,7 +305,7 @@ InverseFilter design_inverse(const TransferMatrix& t, const std::vector<Identifi
   f.corner_wavelength_m = o.corner_wavelength_m;
   f.resolution_m = o.resolution_m;
   f.low_cut_wavelength_m = o.low_cut_wavelength_m;
-  if (o.resolution_m < 0) throw InputError("--resolution-m = " + num(o.resolution_m) + " must be >= 0");
+  f.effective_depth_m = depth;
   f.window = o.window;
   f.transfer = t;
   f.pvdfkit_version = pvdf::version_string;
@@ -310,97 +313,35 @@ InverseFilter design_inverse(const TransferMatrix& t, const std::vector<Identifi
   // Conditioning over the band where G carries signal.
   {
     std::vector<double> conds;
-    for (const auto& s : svds) {
-      const auto v = s.singularValues();
-      if (v(0) >= 1e-3 * smax) conds.push_back(v(1) > 0 ? v(0) / v(1) : 1e300);
+    for (std::size_t k = 0; k < grid.s1.size(); ++k) {
+      if (grid.s1[k] >= 1e-3 * grid.smax) conds.push_back(grid.s2[k] > 0 ? grid.s1[k] / grid.s2[k] : 1e300);
     }
     std::sort(conds.begin(), conds.end());
     if (!conds.empty()) {
       f.conditioning.min = conds.front();
       f.conditioning.max = std::min(conds.back(), 1e300);
       f.conditioning.median = conds[conds.size() / 2];
-      f.conditioning.band_fraction = static_cast<double>(conds.size()) / static_cast<double>(svds.size());
+      f.conditioning.band_fraction = static_cast<double>(conds.size()) / static_cast<double>(grid.s1.size());
     }
   }
 
-  double beta = o.beta;
-  if (o.beta_policy == BetaPolicy::gcv) {
-    // GCV on the identification records: the data m = G f + e, influence A(k) = G H = U diag(s^2/(s^2+b)) U^H,
-    // GCV(b) = sum |(I - A) M|^2 / (sum tr(I - A))^2, summed over frequencies (half spectrum, weighted) and scans.
-    std::size_t n_max = 0;
-    for (const auto& s : scans) n_max = std::max(n_max, s.scan.size());
-    if (n_max == 0) throw InputError("--beta gcv needs the identification scans");
-    detail::RealFft big(detail::good_fft_size(n_max + N));
-    const auto Gb = spectrum(t, big);
-    const std::size_t B = big.bins();
-    std::vector<double> s1(B), s2(B), p1(B, 0.0), p2(B, 0.0), wk(B, 2.0), sh(B), tk(B);
-    wk[0] = 1.0;
-    if (big.size() % 2 == 0) wk[B - 1] = 1.0;
-    std::vector<Eigen::Matrix2cd> U(B);
-    for (std::size_t k = 0; k < B; ++k) {
-      Eigen::JacobiSVD<Eigen::Matrix2cd> sv(at(Gb, k), Eigen::ComputeFullU);
-      s1[k] = sv.singularValues()(0) * sv.singularValues()(0);
-      s2[k] = sv.singularValues()(1) * sv.singularValues()(1);
-      U[k] = sv.matrixU();
-      sh[k] = shape(o, k, big.size(), dx);
-      tk[k] = target(o, k, big.size(), dx);
-    }
-    std::vector<cd> M1(B), M2(B);
-    for (const auto& s : scans) {
-      big.forward(s.scan.m1_V.data(), s.scan.size(), M1.data());
-      big.forward(s.scan.m2_V.data(), s.scan.size(), M2.data());
-      for (std::size_t k = 0; k < B; ++k) {
-        const Eigen::Vector2cd m(M1[k], M2[k]);
-        const Eigen::Vector2cd um = U[k].adjoint() * m;
-        p1[k] += std::norm(um(0));
-        p2[k] += std::norm(um(1));
-      }
-    }
-    const double n_scans = static_cast<double>(scans.size());
-    double best = std::numeric_limits<double>::infinity();
-    const int n_pts = std::max(2, o.gcv_points);
-    for (int p = 0; p < n_pts; ++p) {
-      const double b_rel = o.gcv_beta_min * std::pow(o.gcv_beta_max / o.gcv_beta_min, p / double(n_pts - 1));
-      double resid = 0, trace = 0;
-      for (std::size_t k = 0; k < B; ++k) {
-        const double b = b_rel * smax * smax * sh[k];
-        // I - A = U diag(1 - T s^2/(s^2 + b)) U^H
-        const double r1 = 1 - tk[k] * s1[k] / (s1[k] + b), r2 = 1 - tk[k] * s2[k] / (s2[k] + b);
-        resid += wk[k] * (r1 * r1 * p1[k] + r2 * r2 * p2[k]);
-        trace += wk[k] * n_scans * (r1 + r2);
-      }
-      const double gcv = trace > 0 ? resid / (trace * trace) : std::numeric_limits<double>::infinity();
-      f.gcv_curve.emplace_back(b_rel, gcv);
-      if (gcv < best) {
-        best = gcv;
-        beta = b_rel;
-      }
-    }
-  }
-  if (o.beta_policy == BetaPolicy::discrepancy) {
-    if (!(t.g_noise_power > 0)) {
-      throw InputError("--beta auto needs a noise estimate: the scans must extend beyond taps/4 on a side of the edge "
-                       "(or give a numeric --beta)");
-    }
-    beta = t.g_noise_power / (smax * smax);
-  }
-  f.beta = beta;
-  f.beta_abs = beta * smax * smax;
+  const detail::BetaChoice choice = detail::choose_beta(grid, t, scans, o);
+  f.beta = choice.beta;
+  f.beta_abs = choice.beta * grid.smax * grid.smax;
+  f.beta_reason = choice.reason;
+  f.selection_criterion = choice.criterion;
+  f.selection_curve = choice.curve;
+  if (o.beta_policy == BetaPolicy::gcv) f.gcv_curve = choice.curve;
 
   // Eq. 4 per frequency with the modelling delay exp(-i 2 pi k D / L); H = V diag(s/(s^2+b)) U^H.
   std::array<std::array<std::vector<cd>, 2>, 2> H;
   for (auto& row : H)
     for (auto& v : row) v.resize(fft.bins());
   for (std::size_t k = 0; k < fft.bins(); ++k) {
-    const auto& s = svds[k];
-    const double b = f.beta_abs * shape(o, k, L, dx);
-    Eigen::Vector2d d;
-    for (int q = 0; q < 2; ++q) {
-      const double sq = s.singularValues()(q);
-      d(q) = sq / (sq * sq + b);
-    }
-    const Eigen::Matrix2cd Hk = s.matrixV() * d.asDiagonal() * s.matrixU().adjoint();
-    const cd phase = target(o, k, L, dx) * std::polar(1.0, -2 * pi * static_cast<double>(k) * static_cast<double>(o.delay_samples) / L);
+    const double b = f.beta_abs * grid.shape[k];
+    const Eigen::Vector2d d(grid.s1[k] / (grid.s1[k] * grid.s1[k] + b), grid.s2[k] / (grid.s2[k] * grid.s2[k] + b));
+    const Eigen::Matrix2cd Hk = grid.V[k] * d.asDiagonal() * grid.U[k].adjoint();
+    const cd phase = grid.target[k] * std::polar(1.0, -2 * pi * static_cast<double>(k) * static_cast<double>(o.delay_samples) / static_cast<double>(L));
     for (int i = 0; i < 2; ++i)
       for (int j = 0; j < 2; ++j) H[i][j][k] = Hk(i, j) * phase;
   }

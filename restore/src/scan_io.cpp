@@ -79,11 +79,12 @@ void write_scan_csv(const std::string& path, const Scan& scan, const std::string
 void write_forces_csv(const std::string& path, const RestoredForces& f, const std::string& comment) {
   write_file_atomically(path, [&](std::ostream& out) {
     if (!comment.empty()) out << "# " << comment << '\n';
-    out << "x_m,fx_N,fz_N,mu,mu_valid\n";
-    char buf[160];
+    out << "x_m,fx_N,fz_N,mu,mu_valid,fx_N_per_m,fz_N_per_m\n";
+    char buf[240];
+    const bool per_m = f.fx_N_per_m.size() == f.x_m.size() && f.fz_N_per_m.size() == f.x_m.size();
     for (std::size_t i = 0; i < f.x_m.size(); ++i) {
-      std::snprintf(buf, sizeof buf, "%.17g,%.17g,%.17g,%.17g,%d\n", f.x_m[i], f.fx_N[i], f.fz_N[i], f.mu[i],
-                    f.mu_valid[i]);
+      std::snprintf(buf, sizeof buf, "%.17g,%.17g,%.17g,%.17g,%d,%.17g,%.17g\n", f.x_m[i], f.fx_N[i], f.fz_N[i], f.mu[i],
+                    f.mu_valid[i], per_m ? f.fx_N_per_m[i] : 0.0, per_m ? f.fz_N_per_m[i] : 0.0);
       out << buf;
     }
   });

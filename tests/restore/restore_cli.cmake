@@ -46,3 +46,40 @@ expect(2 "h21" ${PVDFKIT} restore apply ${WORK}/bad_filter.json ${WORK}/a.csv -o
 # A scene with an unknown key is refused.
 file(WRITE ${WORK}/bad_scene.json "{\"scan\": {\"speed_m_per_sec\": 0.05}}")
 expect(2 "speed_m_per_sec" ${PVDFKIT} restore simulate ${WORK}/bad_scene.json -o ${WORK}/x.csv)
+# The forces CSV keeps its columns and adds the line forces in N/m.
+if(NOT "${header}" MATCHES "x_m,fx_N,fz_N,mu,mu_valid,fx_N_per_m,fz_N_per_m")
+  message(FATAL_ERROR "forces.csv lacks the N/m columns: '${header}'")
+endif()
+# A filter tap out of range (finite but absurd) is refused, naming the file, the key and the value.
+file(READ ${WORK}/f.json text)
+string(REGEX REPLACE "\"h22\": \\[\n *[-0-9.e+]+" "\"h22\": [\n  1e308" text "${text}")
+file(WRITE ${WORK}/huge_tap.json "${text}")
+expect(2 "huge_tap.json: filters: h22\\[0\\] = 1e\\+308 must be within" ${PVDFKIT} restore apply ${WORK}/huge_tap.json ${WORK}/a.csv -o ${WORK}/x.csv)
+if(EXISTS ${WORK}/x.csv)
+  message(FATAL_ERROR "a refused apply left ${WORK}/x.csv behind")
+endif()
+# Every numeric flag is range-checked where it is parsed (exit 2, the flag and its value).
+expect(2 "--mu-threshold-N = -1 must be in" ${PVDFKIT} restore apply ${WORK}/f.json ${WORK}/a.csv -o ${WORK}/x.csv --mu-threshold-N -1)
+expect(2 "--block = 0 must be in" ${PVDFKIT} restore apply ${WORK}/f.json ${WORK}/a.csv -o ${WORK}/x.csv --block 0)
+expect(2 "--speed-m-per-s = -0.05 must be in" ${PVDFKIT} restore apply ${WORK}/f.json ${WORK}/a.csv -o ${WORK}/x.csv --speed-m-per-s -0.05)
+expect(2 "--baseline-scale-m = 0 must be in" ${PVDFKIT} restore apply ${WORK}/f.json ${WORK}/a.csv -o ${WORK}/x.csv --baseline-scale-m 0)
+set(ID_ARGS restore identify --scan ${WORK}/a.csv --force 0.6,0.9 --edge-x-m -0.0125 --scan ${WORK}/b.csv --force 0.2,1.0 --edge-x-m -0.0125 -o ${WORK}/g.json)
+expect(2 "--taps = -5 must be in" ${PVDFKIT} ${ID_ARGS} --taps -5)
+expect(2 "--beta = -3 must be in" ${PVDFKIT} ${ID_ARGS} --beta -3)
+expect(2 "--resolution-m = -1 must be in" ${PVDFKIT} ${ID_ARGS} --resolution-m -1)
+expect(2 "--low-cut-m = 1e\\+300 must be in" ${PVDFKIT} ${ID_ARGS} --low-cut-m 1e300)
+expect(2 "--delay-samples = 9000 must be in" ${PVDFKIT} ${ID_ARGS} --delay-samples 9000)
+expect(2 "--beta-corner-m = -0.001 must be in" ${PVDFKIT} ${ID_ARGS} --beta-corner-m -0.001)
+expect(2 "--force FZ = 1e\\+09 must be in" ${PVDFKIT} restore identify --scan ${WORK}/a.csv --force 0.6,1e9 --edge-x-m -0.0125
+       --scan ${WORK}/b.csv --force 0.2,1.0 --edge-x-m -0.0125 -o ${WORK}/g.json)
+expect(2 "--edge-x-m = 1e\\+06 must be in" ${PVDFKIT} restore identify --scan ${WORK}/a.csv --force 0.6,0.9 --edge-x-m 1e6
+       --scan ${WORK}/b.csv --force 0.2,1.0 --edge-x-m -0.0125 -o ${WORK}/g.json)
+# The default identify (no beta flags) reports the chosen beta and why.
+expect(0 "beta \\(predicted\\) = .*predicted at the identification forces" ${PVDFKIT} ${ID_ARGS})
+# A scan at another speed (sample spacing) is refused unless resampled onto the filter's grid.
+file(READ ${EX}/edge_a.json text)
+string(REGEX REPLACE "\"speed_m_per_s\": [0-9.e+-]+" "\"speed_m_per_s\": 0.06" text "${text}")
+file(WRITE ${WORK}/fast.json "${text}")
+expect(0 "simulated" ${PVDFKIT} restore simulate ${WORK}/fast.json -o ${WORK}/fast.csv)
+expect(2 "resample" ${PVDFKIT} restore apply ${WORK}/f.json ${WORK}/fast.csv -o ${WORK}/y.csv)
+expect(0 "resampled" ${PVDFKIT} restore apply ${WORK}/f.json ${WORK}/fast.csv -o ${WORK}/y.csv --resample)
