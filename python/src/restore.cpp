@@ -188,7 +188,7 @@ resolution_m: target Gaussian FWHM (m, 0 = none); low_cut_wavelength_m: damp lon
           py::gil_scoped_release release;
           if (block_samples == 0) return r::restore_scan(filter, scan, mu_threshold_N);
           // Streaming: blocks as a real-time loop would push them; forces equal the offline ones after flush.
-          r::RestoredForces forces = r::restore_scan(filter, scan, mu_threshold_N);
+          r::RestoredForces checked = r::restore_scan(filter, scan, mu_threshold_N);  // validates spacing
           r::StreamingRestorer s(filter, block_samples);
           std::vector<double> fx, fz;
           for (std::size_t i = 0; i < scan.size(); i += block_samples) {
@@ -198,9 +198,15 @@ resolution_m: target Gaussian FWHM (m, 0 = none); low_cut_wavelength_m: damp lon
           s.flush(fx, fz);
           fx.resize(scan.size());
           fz.resize(scan.size());
+          // The streamed forces per sample get the same finishing as the offline path: flat-surface
+          // level, line forces in N/m and mu.
+          r::RestoredForces forces;
+          forces.x_m = checked.x_m;
           forces.fx_N = fx;
           forces.fz_N = fz;
-          r::friction_coefficient(forces, forces.mu_threshold_N);
+          r::RestoreOptions options;
+          options.mu_threshold_N = mu_threshold_N;
+          r::finish_forces(filter, forces, options);
           return forces;
         },
         py::arg("filter"), py::arg("scan"), py::arg("mu_threshold_N") = -1.0, py::arg("block_samples") = std::size_t(0),
