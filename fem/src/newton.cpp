@@ -3,6 +3,8 @@
 // potential, and the artificial-pretension continuation from the flat film.
 #include "film_solver.hpp"
 
+#include "pvdf/core/membrane_scaling.hpp"
+
 #include <deal.II/lac/precondition.h>
 #include <deal.II/lac/solver_control.h>
 #include <deal.II/lac/solver_gmres.h>
@@ -220,12 +222,13 @@ FilmSolver::LineSearch FilmSolver::line_search(Model model, double artificial_te
   return ls;
 }
 
-// A tension scale for the continuation: Hencky-type membrane estimate
-// N* = 2·E·h·(F/(E·h·a))^(2/3): a few times the membrane forces of a clamped membrane carrying F,
-// so that the first (tensioned, linear) step undershoots the deflection rather than overshoots it.
+// A tension scale for the continuation: twice the Hencky-type membrane force scale
+// N* = 2·E·h·(F/(E·h·a))^(2/3) (pvdf/core/membrane_scaling.hpp): a few times the membrane forces
+// of a clamped membrane carrying F, so that the first (tensioned, linear) step undershoots the
+// deflection rather than overshoots it.
 double FilmSolver::estimate_tension() const {
   const double E = std::sqrt(membrane_C_.c[0][0] * membrane_C_.c[1][1]);  // h·E-like (N/m)
-  return 2.0 * E * std::pow(total_force_ / (E * radius_), 2.0 / 3.0);
+  return 2.0 * pvdf::membrane_force_scale_N_per_m(E, total_force_, radius_);
 }
 
 // From the flat, stress-free state the membrane tangent has no transverse stiffness (only the

@@ -19,8 +19,10 @@ inline double membrane_deflection_factor(double force_ratio) { return std::cbrt(
 /// Membrane force scale N ~ E·h·(F/(E·h·a))^(2/3) (N/m) of a clamped membrane of radius a (m) and
 /// membrane stiffness E·h (N/m) carrying F (N): the size of the membrane forces under a probe,
 /// up to an O(1) factor.
+/// (std::pow here, as the solver's continuation has always computed it: a last-bit change of its
+/// starting tension changes the Newton path.)
 inline double membrane_force_scale_N_per_m(double stiffness_N_per_m, double force_N, double radius_m) {
-  return stiffness_N_per_m * membrane_charge_factor(force_N / (stiffness_N_per_m * radius_m));
+  return stiffness_N_per_m * std::pow(force_N / (stiffness_N_per_m * radius_m), 2.0 / 3.0);
 }
 
 }  // namespace pvdf
