@@ -1,5 +1,6 @@
-// Internal to pvdf::fem: the fixed-mesh probe solver behind pvdf::fem::ProbeSweep. Implemented
-// in solver.cc (the one deal.II translation unit); this header exposes std/pvdf types only.
+// Internal to pvdf::fem, free of deal.II: what ProbeSweep (probe_sweep.cpp) uses from the solver —
+// the `auto` model rule (model_choice.cpp) and the fixed-mesh probe solver (sweep_engine.cpp).
+// The solver's own parts share film_solver.hpp, which includes this header.
 #pragma once
 
 #include "pvdf/core/scene.hpp"
@@ -63,8 +64,31 @@ class SweepEngine {
   std::unique_ptr<Impl> impl_;
 };
 
-/// The `auto` rule of pvdf::fem::solve: non-empty reason when bending can be neglected for the
-/// scene's loads at `options.tolerance` (then: large-rotation membrane without bending).
-std::string bending_negligible_reason(const pvdf::Scene& scene, const Options& options);
+/// What the `auto` rule decided.
+struct ModelChoice {
+  /// Kinematics; `automatic` = still open: chosen by trial solves on the solve's first mesh
+  /// (FilmSolver::choose_kinematics, only when no force range is given).
+  Model model = Model::automatic;
+  bool include_bending = true;
+  std::string reason;  ///< why (empty while the kinematics are open)
+};
+
+/// Probe forces a sweep serves (N), for the `auto` rule.
+struct ForceRange {
+  double smallest_N = 0;
+  double largest_N = 0;
+};
+
+/// The `auto` rule (docs/fem.md §2), the one place it is decided, for pvdf::fem::solve and
+/// ProbeSweep. A requested model is returned as is. Otherwise:
+///  1. a priori: bending is negligible for the loads (boundary layer sqrt(D/N) against the probe
+///     radius) -> large-rotation membrane without bending;
+///  2. on the first mesh, by trial solves: linear plate if its w_max/h <= 0.5·sqrt(tolerance), else
+///     von Kármán if it agrees with large rotation within tolerance/4, else large rotation.
+/// Without `sweep`, step 1 uses the scene's loads and step 2 is left to the solve (model stays
+/// `automatic`). With `sweep` (a centred probe), bending is judged at the smallest force (its
+/// layer is widest there), step 2 runs now at the largest force, and a film whose bending is
+/// negligible at the largest force only keeps bending with large-rotation kinematics.
+ModelChoice choose_model(const pvdf::Scene& scene, const Options& options, const ForceRange* sweep = nullptr);
 
 }  // namespace pvdf::fem::detail

@@ -1,7 +1,10 @@
-// Electrode charge formulas (seed 001 eq. 2 and its tensor-transformation correction).
+// Electrode charge formulas (seed 001 eq. 2 and its tensor-transformation correction). The charge
+// law itself lives in pvdf/core/piezo.hpp (the solver uses the same function); this file sums a
+// sampled field and compares the printed eq. 2 with the tensor form.
 #include "pvdf/mapping/charge.hpp"
 
 #include "pvdf/core/error.hpp"
+#include "pvdf/core/piezo.hpp"
 
 #include <cmath>
 #include <string>
@@ -13,7 +16,8 @@ double electrode_charge_C(const MembraneForceSample* samples, std::size_t n_samp
   if (!(thickness_m > 0) || !std::isfinite(thickness_m)) {
     throw InputError("electrode charge: thickness_m = " + std::to_string(thickness_m) + " must be finite and > 0");
   }
-  // Σ w (d31 N11 + d32 N22) / h, accumulated as two sums to keep the round-off small.
+  // Σ w (d31 N11 + d32 N22) / h, accumulated as two sums (∫N11 dA, ∫N22 dA) to keep the
+  // round-off small; the law is linear, so it applies to the integrals directly.
   double sum11 = 0, sum22 = 0;
   for (std::size_t q = 0; q < n_samples; ++q) {
     if (!(samples[q].weight_m2 >= 0)) {
@@ -23,7 +27,7 @@ double electrode_charge_C(const MembraneForceSample* samples, std::size_t n_samp
     sum11 += samples[q].weight_m2 * samples[q].N11_N_per_m;
     sum22 += samples[q].weight_m2 * samples[q].N22_N_per_m;
   }
-  return (d31_C_per_N * sum11 + d32_C_per_N * sum22) / thickness_m;
+  return pvdf::piezo_charge_density_C_per_m2(sum11, sum22, thickness_m, d31_C_per_N, d32_C_per_N);
 }
 
 double electrode_charge_C(const std::vector<MembraneForceSample>& samples, double thickness_m, double d31_C_per_N,
@@ -41,7 +45,8 @@ double charge_radial_tensor_C(double d31_C_per_N, double d32_C_per_N, double bet
   const double c = std::cos(beta_rad), s = std::sin(beta_rad);
   const double sigma11 = sigma_r_Pa * c * c + sigma_theta_Pa * s * s;
   const double sigma22 = sigma_r_Pa * s * s + sigma_theta_Pa * c * c;
-  return (d31_C_per_N * sigma11 + d32_C_per_N * sigma22) * area_m2;
+  // The charge law with stresses: N = σ·h, so with h = 1 the resultants are the stresses.
+  return pvdf::piezo_charge_C(area_m2, sigma11, sigma22, 1.0, d31_C_per_N, d32_C_per_N);
 }
 
 }  // namespace pvdf::mapping

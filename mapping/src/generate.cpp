@@ -162,6 +162,11 @@ using Block = std::vector<Task>;
 struct Layout {
   std::size_t nf = 0, ne = 0;
   std::size_t size() const { return 1 + nf * (3 + ne); }
+  // Fields of a level's block, at level(rec, f) + field (charges: + charges + k).
+  enum Field : std::size_t { status = 0, provenance = 1, deflection = 2, charges = 3 };
+  static constexpr std::size_t point_index = 0;  // rec[point_index] = j*nx + i
+  double* level(double* rec, std::size_t f) const { return rec + 1 + f * (3 + ne); }
+  const double* level(const double* rec, std::size_t f) const { return rec + 1 + f * (3 + ne); }
 };
 
 std::uint64_t fnv1a(const std::string& text) {
@@ -472,14 +477,14 @@ void Generator::solve_block(fem::ProbeSweep& sweep, const Block& block, std::vec
     }
     const double x = map_.x_m[task.i], y = map_.y_m[task.j];
     std::vector<double> rec(layout_.size(), nan);
-    rec[0] = double(task.j * grid_.nx + task.i);
+    rec[Layout::point_index] = double(task.j * grid_.nx + task.i);
     auto put = [&](std::size_t f, const fem::ProbeSolution* s, std::uint8_t prov) {
-      double* r = rec.data() + 1 + f * (3 + ne);
+      double* r = layout_.level(rec.data(), f);
       const bool ok = s && fem::usable(s->status) && s->charge_C.size() == ne;
-      r[0] = double(ok ? PointStatus::ok : PointStatus::not_converged);
-      r[1] = prov;
-      r[2] = ok ? s->deflection_at_load_m : nan;
-      for (std::size_t k = 0; k < ne; ++k) r[3 + k] = ok ? s->charge_C[k] : nan;
+      r[Layout::status] = double(ok ? PointStatus::ok : PointStatus::not_converged);
+      r[Layout::provenance] = prov;
+      r[Layout::deflection] = ok ? s->deflection_at_load_m : nan;
+      for (std::size_t k = 0; k < ne; ++k) r[Layout::charges + k] = ok ? s->charge_C[k] : nan;
       if (!ok && s) {
         std::lock_guard<std::mutex> lock(mutex_);
         if (first_failure_.empty()) {
@@ -537,15 +542,15 @@ void Generator::solve_block(fem::ProbeSweep& sweep, const Block& block, std::vec
 }
 
 void Generator::store_record(const double* rec, bool resumed) {
-  const std::size_t p = std::size_t(rec[0]);
+  const std::size_t p = std::size_t(rec[Layout::point_index]);
   const std::size_t ne = layout_.ne;
   for (std::size_t f = 0; f < layout_.nf; ++f) {
-    const double* r = rec + 1 + f * (3 + ne);
+    const double* r = layout_.level(rec, f);
     const std::size_t pt = f * grid_.nx * grid_.ny + p;
-    map_.status[pt] = std::uint8_t(r[0]);
-    provenance_[pt] = std::uint8_t(r[1]);
-    map_.deflection_at_load_m[pt] = r[2];
-    for (std::size_t k = 0; k < ne; ++k) map_.charge_C[pt * ne + k] = r[3 + k];
+    map_.status[pt] = std::uint8_t(r[Layout::status]);
+    provenance_[pt] = std::uint8_t(r[Layout::provenance]);
+    map_.deflection_at_load_m[pt] = r[Layout::deflection];
+    for (std::size_t k = 0; k < ne; ++k) map_.charge_C[pt * ne + k] = r[Layout::charges + k];
     if (resumed) ++n_resumed_points_;
   }
   known_[p] = 1;
@@ -556,9 +561,9 @@ void Generator::commit(const std::vector<double>& records, std::size_t n_positio
   for (std::size_t r = 0; r < records.size(); r += layout_.size()) {
     const double* rec = records.data() + r;
     store_record(rec, false);
-    this_run_[std::size_t(rec[0])] = 1;
+    this_run_[std::size_t(rec[Layout::point_index])] = 1;
     for (std::size_t f = 0; f < layout_.nf; ++f) {
-      if (rec[1 + f * (3 + layout_.ne) + 1] == provenance::solved) ++fem_points_solved_;
+      if (layout_.level(rec, f)[Layout::provenance] == provenance::solved) ++fem_points_solved_;
     }
   }
   progress_done_ += n_positions;
@@ -743,11 +748,11 @@ ChargeMap Generator::run(MapReport& report) {
       const std::vector<double> data = read_checkpoint(file, hash_, layout_);
       for (std::size_t r = 0; r < data.size(); r += layout_.size()) {
         const double* rec = data.data() + r;
-        const double pd = rec[0];
+        const double pd = rec[Layout::point_index];
         const bool index_ok = pd >= 0 && pd < double(n) && pd == std::floor(pd);
         bool values_ok = index_ok && map_.mask[std::size_t(pd)] != 0;
         for (std::size_t f = 0; values_ok && f < nf; ++f) {
-          const double st = rec[1 + f * (3 + ne)];
+          const double st = layout_.level(rec, f)[Layout::status];
           values_ok = st == double(PointStatus::ok) || st == double(PointStatus::not_converged);
         }
         if (!values_ok) throw InputError(file + ": checkpoint record " + std::to_string(r / layout_.size()) + " is invalid; delete the checkpoint");

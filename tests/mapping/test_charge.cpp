@@ -1,7 +1,9 @@
-// Charge formulas: the quadrature form against the uniform-stress oracle, and seed 001 eq. 2
+// Charge formulas: the charge law of pvdf/core/piezo.hpp (used by the solver) against numbers
+// worked by hand, the quadrature form against the uniform-stress oracle, and seed 001 eq. 2
 // against the tensor transformation (computed independently with pvdf::stress_to_material).
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/material.hpp"
+#include "pvdf/core/piezo.hpp"
 #include "pvdf/mapping/charge.hpp"
 
 #include <catch2/catch.hpp>
@@ -12,6 +14,21 @@
 #include <random>
 
 using namespace pvdf::mapping;
+
+TEST_CASE("the charge law Q = A (d31 N11 + d32 N22) / h against hand-worked numbers", "[mapping][charge]") {
+  // A = 4 mm², h = 25 µm, d31 = 6.5 pC/N, d32 = 0.65 pC/N, N11 = 120 N/m, N22 = -40 N/m:
+  // d31 N11 + d32 N22 = 7.8e-10 - 2.6e-11 = 7.54e-10 C/m; / h = 3.016e-5 C/m²; × A = 1.2064e-10 C.
+  CHECK(pvdf::piezo_charge_density_C_per_m2(120.0, -40.0, 25e-6, 6.5e-12, 0.65e-12) == Approx(3.016e-5).epsilon(1e-14));
+  CHECK(pvdf::piezo_charge_C(4e-6, 120.0, -40.0, 25e-6, 6.5e-12, 0.65e-12) == Approx(1.2064e-10).epsilon(1e-14));
+  // Compression along the draw gives charge of the opposite sign; the shear N12 is not an input.
+  CHECK(pvdf::piezo_charge_C(4e-6, -120.0, 40.0, 25e-6, 6.5e-12, 0.65e-12) == Approx(-1.2064e-10).epsilon(1e-14));
+  // Halving the thickness at the same resultants doubles the stress and the charge.
+  CHECK(pvdf::piezo_charge_C(4e-6, 120.0, -40.0, 12.5e-6, 6.5e-12, 0.65e-12) == Approx(2.4128e-10).epsilon(1e-14));
+  // The quadrature form over a uniform field is the law itself (one home for the formula).
+  std::vector<MembraneForceSample> samples(5, MembraneForceSample{0.8e-6, 120.0, -40.0});
+  CHECK(electrode_charge_C(samples, 25e-6, 6.5e-12, 0.65e-12) ==
+        Approx(pvdf::piezo_charge_C(4e-6, 120.0, -40.0, 25e-6, 6.5e-12, 0.65e-12)).epsilon(1e-14));
+}
 
 TEST_CASE("a uniformly stressed electrode collects d31*sigma11*area + d32*sigma22*area", "[mapping][charge]") {
   const double area = 4e-6, h = 25e-6, d31 = 6.5e-12, d32 = 0.65e-12;

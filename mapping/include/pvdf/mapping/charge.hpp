@@ -1,5 +1,6 @@
 // Electrode charge from membrane stress: the tensor formula Q = ∫(d31·σ11 + d32·σ22) dA over a
-// sampled field (what the FEM side calls), and seed 001 eq. 2 as printed, for comparison.
+// sampled field, and seed 001 eq. 2 as printed, for comparison. The law itself is
+// pvdf::piezo_charge_C (pvdf/core/piezo.hpp), which the solver uses for its electrode charges.
 #pragma once
 
 #include <cstddef>

@@ -1,5 +1,5 @@
 // ProbeSweep: many single-probe solves on one fixed mesh (docs/bench-fem.md, "ProbeSweep").
-// The setup picks the model (the `auto` rule of solve()), one mesh graded to the electrodes and
+// The setup picks the model (the `auto` rule, model_choice.cpp), one mesh graded to the electrodes and
 // nowhere coarser than a size that serves every probe position, checks the electrode charges on
 // it against direct solves at a few probe positions, and keeps DOFs, sparsity and the symbolic
 // factorization. Each probe solve re-integrates the load exactly and warm-starts Newton from a
@@ -51,6 +51,95 @@ double charge_difference(const std::vector<double>& q, const std::vector<double>
   return d;
 }
 
+// Step 2 of the setup: one mesh for every probe position, nowhere coarser than `region` (8 probe
+// radii or a/6), electrodes at half their side, graded away from them. Measured on seed 001
+// (docs/bench-fem.md): these sizes keep the charges within 0.7 % of once-refined direct solves at
+// 9 probe positions on, beside, between and far from the electrodes (grading 0.5 brings that to
+// 0.36 % at twice the DOFs). Smaller tolerances shrink the sizes and the grading; the setup
+// check decides. Sizes given in the options win.
+detail::SweepMeshSizes initial_mesh_sizes(const pvdf::Scene& scene, const SweepOptions& options) {
+  const double tolerance = options.solver.tolerance;
+  const double a = scene.membrane.outline.characteristic_radius_m();
+  const double shrink = std::clamp(std::sqrt(tolerance / 0.01), 0.25, 1.0);
+  detail::SweepMeshSizes sizes;
+  sizes.region_size_m = std::min(a / 6.0, 8.0 * scene.probe.radius_m) * shrink;
+  sizes.electrode_size_m = (scene.electrodes.empty() ? sizes.region_size_m : 0.5 * smallest_electrode_side(scene)) * shrink;
+  sizes.grading = std::clamp(2.0 * tolerance / 0.01, 0.5, 2.0);
+  if (options.region_size_m > 0) sizes.region_size_m = options.region_size_m;
+  if (options.electrode_size_m > 0) sizes.electrode_size_m = options.electrode_size_m;
+  if (options.grading > 0) sizes.grading = options.grading;
+  return sizes;
+}
+
+// Step 3: check positions, each inside the served region (at least `margin` from the rim): the
+// film centre, the first electrode's centre, next to the last electrode (4 probe radii beyond
+// its edge, away from the centre: the probe then sits on the coarser cells between electrodes,
+// where the sweep mesh's error peaks, measured), and a far point opposite the first electrode.
+std::vector<std::array<double, 2>> check_positions(const pvdf::Scene& scene, double margin, int n_checks) {
+  const auto& outline = scene.membrane.outline;
+  std::vector<std::array<double, 2>> candidates{{0.0, 0.0}};
+  std::array<double, 2> dir{0.0, -1.0};
+  if (!scene.electrodes.empty()) {
+    const auto c = scene.electrodes.front().center_m;
+    candidates.push_back({c[0], c[1]});
+    const double n = std::hypot(c[0], c[1]);
+    if (n > 0) dir = {-c[0] / n, -c[1] / n};
+    const auto& last = scene.electrodes.back();
+    const double nl = std::hypot(last.center_m[0], last.center_m[1]);
+    const std::array<double, 2> out = nl > 0 ? std::array<double, 2>{last.center_m[0] / nl, last.center_m[1] / nl}
+                                             : std::array<double, 2>{1.0, 0.0};
+    double half = 0;
+    for (const auto& v : last.outline(16))
+      half = std::max(half, std::hypot(v[0] - last.center_m[0], v[1] - last.center_m[1]));
+    const double d = half + 4 * scene.probe.radius_m;
+    candidates.push_back({last.center_m[0] + d * out[0], last.center_m[1] + d * out[1]});
+  }
+  const double reach = std::max(0.0, outline.inscribed_radius_m() - margin);
+  candidates.push_back({0.7 * reach * dir[0], 0.7 * reach * dir[1]});
+  std::vector<std::array<double, 2>> checks;
+  for (const auto& p : candidates)
+    if (outline.contains(p, margin) && static_cast<int>(checks.size()) < n_checks) checks.push_back(p);
+  return checks;
+}
+
+/// The sweep mesh against direct solves (pvdf::fem::solve on meshes graded to each probe) at the
+/// check positions: the largest relative charge and deflection differences.
+struct CheckOutcome {
+  double charge_error = 0;      // max_k |dQ_k| / max_k |Q_k|, worst position
+  double deflection_error = 0;  // |w/w_direct − 1|, worst position
+  std::string where;            // worst position (or the failed check)
+  bool failed = false;          // a check solve did not converge
+};
+
+CheckOutcome run_checks(detail::SweepEngine& engine, const pvdf::Scene& scene, const Options& solver_options,
+                        Model model, bool bending, const std::vector<std::array<double, 2>>& checks, double force_N) {
+  CheckOutcome c;
+  for (const auto& p : checks) {
+    std::vector<double> state;
+    const detail::EngineSolution s = engine.solve(p[0], p[1], force_N, state, false);
+    Options o = solver_options;
+    o.model = model;
+    o.include_bending = bending;
+    o.adaptive = false;
+    const Result r = pvdf::fem::solve(pvdf::with_probe_load(scene, p[0], p[1], force_N), o);
+    if (!usable(s.status) || !usable(r.summary.status)) {
+      c.failed = true;
+      c.where = "check solve at (" + fmt(p[0]) + ", " + fmt(p[1]) + ") m did not converge";
+      continue;
+    }
+    std::vector<double> ref;
+    for (const auto& e : r.electrodes) ref.push_back(e.charge_C);
+    const double d = charge_difference(s.charge_C, ref);
+    if (d >= c.charge_error) {
+      c.charge_error = d;
+      c.where = "(" + fmt(p[0]) + ", " + fmt(p[1]) + ") m";
+    }
+    if (r.deflection_at_load_m != 0)
+      c.deflection_error = std::max(c.deflection_error, std::abs(s.deflection_at_load_m / r.deflection_at_load_m - 1));
+  }
+  return c;
+}
+
 }  // namespace
 
 struct ProbeSweep::Impl {
@@ -60,6 +149,10 @@ struct ProbeSweep::Impl {
   std::unique_ptr<detail::SweepEngine> engine;
 };
 
+// Setup, in four steps: check the input; choose the model (the `auto` rule over the force
+// range); size one mesh for every probe position; build it and measure its charge error against
+// direct solves at a few positions, halving the sizes (at most twice) until the error meets the
+// tolerance.
 ProbeSweep::ProbeSweep(const pvdf::Scene& scene, const SweepOptions& options) : impl_(std::make_unique<Impl>()) {
   const auto t0 = Clock::now();
   Impl& im = *impl_;
@@ -84,110 +177,23 @@ ProbeSweep::ProbeSweep(const pvdf::Scene& scene, const SweepOptions& options) : 
   const Options& so = options.solver;
   if (!(so.tolerance > 0)) throw pvdf::InputError("fem options: tolerance = " + fmt(so.tolerance) + " must be > 0");
 
-  // 1. Model. Bending matters most at the smallest force (its boundary layer sqrt(D/N) grows as
-  // N ∝ F^(2/3) falls), so the `auto` bending rule is evaluated there.
-  Model model = so.model;
-  bool bending = so.include_bending;
-  if (so.model == Model::automatic) {
-    const std::string reason = detail::bending_negligible_reason(pvdf::with_probe_load(scene, 0, 0, f_min), so);
-    if (!reason.empty()) {
-      model = Model::large_rotation;
-      bending = false;
-      im.setup.model_reason = reason + " (evaluated at the smallest force, " + fmt(f_min) + " N)";
-    } else {
-      // Bending kept: the kinematics from a direct auto solve at the largest force, centred probe.
-      Options o = so;
-      o.adaptive = false;
-      const Result r = pvdf::fem::solve(pvdf::with_probe_load(scene, 0, 0, f_max), o);
-      if (usable(r.summary.status)) {
-        model = r.summary.model;
-        im.setup.model_reason = "auto solve at " + fmt(f_max) + " N, centred probe: " + r.summary.model_reason;
-      } else {
-        model = Model::large_rotation;
-        im.setup.model_reason = "auto solve at " + fmt(f_max) + " N did not converge (" + r.summary.message +
-                                "); using the most general kinematics, large rotation with bending";
-      }
-    }
-  } else {
-    im.setup.model_reason = "requested";
-  }
+  // 1. Model: the `auto` rule over the force range (bending judged at the smallest force, where
+  // its boundary layer sqrt(D/N) is widest as N ∝ F^(2/3) falls; kinematics at the largest).
+  const detail::ForceRange range{f_min, f_max};
+  const detail::ModelChoice choice = detail::choose_model(scene, so, &range);
+  const Model model = choice.model;
+  const bool bending = choice.include_bending;
   im.setup.model = model;
+  im.setup.model_reason = choice.reason;
   im.setup.include_bending = bending;
 
-  // 2. One mesh for every probe position: nowhere coarser than `region` (8 probe radii or a/6),
-  // electrodes at half their side, graded away from them. Measured on seed 001 (docs/bench-fem.md):
-  // these sizes keep the charges within 0.7 % of once-refined direct solves at 9 probe positions
-  // on, beside, between and far from the electrodes (grading 0.5 brings that to 0.36 % at twice
-  // the DOFs). Smaller tolerances shrink the sizes and the grading; the check below decides.
-  const double a = scene.membrane.outline.characteristic_radius_m();
-  const double shrink = std::clamp(std::sqrt(so.tolerance / 0.01), 0.25, 1.0);
-  detail::SweepMeshSizes sizes;
-  sizes.region_size_m = std::min(a / 6.0, 8.0 * scene.probe.radius_m) * shrink;
-  sizes.electrode_size_m = (scene.electrodes.empty() ? sizes.region_size_m : 0.5 * smallest_electrode_side(scene)) * shrink;
-  sizes.grading = std::clamp(2.0 * so.tolerance / 0.01, 0.5, 2.0);
-  if (options.region_size_m > 0) sizes.region_size_m = options.region_size_m;
-  if (options.electrode_size_m > 0) sizes.electrode_size_m = options.electrode_size_m;
-  if (options.grading > 0) sizes.grading = options.grading;
-
-  // 3. Check positions, each inside the served region: the film centre, the first electrode's
-  // centre, next to the last electrode (4 probe radii beyond its edge, away from the centre: the
-  // probe then sits on the coarser cells between electrodes, where the sweep mesh's error peaks,
-  // measured), and a far point opposite the first electrode.
-  std::vector<std::array<double, 2>> checks;
-  {
-    const auto& outline = scene.membrane.outline;
-    const double margin = im.options.rim_margin_m;
-    std::vector<std::array<double, 2>> candidates{{0.0, 0.0}};
-    std::array<double, 2> dir{0.0, -1.0};
-    if (!scene.electrodes.empty()) {
-      const auto c = scene.electrodes.front().center_m;
-      candidates.push_back({c[0], c[1]});
-      const double n = std::hypot(c[0], c[1]);
-      if (n > 0) dir = {-c[0] / n, -c[1] / n};
-      const auto& last = scene.electrodes.back();
-      const double nl = std::hypot(last.center_m[0], last.center_m[1]);
-      const std::array<double, 2> out = nl > 0 ? std::array<double, 2>{last.center_m[0] / nl, last.center_m[1] / nl}
-                                               : std::array<double, 2>{1.0, 0.0};
-      double half = 0;
-      for (const auto& v : last.outline(16))
-        half = std::max(half, std::hypot(v[0] - last.center_m[0], v[1] - last.center_m[1]));
-      const double d = half + 4 * scene.probe.radius_m;
-      candidates.push_back({last.center_m[0] + d * out[0], last.center_m[1] + d * out[1]});
-    }
-    const double reach = std::max(0.0, outline.inscribed_radius_m() - margin);
-    candidates.push_back({0.7 * reach * dir[0], 0.7 * reach * dir[1]});
-    for (const auto& p : candidates)
-      if (outline.contains(p, margin) && static_cast<int>(checks.size()) < options.n_setup_checks) checks.push_back(p);
-  }
-
+  // 2.–4. Mesh sizes, check positions, build and measure.
+  detail::SweepMeshSizes sizes = initial_mesh_sizes(scene, options);
+  const std::vector<std::array<double, 2>> checks =
+      check_positions(scene, im.options.rim_margin_m, options.n_setup_checks);
   for (int attempt = 0;; ++attempt) {
     im.engine = std::make_unique<detail::SweepEngine>(scene, so, model, bending, sizes);
-    double err = 0, err_w = 0;
-    std::string where;
-    bool failed = false;
-    for (const auto& p : checks) {
-      std::vector<double> state;
-      const detail::EngineSolution s = im.engine->solve(p[0], p[1], f_max, state, false);
-      Options o = so;
-      o.model = model;
-      o.include_bending = bending;
-      o.adaptive = false;
-      const Result r = pvdf::fem::solve(pvdf::with_probe_load(scene, p[0], p[1], f_max), o);
-      if (!usable(s.status) || !usable(r.summary.status)) {
-        failed = true;
-        where = "check solve at (" + fmt(p[0]) + ", " + fmt(p[1]) + ") m did not converge";
-        continue;
-      }
-      std::vector<double> ref;
-      for (const auto& e : r.electrodes) ref.push_back(e.charge_C);
-      const double d = charge_difference(s.charge_C, ref);
-      if (d >= err) {
-        err = d;
-        where = "(" + fmt(p[0]) + ", " + fmt(p[1]) + ") m";
-      }
-      if (r.deflection_at_load_m != 0)
-        err_w = std::max(err_w, std::abs(s.deflection_at_load_m / r.deflection_at_load_m - 1));
-    }
+    const CheckOutcome c = run_checks(*im.engine, scene, so, model, bending, checks, f_max);
     im.setup.n_dofs = im.engine->n_dofs();
     im.setup.n_cells = im.engine->n_cells();
     if (checks.empty()) {
@@ -199,19 +205,20 @@ ProbeSweep::ProbeSweep(const pvdf::Scene& scene, const SweepOptions& options) : 
     // once-refined direct solves peaked at 2.4x the check maximum (docs/bench-fem.md), hence the
     // factor (the checks' own references are direct solves with error <= 1.4e-3).
     constexpr double worst_case_factor = 2.5;
-    im.setup.estimated_relative_error = failed ? 1.0 : std::min(1.0, worst_case_factor * err);
+    im.setup.estimated_relative_error = c.failed ? 1.0 : std::min(1.0, worst_case_factor * c.charge_error);
     // The deflection under the probe is resolved far worse than the charges (the mesh is graded
     // to the electrodes, not to the probe): on seed 001 five map nodes off the checks against
     // direct adaptive solves were up to 14x the check maximum (9.4 % at (-36, 12) mm against
     // 0.67 %; docs/map-generation.md), hence its own factor.
     constexpr double deflection_worst_case_factor = 15.0;
-    im.setup.estimated_deflection_relative_error = failed ? 1.0 : std::min(1.0, deflection_worst_case_factor * err_w);
+    im.setup.estimated_deflection_relative_error =
+        c.failed ? 1.0 : std::min(1.0, deflection_worst_case_factor * c.deflection_error);
     im.setup.error_estimator =
         "max over " + std::to_string(checks.size()) + " probe positions (centre, on an electrode, beside one, far) at " +
         fmt(f_max) + " N of max_k |dQ_k| / max_k |Q_k| against direct solves on meshes graded to each probe (" +
-        fmt(err) + ", worst at " + where + "), times " + fmt(worst_case_factor) +
-        " for positions between the checks (calibrated on seed 001)" + (failed ? "; a check solve failed" : "");
-    if ((err <= so.tolerance && !failed) || attempt == 2) break;
+        fmt(c.charge_error) + ", worst at " + c.where + "), times " + fmt(worst_case_factor) +
+        " for positions between the checks (calibrated on seed 001)" + (c.failed ? "; a check solve failed" : "");
+    if ((c.charge_error <= so.tolerance && !c.failed) || attempt == 2) break;
     sizes.region_size_m *= 0.5;
     sizes.electrode_size_m *= 0.5;
   }

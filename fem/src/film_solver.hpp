@@ -1,0 +1,289 @@
+// Internal to pvdf::fem: the film solver (FilmSolver) and the small types its parts share. One
+// class, one mesh, implemented in one file per stage of the method (docs/fem.md):
+//   setup.cpp        scene checks, the initial mesh, DOFs, constraints, sparsity
+//   assembly.cpp     bending operator (C0 interior penalty), load vector, membrane residual/tangent
+//   newton.cpp       sparse linear solves, Newton with line search, artificial-pretension continuation
+//   model_choice.cpp the `auto` rule (bending negligible? linear / von Kármán / large rotation)
+//   adaptivity.cpp   output vector, mesh refinement, the output-error estimate
+//   outputs.cpp      electrode forces and charges, deflections, rim reaction, energy, samples
+//   vtu_output.cpp   VTU/PVD files
+//   solve.cpp        FilmSolver::run() and the public entry points (pvdf::fem::solve, names)
+//   checks.cpp       test hooks (tangent by finite differences, bending operator)
+//   sweep_engine.cpp the fixed-mesh probe solver behind pvdf::fem::ProbeSweep
+// deal.II appears here and in those files only; public headers stay std/Eigen/pvdf.
+#pragma once
+
+#include "pvdf/fem/solver.hpp"
+
+#include "sweep_engine.hpp"
+
+#include <deal.II/base/point.h>
+#include <deal.II/base/tensor.h>
+#include <deal.II/dofs/dof_handler.h>
+#include <deal.II/fe/fe_system.h>
+#include <deal.II/fe/mapping_q.h>
+#include <deal.II/grid/manifold_lib.h>
+#include <deal.II/grid/tria.h>
+#include <deal.II/lac/affine_constraints.h>
+#include <deal.II/lac/dynamic_sparsity_pattern.h>
+#include <deal.II/lac/sparse_matrix.h>
+#include <deal.II/lac/sparsity_pattern.h>
+#include <deal.II/lac/vector.h>
+
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+
+#include <array>
+#include <chrono>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace pvdf::fem::detail {
+
+// The deal.II names the solver's parts use (a private header: kept to this namespace).
+using dealii::AffineConstraints;
+using dealii::DoFHandler;
+using dealii::DynamicSparsityPattern;
+using dealii::FESystem;
+using dealii::MappingQ;
+using dealii::Point;
+using dealii::SparseMatrix;
+using dealii::SparsityPattern;
+using dealii::TransfiniteInterpolationManifold;
+using dealii::Triangulation;
+using dealii::Vector;
+
+constexpr int dim = 2;
+using Clock = std::chrono::steady_clock;
+
+inline double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+/// A number for a message (default 4 significant digits).
+std::string fmt(double x, int precision = 4);
+
+/// Even-odd rule: is (x, y) inside the closed polygon v (vertices in order)?
+bool polygon_contains(const std::vector<pvdf::Point2>& v, double x, double y);
+/// Distance (m) from (x, y) to the polygon v; 0 inside.
+double polygon_distance(const std::vector<pvdf::Point2>& v, double x, double y);
+
+/// A load as the solver sees it.
+struct LoadCase {
+  bool probe = true;
+  Point<dim> center;
+  double radius_m = 0;
+  double force_N = 0;      // probe: exact total
+  double pressure_Pa = 0;  // uniform pressure
+};
+
+/// Plane-stress stiffness in Voigt [xx, yy, xy] (engineering shear) as a small fixed array.
+struct Stiffness3 {
+  double c[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+  std::array<double, 3> apply(const std::array<double, 3>& e) const {
+    return {c[0][0] * e[0] + c[0][1] * e[1] + c[0][2] * e[2], c[1][0] * e[0] + c[1][1] * e[1] + c[1][2] * e[2],
+            c[2][0] * e[0] + c[2][1] * e[1] + c[2][2] * e[2]};
+  }
+};
+
+/// Mid-surface kinematics at one point: H = ∇u (in-plane, H[a][b] = ∂u_a/∂x_b), g = ∇w.
+struct Kinematics {
+  double H[2][2] = {{0, 0}, {0, 0}};
+  double g[2] = {0, 0};
+};
+
+/// Membrane strain (Voigt, engineering shear) for each model (docs/fem.md eq. 2.1–2.3):
+/// linear sym H; von Kármán + ½ g⊗g; large rotation + ½ HᵀH as well.
+inline std::array<double, 3> membrane_strain(const Kinematics& k, Model model) {
+  std::array<double, 3> e{k.H[0][0], k.H[1][1], k.H[0][1] + k.H[1][0]};
+  if (model == Model::linear) return e;
+  e[0] += 0.5 * k.g[0] * k.g[0];
+  e[1] += 0.5 * k.g[1] * k.g[1];
+  e[2] += k.g[0] * k.g[1];
+  if (model == Model::large_rotation) {
+    e[0] += 0.5 * (k.H[0][0] * k.H[0][0] + k.H[1][0] * k.H[1][0]);
+    e[1] += 0.5 * (k.H[0][1] * k.H[0][1] + k.H[1][1] * k.H[1][1]);
+    e[2] += k.H[0][0] * k.H[0][1] + k.H[1][0] * k.H[1][1];
+  }
+  return e;
+}
+
+/// Where the solver stands after a Newton solve.
+struct NewtonOutcome {
+  Status status = Status::converged;
+  int iterations = 0;
+  double residual_norm = 0;
+  std::string message;
+};
+
+/// The outputs compared between meshes and models for the error estimate.
+struct OutputVector {
+  std::vector<double> forces;       // electrode mean N (material axes), 3 per electrode
+  double force_scale = 0;           // max |N| over electrodes
+  std::vector<double> deflections;  // w at each load
+  double deflection_scale = 0;
+};
+
+/// max over outputs of |a − b| / scale(a), forces and deflections each on their own scale.
+double relative_difference(const OutputVector& a, const OutputVector& b);
+
+/// One film problem on one triangulation (step-8/step-15 shape: setup, assemble, solve, refine,
+/// output). Each group of members below is implemented in the file named in its comment.
+class FilmSolver {
+ public:
+  // setup.cpp
+  FilmSolver(const pvdf::Scene& scene, const Options& options);
+  void make_grid();
+  void make_grid_from(const pvdf::mesh::FilmMesh& mesh);
+
+  // solve.cpp: the method, step by step (setup, model, refinement, outputs).
+  Result run();
+
+  // model_choice.cpp: the trial half of the `auto` rule on the current (first) mesh.
+  struct KinematicsChoice {
+    NewtonOutcome outcome;  // failure of a trial solve (status not converged) ends the solve
+    std::string where;      // which trial failed
+    Model model = Model::linear;
+    std::string reason;
+  };
+  KinematicsChoice choose_kinematics(Vector<double>& u);
+  KinematicsChoice choose_kinematics_on_first_mesh();
+
+  // checks.cpp (test hooks)
+  JacobianCheck check_jacobian(double amplitude_m, int n_directions, unsigned int seed);
+  BendingCheck check_bending(const std::array<double, 3>& coefficients, int n_directions, unsigned int seed);
+
+  // sweep_engine.cpp: one fixed mesh built without any probe load, then one probe moved over
+  // it; DOFs, sparsity and the symbolic factorization are kept.
+  void prepare_sweep();
+  void set_probe(double x_m, double y_m, double force_N);
+  NewtonOutcome solve_probe(Model model, Vector<double>& u, bool warm, int& newton_iterations, bool& warm_used);
+  void scale_state(Vector<double>& u, double inplane_factor, double w_factor) const;
+  // outputs.cpp
+  void probe_outputs(const Vector<double>& u, Model model, EngineSolution& out);
+
+  const Summary& summary() const { return summary_; }
+  unsigned int n_dofs() const { return dof_handler_.n_dofs(); }
+  unsigned int n_cells() const { return triangulation_.n_active_cells(); }
+  int n_factorizations() const { return n_factorizations_; }
+  double load_vector_s = 0;
+
+  // outputs.cpp (also used by the VTU postprocessor)
+  MembraneForce membrane_force(const Kinematics& k, const Point<dim>& x) const;
+  double charge_density(const MembraneForce& n) const;
+
+ private:
+  // setup.cpp
+  void refine_initial_mesh();
+  void set_material_ids();
+  void setup_system();
+  void copy_pattern_to_eigen();
+  void mark_rim_w_dofs();
+  void add_bending_face_couplings(DynamicSparsityPattern& dsp) const;
+
+  // assembly.cpp
+  void assemble_bending_matrix();
+  void assemble_load_vector();
+  void build_geometry_cache();
+  void assemble(const Vector<double>& u, Model model, double artificial_tension, bool want_matrix,
+                Vector<double>& residual);
+
+  // newton.cpp
+  bool solve_linear(const Vector<double>& rhs, Vector<double>& x, std::string& message, bool factorize = true);
+  NewtonOutcome newton(Model model, double artificial_tension, Vector<double>& u);
+  struct LineSearch {
+    double alpha = 1.0;        // accepted step length
+    double residual_norm = 0;  // ‖r‖ at u + alpha·du (max() = every trial non-finite)
+    double last_alpha = -1;    // the last trial assembled (r_trial and last_energy_ belong to it)
+  };
+  LineSearch line_search(Model model, double artificial_tension, const Vector<double>& u, const Vector<double>& du,
+                         double slope, double energy0, double r_norm, Vector<double>& trial, Vector<double>& r_trial);
+  double estimate_tension() const;
+  NewtonOutcome solve_from_flat(Model model, Vector<double>& u);
+
+  // adaptivity.cpp
+  OutputVector outputs(const Vector<double>& u, Model model) const;
+  void refine_mesh(Vector<double>& u);
+  NewtonOutcome refine_until_tolerance(Model model, std::string& where);
+
+  // outputs.cpp
+  void fill_result(Result& result, Model model);
+  Kinematics kinematics_at(const Vector<double>& u, const Point<dim>& p) const;
+  std::array<double, 3> electrode_mean_force(const Vector<double>& u, Model model, std::size_t k,
+                                             double* integrated_area = nullptr) const;
+  double electrode_charge(std::size_t k, const std::array<double, 3>& mean_force_material) const;
+  double rim_reaction(const Vector<double>& u, Model model);
+  double strain_energy(const Vector<double>& u, Model model) const;
+  double deflection_extremum(const Vector<double>& u) const;
+
+  // vtu_output.cpp
+  std::string write_vtu(int cycle, Model model);
+
+  // solve.cpp
+  Result zero_load_result(Clock::time_point t_start);
+  Result failure_result(const NewtonOutcome& o, const std::string& where, Clock::time_point t_start);
+  void set_final_status();
+
+  friend class MembranePostprocessor;
+
+  const pvdf::Scene& scene_;
+  Options options_;
+  double thickness_ = 0;
+  double pretension_ = 0;
+  Stiffness3 membrane_C_;  // h·Q̄
+  Stiffness3 bending_D_;   // h³/12·Q̄
+  double bending_penalty_scale_ = 0;
+  bool bending_rim_terms_ = true;  // false only in check_bending (interior terms of the operator)
+  double draw_angle_ = 0;
+  double radius_ = 0;  // characteristic film radius
+  std::vector<LoadCase> loads_;
+  std::vector<std::vector<pvdf::Point2>> electrode_polygons_;
+  double total_force_ = 0;
+
+  Triangulation<dim> triangulation_;
+  std::unique_ptr<TransfiniteInterpolationManifold<dim>> interior_manifold_;
+  std::unique_ptr<MappingQ<dim>> mapping_;
+  std::unique_ptr<FESystem<dim>> fe_;
+  DoFHandler<dim> dof_handler_;
+  AffineConstraints<double> constraints_;
+  AffineConstraints<double> hanging_constraints_;  // hanging nodes only (for the rim reaction)
+  SparsityPattern sparsity_;
+  SparseMatrix<double> tangent_;
+  SparseMatrix<double> bending_;      // condensed
+  SparseMatrix<double> bending_raw_;  // unconstrained (for rim reactions)
+  Vector<double> load_;               // condensed external force
+  Vector<double> load_raw_;           // unconstrained
+  Vector<double> solution_;
+  std::vector<bool> rim_w_dof_;
+  Vector<double> membrane_raw_;       // unconstrained membrane internal force of the last assembly
+  // Sparse direct solver: Eigen's simplicial LDLᵀ (AMD ordering, symbolic analysis once per
+  // mesh) on a copy of the symmetric tangent; UMFPACK is the fallback. (UMFPACK spends most of
+  // its time in dense BLAS kernels, slow with Debian's reference BLAS.)
+  Eigen::SparseMatrix<double> eigen_tangent_;
+  std::vector<std::ptrdiff_t> eigen_index_;
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::AMDOrdering<int>> ldlt_;
+  bool ldlt_analyzed_ = false;
+  int n_factorizations_ = 0;
+  bool ldlt_good_ = false;            // ldlt_ holds a usable factorization of the current pattern
+  // Chord steps (probe sweeps): keep the last factorized tangent while Newton contracts fast.
+  bool reuse_factorization_ = false;
+  bool chord_first_step_ = false;     // the first step of the next newton() may use the old factorization
+
+  // Per-mesh assembly cache (build_geometry_cache): scalar shape gradients [cell][q][base][2],
+  // JxW [cell][q], DOF indices [cell][i]; system_index[c·n_base + a] = local index of (component c, base a).
+  struct GeometryCache {
+    bool valid = false;
+    std::size_t n_cells = 0;
+    unsigned int n_q = 0, n_base = 0;
+    std::vector<unsigned int> system_index;
+    std::vector<double> grad, jxw;
+    std::vector<dealii::types::global_dof_index> dofs;
+  } cache_;
+  Model current_model_ = Model::linear;
+  double last_energy_ = 0;  // potential Π of the last assemble() call (J)
+  Summary summary_;
+  std::vector<std::pair<double, std::string>> pvd_records_;
+  std::vector<std::string> vtu_files_;
+};
+
+}  // namespace pvdf::fem::detail

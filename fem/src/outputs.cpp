@@ -1,0 +1,244 @@
+// Outputs of a converged state (docs/fem.md §6, §7): membrane forces in the global, material and
+// polar frames, electrode mean forces by exact-outline quadrature and their charges (the charge
+// law of pvdf/core/piezo.hpp), deflections, the rim reaction, the strain energy, sample points.
+#include "film_solver.hpp"
+
+#include "pvdf/core/error.hpp"
+#include "pvdf/core/material.hpp"
+#include "pvdf/core/piezo.hpp"
+
+#include <deal.II/base/quadrature_lib.h>
+#include <deal.II/fe/fe_values.h>
+#include <deal.II/numerics/vector_tools.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace pvdf::fem::detail {
+
+using namespace dealii;
+
+// H = ∇u and g = ∇w at a point (deal.II locates the cell).
+Kinematics FilmSolver::kinematics_at(const Vector<double>& u, const Point<dim>& p) const {
+  std::vector<Tensor<1, dim>> grads(3);
+  VectorTools::point_gradient(*mapping_, dof_handler_, u, p, grads);
+  Kinematics k;
+  for (int a = 0; a < 2; ++a) {
+    for (int b = 0; b < 2; ++b) k.H[a][b] = grads[a][b];
+    k.g[a] = grads[2][a];
+  }
+  return k;
+}
+
+// S = h·Q̄·E + N0·I at a point, in the global, material (draw angle) and polar (about the first
+// load) frames.
+MembraneForce FilmSolver::membrane_force(const Kinematics& k, const Point<dim>& x) const {
+  const std::array<double, 3> E = membrane_strain(k, current_model_);
+  std::array<double, 3> S = membrane_C_.apply(E);
+  S[0] += pretension_;
+  S[1] += pretension_;
+  MembraneForce n;
+  n.global = S;
+  const Eigen::Vector3d s(S[0], S[1], S[2]);
+  const Eigen::Vector3d m = pvdf::stress_to_material(draw_angle_) * s;
+  n.material = {m[0], m[1], m[2]};
+  const Point<dim> c = loads_.empty() ? Point<dim>() : loads_.front().center;
+  const double phi = std::atan2(x[1] - c[1], x[0] - c[0]);
+  const Eigen::Vector3d pr = pvdf::stress_to_material(phi) * s;
+  n.polar = {pr[0], pr[1], pr[2]};
+  return n;
+}
+
+// Mean membrane force over electrode k: ∫χ_k N dA / ∫χ_k dA with the exact outline χ_k, by a
+// sub-sampled (8×8 Gauss-2) quadrature on every cell near the electrode.
+std::array<double, 3> FilmSolver::electrode_mean_force(const Vector<double>& u, Model model, std::size_t k,
+                                                       double* integrated_area) const {
+  const auto& poly = electrode_polygons_[k];
+  double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
+  for (const auto& v : poly) {
+    xmin = std::min(xmin, v[0]);
+    xmax = std::max(xmax, v[0]);
+    ymin = std::min(ymin, v[1]);
+    ymax = std::max(ymax, v[1]);
+  }
+  const QIterated<dim> quadrature(QGauss<1>(2), 8);
+  FEValues<dim> fe_values(*mapping_, *fe_, quadrature, update_gradients | update_JxW_values | update_quadrature_points);
+  const FEValuesExtractors::Vector inplane(0);
+  const FEValuesExtractors::Scalar w(2);
+  std::vector<Tensor<2, dim>> grad_u(quadrature.size());
+  std::vector<Tensor<1, dim>> grad_w(quadrature.size());
+  std::array<double, 3> sum{0, 0, 0};
+  double area = 0;
+  for (const auto& cell : dof_handler_.active_cell_iterators()) {
+    const auto box = cell->bounding_box();
+    if (box.get_boundary_points().first[0] > xmax || box.get_boundary_points().second[0] < xmin ||
+        box.get_boundary_points().first[1] > ymax || box.get_boundary_points().second[1] < ymin)
+      continue;
+    fe_values.reinit(cell);
+    fe_values[inplane].get_function_gradients(u, grad_u);
+    fe_values[w].get_function_gradients(u, grad_w);
+    for (unsigned int q = 0; q < quadrature.size(); ++q) {
+      const Point<dim>& x = fe_values.quadrature_point(q);
+      if (!polygon_contains(poly, x[0], x[1])) continue;
+      Kinematics kin;
+      for (int a = 0; a < 2; ++a) {
+        kin.g[a] = grad_w[q][a];
+        for (int b = 0; b < 2; ++b) kin.H[a][b] = grad_u[q][a][b];
+      }
+      const std::array<double, 3> S = membrane_C_.apply(membrane_strain(kin, model));
+      for (int c = 0; c < 3; ++c) sum[c] += S[c] * fe_values.JxW(q);
+      area += fe_values.JxW(q);
+    }
+  }
+  if (integrated_area) *integrated_area = area;
+  if (area <= 0) return {0, 0, 0};
+  std::array<double, 3> mean{sum[0] / area + pretension_, sum[1] / area + pretension_, sum[2] / area};
+  return mean;
+}
+
+// Vertical reaction of the clamped rim (N), from the nodal force balance on the rim.
+double FilmSolver::rim_reaction(const Vector<double>& u, Model model) {
+  Vector<double> r;
+  assemble(u, model, 0.0, false, r);
+  Vector<double> internal = membrane_raw_;
+  if (options_.include_bending) {
+    Vector<double> bu(u.size());
+    bending_raw_.vmult(bu, u);
+    internal += bu;
+  }
+  // Force transmitted to the rim = Σ over rim w-DOFs of (internal − external) nodal forces,
+  // after moving the forces of hanging DOFs onto their masters (some masters lie on the rim).
+  internal -= load_raw_;
+  hanging_constraints_.condense(internal);
+  double reaction = 0;
+  for (types::global_dof_index i = 0; i < u.size(); ++i) {
+    if (rim_w_dof_[i] && !hanging_constraints_.is_constrained(i)) reaction += internal(i);
+  }
+  return -reaction;
+}
+
+// Membrane (½ S:E without the pretension's share) plus bending energy (J).
+double FilmSolver::strain_energy(const Vector<double>& u, Model model) const {
+  const QGauss<dim> quadrature(options_.fe_degree + 1);
+  FEValues<dim> fe_values(*mapping_, *fe_, quadrature, update_gradients | update_JxW_values);
+  const FEValuesExtractors::Vector inplane(0);
+  const FEValuesExtractors::Scalar w(2);
+  std::vector<Tensor<2, dim>> grad_u(quadrature.size());
+  std::vector<Tensor<1, dim>> grad_w(quadrature.size());
+  double energy = 0;
+  for (const auto& cell : dof_handler_.active_cell_iterators()) {
+    fe_values.reinit(cell);
+    fe_values[inplane].get_function_gradients(u, grad_u);
+    fe_values[w].get_function_gradients(u, grad_w);
+    for (unsigned int q = 0; q < quadrature.size(); ++q) {
+      Kinematics k;
+      for (int a = 0; a < 2; ++a) {
+        k.g[a] = grad_w[q][a];
+        for (int b = 0; b < 2; ++b) k.H[a][b] = grad_u[q][a][b];
+      }
+      const auto E = membrane_strain(k, model);
+      const auto S = membrane_C_.apply(E);
+      energy += 0.5 * (S[0] * E[0] + S[1] * E[1] + S[2] * E[2]) * fe_values.JxW(q);
+    }
+  }
+  if (options_.include_bending) energy += 0.5 * bending_raw_.matrix_norm_square(u);
+  return energy;
+}
+
+// The largest |w| over the nodal values (signed value of that extremum; the first one met on a
+// tie). Nodal values of Q2/Q3 are a close bound of the field's extremum for these smooth w.
+double FilmSolver::deflection_extremum(const Vector<double>& u) const {
+  double wmax = 0;
+  for (const auto& cell : dof_handler_.active_cell_iterators()) {
+    std::vector<types::global_dof_index> dofs(fe_->n_dofs_per_cell());
+    cell->get_dof_indices(dofs);
+    for (unsigned int i = 0; i < dofs.size(); ++i) {
+      if (fe_->system_to_component_index(i).first == 2 && std::abs(u(dofs[i])) > std::abs(wmax)) wmax = u(dofs[i]);
+    }
+  }
+  return wmax;
+}
+
+// Charge of electrode k from its mean membrane force in material axes: the charge law
+// Q = A·(d31·N11 + d32·N22)/h (pvdf/core/piezo.hpp) with the electrode's nominal area A.
+double FilmSolver::electrode_charge(std::size_t k, const std::array<double, 3>& mean_force_material) const {
+  return pvdf::piezo_charge_C(scene_.electrodes[k].area_m2(), mean_force_material[0], mean_force_material[1],
+                              thickness_, scene_.material.d31_C_per_N, scene_.material.d32_C_per_N);
+}
+
+// The point form of the same law, (d31·N11 + d32·N22)/h (C/m²), for samples and the VTU field.
+double FilmSolver::charge_density(const MembraneForce& n) const {
+  return pvdf::piezo_charge_density_C_per_m2(n.material[0], n.material[1], thickness_, scene_.material.d31_C_per_N,
+                                             scene_.material.d32_C_per_N);
+}
+
+// Every field of Result from the converged solution_.
+void FilmSolver::fill_result(Result& result, Model model) {
+  current_model_ = model;
+  const Vector<double>& u = solution_;
+  result.max_deflection_m = deflection_extremum(u);
+  for (const auto& l : loads_) {
+    LoadResult lr;
+    lr.x_m = l.center[0];
+    lr.y_m = l.center[1];
+    lr.force_N = l.probe ? l.force_N : l.pressure_Pa * scene_.membrane.outline.area_m2();
+    Vector<double> value(3);
+    VectorTools::point_value(*mapping_, dof_handler_, u, l.center, value);
+    lr.deflection_m = value[2];
+    result.loads.push_back(lr);
+  }
+  result.deflection_at_load_m = result.loads.empty() ? 0.0 : result.loads.front().deflection_m;
+  for (std::size_t k = 0; k < scene_.electrodes.size(); ++k) {
+    ElectrodeResult er;
+    er.name = scene_.electrodes[k].name;
+    er.area_m2 = scene_.electrodes[k].area_m2();
+    er.mean_membrane_force_global_N_per_m = electrode_mean_force(u, model, k);
+    const auto& g = er.mean_membrane_force_global_N_per_m;
+    const Eigen::Vector3d m = pvdf::stress_to_material(draw_angle_) * Eigen::Vector3d(g[0], g[1], g[2]);
+    er.mean_membrane_force_material_N_per_m = {m[0], m[1], m[2]};
+    er.charge_C = electrode_charge(k, er.mean_membrane_force_material_N_per_m);
+    result.electrodes.push_back(er);
+  }
+  for (const auto& p : options_.sample_points_m) {
+    SampleResult s;
+    s.x_m = p[0];
+    s.y_m = p[1];
+    const Point<dim> x(p[0], p[1]);
+    Vector<double> value(3);
+    try {
+      VectorTools::point_value(*mapping_, dof_handler_, u, x, value);
+      const Kinematics k = kinematics_at(u, x);
+      s.membrane_force = membrane_force(k, x);
+    } catch (const std::exception&) {
+      throw InputError("--sample " + fmt(p[0]) + "," + fmt(p[1]) +
+                       " could not be located in the mesh (too close to the rim?); move it inside the film");
+    }
+    s.ux_m = value[0];
+    s.uy_m = value[1];
+    s.w_m = value[2];
+    s.charge_density_C_per_m2 = charge_density(s.membrane_force);
+    result.samples.push_back(s);
+  }
+  result.rim_reaction_N = rim_reaction(u, model);
+  result.strain_energy_J = strain_energy(u, model);
+}
+
+// The outputs a probe sweep keeps: electrode charges and mean forces, w under the probe, the
+// rim reaction (equilibrium check).
+void FilmSolver::probe_outputs(const Vector<double>& u, Model model, EngineSolution& out) {
+  current_model_ = model;
+  out.charge_C.clear();
+  out.mean_membrane_force_material_N_per_m.clear();
+  for (std::size_t k = 0; k < scene_.electrodes.size(); ++k) {
+    const auto g = electrode_mean_force(u, model, k);
+    const Eigen::Vector3d m = pvdf::stress_to_material(draw_angle_) * Eigen::Vector3d(g[0], g[1], g[2]);
+    out.mean_membrane_force_material_N_per_m.push_back({m[0], m[1], m[2]});
+    out.charge_C.push_back(electrode_charge(k, out.mean_membrane_force_material_N_per_m.back()));
+  }
+  Vector<double> value(3);
+  VectorTools::point_value(*mapping_, dof_handler_, u, loads_.front().center, value);
+  out.deflection_at_load_m = value[2];
+  out.rim_reaction_N = rim_reaction(u, model);
+}
+
+}  // namespace pvdf::fem::detail

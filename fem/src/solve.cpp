@@ -1,0 +1,204 @@
+// The film solver's method (FilmSolver::run: setup, model, refinement, outputs) and the public
+// entry points of pvdf::fem: solve(), the model and status names, options from a scene, and the
+// test hooks' constructors. docs/fem.md explains every equation; the parts are listed in
+// film_solver.hpp.
+#include "film_solver.hpp"
+
+#include "pvdf/core/error.hpp"
+
+#include <cmath>
+#include <functional>
+
+namespace pvdf::fem {
+
+// ------------------------------------------------------------------------------ names
+
+Model parse_model(const std::string& text, const std::string& what) {
+  if (text == "auto" || text == "automatic") return Model::automatic;
+  if (text == "linear") return Model::linear;
+  if (text == "von-karman" || text == "von_karman" || text == "vk") return Model::von_karman;
+  if (text == "large-rotation" || text == "large_rotation") return Model::large_rotation;
+  throw InputError(what + " = '" + text + "' is not a model; use auto, linear, von-karman or large-rotation");
+}
+
+std::string model_name(Model model) {
+  switch (model) {
+    case Model::automatic: return "auto";
+    case Model::linear: return "linear";
+    case Model::von_karman: return "von-karman";
+    case Model::large_rotation: return "large-rotation";
+  }
+  return "?";
+}
+
+std::string status_name(Status status) {
+  switch (status) {
+    case Status::converged: return "converged";
+    case Status::tolerance_not_met: return "tolerance-not-met";
+    case Status::no_convergence: return "no-convergence";
+    case Status::not_finite: return "not-finite";
+    case Status::linear_solver_failed: return "linear-solver-failed";
+  }
+  return "?";
+}
+
+Options options_from_scene(const pvdf::Scene& scene) {
+  Options o;
+  o.model = parse_model(scene.model.kinematics, scene.source + ": model.kinematics");
+  o.tolerance = scene.model.tolerance;
+  o.max_refinements = scene.model.max_refinements;
+  return o;
+}
+
+namespace detail {
+
+// The method, step by step (step-15 shape). A failure of any Newton solve ends it with that
+// status and no fields; the output error is estimated by refinement (adaptivity.cpp).
+Result FilmSolver::run() {
+  const auto t_start = Clock::now();
+  reuse_factorization_ = true;  // chord steps while Newton contracts >= 10x per step (see newton())
+  setup_system();
+  if (total_force_ == 0) return zero_load_result(t_start);
+  Summary& s = summary_;
+
+  // 1. The model: requested, or the `auto` rule's trial solves on this first mesh.
+  Model model = options_.model;
+  Vector<double> u(dof_handler_.n_dofs());
+  if (model == Model::automatic) {
+    const KinematicsChoice c = choose_kinematics(u);
+    if (c.outcome.status != Status::converged) return failure_result(c.outcome, c.where, t_start);
+    model = c.model;
+    s.model_reason = c.reason;
+  } else {
+    s.model_reason = "requested";
+    const NewtonOutcome o = solve_from_flat(model, u);
+    if (o.status != Status::converged) return failure_result(o, model_name(model) + " solve", t_start);
+  }
+  s.model = model;
+  solution_ = u;
+  if (!options_.vtu_directory.empty()) vtu_files_.push_back(write_vtu(0, model));
+
+  // 2. Output-driven refinement until the estimated output error meets the tolerance.
+  std::string where;
+  const NewtonOutcome refined = refine_until_tolerance(model, where);
+  if (refined.status != Status::converged) return failure_result(refined, where, t_start);
+  set_final_status();
+
+  // 3. Outputs. Never NaN: a non-finite output is a numerical failure.
+  s.n_dofs = dof_handler_.n_dofs();
+  s.n_cells = triangulation_.n_active_cells();
+  Result result;
+  fill_result(result, model);
+  bool finite = std::isfinite(result.max_deflection_m) && std::isfinite(result.rim_reaction_N);
+  for (const auto& e : result.electrodes)
+    for (double v : e.mean_membrane_force_material_N_per_m) finite = finite && std::isfinite(v);
+  if (!finite) {
+    NewtonOutcome o;
+    o.status = Status::not_finite;
+    o.message = "non-finite outputs";
+    return failure_result(o, "outputs", t_start);
+  }
+  result.vtu_files = vtu_files_;
+  if (!vtu_files_.empty()) result.vtu_files.push_back(options_.vtu_directory + "/film.pvd");
+  s.wall_s = seconds_since(t_start);
+  result.summary = s;
+  return result;
+}
+
+// Nothing loads the film: the flat, pretensioned state is the exact solution.
+Result FilmSolver::zero_load_result(Clock::time_point t_start) {
+  Summary& s = summary_;
+  Result result;
+  s.status = Status::converged;
+  s.model = options_.model == Model::automatic ? Model::linear : options_.model;
+  s.model_reason = "no load: the flat state is exact for every model";
+  s.message = "zero load";
+  s.error_estimator = "exact (no load)";
+  s.estimated_relative_error = 0;
+  s.n_dofs = dof_handler_.n_dofs();
+  s.n_cells = triangulation_.n_active_cells();
+  fill_result(result, s.model);
+  s.wall_s = seconds_since(t_start);
+  result.summary = s;
+  return result;
+}
+
+// A numerical failure: the status and why, no fields (docs: fields only when usable()).
+Result FilmSolver::failure_result(const NewtonOutcome& o, const std::string& where, Clock::time_point t_start) {
+  Summary& s = summary_;
+  s.status = o.status;
+  s.message = where + ": " + o.message;
+  s.n_dofs = dof_handler_.n_dofs();
+  s.n_cells = triangulation_.n_active_cells();
+  s.final_residual_norm = o.residual_norm;
+  s.estimated_relative_error = 1.0;
+  s.wall_s = seconds_since(t_start);
+  Result result;
+  result.summary = s;
+  return result;
+}
+
+// Status from the estimate: converged when it meets the tolerance (or no refinement was asked
+// for), tolerance_not_met when the refinement cap stopped it first.
+void FilmSolver::set_final_status() {
+  Summary& s = summary_;
+  const double estimate = s.estimated_relative_error;
+  const int max_cycles = options_.adaptive ? options_.max_refinements : 0;
+  if (max_cycles == 0) {
+    s.status = Status::converged;
+    s.message = "Newton converged; no refinement requested, output error not estimated";
+  } else if (estimate <= options_.tolerance) {
+    s.status = Status::converged;
+    s.message = "Newton converged; estimated output error " + fmt(estimate) + " <= tolerance " + fmt(options_.tolerance);
+  } else {
+    s.status = Status::tolerance_not_met;
+    s.message = "Newton converged but the estimated output error " + fmt(estimate) + " > tolerance " +
+                fmt(options_.tolerance) + " after " + std::to_string(s.refinement_cycles) + " refinements";
+  }
+}
+
+namespace {
+
+// The `auto` rule's a-priori step decides before the solver is built (bending changes its
+// sparsity); the kinematics, if still open, are chosen by run() on the first mesh.
+Result run_with_model_choice(const pvdf::Scene& scene, const Options& options,
+                             const std::function<void(FilmSolver&)>& make_grid) {
+  const ModelChoice choice = choose_model(scene, options);
+  Options used = options;
+  used.model = choice.model;
+  used.include_bending = choice.include_bending;
+  FilmSolver solver(scene, used);
+  make_grid(solver);
+  Result r = solver.run();
+  const bool decided_a_priori = options.model == Model::automatic && choice.model != Model::automatic;
+  if (decided_a_priori) r.summary.model_reason = choice.reason;
+  return r;
+}
+
+}  // namespace
+
+}  // namespace detail
+
+Result solve(const pvdf::Scene& scene, const Options& options) {
+  return detail::run_with_model_choice(scene, options, [](detail::FilmSolver& s) { s.make_grid(); });
+}
+
+Result solve(const pvdf::Scene& scene, const pvdf::mesh::FilmMesh& mesh, const Options& options) {
+  return detail::run_with_model_choice(scene, options, [&mesh](detail::FilmSolver& s) { s.make_grid_from(mesh); });
+}
+
+JacobianCheck check_jacobian(const pvdf::Scene& scene, const Options& options, double amplitude_m, int n_directions,
+                             unsigned int seed) {
+  detail::FilmSolver solver(scene, options);
+  solver.make_grid();
+  return solver.check_jacobian(amplitude_m, n_directions, seed);
+}
+
+BendingCheck check_bending(const pvdf::Scene& scene, const Options& options, const std::array<double, 3>& coefficients,
+                           int n_directions, unsigned int seed) {
+  detail::FilmSolver solver(scene, options);
+  solver.make_grid();
+  return solver.check_bending(coefficients, n_directions, seed);
+}
+
+}  // namespace pvdf::fem

@@ -1,0 +1,163 @@
+// The fixed-mesh probe solver behind ProbeSweep (docs/bench-fem.md, "ProbeSweep"): one mesh graded
+// to the electrodes and built without any probe, its DOFs, sparsity and symbolic factorization kept;
+// each probe re-integrates the load and warm-starts Newton from a neighbour's state, scaled by the
+// pure-membrane laws across forces (pvdf/core/membrane_scaling.hpp).
+#include "film_solver.hpp"
+
+#include "pvdf/core/membrane_scaling.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace pvdf::fem::detail {
+
+using namespace dealii;
+
+// The sweep mesh is graded to the electrodes only (the scene copy given to this solver carries
+// no loads), capped everywhere by the coarse size, which is therefore the size under any probe.
+void FilmSolver::prepare_sweep() {
+  make_grid();
+  setup_system();
+}
+
+// A new probe position or force changes only the load vector: it is re-integrated on the fixed
+// mesh (cut cells sub-sampled, then scaled so the total vertical force is exactly F).
+void FilmSolver::set_probe(double x_m, double y_m, double force_N) {
+  const auto t0 = Clock::now();
+  LoadCase c;
+  c.probe = true;
+  c.center = Point<dim>(x_m, y_m);
+  c.radius_m = scene_.probe.radius_m;
+  c.force_N = force_N;
+  loads_ = {c};
+  total_force_ = std::abs(force_N);
+  assemble_load_vector();
+  load_vector_s += seconds_since(t0);
+}
+
+// Warm: Newton from the given state (no continuation: a neighbour's state is already tensioned);
+// if that fails, or when cold, the artificial-pretension continuation from the flat film.
+NewtonOutcome FilmSolver::solve_probe(Model model, Vector<double>& u, bool warm, int& newton_iterations,
+                                      bool& warm_used) {
+  const int before = summary_.newton_iterations;
+  warm_used = false;
+  reuse_factorization_ = true;
+  if (warm) {
+    // The warm state is a neighbour's converged one: its last factorized tangent is a good chord.
+    chord_first_step_ = true;
+    const int cap = options_.max_newton_iterations;
+    options_.max_newton_iterations = std::min(cap, 25);
+    Vector<double> start = u;
+    NewtonOutcome o = newton(model, 0.0, u);
+    options_.max_newton_iterations = cap;
+    summary_.newton_iterations += o.iterations;
+    if (o.status == Status::converged) {
+      newton_iterations = summary_.newton_iterations - before;
+      warm_used = true;
+      return o;
+    }
+    u = start;
+  }
+  NewtonOutcome o = solve_from_flat(model, u);
+  newton_iterations = summary_.newton_iterations - before;
+  o.iterations = newton_iterations;
+  return o;
+}
+
+// Multiplies the in-plane DOFs by inplane_factor and the w DOFs by w_factor (each DOF once).
+void FilmSolver::scale_state(Vector<double>& u, double inplane_factor, double w_factor) const {
+  std::vector<bool> done(u.size(), false);
+  std::vector<types::global_dof_index> dofs(fe_->n_dofs_per_cell());
+  for (const auto& cell : dof_handler_.active_cell_iterators()) {
+    cell->get_dof_indices(dofs);
+    for (unsigned int i = 0; i < dofs.size(); ++i) {
+      if (done[dofs[i]]) continue;
+      done[dofs[i]] = true;
+      u(dofs[i]) *= fe_->system_to_component_index(i).first == 2 ? w_factor : inplane_factor;
+    }
+  }
+}
+
+struct SweepEngine::Impl {
+  pvdf::Scene scene;  // outlives the solver, which keeps a reference
+  Options options;
+  Model model = Model::large_rotation;
+  std::unique_ptr<FilmSolver> solver;
+  EngineTiming timing;
+};
+
+SweepEngine::SweepEngine(const pvdf::Scene& scene, const Options& options, Model model, bool include_bending,
+                         const SweepMeshSizes& sizes)
+    : impl_(std::make_unique<Impl>()) {
+  impl_->scene = scene;
+  impl_->scene.loads.clear();
+  impl_->model = model;
+  Options o = options;
+  o.model = model;
+  o.include_bending = include_bending;
+  o.adaptive = false;
+  o.coarse_size_m = sizes.region_size_m;
+  o.probe_size_m = sizes.region_size_m;
+  o.electrode_size_m = sizes.electrode_size_m;
+  o.grading = sizes.grading;
+  o.initial_global_refinements = sizes.global_refinements;
+  o.sample_points_m.clear();
+  o.vtu_directory.clear();
+  impl_->options = o;
+  impl_->solver = std::make_unique<FilmSolver>(impl_->scene, o);
+  impl_->solver->prepare_sweep();
+}
+
+SweepEngine::~SweepEngine() = default;
+
+std::size_t SweepEngine::n_dofs() const { return impl_->solver->n_dofs(); }
+std::size_t SweepEngine::n_cells() const { return impl_->solver->n_cells(); }
+
+EngineTiming SweepEngine::timing() const {
+  EngineTiming t = impl_->timing;
+  const Summary& s = impl_->solver->summary();
+  t.assembly_s = s.assembly_s;
+  t.linear_solve_s = s.linear_solve_s;
+  t.load_vector_s = impl_->solver->load_vector_s;
+  t.newton_iterations = s.newton_iterations;
+  t.factorizations = impl_->solver->n_factorizations();
+  return t;
+}
+
+EngineSolution SweepEngine::solve(double x_m, double y_m, double force_N, std::vector<double>& state, bool warm,
+                                  double state_force_N) {
+  FilmSolver& fs = *impl_->solver;
+  EngineSolution out;
+  const int factorizations_before = fs.n_factorizations();
+  fs.set_probe(x_m, y_m, force_N);
+  Vector<double> u(fs.n_dofs());
+  const bool use_warm = warm && state.size() == u.size();
+  if (use_warm) {
+    std::copy(state.begin(), state.end(), u.begin());
+    // Pure-membrane scaling (w ∝ F^(1/3), strains and in-plane displacements ∝ F^(2/3)): exact for
+    // von Kármán without bending or pretension, a close start otherwise.
+    if (state_force_N > 0 && state_force_N != force_N) {
+      const double ratio = force_N / state_force_N;
+      fs.scale_state(u, pvdf::membrane_charge_factor(ratio), pvdf::membrane_deflection_factor(ratio));
+    }
+  }
+  NewtonOutcome o = fs.solve_probe(impl_->model, u, use_warm, out.newton_iterations, out.warm_started);
+  out.status = o.status;
+  out.message = o.message;
+  out.factorizations = fs.n_factorizations() - factorizations_before;
+  if (o.status != Status::converged) return out;
+  const auto t0 = Clock::now();
+  fs.probe_outputs(u, impl_->model, out);
+  impl_->timing.outputs_s += seconds_since(t0);
+  bool finite = std::isfinite(out.deflection_at_load_m) && std::isfinite(out.rim_reaction_N);
+  for (double q : out.charge_C) finite = finite && std::isfinite(q);
+  if (!finite) {
+    out.status = Status::not_finite;
+    out.message = "non-finite outputs";
+    return out;
+  }
+  state.assign(u.begin(), u.end());
+  return out;
+}
+
+}  // namespace pvdf::fem::detail
