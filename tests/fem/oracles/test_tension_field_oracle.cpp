@@ -67,9 +67,11 @@ TEST_CASE("tension field: slack film under a centred probe", "[oracle][tension-f
                 k.n0, k.F, fine.centre_deflection_m() * 1e3, fine.radial_force_N_per_m(10e-3), r_w * 1e3,
                 std::atan(-fine.slope(p.radius_m)) * 180 / M_PI);
     // Vertical equilibrium across every circle outside the load: 2πr N_r (−w') = F.
-    // (At r_w itself N_θ has a kink inside an element, which the C¹ elements smooth: 2e-4 to 8e-4 there.)
+    // (Near r_w, N_θ has a kink inside an element, which the C¹ elements smooth: up to 8e-4 at r_w and
+    // 2e-4 one element away; outside that element the equilibrium holds to 1e-5.)
     CHECK(fine.vertical_force_N(r_w) == Approx(k.F).epsilon(1e-3));
-    for (double r : {2e-3, 0.5 * (r_w + p.load_radius_m), 1.02 * r_w, 0.5 * (r_w + p.radius_m), 0.999 * p.radius_m})
+    for (double r : {2e-3, 0.5 * (r_w + p.load_radius_m), r_w + 0.1 * (p.radius_m - r_w), 0.5 * (r_w + p.radius_m),
+                     0.999 * p.radius_m})
     {
       INFO("r = " << r);
       CHECK(fine.vertical_force_N(r) == Approx(k.F).epsilon(1e-5));
