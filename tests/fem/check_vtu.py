@@ -17,6 +17,16 @@ except ImportError:
 
 pvdfkit, scene, out = sys.argv[1], sys.argv[2], sys.argv[3]
 shutil.rmtree(out, ignore_errors=True)
+os.makedirs(out)
+# An oblique draw direction, so that a wrong rotation into the material axes (sign, transpose,
+# degrees for radians) shows: at 0 the material and global frames coincide and any rotation passes.
+DRAW_ANGLE_DEG = 35.0
+with open(scene) as f:
+    scene_json = json.load(f)
+scene_json["material"]["draw_angle_deg"] = DRAW_ANGLE_DEG
+scene = os.path.join(out, "scene_drawn.json")
+with open(scene, "w") as f:
+    json.dump(scene_json, f)
 run = subprocess.run([pvdfkit, "solve", scene, "--vtu", out, "--json", "--sample", "0.01,0.0"],
                      capture_output=True, text=True)
 assert run.returncode == 0, run.stderr
@@ -55,10 +65,19 @@ assert {-1, 0, 1, 2} <= ids, ids
 def frame(name):
     return [vtk_to_numpy(pd.GetArray("N_%s_%s_N_per_m" % (name, c))) for c in comp[name]]
 ng, nm = frame("global"), frame("material")
-# Membrane force in material axes equals the global one rotated by the draw angle (0 here).
+# Membrane force in material axes is the global one rotated by the draw angle θ: with the draw
+# direction e1 = (cos θ, sin θ) and e2 = (−sin θ, cos θ), N11 = e1·N·e1, N22 = e2·N·e2, N12 = e1·N·e2.
 scale = max(abs(x).max() for x in ng)
-for a, b in zip(ng, nm):
-    assert abs(a - b).max() <= 1e-9 * scale
+c, s = math.cos(math.radians(DRAW_ANGLE_DEG)), math.sin(math.radians(DRAW_ANGLE_DEG))
+nxx, nyy, nxy = (x.astype(float) for x in ng)
+rotated = [c * c * nxx + s * s * nyy + 2 * c * s * nxy,
+           s * s * nxx + c * c * nyy - 2 * c * s * nxy,
+           c * s * (nyy - nxx) + (c * c - s * s) * nxy]
+for k, (a, b) in enumerate(zip(rotated, nm)):
+    # float32 storage in the VTU: ~1e-7 of the largest force.
+    assert abs(a - b.astype(float)).max() <= 1e-5 * scale, (k, abs(a - b).max() / scale)
+# And the rotation is not the identity here (the check above could not pass by accident).
+assert abs(ng[0].astype(float) - nm[0].astype(float)).max() > 1e-2 * scale
 # Charge density = (d31 N11 + d32 N22)/h (the VTU stores 32-bit floats: ~1e-7 relative).
 q = vtk_to_numpy(pd.GetArray("charge_density_C_per_m2")).astype(float)
 expect = (6.5e-12 * nm[0].astype(float) + 0.65e-12 * nm[1].astype(float)) / 25e-6

@@ -13,7 +13,11 @@
 //  * bending (optional) with linear curvatures κ_r = w'', κ_θ = w'/r and D = E h³/(12(1 − ν²))
 //    (axisymmetric von Kármán plate; it is also used with the Green–Lagrange membrane strains);
 //  * the load is a *dead vertical* load q = F/(π c²) per unit undeformed area on r < c (what a
-//    force transducer measures), not a follower pressure.
+//    force transducer measures), not a follower pressure;
+//  * tension field (optional, for slack or wrinkling films): the relaxed membrane energy of Pipkin
+//    (1986) / Steigmann (1990) — a compressive principal force is replaced by zero (the film wrinkles
+//    at no cost instead of buckling), N0 may then be negative (a slack film: stress-free radius
+//    a·(1 + s) with s = −N0 (1 − ν)/(E h) > 0). For an axisymmetric state r and θ are principal.
 // Method: minimise the total potential energy over C¹ Hermite-cubic elements for both u and w on a
 // graded grid with a node at r = c (the load edge), Newton with energy line search, and load
 // continuation when bending or pretension is present. No deal.II: this is the independent check.
@@ -29,6 +33,7 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace pvdf::fem::oracles {
@@ -47,8 +52,9 @@ struct AxisymmetricProblem {
   double poisson_ratio = 0.3;       ///< ν
   double force_N = 1.0;             ///< total vertical force F (downward = +w)
   double load_radius_m = 1e-3;      ///< c, radius of the loaded central disk; c = a: uniform pressure
-  double pretension_N_per_m = 0.0;  ///< N0, uniform in-plane pretension (N/m), ≥ 0
+  double pretension_N_per_m = 0.0;  ///< N0, uniform in-plane pretension (N/m); < 0 (slack) only with tension_field
   bool bending = false;             ///< add plate bending (clamped: w'(a) = 0)
+  bool tension_field = false;       ///< relaxed (wrinkling) membrane energy: no compressive principal force
   Kinematics kinematics = Kinematics::von_karman;
 };
 
@@ -94,6 +100,19 @@ class AxisymmetricSolution {
     const double shear = D_ * (P.wppp + P.wpp / r - P.wp / (r * r));
     return 2 * M_PI * r * (shear - P.Nr * P.wp) * Eh_ * a_;
   }
+  /// Radius intervals [r0, r1] (m) where the hoop force vanishes (tension field: the film wrinkles
+  /// radially there), located by bisection on the relaxed law's state between `n_samples` samples.
+  std::vector<std::pair<double, double>> wrinkled_intervals_m(int n_samples = 2000) const;
+  /// Smallest and largest hoop force over [0, a] sampled at `n_samples` points (N/m).
+  std::pair<double, double> hoop_force_range_N_per_m(int n_samples = 2000) const {
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    for (int i = 0; i <= n_samples; ++i) {
+      const double n = hoop_force_N_per_m(a_ * i / n_samples);
+      lo = std::min(lo, n);
+      hi = std::max(hi, n);
+    }
+    return {lo, hi};
+  }
   /// Node radii (m), for plotting or grading checks.
   std::vector<double> nodes_m() const {
     std::vector<double> out(nodes_.size());
@@ -110,7 +129,7 @@ class AxisymmetricSolution {
   std::vector<double> nodes_;
   Eigen::VectorXd x_;
   double a_ = 1, Eh_ = 1, nu_ = 0.3, n0_ = 0, D_ = 0;
-  bool gl_ = false;
+  bool gl_ = false, tf_ = false;
 };
 
 namespace detail {
@@ -149,9 +168,35 @@ inline const std::array<std::pair<double, double>, 6>& gauss6() {
 // Dimensionless model: lengths / a, forces / (E h), energies / (E h a²).
 struct Model {
   double A = 1, nu = 0.3, D = 0, n0 = 0, q = 0, c = 1;
-  bool gl = false, bending = false;
+  bool gl = false, bending = false, tf = false;
   std::vector<double> nodes;
 };
+
+// Relaxed (tension-field) plane-stress law of an isotropic film in its principal axes r, θ, forces
+// per E h. Elastic strains e = ε − s (s the natural strain of the slack film). The four states of
+// Pipkin's relaxed energy: taut (both forces > 0, the ordinary law), wrinkled with the hoop force
+// zero (uniaxial tension N_r = e_r when e_θ ≤ −ν e_r), wrinkled with the radial force zero, slack
+// (e_r, e_θ ≤ 0: no force). W and N are continuous across the states; C = ∂N/∂e is the tangent.
+struct RelaxedLaw {
+  enum State { taut, hoop_wrinkled, radial_wrinkled, slack } state = taut;
+  double W = 0, Nr = 0, Nt = 0, C11 = 0, C12 = 0, C22 = 0;
+};
+
+inline RelaxedLaw relaxed_law(double er, double et, double nu) {
+  const double A = 1.0 / (1 - nu * nu);
+  RelaxedLaw L;
+  const double nr = A * (er + nu * et), nt = A * (et + nu * er);
+  if (nr > 0 && nt > 0) {
+    L = {RelaxedLaw::taut, 0.5 * A * (er * er + 2 * nu * er * et + et * et), nr, nt, A, A * nu, A};
+  } else if (er > 0 && et <= -nu * er) {
+    L = {RelaxedLaw::hoop_wrinkled, 0.5 * er * er, er, 0, 1, 0, 0};
+  } else if (et > 0 && er <= -nu * et) {
+    L = {RelaxedLaw::radial_wrinkled, 0.5 * et * et, 0, et, 0, 0, 1};
+  } else {
+    L.state = RelaxedLaw::slack;
+  }
+  return L;
+}
 
 // Point-wise kinematics at radius r from element values.
 struct Kin {
@@ -197,13 +242,16 @@ inline double energy(const Model& m, const Eigen::VectorXd& x, Eigen::VectorXd* 
       const double dA = 2 * M_PI * r * h * wq;
       const Hermite H(xi, h);
       const Kin k = kinematics(m, H, xe, r);
-      const double Nr = m.n0 + m.A * (k.er + m.nu * k.et);
-      const double Nt = m.n0 + m.A * (k.et + m.nu * k.er);
+      // Tension field: the whole relaxed energy of the elastic strain e = ε − s, s = −N0 (1 − ν).
+      const double s_nat = -m.n0 * (1 - m.nu);
+      const RelaxedLaw L = m.tf ? relaxed_law(k.er - s_nat, k.et - s_nat, m.nu) : RelaxedLaw{};
+      const double Nr = m.tf ? L.Nr : m.n0 + m.A * (k.er + m.nu * k.et);
+      const double Nt = m.tf ? L.Nt : m.n0 + m.A * (k.et + m.nu * k.er);
       // Pretension energy N0 (ε_r + ε_θ) without its linear part u' + u/r, whose integral (r u)' vanishes
       // (u(0) = u(a) = 0): dropping it exactly keeps O(N0) rounding out of a gradient that may be O(F).
       const double uor_ = r > 1e-14 ? k.u / r : k.up;
       const double quad = 0.5 * k.wp * k.wp + (m.gl ? 0.5 * (k.up * k.up + uor_ * uor_) : 0.0);
-      double W = m.n0 * quad + 0.5 * m.A * (k.er * k.er + 2 * m.nu * k.er * k.et + k.et * k.et);
+      double W = m.tf ? L.W : m.n0 * quad + 0.5 * m.A * (k.er * k.er + 2 * m.nu * k.er * k.et + k.et * k.et);
       double Wb = 0;
       if (m.bending) Wb = 0.5 * m.D * (k.kr * k.kr + 2 * m.nu * k.kr * k.kt + k.kt * k.kt);
       const double load = loaded ? m.q * k.w : 0.0;
@@ -225,16 +273,24 @@ inline double energy(const Model& m, const Eigen::VectorXd& x, Eigen::VectorXd* 
       }
       der = (1 + (m.gl ? k.up : 0.0)) * dpu + k.wp * dpw;
       det = (1 + (m.gl ? uor : 0.0)) * fu_r;
-      ge += ((Nr - m.n0) * der + (Nt - m.n0) * det) * dA;
-      ge += m.n0 * (k.wp * dpw + (m.gl ? Eigen::Matrix<double, 8, 1>(k.up * dpu + uor * fu_r) : Eigen::Matrix<double, 8, 1>::Zero())) * dA;
+      if (m.tf) {
+        ge += (Nr * der + Nt * det) * dA;
+      } else {
+        ge += ((Nr - m.n0) * der + (Nt - m.n0) * det) * dA;
+        ge += m.n0 * (k.wp * dpw + (m.gl ? Eigen::Matrix<double, 8, 1>(k.up * dpu + uor * fu_r) : Eigen::Matrix<double, 8, 1>::Zero())) * dA;
+      }
       if (m.bending) {
         const double Mr = m.D * (k.kr + m.nu * k.kt), Mt = m.D * (k.kt + m.nu * k.kr);
         ge += (Mr * dkr + Mt * dkt) * dA;
       }
       if (loaded) ge -= m.q * fw * dA;
       if (hess) {
-        He += m.A * (der * der.transpose() + m.nu * (der * det.transpose() + det * der.transpose()) +
-                     det * det.transpose()) * dA;
+        if (m.tf)
+          He += (L.C11 * der * der.transpose() + L.C12 * (der * det.transpose() + det * der.transpose()) +
+                 L.C22 * det * det.transpose()) * dA;
+        else
+          He += m.A * (der * der.transpose() + m.nu * (der * det.transpose() + det * der.transpose()) +
+                       det * det.transpose()) * dA;
         He += Nr * (dpw * dpw.transpose()) * dA;
         if (m.gl) He += (Nr * dpu * dpu.transpose() + Nt * fu_r * fu_r.transpose()) * dA;
         if (m.bending)
@@ -275,8 +331,41 @@ inline AxisymmetricSolution::Point AxisymmetricSolution::eval(double r_m) const 
   detail::Model m;
   m.gl = gl_;
   const detail::Kin k = detail::kinematics(m, H, x_.data() + 4 * e, r);
+  if (tf_) {
+    const double s_nat = -n0_ * (1 - nu_);
+    const detail::RelaxedLaw L = detail::relaxed_law(k.er - s_nat, k.et - s_nat, nu_);
+    return Point{k.u, k.up, k.w, k.wp, k.wpp, k.wppp, L.Nr, L.Nt};
+  }
   const double A = 1.0 / (1 - nu_ * nu_);
   return Point{k.u, k.up, k.w, k.wp, k.wpp, k.wppp, n0_ + A * (k.er + nu_ * k.et), n0_ + A * (k.et + nu_ * k.er)};
+}
+
+inline std::vector<std::pair<double, double>> AxisymmetricSolution::wrinkled_intervals_m(int n_samples) const {
+  std::vector<std::pair<double, double>> out;
+  if (!tf_) return out;
+  // Hoop force exactly zero: the hoop-wrinkled or slack state of the relaxed law.
+  auto wrinkled = [&](double r_m) { return eval(r_m).Nt == 0.0; };
+  auto edge = [&](double lo, double hi) {  // state changes in (lo, hi): bisect to 1e-9 a
+    const bool at_lo = wrinkled(lo);
+    while (hi - lo > 1e-9 * a_) {
+      const double mid = 0.5 * (lo + hi);
+      (wrinkled(mid) == at_lo ? lo : hi) = mid;
+    }
+    return 0.5 * (lo + hi);
+  };
+  double start = -1, prev_r = 0;
+  bool prev = wrinkled(0.0);
+  if (prev) start = 0.0;
+  for (int i = 1; i <= n_samples; ++i) {
+    const double r = a_ * i / n_samples;
+    const bool now = wrinkled(r);
+    if (now && !prev) start = edge(prev_r, r);
+    if (!now && prev) out.emplace_back(start, edge(prev_r, r));
+    prev = now;
+    prev_r = r;
+  }
+  if (prev) out.emplace_back(start, a_);
+  return out;
 }
 
 /// Solves the axisymmetric problem. Throws std::invalid_argument on unusable input; a failed
@@ -284,8 +373,11 @@ inline AxisymmetricSolution::Point AxisymmetricSolution::eval(double r_m) const 
 inline AxisymmetricSolution solve_axisymmetric(const AxisymmetricProblem& p, const AxisymmetricOptions& o = {}) {
   if (!(p.radius_m > 0 && p.thickness_m > 0 && p.youngs_modulus_Pa > 0 && p.poisson_ratio > -1 &&
         p.poisson_ratio < 0.5 && p.force_N > 0 && p.load_radius_m > 0 && p.load_radius_m <= p.radius_m &&
-        p.pretension_N_per_m >= 0 && o.n_elements >= 8))
-    throw std::invalid_argument("solve_axisymmetric: need a, h, E, F, c > 0, c <= a, -1 < nu < 0.5, N0 >= 0, n >= 8");
+        (p.pretension_N_per_m >= 0 || p.tension_field) && o.n_elements >= 8 &&
+        !(p.tension_field && (p.bending || p.poisson_ratio < 0))))
+    throw std::invalid_argument(
+        "solve_axisymmetric: need a, h, E, F, c > 0, c <= a, -1 < nu < 0.5, N0 >= 0 (< 0 only with tension_field), "
+        "n >= 8; tension_field is a membrane model (no bending, nu >= 0)");
   const double a = p.radius_m, Eh = p.youngs_modulus_Pa * p.thickness_m, nu = p.poisson_ratio;
   detail::Model m;
   m.A = 1.0 / (1 - nu * nu);
@@ -389,14 +481,53 @@ inline AxisymmetricSolution solve_axisymmetric(const AxisymmetricProblem& p, con
         dw = std::max({dw, std::abs(dx[4 * i + 2]), std::abs(dx[4 * i + 3])});
         wmax = std::max({wmax, std::abs(x[4 * i + 2]), std::abs(x[4 * i + 3])});
       }
-      // (u ~ w² in a membrane: below 1e-15·w it is rounding, e.g. in the linear first load step.)
-      if (alpha == 1 && dw <= o.step_tolerance * wmax && du <= o.step_tolerance * umax + 1e-15 * wmax) return true;
+      // (u ~ w² in a membrane: below 1e-12·w it is rounding, e.g. in the linear first load step of a
+      // thick plate, where the bending stiffness makes the tangent ill-conditioned.)
+      if (alpha == 1 && dw <= o.step_tolerance * wmax && du <= o.step_tolerance * umax + 1e-12 * wmax) return true;
     }
     return false;
   };
 
   const bool pure_membrane = !p.bending && m.n0 == 0;
-  if (pure_membrane) {
+  if (p.tension_field) {
+    // Relaxed membrane, slack or taut. A slack film has no stiffness at small load and its flat
+    // state is all wrinkled, so no load continuation: solve the taut film first (N0 ≥ 0, from
+    // Hencky's paraboloid, where the relaxation is rarely active), then lower N0 to its slack
+    // value in steps, each Newton solve started from the last (halving a step that fails).
+    m.tf = true;
+    m.gl = false;
+    const double n0_target = m.n0;
+    m.n0 = std::max(0.0, n0_target);
+    const double w0 = 0.65 * std::cbrt(q_full * m.c * m.c);
+    for (int i = 0; i < n_nodes; ++i) {
+      const double r = m.nodes[i];
+      x[4 * i + 2] = w0 * (1 - r * r);
+      x[4 * i + 3] = -2 * w0 * r;
+    }
+    sol.load_steps = 1;
+    bool ok = newton(q_full);
+    double step = n0_target / 4;
+    while (ok && m.n0 > n0_target) {
+      const Eigen::VectorXd x_save = x;
+      const double n0_save = m.n0;
+      m.n0 = std::max(n0_target, m.n0 + step);
+      ++sol.load_steps;
+      if (newton(q_full)) {
+        step *= 1.5;
+      } else {
+        x = x_save;
+        m.n0 = n0_save;
+        step *= 0.5;
+        if (std::abs(step) < 1e-6 * std::abs(n0_target)) ok = false;
+      }
+    }
+    if (ok && p.kinematics == Kinematics::green_lagrange) {
+      m.gl = true;
+      ok = newton(q_full);
+      ++sol.load_steps;
+    }
+    sol.converged = ok;
+  } else if (pure_membrane) {
     // The pure von Kármán membrane has no stiffness at w = 0: start from a paraboloid with
     // Hencky's amplitude (K ≈ 0.65) for the same total force spread over the whole film.
     m.gl = false;
@@ -459,6 +590,7 @@ inline AxisymmetricSolution solve_axisymmetric(const AxisymmetricProblem& p, con
     sol.converged = ok;
   }
   sol.gl_ = m.gl;
+  sol.tf_ = m.tf;
   sol.x_ = x;
   if (!sol.converged) {
     sol.message = "Newton did not converge";
