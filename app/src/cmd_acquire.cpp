@@ -14,6 +14,8 @@
 #define PVDF_ACQUIRE_HAVE_MAPPING 1
 #include "pvdf/mapping/locator.hpp"
 #include "pvdf/mapping/map.hpp"
+#include "pvdf/mapping/stream.hpp"
+#include "pvdf/mapping/tracker.hpp"
 #endif
 #if __has_include("pvdf/restore/apply.hpp") && __has_include("pvdf/restore/filter.hpp") && \
     __has_include("pvdf/restore/scan_io.hpp")
@@ -23,9 +25,11 @@
 #include "pvdf/restore/scan_io.hpp"
 #endif
 
+#include <algorithm>
 #include <atomic>
 #include <cerrno>
 #include <chrono>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstring>
@@ -51,6 +55,7 @@ struct AcquireOptions {
   std::string force_range;
   double rate_Hz = 0;
   double gain_mV_per_pC = 0;
+  bool gain_given = false;
   double duration_s = 0;
   double stall_timeout_s = 2.0;
   int transfers = 8;
@@ -124,8 +129,16 @@ double charge_gain_V_per_C(const StreamInfo& info, const char* flag) {
   return info.gain_V_per_C;
 }
 
+/// Largest |charge| of a map over its nodes and levels (C).
+double map_peak_charge_C(const pvdf::mapping::ChargeMap& map) {
+  double peak = 0;
+  for (const double q : map.charge_C) peak = std::max(peak, std::abs(q));
+  return peak;
+}
+
 /// Press locations: one per block, from the block-mean charges (q = V / gain), channel k
-/// taken as the map's electrode k.
+/// taken as the map's electrode k. A block with a clipped sample (an ADC code at its limits)
+/// or the device's overflow flag is `saturated` and not located: its charges are unknown.
 class LocateStage final : public Stage {
  public:
   LocateStage(const StreamInfo& info, const std::string& map_path, const pvdf::mapping::LocatorOptions& options)
@@ -135,30 +148,52 @@ class LocateStage final : public Stage {
       throw pvdf::InputError("--locate " + map_path + ": the map has " + std::to_string(locator_.n_electrodes()) +
                              " electrodes but the stream has " + std::to_string(info.channels().size()) +
                              " channels; stream one channel per electrode, in the map's order");
+    // Front-end sanity: the map's charges (at its highest level) must fit the ADC's range.
+    const double peak_V = map_peak_charge_C(map_) * gain_V_per_C_;
+    if (peak_V > info.full_scale_V) {
+      char text[320];
+      std::snprintf(text, sizeof text,
+                    "the map %s reaches %g pC, %g V at the gain of %g mV/pC: beyond the front end's %g V full scale, "
+                    "so presses there clip (rows flagged saturated); lower --gain-mV-per-pC to at most %g",
+                    map_path.c_str(), map_peak_charge_C(map_) * 1e12, peak_V, gain_V_per_C_ * 1e-9, info.full_scale_V,
+                    gain_V_per_C_ * 1e-9 * info.full_scale_V / peak_V);
+      pvdf::app::warn(text);
+    }
   }
-  void header(std::FILE* out) override {
-    std::fprintf(out, "t_s,x_m,y_m,force_N,residual,sigma_x_m,sigma_y_m,sigma_F_N,flags\n");
-  }
+  void header(std::FILE* out) override { std::fprintf(out, "%s\n", pvdf::mapping::stream_output_header().c_str()); }
   void process(const SampleBlock& b, std::FILE* out) override {
     const int nc = b.frame.n_channels;
     std::vector<double> q(static_cast<std::size_t>(nc), 0.0);
-    for (int i = 0; i < b.frame.n_samples; ++i)
+    bool saturated = b.frame.overflow;
+    for (int i = 0; i < b.frame.n_samples; ++i) {
+      saturated = saturated || pvdf::hardware::sample_clipped(b.frame, i, info_.adc_bits);
       for (int c = 0; c < nc; ++c) q[static_cast<std::size_t>(c)] += b.frame.counts[static_cast<std::size_t>(i * nc + c)];
+    }
     for (auto& v : q) v = v * info_.volts_per_count() / b.frame.n_samples / gain_V_per_C_;
-    const auto r = locator_.locate(q);
+    pvdf::mapping::Location r;
+    if (saturated) {
+      r.flags = pvdf::mapping::flag::saturated;
+      ++n_saturated_;
+      tracker_.reset();  // the press is lost while clipped: search afresh after it
+    } else {
+      r = tracker_.next(q.data());
+    }
     const double t = b.time_s(0, info_.sample_rate_Hz) + 0.5 * (b.frame.n_samples - 1) / info_.sample_rate_Hz;
-    if (r.has_position())
-      std::fprintf(out, "%.7f,%.9g,%.9g,%.9g,%.6g,%.6g,%.6g,%.6g,%s\n", t, r.x_m, r.y_m, r.force_N, r.residual, r.sigma_x_m,
-                   r.sigma_y_m, r.sigma_F_N, pvdf::mapping::flags_text(r.flags).c_str());
-    else
-      std::fprintf(out, "%.7f,,,,%.6g,,,,%s\n", t, r.residual, pvdf::mapping::flags_text(r.flags).c_str());
+    std::fprintf(out, "%.7f,%s\n", t, pvdf::mapping::stream_row_fields(r).c_str());
+  }
+  void finish(std::FILE*) override {
+    if (n_saturated_ > 0) {
+      pvdf::app::warn(std::to_string(n_saturated_) + " frame(s) clipped or overflowed: flagged saturated, not located");
+    }
   }
 
  private:
   StreamInfo info_;
   pvdf::mapping::ChargeMap map_;
   pvdf::mapping::Locator locator_;
+  pvdf::mapping::Tracker tracker_{locator_};
   double gain_V_per_C_;
+  std::size_t n_saturated_ = 0;
 };
 #endif
 
@@ -246,7 +281,8 @@ std::unique_ptr<Stage> make_stage(const AcquireOptions& o, const StreamInfo& inf
 
 /// Opens the source; a simulated scene that names a charge map gets its press charges from
 /// the map here (the hardware module does not read maps): Q at each press's position and force.
-std::unique_ptr<pvdf::hardware::Source> open_any_source(const std::string& device, const pvdf::hardware::OpenOptions& open) {
+std::unique_ptr<pvdf::hardware::Source> open_any_source(const std::string& device, const pvdf::hardware::OpenOptions& open,
+                                                        bool quiet) {
   if (device.rfind("sim:", 0) != 0 || device.size() == 4) return pvdf::hardware::open_source(device, open);
   const std::string path = device.substr(4);
   pvdf::hardware::SimScene scene = pvdf::hardware::load_sim_scene(path);
@@ -281,6 +317,20 @@ std::unique_ptr<pvdf::hardware::Source> open_any_source(const std::string& devic
                              "] with force_N = " + std::to_string(p.force_N) + " is outside the map " + scene.map_path +
                              "; move it inside the film (away from the rim)");
   }
+  // The simulated amplifier's default gain suits the map: its largest charge (or a press's)
+  // at 80 % of the ADC's full scale, unless the scene or --gain-mV-per-pC sets the gain.
+  if (!scene.gain_given && !(open.gain_mV_per_pC > 0)) {
+    double peak_C = map_peak_charge_C(map);
+    for (const auto& p : scene.presses)
+      for (const double q : p.charges_C) peak_C = std::max(peak_C, std::abs(q));
+    if (peak_C > 0) {
+      scene.gain_V_per_C = 0.8 * scene.full_scale_V / peak_C;
+      if (!quiet)
+        std::fprintf(stderr, "acquire: simulated amplifier gain %.4g mV/pC (the map's largest charge, %.4g pC, at 80 %% of "
+                             "the %g V full scale; set gain_V_per_C in the scene or --gain-mV-per-pC to choose)\n",
+                     scene.gain_V_per_C * 1e-9, peak_C * 1e12, scene.full_scale_V);
+    }
+  }
   return pvdf::hardware::open_sim(scene, "sim " + path + " (map " + scene.map_path + ")", open);
 #else
   throw pvdf::InputError(path + ": map-driven simulation is not available in this build (the mapping module, "
@@ -314,7 +364,13 @@ int run_acquire(const AcquireOptions& o) {
   open.stall_timeout_s = o.stall_timeout_s;
   if (o.transfers < 1 || o.transfers > 64) throw pvdf::InputError("--transfers " + std::to_string(o.transfers) + " must be in 1..64");
 
-  auto source = open_any_source(o.device, open);
+  if (o.gain_given && !(o.gain_mV_per_pC > 0 && std::isfinite(o.gain_mV_per_pC))) {
+    char text[160];
+    std::snprintf(text, sizeof text, "--gain-mV-per-pC %g: must be finite and > 0 (mV/pC); omit it to use the device's",
+                  o.gain_mV_per_pC);
+    throw pvdf::InputError(text);
+  }
+  auto source = open_any_source(o.device, open, o.quiet);
   const StreamInfo info = source->info();
   auto stage = make_stage(o, info);
   std::optional<pvdf::hardware::Recorder> recorder;
@@ -401,7 +457,9 @@ PVDF_COMMAND(70, [](CLI::App& root) {
   sub->add_option("--rate-Hz", o->rate_Hz, "usb: sample rate per channel (default: the device's)");
   sub->add_option("--channels", o->channels, "usb: channels to stream, e.g. 0,1,2 (default: the device's)");
   sub->add_option("--gain-mV-per-pC", o->gain_mV_per_pC,
-                  "Charge-amplifier sensitivity: set on a usb device, and used to turn volts into charge for --locate");
+                  "Charge-amplifier sensitivity: set on a usb device (and the simulator), and used to turn volts into "
+                  "charge for --locate")
+      ->each([o](const std::string&) { o->gain_given = true; });
   sub->add_option("--duration-s", o->duration_s, "Stop after this much signal (0 = until the stream ends or Ctrl-C)");
   sub->add_option("--stall-timeout-s", o->stall_timeout_s, "usb: give up when no data arrives for this long")
       ->capture_default_str();

@@ -24,6 +24,7 @@ struct LocateOptions {
   std::string charges;
   std::string noise;
   double force_N = 0;
+  bool force_N_given = false;
   std::string force_range;
   bool no_calibration = false;
   bool json = false;
@@ -33,6 +34,12 @@ struct LocateOptions {
   std::string plot_path;
   std::string pictures_dir;
 };
+
+std::string g_text(double v) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%g", v);
+  return buffer;
+}
 
 nlohmann::json flags_json(std::uint32_t flags) {
   nlohmann::json a = nlohmann::json::array();
@@ -60,7 +67,14 @@ int run_locate(const LocateOptions& o) {
     options.max_force_N = r[1];
     if (!(r[0] > 0) || !(r[1] > r[0])) throw pvdf::InputError("--force-range-N " + o.force_range + ": need 0 < MIN < MAX (N)");
   }
-  if (o.force_N != 0 && !(o.force_N > 0)) throw pvdf::InputError("--force-N " + std::to_string(o.force_N) + ": must be > 0 (N)");
+  if (o.force_N_given && !(o.force_N > 0 && std::isfinite(o.force_N))) {
+    throw pvdf::InputError("--force-N " + g_text(o.force_N) + ": must be finite and > 0 (N); omit it when the force is unknown");
+  }
+  if (!options.noise_C.empty()) {
+    for (double s : options.noise_C) {
+      if (!(s > 0 && std::isfinite(s))) throw pvdf::InputError("--noise-C " + o.noise + ": " + g_text(s) + " must be finite and > 0 (C)");
+    }
+  }
   options.known_force_N = o.force_N;
   const Locator locator(map, options);
 
@@ -100,13 +114,16 @@ int run_locate(const LocateOptions& o) {
         j["sigma_y_m"] = r.sigma_y_m;
         j["sigma_F_N"] = r.sigma_F_N;
         j["n_solutions"] = r.n_solutions;
+        j["probability"] = r.probability;
+        j["p_best"] = r.probability;
         j["calibrated"] = locator.calibrated();
         if (r.flags & flag::ambiguous) {
           nlohmann::json others = nlohmann::json::array();
           for (int a = 0; a < r.n_alternatives; ++a) {
             const auto& alt = r.alternatives[std::size_t(a)];
             others.push_back({{"x_m", alt.x_m}, {"y_m", alt.y_m}, {"force_N", alt.force_N}, {"residual", alt.residual},
-                              {"sigma_x_m", alt.sigma_x_m}, {"sigma_y_m", alt.sigma_y_m}, {"sigma_F_N", alt.sigma_F_N}});
+                              {"sigma_x_m", alt.sigma_x_m}, {"sigma_y_m", alt.sigma_y_m}, {"sigma_F_N", alt.sigma_F_N},
+                              {"probability", alt.probability}});
           }
           j["alternatives"] = others;
         }
@@ -116,13 +133,14 @@ int run_locate(const LocateOptions& o) {
       std::printf("x = %.4f mm +- %.4f mm\ny = %.4f mm +- %.4f mm\nF = %.5g N +- %.3g N%s\n", r.x_m * 1e3,
                   r.sigma_x_m * 1e3, r.y_m * 1e3, r.sigma_y_m * 1e3, r.force_N, r.sigma_F_N,
                   o.force_N > 0 ? " (given)" : "");
-      std::printf("residual = %.3g (noise units)\nflags: %s\n", r.residual, flags_text(r.flags).c_str());
+      std::printf("residual = %.3g (noise units)\nprobability = %.3g\nflags: %s\n", r.residual, r.probability,
+                  flags_text(r.flags).c_str());
       for (int a = 0; a < r.n_alternatives; ++a) {
         const auto& alt = r.alternatives[std::size_t(a)];
-        std::printf("also fits: x = %.4f mm, y = %.4f mm, F = %.5g N, residual %.3g\n", alt.x_m * 1e3, alt.y_m * 1e3,
-                    alt.force_N, alt.residual);
+        std::printf("also fits: x = %.4f mm, y = %.4f mm, F = %.5g N, residual %.3g, probability %.3g\n",
+                    alt.x_m * 1e3, alt.y_m * 1e3, alt.force_N, alt.residual, alt.probability);
       }
-      if (r.flags & flag::ambiguous) std::printf("%d solutions fit within noise in all\n", r.n_solutions);
+      if (r.flags & flag::ambiguous) std::printf("%d solutions fit within noise in all (all shown)\n", r.n_solutions);
     } else {
       std::printf("flags: %s\n", flags_text(r.flags).c_str());
     }
@@ -174,8 +192,9 @@ PVDF_COMMAND(60, [](CLI::App& root) {
   sub->add_option("--charges-C", o->charges, "One press: the charges of the map's electrodes, in its order (C), e.g. 4e-11,2e-11,1.5e-11");
   sub->add_flag("--json", o->json, "Print the single result as JSON");
   sub->add_option("--noise-C", o->noise, "1-sigma charge noise, one value or one per electrode (C); default: the map's");
-  sub->add_option("--force-N", o->force_N, "Known force (N): fit the position only (and the force of --pictures)");
-  sub->add_option("--force-range-N", o->force_range, "Plausible forces MIN,MAX (N); default: half the lowest to twice the highest map level");
+  sub->add_option("--force-N", o->force_N, "Known force (N): fit the position only (and the force of --pictures)")
+      ->each([o](const std::string&) { o->force_N_given = true; });
+  sub->add_option("--force-range-N", o->force_range, "Plausible forces MIN,MAX (N), also the prior of the solutions' probabilities; default: half the lowest to twice the highest map level");
   sub->add_flag("--no-calibration", o->no_calibration, "Ignore the map's calibration group");
   sub->add_flag("--stream", o->stream, "Read CSV rows (t_s,charge_<name>_C,...) on stdin, write located rows on stdout");
   sub->add_option("--input", o->input, "Read the CSV rows from this file instead of stdin (implies --stream)");

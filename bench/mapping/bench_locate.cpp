@@ -4,9 +4,11 @@
 // noise (optionally plotted: --plot PNG).
 //   bench_locate [--presses N] [--plot docs/img/lookup_error_vs_noise.png]
 //   bench_locate --profile   (only the 6-start lookup, 50 passes: for perf record)
+//   bench_locate --tracking  (only the stream tracker against the full search)
 #include "pvdf/plot/plot.hpp"
 #include "pvdf/mapping/locator.hpp"
 #include "pvdf/mapping/synthetic.hpp"
+#include "pvdf/mapping/tracker.hpp"
 #include "pvdf/mapping/triangulation.hpp"
 
 #include <algorithm>
@@ -91,16 +93,116 @@ Row run(const std::string& name, const std::vector<Press>& presses, const std::v
   return row;
 }
 
+
+/// A realistic sensor stream at 10 kHz: presses of 50-500 ms separated by 20-100 ms of nothing,
+/// each a raised-cosine force ramp up (10-30 % of the press), a hold and a ramp down, to a peak
+/// of 0.5-2 N; half of them still, half moving along a straight line at up to 50 mm/s; within
+/// 12 mm of the centre; Gaussian charge noise of `noise_C` on every sample.
+std::vector<std::array<double, 3>> realistic_stream(const SyntheticModel& model, double duration_s, double noise_C,
+                                                    unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(0, 1);
+  std::normal_distribution<double> noise(0, noise_C);
+  const double dt = 1e-4;
+  std::vector<std::array<double, 3>> q;
+  const std::size_t n = std::size_t(duration_s / dt);
+  while (q.size() < n) {
+    const std::size_t gap = std::size_t((0.02 + 0.08 * u(rng)) / dt);
+    for (std::size_t i = 0; i < gap && q.size() < n; ++i) q.push_back({noise(rng), noise(rng), noise(rng)});
+    const double length_s = 0.05 + 0.45 * u(rng), rise_s = length_s * (0.1 + 0.2 * u(rng)), peak_N = 0.5 + 1.5 * u(rng);
+    double x = 0, y = 0;
+    do {
+      x = (2 * u(rng) - 1) * 0.012;
+      y = (2 * u(rng) - 1) * 0.012;
+    } while (std::hypot(x, y) > 0.012);
+    const bool moving = u(rng) < 0.5;
+    const double speed = moving ? 0.05 * u(rng) : 0.0, heading = 2 * M_PI * u(rng);
+    const std::size_t samples = std::size_t(length_s / dt);
+    for (std::size_t i = 0; i < samples && q.size() < n; ++i) {
+      const double t = double(i) * dt;
+      const double ramp = t < rise_s ? 0.5 - 0.5 * std::cos(M_PI * t / rise_s)
+                          : t > length_s - rise_s ? 0.5 - 0.5 * std::cos(M_PI * (length_s - t) / rise_s) : 1.0;
+      const double F = std::max(peak_N * ramp, 1e-6);
+      const double px = std::clamp(x + speed * t * std::cos(heading), -0.014, 0.014);
+      const double py = std::clamp(y + speed * t * std::sin(heading), -0.014, 0.014);
+      std::array<double, 3> c{};
+      for (std::size_t k = 0; k < 3; ++k) c[k] = model.charge_C(px, py, F, k) + noise(rng);
+      q.push_back(c);
+    }
+  }
+  return q;
+}
+
+/// The tracker against the full search on a realistic stream: samples/s of each (CPU time of
+/// one thread, best of 3), how often the tracker's answer equals the full search's (same
+/// position or none; position and force within a tenth of the full search's σ), and the
+/// tracker's latency per sample.
+void tracking_rows(const Locator& locator, const SyntheticModel& model, const TrackerOptions& options) {
+  const auto q = realistic_stream(model, 10.0, 0.05e-12, 7);
+  const std::size_t n = q.size();
+  std::vector<Location> full(n), tracked(n);
+  double best_full = 1e30, best_tracked = 1e30;
+  for (int pass = 0; pass < 3; ++pass) {
+    std::clock_t t0 = std::clock();
+    for (std::size_t i = 0; i < n; ++i) full[i] = locator.locate(q[i].data());
+    best_full = std::min(best_full, double(std::clock() - t0) / CLOCKS_PER_SEC);
+    Tracker tracker(locator, options);
+    t0 = std::clock();
+    for (std::size_t i = 0; i < n; ++i) tracked[i] = tracker.next(q[i].data());
+    best_tracked = std::min(best_tracked, double(std::clock() - t0) / CLOCKS_PER_SEC);
+  }
+  std::size_t agree = 0, with_position = 0, agree_position = 0, differ_presence = 0, differ_count = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Location& a = full[i];
+    const Location& b = tracked[i];
+    bool same = a.has_position() == b.has_position();
+    differ_presence += !same;
+    differ_count += same && a.has_position() && a.n_solutions != b.n_solutions;
+    if (same && a.has_position()) {
+      ++with_position;
+      same = std::abs(a.x_m - b.x_m) <= 0.1 * a.sigma_x_m + 1e-12 && std::abs(a.y_m - b.y_m) <= 0.1 * a.sigma_y_m + 1e-12 &&
+             std::abs(a.force_N - b.force_N) <= 0.1 * a.sigma_F_N + 1e-12;
+      agree_position += same;
+    }
+    agree += same;
+  }
+  // Latency: each sample timed on its own (steady clock), a fresh tracker.
+  Tracker tracker(locator, options);
+  std::vector<double> latency(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto t0 = std::chrono::steady_clock::now();
+    tracker.next(q[i].data());
+    latency[i] = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  }
+  const TrackerSummary& s = tracker.summary();
+  std::printf("tracking a realistic stream (10 s at 10 kHz: presses of 50-500 ms, still and moving up to 50 mm/s, "
+              "force ramps to 0.5-2 N, 0.05 pC noise; %zu samples, %zu with a position):\n", n, with_position);
+  std::printf("  full search every sample      %10.0f samples/s\n", double(n) / best_full);
+  std::printf("  tracker (locate_from + search) %10.0f samples/s  (%.2fx)\n", double(n) / best_tracked,
+              best_full / best_tracked);
+  std::printf("  agreement with the full search within sigma/10: %.3f %% of samples (%.3f %% of those with a position)\n",
+              100.0 * double(agree) / double(n), 100.0 * double(agree_position) / double(std::max<std::size_t>(with_position, 1)));
+  std::printf("  search interval %d samples, search on a direction-bin change: %s; disagreements: %zu with/without a "
+              "position, %zu with another number of solutions\n", options.search_interval,
+              options.search_on_bin_change ? "yes" : "no", differ_presence, differ_count);
+  std::printf("  tracker: %llu full searches (onset %llu, degraded %llu, bin change %llu, interval %llu), %llu tracked\n",
+              (unsigned long long)s.full_searches, (unsigned long long)s.onsets, (unsigned long long)s.degraded,
+              (unsigned long long)s.bin_changes, (unsigned long long)s.intervals, (unsigned long long)s.tracked);
+  std::printf("  latency per sample: median %.2f us, p99 %.2f us, max %.2f us\n\n", median(latency) * 1e6,
+              percentile(latency, 0.99) * 1e6, *std::max_element(latency.begin(), latency.end()) * 1e6);
+}
 }  // namespace
 
 int main(int argc, char** argv) {
   std::size_t n = 2000;
   std::string plot_path;
+  bool tracking_only = false;
   bool profile = false;  // --profile: only the first lookup row, repeated (for perf record)
   for (int a = 1; a < argc; ++a) {
     if (!std::strcmp(argv[a], "--presses") && a + 1 < argc) n = std::size_t(std::atol(argv[++a]));
     if (!std::strcmp(argv[a], "--plot") && a + 1 < argc) plot_path = argv[++a];
     if (!std::strcmp(argv[a], "--profile")) profile = true;
+    if (!std::strcmp(argv[a], "--tracking")) tracking_only = true;
   }
   SyntheticModel model;  // seed-001 triangle, d31/d32 direction factor, anisotropy, core, rim
   model.force_skew = 0.05;
@@ -128,6 +230,17 @@ int main(int argc, char** argv) {
   std::vector<std::array<double, 3>> q(n);
   for (std::size_t i = 0; i < n; ++i) {
     for (std::size_t k = 0; k < 3; ++k) q[i][k] = model.charge_C(presses[i].x, presses[i].y, presses[i].F, k);
+  }
+  if (tracking_only) {  // only the tracker against the full search
+    TrackerOptions by_default;
+    tracking_rows(locator, model, by_default);
+    for (int interval : {20, 100}) {
+      TrackerOptions no_bins;
+      no_bins.search_on_bin_change = false;
+      no_bins.search_interval = interval;
+      tracking_rows(locator, model, no_bins);
+    }
+    return 0;
   }
   if (profile) {
     double sink = 0;
@@ -202,6 +315,16 @@ int main(int argc, char** argv) {
     for (const auto& r : stream_rows) {
       std::printf("%-46s %12.0f %12.5f %12.4f %12.4f %9.1f%% %7.1f%%\n", r.method.c_str(), r.rate, r.med * 1e3,
                   r.p95 * 1e3, r.force * 100, r.ambiguous * 100, r.flagged * 100);
+    }
+  }
+  {
+    TrackerOptions by_default;
+    tracking_rows(locator, model, by_default);
+    for (int interval : {20, 100}) {
+      TrackerOptions no_bins;
+      no_bins.search_on_bin_change = false;
+      no_bins.search_interval = interval;
+      tracking_rows(locator, model, no_bins);
     }
   }
   std::printf("\n(median/p95: error of the reported answer nearest the truth; 'ambiguous': another solution fits "

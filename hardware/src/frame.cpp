@@ -8,21 +8,11 @@
 #include <cstring>
 #include <sstream>
 
+#include <zlib.h>
+
 namespace pvdf::hardware {
 
 namespace {
-
-// Byte-wise table for the reflected polynomial, built once at compile time.
-constexpr std::array<std::uint32_t, 256> make_crc_table() {
-  std::array<std::uint32_t, 256> table{};
-  for (std::uint32_t i = 0; i < 256; ++i) {
-    std::uint32_t c = i;
-    for (int k = 0; k < 8; ++k) c = (c & 1u) ? (0xEDB88320u ^ (c >> 1)) : (c >> 1);
-    table[i] = c;
-  }
-  return table;
-}
-constexpr std::array<std::uint32_t, 256> crc_table = make_crc_table();
 
 std::uint16_t get_u16(const std::uint8_t* p) { return static_cast<std::uint16_t>(p[0] | (p[1] << 8)); }
 std::uint32_t get_u32(const std::uint8_t* p) {
@@ -51,9 +41,26 @@ int popcount16(std::uint16_t v) {
 }  // namespace
 
 std::uint32_t crc32(const std::uint8_t* data, std::size_t n, std::uint32_t crc) {
-  std::uint32_t c = ~crc;
-  for (std::size_t i = 0; i < n; ++i) c = crc_table[(c ^ data[i]) & 0xFFu] ^ (c >> 8);
-  return ~c;
+  // zlib's crc32 (same polynomial, initial value and final XOR; hardware-assisted where zlib
+  // has it), fed in pieces below 4 GiB because its length is a uInt.
+  uLong c = crc;
+  while (n > 0) {
+    const uInt piece = static_cast<uInt>(std::min<std::size_t>(n, 1u << 30));
+    c = ::crc32(c, data, piece);
+    data += piece;
+    n -= piece;
+  }
+  return static_cast<std::uint32_t>(c);
+}
+
+bool sample_clipped(const Frame& frame, int sample, int adc_bits) {
+  const int code_max = (1 << (adc_bits - 1)) - 1;
+  const int nc = frame.n_channels;
+  for (int c = 0; c < nc; ++c) {
+    const int v = frame.counts[static_cast<std::size_t>(sample * nc + c)];
+    if (v >= code_max || v <= -code_max - 1) return true;
+  }
+  return false;
 }
 
 void encode_frame(const Frame& frame, std::vector<std::uint8_t>& out) {

@@ -61,6 +61,7 @@ SimScene parse_sim_scene(const nlohmann::json& json, const std::string& source) 
   s.full_scale_V = r.positive_or("full_scale_V", s.full_scale_V);
   s.noise_V = r.non_negative_or("noise_V", s.noise_V);
   s.sensitivity_C_per_N = r.number_or("sensitivity_C_per_N", s.sensitivity_C_per_N);
+  s.gain_given = r.has("gain_V_per_C");
   s.gain_V_per_C = r.number_or("gain_V_per_C", s.gain_V_per_C);
   s.time_constant_s = r.non_negative_or("time_constant_s", s.time_constant_s);
   s.seed = static_cast<unsigned>(r.integer_or("seed", 1, 0, 0xFFFFFFFFL));

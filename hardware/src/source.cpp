@@ -93,7 +93,15 @@ std::unique_ptr<Source> open_source(const std::string& spec, const OpenOptions& 
 }
 
 std::unique_ptr<Source> open_sim(const SimScene& scene, const std::string& description, const OpenOptions& options) {
-  return with_gain(std::make_unique<SimSource>(scene, options.realtime, description), options.gain_mV_per_pC);
+  // The simulated device is the hardware: a gain given for it sets its amplifier (like a USB
+  // device's), so volts and charges stay consistent.
+  if (options.gain_mV_per_pC > 0) {
+    SimScene with_gain_set = scene;
+    with_gain_set.gain_V_per_C = options.gain_mV_per_pC * 1e9;  // mV/pC = 1e9 V/C
+    with_gain_set.gain_given = true;
+    return std::make_unique<SimSource>(with_gain_set, options.realtime, description);
+  }
+  return std::make_unique<SimSource>(scene, options.realtime, description);
 }
 
 }  // namespace pvdf::hardware

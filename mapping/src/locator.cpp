@@ -4,6 +4,7 @@
 #include "pvdf/core/error.hpp"
 
 #include <algorithm>
+#include <cstdio>
 #include <cmath>
 #include <limits>
 
@@ -20,9 +21,9 @@ namespace pvdf::mapping {
 
 std::string flags_text(std::uint32_t flags) {
   static const char* names[] = {"outside_map", "ambiguous", "no_press", "poor_fit", "force_extrapolated",
-                                "scaling_assumed", "not_converged", "ill_conditioned"};
+                                "scaling_assumed", "not_converged", "ill_conditioned", "saturated"};
   std::string out;
-  for (int b = 0; b < 8; ++b) {
+  for (int b = 0; b < 9; ++b) {
     if (flags & (1u << b)) {
       if (!out.empty()) out += '|';
       out += names[b];
@@ -114,6 +115,13 @@ inline bool test_candidate(const float* sc, std::size_t ne_runtime, const double
   return true;
 }
 
+/// A number for a message, printed like %g (never "-0.000000").
+std::string text_g(double v) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%g", v);
+  return buffer;
+}
+
 inline double normalize(double* v, std::size_t n) {
   double s = 0;
   for (std::size_t k = 0; k < n; ++k) s += v[k] * v[k];
@@ -138,11 +146,11 @@ Locator::Locator(const ChargeMap& map, const LocatorOptions& options)
   } else if (options.noise_C.size() == ne_) {
     noise_ = options.noise_C;
   } else {
-    throw InputError("--noise-C: " + std::to_string(options.noise_C.size()) + " values given; give 1 or " +
+    throw InputError("locator noise_C: " + std::to_string(options.noise_C.size()) + " values given; give 1 or " +
                      std::to_string(ne_) + " (one per electrode)");
   }
   for (double s : noise_) {
-    if (!std::isfinite(s) || !(s > 0)) throw InputError("--noise-C: " + std::to_string(s) + " must be finite and > 0 (C)");
+    if (!std::isfinite(s) || !(s > 0)) throw InputError("locator noise_C = " + text_g(s) + " must be finite and > 0 (C)");
   }
   gain_.assign(ne_, 1.0);
   offset_.assign(ne_, 0.0);
@@ -162,19 +170,19 @@ Locator::Locator(const ChargeMap& map, const LocatorOptions& options)
   chi2_limit_ = options.known_force_N > 0 ? chi2_limit_fixed_ : chi2_limit_free_;
   single_level_ = map.nf() == 1;
   // Plausible forces: what the caller says, else half the lowest to twice the highest level
-  // (unbounded for a single-level map, where the scaling law is all there is).
+  // (also for a single-level map: the scaling law carries it over that range).
   {
     double lo = options.min_force_N, hi = options.max_force_N;
-    if (!(lo > 0)) lo = single_level_ ? 1e-30 : 0.5 * map.forces_N.front();
-    if (!(hi > 0)) hi = single_level_ ? 1e30 : 2.0 * map.forces_N.back();
+    if (!(lo > 0)) lo = 0.5 * map.forces_N.front();
+    if (!(hi > 0)) hi = 2.0 * map.forces_N.back();
     if (!(hi > lo) || !std::isfinite(lo) || !std::isfinite(hi)) {
-      throw InputError("--force-range-N: " + std::to_string(lo) + ".." + std::to_string(hi) + " must satisfy 0 < min < max");
+      throw InputError("locator force range " + text_g(lo) + ".." + text_g(hi) + " N must satisfy 0 < min < max");
     }
     log_force_lo_ = std::log(lo);
     log_force_hi_ = std::log(hi);
     if (options.known_force_N != 0.0) {
       if (!(options.known_force_N > 0) || !std::isfinite(options.known_force_N)) {
-        throw InputError("--force-N: " + std::to_string(options.known_force_N) + " must be finite and > 0 (N)");
+        throw InputError("locator known_force_N = " + text_g(options.known_force_N) + " must be finite and > 0 (N)");
       }
       fixed_force_ = true;
       log_force_lo_ = log_force_hi_ = std::log(options.known_force_N);
@@ -1237,6 +1245,17 @@ PVDF_CLONES Location Locator::locate_impl(const double* charges_C, bool fixed_fo
   return finish(Q, fits, n_starts);
 }
 
+std::int64_t Locator::search_bin(const double* charges_C) const {
+  Query Q;
+  Location early;
+  if (!prepare(charges_C, fixed_force_, fixed_force_ ? log_force_lo_ : 0.0, Q, early)) return -1;
+  double phi, theta;
+  direction_key(Q.q_unit.data(), phi, theta);
+  const int p = std::clamp(int(std::floor((phi - phi0_) / (phi1_ - phi0_) * bins_)), -1, bins_);
+  const int t = std::clamp(int(std::floor((theta - theta0_) / (theta1_ - theta0_) * bins_)), -1, bins_);
+  return std::int64_t(t + 1) * (bins_ + 2) + (p + 1);
+}
+
 Location Locator::locate_from(const double* charges_C, const std::array<double, 3>* starts, int n_starts) const {
   Query Q;
   Location early;
@@ -1258,8 +1277,6 @@ Location Locator::locate_from(const double* charges_C, const std::array<double, 
 PVDF_CLONES Location Locator::finish(const Query& Q, std::array<Fit, 8>& fits, int n_starts) const {
   const bool fixed_force = Q.fixed_force;
   const double limit = Q.limit;
-  const Vec& q = Q.q;
-  const Vec& w = Q.w;
   Location out;
   out.n_starts = n_starts;
   // Rank: fits within noise first, among them forces inside the map's levels first, then χ².
@@ -1282,19 +1299,7 @@ PVDF_CLONES Location Locator::finish(const Query& Q, std::array<Fit, 8>& fits, i
   }
   Fit& b = fits[std::size_t(best)];
   covariance(b, fixed_force);
-  out.x_m = b.x;
-  out.y_m = b.y;
-  out.force_N = std::exp(b.l);
-  out.residual = std::sqrt(b.chi2);
-  out.sigma_x_m = b.sigma[0];
-  out.sigma_y_m = b.sigma[1];
-  out.sigma_F_N = out.force_N * b.sigma[2];
-  out.iterations = b.iterations;
-  out.n_solutions = 1;
-  if (!b.converged) out.flags |= flag::not_converged;
-  if (b.singular) out.flags |= flag::ill_conditioned;
-  if (single_level_) out.flags |= flag::scaling_assumed;
-  if (extrapolated(b)) out.flags |= flag::force_extrapolated;
+  fill_main(b, out);
   if (b.chi2 > limit) {
     if (b.blocked) {
       out = Location{};
@@ -1306,6 +1311,95 @@ PVDF_CLONES Location Locator::finish(const Query& Q, std::array<Fit, 8>& fits, i
     return out;
   }
   // Other minima that also fit within noise and lie elsewhere: ambiguous.
+  std::array<int, 8> group{};
+  const int n_group = distinct_solutions(Q, fits, n_starts, best, group);
+  if (n_group == 1) return out;
+  // Every solution with its posterior probability; the most probable one is the main answer,
+  // the others follow most probable first.
+  std::array<double, 8> p{};
+  double p_max = -std::numeric_limits<double>::infinity();
+  for (int g = 0; g < n_group; ++g) {
+    p[std::size_t(g)] = log_posterior_weight(Q, fits[std::size_t(group[std::size_t(g)])]);
+    p_max = std::max(p_max, p[std::size_t(g)]);
+  }
+  double sum = 0;
+  for (int g = 0; g < n_group; ++g) sum += (p[std::size_t(g)] = std::exp(p[std::size_t(g)] - p_max));
+  for (int g = 0; g < n_group; ++g) p[std::size_t(g)] /= sum;
+  for (int a = 1; a < n_group; ++a) {  // insertion sort of a handful, most probable first
+    for (int c = a; c > 0 && p[std::size_t(c)] > p[std::size_t(c - 1)]; --c) {
+      std::swap(p[std::size_t(c)], p[std::size_t(c - 1)]);
+      std::swap(group[std::size_t(c)], group[std::size_t(c - 1)]);
+    }
+  }
+  const int n_starts_made = out.n_starts;
+  Fit& main = fits[std::size_t(group[0])];
+  if (group[0] != best) {
+    covariance(main, fixed_force);
+    out = Location{};
+    out.n_starts = n_starts_made;
+    fill_main(main, out);
+  }
+  out.flags |= flag::ambiguous;
+  out.n_solutions = n_group;
+  out.probability = p[0];
+  out.n_alternatives = n_group - 1;
+  for (int a = 1; a < n_group; ++a) {
+    Fit& f = fits[std::size_t(group[std::size_t(a)])];
+    if (group[std::size_t(a)] != best) covariance(f, fixed_force);
+    out.alternatives[std::size_t(a - 1)] = {f.x, f.y, std::exp(f.l), std::sqrt(f.chi2), f.sigma[0], f.sigma[1],
+                                            std::exp(f.l) * f.sigma[2], p[std::size_t(a)]};
+  }
+  out.alternative = out.alternatives[0];
+  return out;
+}
+
+void Locator::fill_main(const Fit& b, Location& out) const {
+  out.x_m = b.x;
+  out.y_m = b.y;
+  out.force_N = std::exp(b.l);
+  out.residual = std::sqrt(b.chi2);
+  out.sigma_x_m = b.sigma[0];
+  out.sigma_y_m = b.sigma[1];
+  out.sigma_F_N = out.force_N * b.sigma[2];
+  out.iterations = b.iterations;
+  out.n_solutions = 1;
+  out.probability = 1.0;
+  if (!b.converged) out.flags |= flag::not_converged;
+  if (b.singular) out.flags |= flag::ill_conditioned;
+  // The force is outside the map's levels (the scaling law carries the map there) only when it
+  // is so by more than its own uncertainty: a press at a level's force is not flagged.
+  const double tolerance = std::max(1e-3, 2.0 * b.sigma[2]);
+  const bool off_levels = b.l < interp_.min_log_force() - tolerance || b.l > interp_.max_log_force() + tolerance;
+  if (off_levels) out.flags |= flag::force_extrapolated;
+  if (single_level_ && off_levels) out.flags |= flag::scaling_assumed;
+}
+
+double Locator::log_posterior_weight(const Query& Q, const Fit& f) const {
+  // Laplace approximation of the posterior mass around a solution: exp(−χ²/2) times the volume
+  // (2π)^(k/2) det(A)^(−1/2) of its Gaussian, A = JᵀWJ in (x, y[, ln F]), times the prior's
+  // density there. The prior is uniform over the map's area and uniform in F over the force
+  // range: in ln F its density is ∝ F. Where JᵀWJ is (nearly) singular the prior itself bounds
+  // the posterior's width: A gets the precision of the uniform prior (12 / width²) added.
+  const double wx = double(interp_.nx() - 1) * interp_.hx(), wy = double(interp_.ny() - 1) * interp_.hy();
+  const double rx = 12.0 / (wx * wx), ry = 12.0 / (wy * wy);
+  const auto& m = f.jtj;  // 00 01 02 11 12 22
+  const double a00 = m[0] + rx, a01 = m[1], a11 = m[3] + ry;
+  double det = 0, floor = rx * ry;
+  if (Q.fixed_force) {
+    det = a00 * a11 - a01 * a01;
+  } else {
+    const double width_l = std::max(Q.log_hi - Q.log_lo, 1e-6), rl = 12.0 / (width_l * width_l);
+    const double a02 = m[2], a12 = m[4], a22 = m[5] + rl;
+    det = a00 * (a11 * a22 - a12 * a12) - a01 * (a01 * a22 - a12 * a02) + a02 * (a01 * a12 - a11 * a02);
+    floor *= rl;
+  }
+  return -0.5 * f.chi2 - 0.5 * std::log(std::max(det, floor)) + (Q.fixed_force ? 0.0 : f.l);
+}
+
+int Locator::distinct_solutions(const Query& Q, const std::array<Fit, 8>& fits, int n_starts, int best,
+                                std::array<int, 8>& group) const {
+  const bool fixed_force = Q.fixed_force;
+  const double limit = Q.limit;
   const double separation = options_.ambiguity_separation_cells * std::max(interp_.hx(), interp_.hy());
   // Two end points are one solution when they are within 3 σ of each other (Mahalanobis
   // distance in (x, y) from either one's JᵀWJ, ln F profiled out), or within 1e-3 cell
@@ -1329,41 +1423,19 @@ PVDF_CLONES Location Locator::finish(const Query& Q, std::array<Fit, 8>& fits, i
       singular = singular || !(det > 1e-12 * (s00 * s11 + 1e-300));
       d2 = std::min(d2, s00 * dx * dx + 2 * s01 * dx * dy + s11 * dy * dy);
     }
-    if (singular) return distinct_minima(q.data(), w.data(), a, f, 0.0, limit);
+    if (singular) return distinct_minima(Q.q.data(), Q.w.data(), a, f, 0.0, limit);
     return d2 > 9.0;
   };
-  std::array<int, 8> distinct{};
-  int n_distinct = 0;
+  group[0] = best;
+  int n = 1;
   for (int s = 0; s < n_starts; ++s) {
     const Fit& f = fits[std::size_t(s)];
     if (s == best || !f.ok || f.chi2 > limit) continue;
-    if (!distinct_from(b, f)) continue;
     bool is_new = true;
-    for (int d = 0; d < n_distinct; ++d) {
-      is_new = is_new && distinct_from(fits[std::size_t(distinct[std::size_t(d)])], f);
-    }
-    if (!is_new) continue;
-    distinct[std::size_t(n_distinct++)] = s;
+    for (int d = 0; d < n && is_new; ++d) is_new = distinct_from(fits[std::size_t(group[std::size_t(d)])], f);
+    if (is_new) group[std::size_t(n++)] = s;
   }
-  if (n_distinct > 0) {
-    out.flags |= flag::ambiguous;
-    out.n_solutions = 1 + n_distinct;
-    // Report the others best first (insertion sort of a handful).
-    for (int a = 1; a < n_distinct; ++a) {
-      for (int c = a; c > 0 && better(fits[std::size_t(distinct[std::size_t(c)])], fits[std::size_t(distinct[std::size_t(c - 1)])]); --c) {
-        std::swap(distinct[std::size_t(c)], distinct[std::size_t(c - 1)]);
-      }
-    }
-    out.n_alternatives = std::min(n_distinct, int(out.alternatives.size()));
-    for (int a = 0; a < out.n_alternatives; ++a) {
-      Fit& f = fits[std::size_t(distinct[std::size_t(a)])];
-      covariance(f, fixed_force);
-      out.alternatives[std::size_t(a)] = {f.x, f.y, std::exp(f.l), std::sqrt(f.chi2), f.sigma[0], f.sigma[1],
-                                          std::exp(f.l) * f.sigma[2]};
-    }
-    out.alternative = out.alternatives[0];
-  }
-  return out;
+  return n;
 }
 
 }  // namespace pvdf::mapping

@@ -11,7 +11,43 @@
 
 namespace pvdf::mapping {
 
-std::string stream_output_header() { return "t_s,x_m,y_m,force_N,residual,sigma_x_m,sigma_y_m,sigma_F_N,flags"; }
+std::string stream_output_header() {
+  std::string h = "t_s,x_m,y_m,force_N,residual,sigma_x_m,sigma_y_m,sigma_F_N,flags,p_best,n_solutions";
+  for (int a = 1; a < Location::max_solutions; ++a) {
+    const std::string p = ",alt" + std::to_string(a) + "_";
+    h += p + "x_m" + p + "y_m" + p + "force_N" + p + "p";
+  }
+  return h;
+}
+
+std::string stream_row_fields(const Location& r) {
+  char buffer[160];
+  std::string row;
+  if (r.has_position()) {
+    std::snprintf(buffer, sizeof buffer, "%.9g,%.9g,%.9g,%.6g,%.4g,%.4g,%.4g,", r.x_m, r.y_m, r.force_N, r.residual,
+                  r.sigma_x_m, r.sigma_y_m, r.sigma_F_N);
+    row = buffer;
+  } else {
+    row = ",,,,,,,";
+  }
+  row += flags_text(r.flags);
+  if (r.has_position()) {
+    std::snprintf(buffer, sizeof buffer, ",%.4g,%d", r.probability, r.n_solutions);
+    row += buffer;
+  } else {
+    row += ",,0";
+  }
+  for (int a = 0; a + 1 < Location::max_solutions; ++a) {
+    if (r.has_position() && a < r.n_alternatives) {
+      const auto& alt = r.alternatives[std::size_t(a)];
+      std::snprintf(buffer, sizeof buffer, ",%.9g,%.9g,%.9g,%.4g", alt.x_m, alt.y_m, alt.force_N, alt.probability);
+      row += buffer;
+    } else {
+      row += ",,,,";
+    }
+  }
+  return row;
+}
 
 StreamSummary locate_stream(const Locator& locator, std::istream& in, std::ostream& out, std::ostream& warnings,
                             const StreamOptions& options) {
@@ -48,7 +84,9 @@ StreamSummary locate_stream(const Locator& locator, std::istream& in, std::ostre
   out << stream_output_header() << '\n' << std::flush;
 
   std::array<double, max_electrodes> q{};
-  char buffer[512];
+  TrackerOptions tracker_options;
+  tracker_options.search_interval = options.search_interval;
+  Tracker tracker(locator, tracker_options);
   auto skip = [&](const std::string& reason) {
     const std::string where = options.source + ":" + std::to_string(line_no) + ": " + reason;
     if (options.strict) throw InputError(where + " (--strict refuses malformed rows; drop --strict to skip them)");
@@ -79,19 +117,17 @@ StreamSummary locate_stream(const Locator& locator, std::istream& in, std::ostre
       skip("column t_s = '" + fields[std::size_t(time_col)] + "' is not a finite number");
       good = false;
     }
-    if (!good) continue;
-    const Location r = locator.locate(q.data());
-    const std::string t_text = time_col >= 0 ? fields[std::size_t(time_col)] : std::to_string(summary.rows - 1);
-    if (r.has_position()) {
-      std::snprintf(buffer, sizeof buffer, ",%.9g,%.9g,%.9g,%.6g,%.4g,%.4g,%.4g,", r.x_m, r.y_m, r.force_N, r.residual,
-                    r.sigma_x_m, r.sigma_y_m, r.sigma_F_N);
-      ++summary.located;
-    } else {
-      std::snprintf(buffer, sizeof buffer, ",,,,,,,,");
+    if (!good) {
+      tracker.reset();  // a gap in the stream: search the next row afresh
+      continue;
     }
+    const Location r = tracker.next(q.data());
+    const std::string t_text = time_col >= 0 ? fields[std::size_t(time_col)] : std::to_string(summary.rows - 1);
+    if (r.has_position()) ++summary.located;
     if (r.flags != 0) ++summary.flagged;
-    out << t_text << buffer << flags_text(r.flags) << '\n' << std::flush;
+    out << t_text << ',' << stream_row_fields(r) << '\n' << std::flush;
   }
+  summary.tracking = tracker.summary();
   return summary;
 }
 

@@ -189,13 +189,26 @@ TEST_CASE("a symmetric layout is flagged ambiguous with the mirror position as a
   const Location r = locator.locate(pvdf_test::charges(model, p));
   REQUIRE(r.has_position());
   CHECK((r.flags & flag::ambiguous) != 0);
-  // One of the two answers is the truth, the other its mirror image.
-  const bool first_true = std::abs(r.y_m - p.y_m) < 1e-4;
-  const double other_y = first_true ? r.alternative.y_m : r.y_m;
-  CHECK(std::abs(std::abs(r.y_m) - p.y_m) < 1e-4);
-  CHECK(std::abs(other_y + p.y_m) < 1e-4);
-  CHECK(std::abs(r.alternative.x_m - p.x_m) < 1e-4);
-  CHECK(std::abs(r.alternative.force_N - p.force_N) / p.force_N < 1e-3);
+  // Both the truth and its mirror image are among the reported solutions, with the same force
+  // and — by the symmetry — the same posterior probability.
+  std::vector<Location::Alternative> all{{r.x_m, r.y_m, r.force_N, r.residual, r.sigma_x_m, r.sigma_y_m, r.sigma_F_N,
+                                          r.probability}};
+  for (int a = 0; a < r.n_alternatives; ++a) all.push_back(r.alternatives[std::size_t(a)]);
+  CHECK(int(all.size()) == r.n_solutions);
+  const Location::Alternative* truth = nullptr;
+  const Location::Alternative* mirror = nullptr;
+  double p_sum = 0;
+  for (const auto& s : all) {
+    p_sum += s.probability;
+    if (std::abs(s.x_m - p.x_m) < 1e-4 && std::abs(s.y_m - p.y_m) < 1e-4) truth = &s;
+    if (std::abs(s.x_m - p.x_m) < 1e-4 && std::abs(s.y_m + p.y_m) < 1e-4) mirror = &s;
+  }
+  REQUIRE(truth != nullptr);
+  REQUIRE(mirror != nullptr);
+  CHECK(std::abs(mirror->force_N - p.force_N) / p.force_N < 1e-3);
+  CHECK(mirror->probability == Approx(truth->probability).epsilon(0.02));
+  CHECK(p_sum == Approx(1.0).epsilon(1e-12));
+  CHECK(r.probability >= truth->probability);  // the main answer is the most probable
 }
 
 TEST_CASE("every exact solution is found: fold twins less than a cell apart are reported, not merged",
@@ -308,15 +321,29 @@ TEST_CASE("charges at the noise level are flagged no_press", "[mapping][locator]
 
 TEST_CASE("a single-level map uses the F^(2/3) law and says so", "[mapping][locator]") {
   SyntheticModel model;  // pure membrane scaling: exact
-  const Locator locator(build_synthetic_map(model, 1e-3, 3e-3, {1.0}, 0.05e-12));
+  const ChargeMap map = build_synthetic_map(model, 1e-3, 3e-3, {1.0}, 0.05e-12);
+  LocatorOptions wide;
+  wide.max_force_N = 4.0;
+  const Locator locator(map, wide);
   const Press p{-0.0071, 0.0123, 2.7};
   const Location r = locator.locate(pvdf_test::charges(model, p));
   REQUIRE(r.has_position());
   CHECK((r.flags & flag::scaling_assumed) != 0);
+  CHECK((r.flags & flag::force_extrapolated) != 0);
   double force_error = 0;
   const double error = nearest_answer_error(r, p, &force_error);
   CHECK(force_error < 1e-3);
   CHECK(error < 0.05e-3);
+  // At the map's own level the law is not needed: no flag (with the default range, which for
+  // a one-level map is half to twice its level, as for any map).
+  const Locator plain(map);
+  const Press at_level{-0.0071, 0.0123, 1.0};
+  const Location s = plain.locate(pvdf_test::charges(model, at_level));
+  REQUIRE(s.has_position());
+  CHECK((s.flags & (flag::scaling_assumed | flag::force_extrapolated)) == 0);
+  // The default range ends at twice the level: a press at 2.7 N is not accepted there.
+  const Location far = plain.locate(pvdf_test::charges(model, p));
+  if (far.has_position()) CHECK(far.force_N <= 2.0 * (1 + 1e-9));
 }
 
 TEST_CASE("calibration stored in the map is applied to measured charges", "[mapping][locator]") {
@@ -363,7 +390,7 @@ TEST_CASE("bad locator input is refused with a message", "[mapping][locator]") {
   const ChargeMap map = build_synthetic_map(SyntheticModel{}, 3e-3, 3e-3, {1.0}, 1e-13);
   LocatorOptions o;
   o.noise_C = {1e-13, 1e-13};
-  CHECK_THROWS_WITH(Locator(map, o), Catch::Contains("--noise-C"));
+  CHECK_THROWS_WITH(Locator(map, o), Catch::Contains("noise_C"));
   o.noise_C = {-1.0};
   CHECK_THROWS_AS(Locator(map, o), pvdf::InputError);
 }

@@ -59,11 +59,35 @@ TEST_CASE("a stream of charges becomes a stream of positions", "[mapping][stream
   const Location r = shared_locator().locate(pvdf_test::charges(SyntheticModel{}, a));
   CHECK(x == Approx(r.x_m).epsilon(1e-6));
   CHECK(y == Approx(r.y_m).epsilon(1e-6));
+  // Every solution is in the row: p_best, n_solutions, then the alternatives' fixed columns
+  // (filled for the n_solutions − 1 others, empty after), probabilities summing to 1.
+  REQUIRE(lines[1].size() == 11 + 4 * 7);
+  CHECK(lines[0][9] == "p_best");
+  CHECK(lines[0][10] == "n_solutions");
+  CHECK(lines[0][11] == "alt1_x_m");
+  CHECK(lines[0][38] == "alt7_p");
+  for (int i = 1; i <= 2; ++i) {
+    double p_best = 0, n_solutions = 0;
+    REQUIRE(pvdf::parse_finite(lines[std::size_t(i)][9], p_best));
+    REQUIRE(pvdf::parse_finite(lines[std::size_t(i)][10], n_solutions));
+    double p_sum = p_best;
+    for (int a = 1; a < 8; ++a) {
+      const auto& p_text = lines[std::size_t(i)][std::size_t(11 + 4 * (a - 1) + 3)];
+      CHECK(p_text.empty() == (a >= n_solutions));
+      double p = 0;
+      if (!p_text.empty() && pvdf::parse_finite(p_text, p)) {
+        CHECK(p <= p_best);  // the main answer is the most probable one
+        p_sum += p;
+      }
+    }
+    CHECK(p_sum == Approx(1.0).margin(1e-3));
+  }
   // The no-press row has empty numbers and the flag.
-  REQUIRE(lines[3].size() == 9);
+  REQUIRE(lines[3].size() == 11 + 4 * 7);
   CHECK(lines[3][1].empty());
   CHECK(lines[3][3].empty());
   CHECK(lines[3][8] == "no_press");
+  CHECK(lines[3][10] == "0");
 }
 
 TEST_CASE("malformed rows are skipped with their line numbers, or refused with strict", "[mapping][stream]") {

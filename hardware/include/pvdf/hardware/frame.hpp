@@ -28,6 +28,10 @@ struct Frame {
   std::vector<std::int16_t> counts;   ///< n_samples × n_channels, interleaved (row = sample)
 };
 
+/// True when any channel of sample `sample` sits at the ADC's limits (code ≥ 2^(bits−1) − 1 or
+/// ≤ −2^(bits−1)): the amplifier output was clipped and the sample's charges are not known.
+bool sample_clipped(const Frame& frame, int sample, int adc_bits);
+
 /// Appends the wire encoding of `frame` (header, samples, CRC) to `out`.
 /// Throws InputError if the counts are inconsistent (mask popcount ≠ n_channels, sizes).
 void encode_frame(const Frame& frame, std::vector<std::uint8_t>& out);

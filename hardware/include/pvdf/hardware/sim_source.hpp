@@ -53,6 +53,9 @@ struct SimScene {
   double noise_V = 0.002;            ///< RMS white noise at the amplifier output
   double sensitivity_C_per_N = 2.0e-11;  ///< film charge per newton (d33-like, 20 pC/N)
   double gain_V_per_C = 5.0e10;      ///< charge amplifier 1/C_f (50 mV/pC)
+  /// The scene set gain_V_per_C itself (else an application may pick one that suits the
+  /// charges it drives the presses with, e.g. a charge map's range).
+  bool gain_given = false;
   double time_constant_s = 0.0;      ///< amplifier R_f·C_f; 0 = ideal (no decay)
   unsigned seed = 1;
   std::vector<SimPress> presses;

@@ -13,7 +13,7 @@
 
 namespace pvdf::mapping {
 
-/// Flags of a Location (bit mask). A result with outside_map or no_press carries no position.
+/// Flags of a Location (bit mask). A result with outside_map, no_press or saturated carries no position.
 namespace flag {
 inline constexpr std::uint32_t outside_map = 1u << 0;        ///< best fit is held by the map's edge or force range and does not fit within noise
 inline constexpr std::uint32_t ambiguous = 1u << 1;          ///< two distinct positions fit within noise (alternative reported)
@@ -23,6 +23,7 @@ inline constexpr std::uint32_t force_extrapolated = 1u << 4; ///< force outside 
 inline constexpr std::uint32_t scaling_assumed = 1u << 5;    ///< single-level map: force from the F^(2/3) law
 inline constexpr std::uint32_t not_converged = 1u << 6;      ///< Levenberg–Marquardt hit its iteration cap
 inline constexpr std::uint32_t ill_conditioned = 1u << 7;    ///< JᵀJ singular (e.g. on a symmetry line): σ's reported as 0
+inline constexpr std::uint32_t saturated = 1u << 8;          ///< the front end clipped (ADC at its limits) or lost data: charges unknown, not located
 }  // namespace flag
 
 /// "ok" or the set names joined by '|', e.g. "ambiguous|force_extrapolated".
@@ -48,7 +49,8 @@ struct LocatorOptions {
   double ambiguity_separation_cells = 0.0;
   /// Plausible force range (N): solutions outside it are not accepted (the fit is held at the
   /// bound and then flagged outside_map if it does not fit within noise). 0 = automatic: half
-  /// the lowest to twice the highest force level of the map; unbounded for a one-level map.
+  /// the lowest to twice the highest force level of the map (a one-level map included). The
+  /// range is also the prior of the solutions' probabilities (uniform in F over it).
   /// With unknown force, three charges often have a second exact solution (a far press at a
   /// high force looks like a near press at a low one, docs/lookup.md §2): the range removes
   /// the implausible one.
@@ -70,15 +72,22 @@ struct Location {
   std::uint32_t flags = 0;
   int iterations = 0;                 ///< LM iterations of the reported solution
   int n_starts = 0;                   ///< LM runs made
-  int n_solutions = 0;                ///< distinct positions that fit within noise (> 1: ambiguous)
-  /// With `ambiguous`: the next-best other solution that fits within noise (= alternatives[0]).
+  int n_solutions = 0;                ///< distinct positions that fit within noise (> 1: ambiguous); all are reported
+  /// Most solutions one lookup reports (the main answer and up to seven alternatives).
+  static constexpr int max_solutions = 8;
+  /// Posterior probability of the main answer among the n_solutions reported (docs/lookup.md
+  /// §1.8: Gaussian charge noise, prior uniform over the map's area and the force range). The
+  /// main answer is the most probable solution; 1 when it is the only one.
+  double probability = 0;
+  /// With `ambiguous`: the next most probable other solution (= alternatives[0]).
   struct Alternative {
     double x_m = 0, y_m = 0, force_N = 0, residual = 0, sigma_x_m = 0, sigma_y_m = 0, sigma_F_N = 0;
+    double probability = 0;  ///< posterior probability of this solution (the n_solutions sum to 1)
   } alternative;
-  /// With `ambiguous`: up to three other solutions, best first (n_solutions − 1 may be larger).
-  std::array<Alternative, 3> alternatives{};
+  /// With `ambiguous`: every other solution, most probable first (n_alternatives = n_solutions − 1).
+  std::array<Alternative, max_solutions - 1> alternatives{};
   int n_alternatives = 0;
-  bool has_position() const { return (flags & (flag::outside_map | flag::no_press)) == 0; }
+  bool has_position() const { return (flags & (flag::outside_map | flag::no_press | flag::saturated)) == 0; }
 };
 
 /// Map → press lookup: coarse search in a table of charge directions, then Levenberg–Marquardt
@@ -108,6 +117,11 @@ class Locator {
   /// reported. Starts off the map or with a non-positive force are skipped (at most 8 are
   /// fitted); none left gives outside_map. Thread-safe, no allocation.
   Location locate_from(const double* charges_C, const std::array<double, 3>* starts, int n_starts) const;
+
+  /// The coarse search's bin of the charges' direction (the cells a search would test come
+  /// from it); −1 when there is nothing to locate (no press, non-finite charges). Two samples in
+  /// one bin are searched over the same candidate cells (used by Tracker to decide when to search).
+  std::int64_t search_bin(const double* charges_C) const;
 
   /// The map's (calibrated, if enabled) charges for a press at (x, y) with force F; false outside.
   bool predict(double x_m, double y_m, double force_N, double* charges_C) const;
@@ -144,6 +158,14 @@ class Locator {
   int add_fold_twins(const Query& query, std::array<Fit, 8>& fits, int n_fits) const;
   /// Choice, flags, covariance and alternatives from the fits.
   Location finish(const Query& query, std::array<Fit, 8>& fits, int n_fits) const;
+  /// Position, force, σ's and flags of the main answer from its fit (σ's computed).
+  void fill_main(const Fit& fit, Location& out) const;
+  /// The best fit (index `best`, within noise) and every other fit within noise that is a
+  /// distinct solution (group[0] = best); returns their number.
+  int distinct_solutions(const Query& query, const std::array<Fit, 8>& fits, int n_fits, int best,
+                         std::array<int, 8>& group) const;
+  /// ln of a solution's unnormalized posterior mass (Laplace approximation, docs/lookup.md §1.8).
+  double log_posterior_weight(const Query& query, const Fit& fit) const;
   bool distinct_minima(const double* q, const double* w, const Fit& a, const Fit& b, double separation,
                        double limit) const;
   struct Shortlist {
