@@ -284,14 +284,26 @@ Covariance analyse(const Eigen::MatrixXd& J, double scale) {
 
 }  // namespace
 
-FitResult fit_film(const pvdf::Scene& scene, const MeasuredTable& measured, const FitOptions& options) {
-  const auto t0 = Clock::now();
-  FitResult res;
+namespace {
+
+/// Validated parameters, starting values and uncertainties of a fit.
+struct Prepared {
+  std::vector<ParamSpec> specs;
+  Values start;
+  std::vector<std::vector<double>> sigma;
+  std::size_t m = 0;
+  bool sigmas_given = false;
+};
+
+Prepared prepare(const pvdf::Scene& scene, const MeasuredTable& measured, const FitOptions& options) {
+  Prepared res;
+  std::vector<ParamSpec>& specs = res.specs;
+  Values& start = res.start;
+  std::vector<std::vector<double>>& sigma = res.sigma;
   const std::vector<std::string> known = parameter_names(scene);
   std::vector<std::string> names = options.parameters.empty() ? default_parameters(measured) : options.parameters;
 
   // 1. Parameters and starting values.
-  std::vector<ParamSpec> specs;
   for (const auto& n : names) {
     if (std::find(known.begin(), known.end(), n) == known.end()) {
       throw pvdf::InputError("--params: '" + n + "' is not a parameter of this scene; choose from " + join(known));
@@ -306,7 +318,6 @@ FitResult fit_film(const pvdf::Scene& scene, const MeasuredTable& measured, cons
     else s.electrode = static_cast<int>(std::find(known.begin() + 4, known.end(), n) - (known.begin() + 4));
     specs.push_back(s);
   }
-  Values start;
   start.T = scene.membrane.pretension_N_per_m;
   start.d31 = scene.material.d31_C_per_N;
   start.d32 = scene.material.d32_C_per_N;
@@ -330,7 +341,7 @@ FitResult fit_film(const pvdf::Scene& scene, const MeasuredTable& measured, cons
     else if (n == "d32_C_per_N") start.d32 = value;
     else start.gains[std::find(known.begin() + 4, known.end(), n) - (known.begin() + 4)] = value;
   }
-  std::size_t m = 0;
+  std::size_t& m = res.m;
   for (const auto& c : measured.observed)
     for (double x : c.value) m += std::isnan(x) ? 0 : 1;
   const std::size_t n = specs.size();
@@ -343,7 +354,6 @@ FitResult fit_film(const pvdf::Scene& scene, const MeasuredTable& measured, cons
   }
 
   // 2. Uncertainties: given, or one relative uncertainty s estimated from the scatter (σ = s·|value|).
-  std::vector<std::vector<double>> sigma;
   for (const auto& c : measured.observed) {
     if (c.has_sigma) {
       sigma.push_back(c.sigma);
@@ -357,8 +367,13 @@ FitResult fit_film(const pvdf::Scene& scene, const MeasuredTable& measured, cons
     for (double v : c.value) s.push_back(std::max(std::abs(v), 1e-3 * scale));
     sigma.push_back(s);
   }
+  return res;
+}
 
-  // 3. FEM predictor on the measured presses.
+}  // namespace
+
+FitResult fit_film(const pvdf::Scene& scene, const MeasuredTable& measured, const FitOptions& options) {
+  prepare(scene, measured, options);  // bad names and values fail before any FEM work
   std::vector<Press> presses;
   for (std::size_t i = 0; i < measured.n_rows(); ++i) presses.push_back({measured.x_m[i], measured.y_m[i], measured.force_N[i]});
   for (std::size_t i = 0; i < presses.size(); ++i) {
@@ -370,7 +385,23 @@ FitResult fit_film(const pvdf::Scene& scene, const MeasuredTable& measured, cons
     }
   }
   Predictor predictor(scene, presses, options.predictor);
-  Problem problem(predictor, measured, specs, start, sigma);
+  return fit_film(predictor, measured, options);
+}
+
+FitResult fit_film(Predictor& predictor, const MeasuredTable& measured, const FitOptions& options) {
+  const auto t0 = Clock::now();
+  FitResult res;
+  const pvdf::Scene& scene = predictor.scene();
+  if (predictor.presses().size() != measured.n_rows()) {
+    throw pvdf::InputError("fit: the predictor serves " + std::to_string(predictor.presses().size()) +
+                           " presses, the measured table has " + std::to_string(measured.n_rows()));
+  }
+  Prepared prep = prepare(scene, measured, options);
+  const std::vector<ParamSpec>& specs = prep.specs;
+  const Values& start = prep.start;
+  const std::size_t m = prep.m, n = specs.size();
+  res.sigmas_given = prep.sigmas_given;
+  Problem problem(predictor, measured, specs, start, prep.sigma);
 
   std::vector<double> p(n);
   for (std::size_t j = 0; j < n; ++j) {

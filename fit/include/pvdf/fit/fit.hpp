@@ -94,6 +94,10 @@ struct FitResult {
 /// the film. Numerical outcomes are the status.
 FitResult fit_film(const pvdf::Scene& scene, const MeasuredTable& measured, const FitOptions& options = {});
 
+/// Same on a prepared predictor (its presses must be the table's rows, in order): repeated fits
+/// to data at the same presses reuse its mesh, model choice and warm starts.
+FitResult fit_film(Predictor& predictor, const MeasuredTable& measured, const FitOptions& options = {});
+
 /// The scene with the film parameters applied: stiffnesses × E_scale, pretension, d31, d32.
 pvdf::Scene apply_parameters(const pvdf::Scene& scene, double pretension_N_per_m, double E_scale, double d31_C_per_N,
                              double d32_C_per_N);
