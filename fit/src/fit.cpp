@@ -370,6 +370,68 @@ Prepared prepare(const pvdf::Scene& scene, const MeasuredTable& measured, const 
   return res;
 }
 
+/// Covariance, correlations and the identifiability verdict of the free parameters (§2 of
+/// docs/fem-vs-experiment.md): fills res.correlation and res.condition_number.
+struct Identifiability {
+  std::vector<double> sigma_internal;  ///< [n] 1-σ of the internal parameters (NaN for bound ones)
+  std::vector<bool> determined;        ///< [n]
+  std::vector<std::string> why;        ///< [n] reason when not determined
+  bool ill = false;
+};
+
+Identifiability identify(const Eigen::MatrixXd& J, const std::vector<Eigen::Index>& free, double cov_scale,
+                         const std::vector<ParamSpec>& specs, const FitOptions& options, FitResult& res) {
+  const std::size_t n = specs.size();
+  res.correlation.assign(n, std::vector<double>(n, std::numeric_limits<double>::quiet_NaN()));
+  Identifiability out;
+  std::vector<double>& sigma_internal = out.sigma_internal;
+  std::vector<bool>& determined = out.determined;
+  std::vector<std::string>& why = out.why;
+  sigma_internal.assign(n, std::numeric_limits<double>::quiet_NaN());
+  determined.assign(n, true);
+  why.assign(n, "");
+  if (!free.empty()) {
+    Eigen::MatrixXd Jf(J.rows(), static_cast<Eigen::Index>(free.size()));
+    for (std::size_t a = 0; a < free.size(); ++a) Jf.col(static_cast<Eigen::Index>(a)) = J.col(free[a]);
+    const Covariance c = analyse(Jf, cov_scale);
+    res.condition_number = c.condition;
+    const Eigen::Index nf = static_cast<Eigen::Index>(free.size());
+    for (Eigen::Index a = 0; a < nf; ++a) {
+      sigma_internal[free[a]] = std::sqrt(c.cov(a, a));
+      for (Eigen::Index b = 0; b < nf; ++b)
+        res.correlation[free[a]][free[b]] = c.cov(a, b) / std::sqrt(c.cov(a, a) * c.cov(b, b));
+    }
+    // A parameter is not determined when it takes part (component > 0.1) in a direction the data
+    // resolve condition_limit times worse than the best one, or when it is correlated beyond
+    // correlation_limit with another: the data then fix only a combination of the two.
+    for (Eigen::Index k = 0; k < nf; ++k) {
+      if (!(c.s(k) * options.condition_limit < c.s(0))) continue;
+      for (Eigen::Index a = 0; a < nf; ++a) {
+        if (std::abs(c.V(a, k)) > 0.1 && determined[free[a]]) {
+          determined[free[a]] = false;
+          why[free[a]] = "the data fix only a combination of parameters here (column-scaled condition number " +
+                         fmt(c.condition, 3) + " > " + fmt(options.condition_limit, 3) + ")";
+        }
+      }
+    }
+    for (Eigen::Index a = 0; a < nf; ++a) {
+      for (Eigen::Index b = 0; b < nf; ++b) {
+        const double r = res.correlation[free[a]][free[b]];
+        if (a != b && std::abs(r) > options.correlation_limit) {
+          determined[free[a]] = false;
+          if (why[free[a]].empty() || why[free[a]].rfind("the data fix", 0) == 0) {
+            why[free[a]] = "indistinguishable from " + specs[free[b]].name + " (correlation " + fmt(r, 6) +
+                           ", column-scaled condition number " + fmt(c.condition, 3) + ")";
+          }
+        }
+      }
+    }
+    for (std::size_t j = 0; j < n; ++j) out.ill = out.ill || !determined[j];
+  }
+
+  return out;
+}
+
 }  // namespace
 
 FitResult fit_film(const pvdf::Scene& scene, const MeasuredTable& measured, const FitOptions& options) {
@@ -492,49 +554,11 @@ FitResult fit_film(Predictor& predictor, const MeasuredTable& measured, const Fi
   res.fitted_scene = apply_parameters(scene, v.T, v.E, v.d31, v.d32);
   const Values v0 = problem.decode(p_start.data());
 
-  res.correlation.assign(n, std::vector<double>(n, std::numeric_limits<double>::quiet_NaN()));
-  std::vector<double> sigma_internal(n, std::numeric_limits<double>::quiet_NaN());
-  std::vector<bool> determined(n, true);
-  std::vector<std::string> why(n);
-  bool ill = false;
-  if (!free.empty()) {
-    Eigen::MatrixXd Jf(m, static_cast<Eigen::Index>(free.size()));
-    for (std::size_t a = 0; a < free.size(); ++a) Jf.col(static_cast<Eigen::Index>(a)) = J.col(free[a]);
-    const Covariance c = analyse(Jf, cov_scale);
-    res.condition_number = c.condition;
-    const Eigen::Index nf = static_cast<Eigen::Index>(free.size());
-    for (Eigen::Index a = 0; a < nf; ++a) {
-      sigma_internal[free[a]] = std::sqrt(c.cov(a, a));
-      for (Eigen::Index b = 0; b < nf; ++b)
-        res.correlation[free[a]][free[b]] = c.cov(a, b) / std::sqrt(c.cov(a, a) * c.cov(b, b));
-    }
-    // A parameter is not determined when it takes part (component > 0.1) in a direction the data
-    // resolve condition_limit times worse than the best one, or when it is correlated beyond
-    // correlation_limit with another: the data then fix only a combination of the two.
-    for (Eigen::Index k = 0; k < nf; ++k) {
-      if (!(c.s(k) * options.condition_limit < c.s(0))) continue;
-      for (Eigen::Index a = 0; a < nf; ++a) {
-        if (std::abs(c.V(a, k)) > 0.1 && determined[free[a]]) {
-          determined[free[a]] = false;
-          why[free[a]] = "the data fix only a combination of parameters here (column-scaled condition number " +
-                         fmt(c.condition, 3) + " > " + fmt(options.condition_limit, 3) + ")";
-        }
-      }
-    }
-    for (Eigen::Index a = 0; a < nf; ++a) {
-      for (Eigen::Index b = 0; b < nf; ++b) {
-        const double r = res.correlation[free[a]][free[b]];
-        if (a != b && std::abs(r) > options.correlation_limit) {
-          determined[free[a]] = false;
-          if (why[free[a]].empty() || why[free[a]].rfind("the data fix", 0) == 0) {
-            why[free[a]] = "indistinguishable from " + specs[free[b]].name + " (correlation " + fmt(r, 6) +
-                           ", column-scaled condition number " + fmt(c.condition, 3) + ")";
-          }
-        }
-      }
-    }
-    for (std::size_t j = 0; j < n; ++j) ill = ill || !determined[j];
-  }
+  Identifiability id = identify(J, free, cov_scale, specs, options, res);
+  const std::vector<double>& sigma_internal = id.sigma_internal;
+  const std::vector<bool>& determined = id.determined;
+  const std::vector<std::string>& why = id.why;
+  const bool ill = id.ill;
 
   // 6. Estimates in external units.
   for (std::size_t j = 0; j < n; ++j) {

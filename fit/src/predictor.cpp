@@ -53,7 +53,11 @@ struct Predictor::Impl {
     const auto t0 = Clock::now();
     const Press& p = presses[i];
     fem::SweepState out;
-    const fem::ProbeSolution s = sw.solve(p.x_m, p.y_m, force_N, &warm[i], &out);
+    // A press never solved before starts from the previous press's state (a neighbour, usually
+    // closer than the flat film), as map generation does.
+    const fem::SweepState* start = &warm[i];
+    if (warm[i].dofs.empty() && i > 0 && !warm[i - 1].dofs.empty()) start = &warm[i - 1];
+    const fem::ProbeSolution s = sw.solve(p.x_m, p.y_m, force_N, start, &out);
     stats.solve_s += seconds_since(t0);
     ++stats.n_solves;
     if (!fem::usable(s.status)) {

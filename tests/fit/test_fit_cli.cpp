@@ -96,3 +96,18 @@ TEST_CASE("fit end to end: the fitted scene loads and carries the stiffness the 
   const pvdf::Scene base = pvdf::load_scene(scene);
   CHECK(fitted.material.E1_Pa / base.material.E1_Pa == Approx(f["film"]["E_scale"].get<double>()).epsilon(1e-9));
 }
+
+TEST_CASE("compare MAP warns about presses closer to an electrode than twice the map's spacing", "[fit][cli]") {
+  const auto dir = std::filesystem::temp_directory_path();
+  const std::string coarse = (dir / "pvdf_fit_cli_4mm.h5").string(), fine = (dir / "pvdf_fit_cli_1mm.h5").string();
+  REQUIRE(pvdf::test::run_pvdfkit("synthetic-map -o " + coarse + " --spacing-m 0.004").exit_code == 0);
+  REQUIRE(pvdf::test::run_pvdfkit("synthetic-map -o " + fine + " --spacing-m 0.001").exit_code == 0);
+  // Line 2: 4 mm from electrode A (0, 10) mm; line 3: >= 17 mm from every electrode.
+  const auto csv = write("near.csv", "x_m,y_m,force_N,charge_A_C,charge_B_C,charge_C_C\n0,0.006,1,1e-10,1e-10,1e-10\n"
+                                     "0,-0.02,1,1e-10,1e-10,1e-10\n");
+  const auto c = pvdf::test::run_pvdfkit("compare " + coarse + " " + csv);
+  CHECK(c.err.find("warning: line 2: the press is 4.0 mm from electrode A") != std::string::npos);
+  CHECK(c.err.find("line 3") == std::string::npos);
+  const auto f = pvdf::test::run_pvdfkit("compare " + fine + " " + csv);
+  CHECK(f.err.find("warning: line") == std::string::npos);
+}
