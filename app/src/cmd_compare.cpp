@@ -1,6 +1,9 @@
 // `pvdfkit compare MAP measured.csv`: FEM charge map against measured charges — per-press and
 // mean % difference per electrode, like seed 001 Fig. 12 ("an average difference of 18 %").
 #include "command.hpp"
+#ifdef PVDF_HAVE_FIT
+#include "compare_scene.hpp"
+#endif
 
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
@@ -33,12 +36,19 @@ nlohmann::json number_or_null(double v) { return std::isfinite(v) ? nlohmann::js
 
 int run_compare(const CompareCliOptions& o) {
   using namespace pvdf::mapping;
+#ifdef PVDF_HAVE_FIT
+  if (pvdf::app::is_scene_file(o.map_path))  // a scene: FEM solves at the presses (compare_scene.cpp)
+    return pvdf::app::run_compare_scene(o.map_path, o.measured_path, o.json, o.plot_path, o.report_path);
+#endif
   const ChargeMap map = read_map(o.map_path);
   const MapInterpolant interpolant(map);
   if (o.min_map_charge_C < 0 || !std::isfinite(o.min_map_charge_C)) {
     throw pvdf::InputError("--min-map-charge-C " + std::to_string(o.min_map_charge_C) + " must be >= 0 (C)");
   }
   const auto measured = read_measured_csv(o.measured_path, map.electrode_names);
+#ifdef PVDF_HAVE_FIT
+  pvdf::app::warn_if_map_too_coarse(map, measured);
+#endif
   CompareOptions co;
   co.min_map_charge_C = o.min_map_charge_C;
   const Comparison c = compare_with_map(map, interpolant, measured, co);

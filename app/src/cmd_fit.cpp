@@ -1,0 +1,168 @@
+// `pvdfkit fit SCENE measured.csv [--params NAME,...] -o fitted.json [--json] [--plot FILE.png]`:
+// fits the film's effective physics to bench data on FEM predictions (docs/fem-vs-experiment.md).
+#include "command.hpp"
+
+#include "pvdf/core/error.hpp"
+#include "pvdf/core/io.hpp"
+#include "pvdf/core/progress.hpp"
+#include "pvdf/core/scene.hpp"
+#include "pvdf/fit/fit.hpp"
+#include "pvdf/fit/report.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+namespace {
+
+struct FitCliOptions {
+  std::string scene_path, measured_path, output_path, plot_path, params, start;
+  bool json = false, verbose = false;
+  double tolerance = 0;
+  int max_iterations = 40;
+};
+
+std::vector<std::string> split(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream ss(text);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    const auto a = item.find_first_not_of(' '), b = item.find_last_not_of(' ');
+    if (a != std::string::npos) out.push_back(item.substr(a, b - a + 1));
+  }
+  return out;
+}
+
+std::map<std::string, double> parse_start(const std::string& text) {
+  std::map<std::string, double> out;
+  for (const auto& item : split(text)) {
+    const auto eq = item.find('=');
+    double v = 0;
+    if (eq == std::string::npos || !pvdf::parse_finite(item.substr(eq + 1), v)) {
+      throw pvdf::InputError("--start: '" + item + "' must be NAME=VALUE with a finite number, e.g. E_scale=0.02");
+    }
+    out[item.substr(0, eq)] = v;
+  }
+  return out;
+}
+
+void print_text(const pvdf::fit::FitResult& r, const pvdf::fit::MeasuredTable& m) {
+  std::printf("fit of %s: %s (%d iterations, %zu FEM solves on %zu sweep meshes, %.1f s)\n", m.source.c_str(),
+              pvdf::fit::status_name(r.status).c_str(), r.iterations, r.fem.n_solves, r.fem.n_sweeps, r.wall_s);
+  std::printf("chi2 %.4g -> %.4g, %d degrees of freedom, reduced chi2 %.4g%s\n", r.chi2_start, r.chi2,
+              r.degrees_of_freedom, r.reduced_chi2, r.sigmas_given ? "" : " (no sigma columns: relative sigmas)");
+  std::printf("%-20s %14s %14s %14s %s\n", "parameter", "start", "value", "1-sigma", "");
+  for (const auto& p : r.parameters) {
+    std::printf("%-20s %14.6g %14.6g %14.3g %s\n", p.name.c_str(), p.start, p.value, p.sigma,
+                p.at_bound ? "(at bound)" : (p.determined ? "" : "(NOT DETERMINED)"));
+  }
+  std::printf("correlation (column-scaled condition number %.3g):\n", r.condition_number);
+  for (std::size_t a = 0; a < r.correlation.size(); ++a) {
+    std::printf("  %-20s", r.parameters[a].name.c_str());
+    for (double c : r.correlation[a]) std::printf(" %8.4f", c);
+    std::printf("\n");
+  }
+  std::printf("residuals: %5s %-16s %12s %12s %12s %12s %8s\n", "line", "column", "measured", "sigma", "FEM start",
+              "FEM fit", "(F-m)/s");
+  for (const auto& o : r.observations) {
+    std::printf("           %5zu %-16s %12.5g %12.3g %12.5g %12.5g %8.2f\n", o.line, o.column.c_str(), o.measured, o.sigma,
+                o.predicted_start, o.predicted, o.normalized_residual);
+  }
+  const auto& s = r.fem.reference_setup;
+  std::printf("FEM: %s%s, %zu DOFs, estimated charge error %.3g %%, deflection error %.3g %% (not in the intervals)\n",
+              pvdf::fem::model_name(s.model).c_str(), s.include_bending ? " with bending" : " (bending neglected)",
+              s.n_dofs, 100 * s.estimated_relative_error, 100 * s.estimated_deflection_relative_error);
+}
+
+int run_fit(const FitCliOptions& o) {
+  const pvdf::Scene scene = pvdf::load_scene(o.scene_path);
+  std::vector<std::string> names;
+  for (const auto& e : scene.electrodes) names.push_back(e.name);
+  const pvdf::fit::MeasuredTable measured = pvdf::fit::read_measured(o.measured_path, names);
+  pvdf::fit::FitOptions fo;
+  fo.parameters = split(o.params);
+  fo.start = parse_start(o.start);
+  if (o.max_iterations < 1) throw pvdf::InputError("--max-iterations " + std::to_string(o.max_iterations) + " must be >= 1");
+  fo.max_iterations = o.max_iterations;
+  if (o.tolerance != 0) {
+    if (!(o.tolerance >= 1e-6 && o.tolerance <= 0.5)) {
+      throw pvdf::InputError("--tolerance " + std::to_string(o.tolerance) + " must be in [1e-6, 0.5]");
+    }
+    fo.predictor.use_scene_model = false;
+    fo.predictor.sweep.solver = pvdf::fem::options_from_scene(scene);
+    fo.predictor.sweep.solver.tolerance = o.tolerance;
+  }
+  // Progress on stderr: a bar with ETA per batch of FEM solves on a terminal, a line per iteration.
+  const bool tty = isatty(STDERR_FILENO) != 0;
+  std::shared_ptr<pvdf::Progress> bar;
+  fo.predictor.progress = [&bar, tty](std::size_t done, std::size_t total) {
+    if (!tty) return;
+    if (done == 1) bar = std::make_shared<pvdf::Progress>("fit: FEM solves", total);
+    if (bar) bar->update(done);
+    if (bar && done == total) {
+      bar->finish();
+      bar.reset();
+    }
+  };
+  if (tty || o.verbose) fo.log = [](const std::string& line) { std::cerr << line << '\n'; };
+
+  const pvdf::fit::FitResult r = pvdf::fit::fit_film(scene, measured, fo);
+  const bool usable = r.status == pvdf::fit::FitStatus::converged;
+  if (!o.plot_path.empty() && !r.observations.empty()) pvdf::fit::write_fit_png(r, measured, scene, o.plot_path);
+  if (o.json) {
+    nlohmann::json j = pvdf::fit::to_json(r, measured);
+    j["scene"] = o.scene_path;
+    j["fitted_scene"] = usable ? nlohmann::json(o.output_path) : nlohmann::json(nullptr);
+    std::cout << j.dump(2) << '\n';
+  } else if (!r.observations.empty()) {
+    print_text(r, measured);
+  }
+  for (const auto& w : r.warnings) pvdf::app::warn(w);
+  if (!usable) {
+    std::cerr << "error: fit " << pvdf::fit::status_name(r.status) << ": " << r.message
+              << "; no fitted scene written\n";
+    return pvdf::exit_code::numerical;
+  }
+  nlohmann::json out = pvdf::scene_to_json(r.fitted_scene);
+  std::ostringstream desc;
+  desc << "fitted by pvdfkit fit to " << o.measured_path << " from " << o.scene_path << ":";
+  for (const auto& p : r.parameters) desc << ' ' << p.name << " = " << p.value << " +- " << p.sigma << ';';
+  desc << " electrode gains are not scene keys (see the fit report)";
+  out["description"] = desc.str();
+  pvdf::write_file_atomically(o.output_path, [&](std::ostream& os) { os << out.dump(2) << '\n'; });
+  if (!o.json) {
+    std::printf("fitted scene written to %s%s\n", o.output_path.c_str(),
+                o.plot_path.empty() ? "" : (", figure to " + o.plot_path).c_str());
+  }
+  return pvdf::exit_code::success;
+}
+
+}  // namespace
+
+PVDF_COMMAND(67, [](CLI::App& root) {
+  auto* sub = root.add_subcommand(
+      "fit", "Fit the film's pre-tension, stiffness scale, piezo constants and electrode gains to bench data on FEM "
+             "predictions, with 1-sigma intervals and identifiability (docs/fem-vs-experiment.md)");
+  auto o = std::make_shared<FitCliOptions>();
+  sub->add_option("SCENE", o->scene_path, "Scene JSON of the sensor (the starting values)")->required();
+  sub->add_option("MEASURED", o->measured_path,
+                  "CSV: x_m,y_m,force_N and any of deflection_m, charge_<electrode>_C, with optional sigma_<column>")
+      ->required();
+  sub->add_option("--params", o->params,
+                  "Parameters to fit, comma-separated: pretension_N_per_m, E_scale, d31_C_per_N, d32_C_per_N, "
+                  "gain_<electrode> (default: E_scale if deflections are given, d31_C_per_N if charges are)");
+  sub->add_option("-o,--output", o->output_path, "Fitted scene (JSON, same format as SCENE)")->required();
+  sub->add_flag("--json", o->json, "Print the result as JSON (keys in docs/fem-vs-experiment.md)");
+  sub->add_option("--plot", o->plot_path, "PNG: measured against FEM before and after the fit");
+  sub->add_option("--start", o->start, "Starting values NAME=VALUE,... (default: the scene's, E_scale 1, gains 1)");
+  sub->add_option("--tolerance", o->tolerance, "FEM relative tolerance of the sweep mesh (default: the scene's)");
+  sub->add_option("--max-iterations", o->max_iterations, "Levenberg-Marquardt iterations (default 40)");
+  sub->add_flag("--verbose", o->verbose, "One line per iteration on stderr even when it is not a terminal");
+  return pvdf::app::Subcommand{sub, [o] { return run_fit(*o); }};
+});

@@ -1,0 +1,231 @@
+// `pvdfkit compare SCENE measured.csv`: measured charges (and deflections) against FEM solves at
+// the measured presses themselves, warm-started on one prepared mesh — no map, no interpolation
+// error. Also the rule that flags presses a map's spacing cannot resolve.
+#include "compare_scene.hpp"
+
+#include "command.hpp"
+
+#include "pvdf/core/error.hpp"
+#include "pvdf/core/io.hpp"
+#include "pvdf/core/scene.hpp"
+#include "pvdf/fit/measured.hpp"
+#include "pvdf/fit/predictor.hpp"
+#include "pvdf/mapping/pictures.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <limits>
+
+namespace pvdf::app {
+
+namespace {
+
+constexpr double nan_value = std::numeric_limits<double>::quiet_NaN();
+
+nlohmann::json number_or_null(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+
+}  // namespace
+
+bool is_scene_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  char c = 0;
+  while (in.get(c)) {
+    if (c == ' ' || c == '\t' || c == '\r' || c == '\n') continue;
+    return c == '{';
+  }
+  return false;
+}
+
+int warn_if_map_too_coarse(const pvdf::mapping::ChargeMap& map, const std::vector<pvdf::mapping::MeasuredPress>& presses) {
+  if (map.nx() < 2 || map.ny() < 2) return 0;
+  const double h = std::max(map.x_m[1] - map.x_m[0], map.y_m[1] - map.y_m[0]);
+  int n = 0;
+  for (const auto& p : presses) {
+    for (std::size_t k = 0; k < map.ne(); ++k) {
+      const double d = std::hypot(p.x_m - map.electrode_centers_m[k][0], p.y_m - map.electrode_centers_m[k][1]);
+      if (d < 2 * h) {
+        char buf[320];
+        std::snprintf(buf, sizeof buf,
+                      "line %zu: the press is %.1f mm from electrode %s, closer than twice the map's spacing "
+                      "(%.1f mm): the map's interpolation error alone can reach tens of %% there; use a map with "
+                      "spacing <= %.1f mm, or compare against the scene itself (pvdfkit compare SCENE %s)",
+                      p.line, d * 1e3, map.electrode_names[k].c_str(), h * 1e3, d * 1e3 / 2, "CSV");
+        warn(buf);
+        ++n;
+        break;
+      }
+    }
+  }
+  return n;
+}
+
+int run_compare_scene(const std::string& scene_path, const std::string& measured_path, bool json,
+                      const std::string& plot_path, const std::string& report_path) {
+  const pvdf::Scene scene = pvdf::load_scene(scene_path);
+  std::vector<std::string> names;
+  for (const auto& e : scene.electrodes) names.push_back(e.name);
+  const fit::MeasuredTable m = fit::read_measured(measured_path, names);
+  const std::size_t ne = names.size(), n = m.n_rows();
+  std::vector<fit::Press> presses;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!scene.membrane.outline.contains({m.x_m[i], m.y_m[i]}, scene.probe.radius_m)) {
+      throw pvdf::InputError(measured_path + ":" + std::to_string(m.line[i]) +
+                             ": press is not inside the film at least a probe radius from the rim; fix or remove the row");
+    }
+    presses.push_back({m.x_m[i], m.y_m[i], m.force_N[i]});
+  }
+  fit::Predictor predictor(scene, presses);
+  const auto responses = predictor.predict({scene.membrane.pretension_N_per_m, 1.0});
+  const std::vector<double> gains(ne, 1.0);
+
+  // The same record as `compare MAP`, so the same summary, plot and report follow.
+  pvdf::mapping::Comparison c;
+  std::vector<double> w_meas(n, nan_value), w_fem(n, nan_value);
+  std::vector<std::vector<double>> measured_q(n, std::vector<double>(ne, nan_value));
+  for (const auto& col : m.observed) {
+    for (std::size_t i = 0; i < n; ++i) {
+      if (col.electrode < 0) w_meas[i] = col.value[i];
+      else measured_q[i][col.electrode] = col.value[i];
+    }
+  }
+  c.electrodes.resize(ne);
+  for (std::size_t k = 0; k < ne; ++k) c.electrodes[k].name = names[k];
+  double sum_abs = 0, sum = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    pvdf::mapping::ComparedPress p;
+    p.measured.x_m = m.x_m[i];
+    p.measured.y_m = m.y_m[i];
+    p.measured.force_N = m.force_N[i];
+    p.measured.line = m.line[i];
+    p.measured.charge_C = measured_q[i];
+    p.in_map = true;
+    p.map_charge_C = fit::charges_C(responses[i], predictor.electrode_areas_m2(), scene.membrane.thickness_m,
+                                    scene.material.d31_C_per_N, scene.material.d32_C_per_N, gains);
+    p.difference_pct.assign(ne, nan_value);
+    for (std::size_t k = 0; k < ne; ++k) {
+      if (!std::isfinite(measured_q[i][k]) || p.map_charge_C[k] == 0) continue;
+      const double d = 100 * (measured_q[i][k] - p.map_charge_C[k]) / p.map_charge_C[k];
+      p.difference_pct[k] = d;
+      auto& s = c.electrodes[k];
+      ++s.n_compared;
+      s.mean_abs_difference_pct += std::abs(d);
+      s.mean_difference_pct += d;
+      s.rms_difference_pct += d * d;
+      s.max_abs_difference_pct = std::max(s.max_abs_difference_pct, std::abs(d));
+      sum_abs += std::abs(d);
+      sum += d;
+      ++c.n_compared_values;
+    }
+    w_fem[i] = responses[i].deflection_m;
+    c.presses.push_back(p);
+  }
+  for (auto& s : c.electrodes) {
+    if (s.n_compared == 0) continue;
+    s.mean_abs_difference_pct /= s.n_compared;
+    s.mean_difference_pct /= s.n_compared;
+    s.rms_difference_pct = std::sqrt(s.rms_difference_pct / s.n_compared);
+  }
+  c.n_presses = c.n_in_map = static_cast<int>(n);
+  if (c.n_compared_values > 0) {
+    c.mean_abs_difference_pct = sum_abs / c.n_compared_values;
+    c.mean_difference_pct = sum / c.n_compared_values;
+  }
+  const auto& setup = predictor.stats().reference_setup;
+
+  if (!report_path.empty()) {
+    pvdf::write_file_atomically(report_path, [&](std::ostream& out) {
+      out.precision(10);
+      out << "line,x_m,y_m,force_N,deflection_measured_m,deflection_fem_m";
+      for (const auto& nm : names) out << ",charge_" << nm << "_measured_C,charge_" << nm << "_fem_C,difference_" << nm << "_pct";
+      out << '\n';
+      for (std::size_t i = 0; i < n; ++i) {
+        const auto& p = c.presses[i];
+        out << p.measured.line << ',' << p.measured.x_m << ',' << p.measured.y_m << ',' << p.measured.force_N << ','
+            << w_meas[i] << ',' << w_fem[i];
+        for (std::size_t k = 0; k < ne; ++k)
+          out << ',' << p.measured.charge_C[k] << ',' << p.map_charge_C[k] << ',' << p.difference_pct[k];
+        out << '\n';
+      }
+    });
+  }
+  if (json) {
+    nlohmann::json j;
+    j["scene"] = scene_path;
+    j["measured"] = measured_path;
+    j["model"] = pvdf::fem::model_name(setup.model);
+    j["estimated_charge_relative_error"] = setup.estimated_relative_error;
+    j["estimated_deflection_relative_error"] = setup.estimated_deflection_relative_error;
+    j["difference_definition"] = "100 * (Q_measured - Q_fem) / Q_fem, per press and electrode";
+    j["n_presses"] = c.n_presses;
+    j["n_compared_values"] = c.n_compared_values;
+    j["mean_abs_difference_pct"] = c.mean_abs_difference_pct;
+    j["mean_difference_pct"] = c.mean_difference_pct;
+    j["paper_mean_difference_pct"] = pvdf::mapping::paper_mean_difference_pct;
+    j["electrodes"] = nlohmann::json::array();
+    for (const auto& s : c.electrodes) {
+      j["electrodes"].push_back({{"name", s.name}, {"n_compared", s.n_compared},
+                                 {"mean_abs_difference_pct", s.mean_abs_difference_pct},
+                                 {"mean_difference_pct", s.mean_difference_pct},
+                                 {"rms_difference_pct", s.rms_difference_pct},
+                                 {"max_abs_difference_pct", s.max_abs_difference_pct}});
+    }
+    j["presses"] = nlohmann::json::array();
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto& p = c.presses[i];
+      nlohmann::json e = {{"line", p.measured.line}, {"x_m", p.measured.x_m}, {"y_m", p.measured.y_m},
+                          {"force_N", p.measured.force_N}, {"deflection_measured_m", number_or_null(w_meas[i])},
+                          {"deflection_fem_m", w_fem[i]}};
+      for (std::size_t k = 0; k < ne; ++k) {
+        e["charge_" + names[k] + "_measured_C"] = number_or_null(p.measured.charge_C[k]);
+        e["charge_" + names[k] + "_fem_C"] = p.map_charge_C[k];
+        e["difference_" + names[k] + "_pct"] = number_or_null(p.difference_pct[k]);
+      }
+      j["presses"].push_back(e);
+    }
+    std::cout << j.dump(2) << '\n';
+  } else {
+    std::printf("%s against FEM solves of %s at the measured presses (%s, estimated charge error %.2g %%); "
+                "difference = 100 (Q_measured - Q_fem) / Q_fem\n",
+                measured_path.c_str(), scene_path.c_str(), pvdf::fem::model_name(setup.model).c_str(),
+                100 * setup.estimated_relative_error);
+    std::printf("%5s %9s %9s %7s %9s %9s", "line", "x_mm", "y_mm", "F_N", "w_meas_mm", "w_fem_mm");
+    for (const auto& nm : names) std::printf(" %10s %10s %8s", (nm + "_meas_pC").c_str(), (nm + "_fem_pC").c_str(), (nm + "_%").c_str());
+    std::printf("\n");
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto& p = c.presses[i];
+      std::printf("%5zu %9.3f %9.3f %7.3g %9.4g %9.4g", p.measured.line, p.measured.x_m * 1e3, p.measured.y_m * 1e3,
+                  p.measured.force_N, w_meas[i] * 1e3, w_fem[i] * 1e3);
+      for (std::size_t k = 0; k < ne; ++k) {
+        std::printf(" %10.4g %10.4g", p.measured.charge_C[k] * 1e12, p.map_charge_C[k] * 1e12);
+        if (std::isfinite(p.difference_pct[k])) std::printf(" %8.2f", p.difference_pct[k]);
+        else std::printf(" %8s", "-");
+      }
+      std::printf("\n");
+    }
+    std::printf("per electrode: mean |difference|, mean signed difference, rms, max |difference| (%%)\n");
+    for (const auto& s : c.electrodes) {
+      std::printf("  %-8s n %3d  mean|d| %7.2f  mean %+7.2f  rms %7.2f  max %7.2f\n", s.name.c_str(), s.n_compared,
+                  s.mean_abs_difference_pct, s.mean_difference_pct, s.rms_difference_pct, s.max_abs_difference_pct);
+    }
+    std::printf("all: mean |difference| %.2f %% over %d values (seed 001: %.0f %%)\n", c.mean_abs_difference_pct,
+                c.n_compared_values, pvdf::mapping::paper_mean_difference_pct);
+  }
+  if (!plot_path.empty() && c.n_compared_values > 0) {
+    pvdf::mapping::write_comparison_png(c, plot_path);
+    if (!json) std::printf("plot written to %s\n", plot_path.c_str());
+  }
+  if (!report_path.empty() && !json) std::printf("report written to %s\n", report_path.c_str());
+  bool any_deflection = false;
+  for (double w : w_meas) any_deflection = any_deflection || std::isfinite(w);
+  if (c.n_compared_values == 0 && !any_deflection) {
+    std::cerr << "error: " << measured_path << ": nothing to compare (no charge or deflection column)\n";
+    return pvdf::exit_code::numerical;
+  }
+  return pvdf::exit_code::success;
+}
+
+}  // namespace pvdf::app
