@@ -133,8 +133,8 @@ bool stdout_reader_gone(int write_errno) {
 /// Flushes standard output and turns a write error into exit 2: a result that did not reach
 /// its reader is not a success. A closed pipe ends the run quietly (the reader asked for less).
 int finish_stdout(int code) {
-  std::cout.flush();
   errno = 0;
+  std::cout.flush();  // synced with stdio: this is where buffered output is written
   const bool flush_failed = std::fflush(stdout) != 0;
   const int write_errno = errno;
   if (!flush_failed && !std::ferror(stdout) && !std::cout.bad()) return code;

@@ -68,6 +68,8 @@ void write_hostile_fixtures(const std::filesystem::path& d) {
   write(d / "probe_huge.json", seed001_with(R"({"probe": {"radius_m": 0.04}})"));
   write(d / "load_rim.json", seed001_with(R"({"loads": [{"position_m": [0, 0.044], "force_N": 1}]})"));
   write(d / "load_outside.json", seed001_with(R"({"loads": [{"position_m": [0, 0.05], "force_N": 1}]})"));
+  write(d / "e_short_edge.json", seed001_with(R"({"electrodes": [{"name": "P", "shape": "polygon",
+      "vertices_m": [[0, 0.01], [0.002, 0.01], [0.002, 0.012], [1e-13, 0.012], [0, 0.012]]}]})"));
   write(d / "size_min_tiny.json", seed001_with(R"({"mesh": {"size_min_m": 1e-9}})"));
   write(d / "tolerance_tiny.json", seed001_with(R"({"model": {"tolerance": 1e-12}})"));
   write(d / "thickness_neg.json", seed001_with(R"({"membrane": {"thickness_m": -2.5e-5}})"));

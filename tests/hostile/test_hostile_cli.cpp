@@ -80,6 +80,7 @@ const std::vector<Row> rows = {
   {"mesh-deep-array", "mesh deep_array.json -o k2.msh", 2, "deep_array.json:1:", "k2.msh,k2.png"},
   {"mesh-radius-huge", "mesh radius_huge.json -o k3.msh", 2, "membrane.radius_m", "k3.msh,k3.png"},
   {"mesh-probe-1e-300", "mesh probe_1e-300.json -o k4.msh", 2, "probe.radius_m", "k4.msh,k4.png"},
+  {"mesh-short-edge", "mesh e_short_edge.json -o k6.msh", 2, "electrodes[0]", "k6.msh,k6.png"},
   {"mesh-size-min-tiny", "mesh size_min_tiny.json -o k5.msh", 2, "mesh.size_min_m", "k5.msh,k5.png"},
   {"design-e-outside", "design e_outside.json --synthetic --no-plots", 2, "electrodes[0]"},
   {"design-e-crossing", "design e_crossing.json --synthetic --no-plots", 2, "electrodes[0]"},
