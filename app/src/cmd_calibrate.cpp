@@ -68,7 +68,9 @@ PVDF_COMMAND(61, [](CLI::App& root) {
   sub->add_option("MEASURED", o->measured_path,
                   "CSV of presses at known places: x_m,y_m,force_N,charge_<name>_C for every electrode")
       ->required();
-  sub->add_option("-o,--output", o->output_path, "Calibrated map to write (the map plus a /calibration group)")->required();
+  sub->add_option("-o,--output", o->output_path, "Calibrated map to write (the map plus a /calibration group)")
+      ->required()
+      ->check(pvdf::app::output_file());
   sub->add_option("--noise-C", o->noise, "1-sigma charge noise used when locating for the report (C)");
   sub->add_flag("--json", o->json, "Print the report as JSON");
   return pvdf::app::Subcommand{sub, [o] { return run_calibrate(*o); }};

@@ -42,9 +42,6 @@ int run_compare(const CompareCliOptions& o) {
 #endif
   const ChargeMap map = read_map(o.map_path);
   const MapInterpolant interpolant(map);
-  if (o.min_map_charge_C < 0 || !std::isfinite(o.min_map_charge_C)) {
-    throw pvdf::InputError("--min-map-charge-C " + std::to_string(o.min_map_charge_C) + " must be >= 0 (C)");
-  }
   const auto measured = read_measured_csv(o.measured_path, map.electrode_names);
 #ifdef PVDF_HAVE_FIT
   pvdf::app::warn_if_map_too_coarse(map, measured);
@@ -161,9 +158,11 @@ PVDF_COMMAND(66, [](CLI::App& root) {
                   "CSV with columns x_m,y_m,force_N and charge_<name>_C per electrode of the map (docs/seed001-reproduction.md)")
       ->required();
   sub->add_flag("--json", o->json, "Print the comparison as JSON (summary, per electrode, per press)");
-  sub->add_option("--plot", o->plot_path, "Figure (.png, .svg or .pdf): CSV against map charge, and % difference per press");
-  sub->add_option("-o,--report", o->report_path, "Write the per-press report as CSV");
+  sub->add_option("--plot", o->plot_path, "Figure (.png, .svg or .pdf): CSV against map charge, and % difference per press")
+      ->check(pvdf::app::output_file());
+  sub->add_option("-o,--report", o->report_path, "Write the per-press report as CSV")->check(pvdf::app::output_file());
   sub->add_option("--min-map-charge-C", o->min_map_charge_C,
-                  "Map charges smaller than this are not compared as a percentage (C); default 3x the map's noise_C");
+                  "Map charges smaller than this are not compared as a percentage (C); default 3x the map's noise_C")
+      ->check(pvdf::app::number_in(0, 1e-3, "C"));
   return pvdf::app::Subcommand{sub, [o] { return run_compare(*o); }};
 });

@@ -402,6 +402,12 @@ int run_design(const DesignCommandOptions& o) {
 
   DesignOptions d;
   d.noise_C = pvdf::parse_number_list(o.noise, "--noise-C");
+  for (const double n : d.noise_C) {
+    if (!(n > 0 && n < 1e-6)) {
+      throw pvdf::InputError("--noise-C " + pvdf::escape_control_bytes(o.noise) + ": " + fmt("%g", n) +
+                             " must lie in (0, 1e-6) C (a 1-sigma charge noise)");
+    }
+  }
   const auto range = pvdf::parse_number_list(o.force_range, "--force-range-N", 2);
   d.min_force_N = range[0];
   d.max_force_N = range[1];
@@ -574,25 +580,38 @@ PVDF_COMMAND(75, [](CLI::App& root) {
                   "@layout_scale, @electrode_size_m (docs/design.md)");
   sub->add_option("--noise-C", o->noise, "1-sigma charge noise per electrode before quantization, one value or one per electrode (C)")
       ->capture_default_str();
-  sub->add_option("--target-mm", o->target_mm, "Coverage target for the position bound (mm)")->capture_default_str();
-  sub->add_option("--force-N", o->force_N, "Force of the evaluated presses (N)")->capture_default_str();
+  sub->add_option("--target-mm", o->target_mm, "Coverage target for the position bound (mm)")
+      ->capture_default_str()
+      ->check(pvdf::app::number_in(0, 1000, "mm", true));
+  sub->add_option("--force-N", o->force_N, "Force of the evaluated presses (N)")
+      ->capture_default_str()
+      ->check(pvdf::app::number_in(0, 1e4, "N (the rule of loads[].force_N, pushing)", true));
   sub->add_option("--force-range-N", o->force_range, "Forces the sensor must serve MIN,MAX (N): ADC full scale at MAX, 1-LSB check at MIN")
       ->capture_default_str();
   sub->add_flag("--force-known", o->force_known, "Figure of merit with the force measured separately (fit x, y only)");
-  sub->add_option("--spacing-m", o->spacing_m, "Preview map spacing (m); default 0.003 (FEM) or 0.001 (--synthetic)");
+  sub->add_option("--spacing-m", o->spacing_m, "Preview map spacing (m); default 0.003 (FEM) or 0.001 (--synthetic)")
+      ->check(pvdf::app::number_in(1e-4, 0.02, "m (the range of synthetic-map)"));
   sub->add_flag("--synthetic", o->synthetic, "Instant previews on the analytic stand-in instead of FEM maps (labelled synthetic)");
   sub->add_option("--map", o->maps, "Evaluate a ready charge map (HDF5) as one more layout (repeatable)");
-  sub->add_option("--refine-best", o->refine_best, "Recompute the best N layouts at --refine-spacing-m and rank them again");
-  sub->add_option("--refine-spacing-m", o->refine_spacing_m, "Spacing of the refined maps (m); default half the preview spacing");
-  sub->add_option("--tolerance", o->tolerance, "FEM maps: requested relative charge error (0 = the scene's model.tolerance)");
-  sub->add_option("--threads", o->threads, "FEM maps: worker threads (0 = all cores)");
-  sub->add_option("--adc-bits", o->adc_bits, "ADC resolution (bits, bipolar); 0 = ideal")->capture_default_str();
-  sub->add_option("--full-scale-C", o->full_scale_C, "ADC full scale (C); default 1.25 x the largest charge at the top of the force range");
+  sub->add_option("--refine-best", o->refine_best, "Recompute the best N layouts at --refine-spacing-m and rank them again")
+      ->check(pvdf::app::integer_in(0, 1000));
+  sub->add_option("--refine-spacing-m", o->refine_spacing_m, "Spacing of the refined maps (m); default half the preview spacing")
+      ->check(pvdf::app::number_in(1e-4, 0.02, "m (the range of synthetic-map)"));
+  sub->add_option("--tolerance", o->tolerance, "FEM maps: requested relative charge error (default: the scene's model.tolerance)")
+      ->check(pvdf::app::number_in(1e-8, 0.5, "(the rule of the scene key model.tolerance), e.g. 0.01"));
+  sub->add_option("--threads", o->threads, "FEM maps: worker threads (0 = all cores)")->check(pvdf::app::integer_in(0, 1024));
+  sub->add_option("--adc-bits", o->adc_bits, "ADC resolution (bits, bipolar); 0 = ideal")
+      ->capture_default_str()
+      ->check(pvdf::app::integer_in(0, 32));
+  sub->add_option("--full-scale-C", o->full_scale_C, "ADC full scale (C); default 1.25 x the largest charge at the top of the force range")
+      ->check(pvdf::app::number_in(0, 1e-3, "C", true));
   sub->add_option("--ambiguity-distance-m", o->ambiguity_min_distance_m,
-                  "Another accepted solution farther than max(this, 3 sigma) is a distinct press (default: the target)");
+                  "Another accepted solution farther than max(this, 3 sigma) is a distinct press (default: the target)")
+      ->check(pvdf::app::number_in(0, 1, "m"));
   sub->add_flag("--json", o->json, "Print the ranking as JSON");
   sub->add_option("--out-dir", o->out_dir, "Folder for design_position.png, design_force.png, design_sweep.png, design.json, maps/")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(pvdf::app::output_folder());
   sub->add_flag("--no-plots", o->no_plots, "Write no files (ranking on stdout only)");
   return pvdf::app::Subcommand{sub, [o] { return run_design(*o); }};
 });

@@ -27,8 +27,6 @@ struct IsochargeOptions {
 
 int run_isocharge(const IsochargeOptions& o) {
   using namespace pvdf::mapping;
-  if (o.force_N != 0 && !(o.force_N > 0)) throw pvdf::InputError("--force-N " + std::to_string(o.force_N) + ": must be > 0 (N)");
-  if (!(o.zoom_m >= 0)) throw pvdf::InputError("--zoom-m " + std::to_string(o.zoom_m) + ": must be >= 0 (m; 0 = whole map)");
   const ChargeMap map = read_map(o.map_path);
   std::vector<double> q;
   if (!o.charges.empty()) q = pvdf::parse_number_list(o.charges, "--charges-C", map.ne());
@@ -87,9 +85,13 @@ PVDF_COMMAND(62, [](CLI::App& root) {
       "data, and a charge triple's contours with their intersection");
   auto o = std::make_shared<IsochargeOptions>();
   sub->add_option("MAP", o->map_path, "Charge map (HDF5 from `pvdfkit map`)")->required();
-  sub->add_option("--out-dir", o->out_dir, "Folder for isocharge_<name>.png, isocharge_all.png, charges.vtk")->required();
-  sub->add_option("--force-N", o->force_N, "Press force of the pictures (N); default: the map level nearest 1 N");
-  sub->add_option("--zoom-m", o->zoom_m, "Draw only [-W, W] x [-W, W] around the film centre (m), e.g. 0.015; default: all");
+  sub->add_option("--out-dir", o->out_dir, "Folder for isocharge_<name>.png, isocharge_all.png, charges.vtk")
+      ->required()
+      ->check(pvdf::app::output_folder());
+  sub->add_option("--force-N", o->force_N, "Press force of the pictures (N); default: the map level nearest 1 N")
+      ->check(pvdf::app::number_in(0, 1e4, "N", true));
+  sub->add_option("--zoom-m", o->zoom_m, "Draw only [-W, W] x [-W, W] around the film centre (m), e.g. 0.015; default: all")
+      ->check(pvdf::app::number_in(0, 10, "m (0 = the whole map)"));
   sub->add_option("--charges-C", o->charges,
                   "A charge triple (C, map electrode order): also write intersection.png with its isocharge contours");
   sub->add_option("--at-m", o->at, "X,Y (m): use the charges the map predicts for a press there as the triple");

@@ -11,6 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
 #include <csignal>
@@ -23,6 +24,10 @@ namespace {
 
 // Set by SIGINT/SIGTERM: the generation stops after the current solves and keeps its checkpoint.
 std::atomic<bool> interrupted{false};
+
+/// Largest map (positions x force levels) `pvdfkit map` starts: ~25 bytes per point and electrode
+/// in memory, and days of solves beyond it.
+constexpr double max_map_points = 2e6;
 extern "C" void on_interrupt(int) { interrupted.store(true); }
 
 struct MapCommandOptions {
@@ -63,9 +68,34 @@ int run_map(const MapCommandOptions& o) {
   MapOptions options;
   options.spacing_m = o.spacing_m;
   options.forces_N = pvdf::parse_number_list(o.forces, "--forces-N");
+  for (const double f : options.forces_N) {
+    if (!(f > 0 && f <= 1e4)) {
+      throw pvdf::InputError("--forces-N " + pvdf::escape_control_bytes(o.forces) + ": " + pvdf::format_g(f) +
+                             " must lie in (0, 1e4] N (a press pushes the film; the rule of loads[].force_N)");
+    }
+  }
+  double area_m2 = scene.membrane.outline.area_m2();
   if (!o.region.empty()) {
     const auto r = pvdf::parse_number_list(o.region, "--region XMIN,XMAX,YMIN,YMAX (m)", 4);
+    if (!(r[0] < r[1] && r[2] < r[3])) {
+      throw pvdf::InputError("--region " + pvdf::escape_control_bytes(o.region) + ": needs XMIN < XMAX and YMIN < YMAX (m)");
+    }
     options.region_m = std::array<double, 4>{r[0], r[1], r[2], r[3]};
+    area_m2 = std::min(area_m2, (r[1] - r[0]) * (r[3] - r[2]));
+  }
+  // Bound the work before it starts: positions x force levels x electrodes are held in memory.
+  const double n_positions = area_m2 / (o.spacing_m * o.spacing_m);
+  if (n_positions * static_cast<double>(options.forces_N.size()) > max_map_points) {
+    throw pvdf::InputError("--spacing-m " + pvdf::format_g(o.spacing_m) + ": the map would hold about " +
+                           pvdf::format_g(n_positions) + " positions x " + std::to_string(options.forces_N.size()) +
+                           " force levels, more than the limit " + pvdf::format_g(max_map_points) +
+                           " points; use a larger --spacing-m or a smaller --region");
+  }
+  if (!o.no_checkpoint && !o.checkpoint.empty()) pvdf::app::check_output_file(o.checkpoint, "--checkpoint");
+  if (o.rim_margin_m != 0 && o.rim_margin_m < 2 * scene.probe.radius_m) {
+    throw pvdf::InputError("--rim-margin-m " + pvdf::format_g(o.rim_margin_m) + " must be 0 (default) or >= " +
+                           pvdf::format_g(2 * scene.probe.radius_m) +
+                           " m, two probe radii: a footprint must stay one probe radius clear of the rim (docs/scene.md)");
   }
   options.rim_margin_m = o.rim_margin_m;
   options.model = o.model;
@@ -75,7 +105,15 @@ int run_map(const MapCommandOptions& o) {
   options.use_force_scaling = !o.no_force_scaling;
   options.scaling_check_stride = o.scaling_check_stride;
   options.n_setup_checks = o.setup_checks;
-  if (!o.noise.empty()) options.noise_C = pvdf::parse_number_list(o.noise, "--noise-C", scene.electrodes.size());
+  if (!o.noise.empty()) {
+    options.noise_C = pvdf::parse_number_list(o.noise, "--noise-C", scene.electrodes.size());
+    for (const double n : options.noise_C) {
+      if (!(n > 0 && n < 1e-6)) {
+        throw pvdf::InputError("--noise-C " + pvdf::escape_control_bytes(o.noise) + ": " + pvdf::format_g(n) +
+                               " must lie in (0, 1e-6) C (a 1-sigma charge noise)");
+      }
+    }
+  }
   if (!o.no_checkpoint) options.checkpoint_path = o.checkpoint.empty() ? o.output + ".checkpoint" : o.checkpoint;
   options.resume = !o.no_resume;
   options.distributed = mpi.has_value();
@@ -186,23 +224,32 @@ PVDF_COMMAND(35, [](CLI::App& root) {
                                          "position and force level (FEM; runs under mpirun -np N)");
   auto o = std::make_shared<MapCommandOptions>();
   sub->add_option("scene", o->scene_path, "Scene file (JSON)")->required();
-  sub->add_option("-o,--output", o->output, "Map file to write (HDF5, docs/mapping.md)")->required();
-  sub->add_option("--spacing-m", o->spacing_m, "Grid spacing (m); nodes at multiples of it (default 0.002)");
+  sub->add_option("-o,--output", o->output, "Map file to write (HDF5, docs/mapping.md)")
+      ->required()
+      ->check(pvdf::app::output_file());
+  sub->add_option("--spacing-m", o->spacing_m, "Grid spacing (m); nodes at multiples of it (default 0.002)")
+      ->check(pvdf::app::number_in(1e-5, 0.1, "m"));
   sub->add_option("--forces-N", o->forces, "Force levels F1,F2,... (N, > 0; default 1)");
   sub->add_option("--region", o->region, "Map only XMIN,XMAX,YMIN,YMAX (m; default: the whole film)");
-  sub->add_option("--rim-margin-m", o->rim_margin_m, "No probe centres closer than this to the rim (m; 0 = 2 x probe radius)");
+  sub->add_option("--rim-margin-m", o->rim_margin_m, "No probe centres closer than this to the rim (m; 0 = 2 x probe radius)")
+      ->check(pvdf::app::number_in(0, 1, "m"));
   sub->add_option("--model", o->model, "Kinematics: auto|linear|von-karman|large-rotation (default auto)");
-  sub->add_option("--tolerance", o->tolerance, "Requested relative charge error (default: scene, 0.01)");
-  sub->add_option("--threads", o->threads, "Threads per process (0 = cores / ranks)");
-  sub->add_option("--checkpoint", o->checkpoint, "Checkpoint file (default OUTPUT.checkpoint; resumed when it exists)");
+  sub->add_option("--tolerance", o->tolerance, "Requested relative charge error (default: scene, 0.01)")
+      ->check(pvdf::app::number_in(1e-8, 0.5, "(the rule of the scene key model.tolerance), e.g. 0.01"));
+  sub->add_option("--threads", o->threads, "Threads per process (0 = cores / ranks)")
+      ->check(pvdf::app::integer_in(0, 1024));
+  sub->add_option("--checkpoint", o->checkpoint, "Checkpoint file (default OUTPUT.checkpoint; resumed when it exists)")
+      ->check(pvdf::app::output_file());
   sub->add_flag("--no-checkpoint", o->no_checkpoint, "Write no checkpoint");
   sub->add_flag("--no-resume", o->no_resume, "Ignore an existing checkpoint (start afresh)");
   sub->add_flag("--no-symmetry", o->no_symmetry, "Solve every position even when the scene is mirror-symmetric");
   sub->add_flag("--no-force-scaling", o->no_force_scaling, "Solve every force level (no Q ~ F^(2/3) shortcut)");
   sub->add_option("--scaling-check-stride", o->scaling_check_stride,
-                  "Force-scaling check positions every N grid steps (default 4)");
+                  "Force-scaling check positions every N grid steps (default 4)")
+      ->check(pvdf::app::integer_in(1, 1000));
   sub->add_option("--setup-checks", o->setup_checks,
-                  "Direct solves that measure the sweep mesh's charge error at setup (0-3, default 3)");
+                  "Direct solves that measure the sweep mesh's charge error at setup (0-3, default 3)")
+      ->check(pvdf::app::integer_in(0, 3));
   sub->add_option("--noise-C", o->noise, "1-sigma charge noise per electrode N1,N2,... (C; default 5e-14 each)");
   sub->add_flag("--json", o->json, "Print a JSON summary (counts, model, timings)");
   sub->add_flag("--quiet", o->quiet, "No progress bar");

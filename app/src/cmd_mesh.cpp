@@ -3,6 +3,7 @@
 #include "command.hpp"
 
 #include "pvdf/core/error.hpp"
+#include "pvdf/core/io.hpp"
 #include "pvdf/core/scene.hpp"
 #include "pvdf/mesh/mesher.hpp"
 
@@ -34,6 +35,10 @@ std::string default_preview_path(const std::string& msh) {
 int run_mesh(const MeshCommandOptions& o) {
   const pvdf::Scene scene = o.scene_path.empty() ? pvdf::default_scene() : pvdf::load_scene(o.scene_path);
   for (const auto& w : scene.warnings) pvdf::app::warn(w);
+  // Every output path is checked before Gmsh runs: no .msh is left when the preview cannot be written.
+  if (!o.no_preview) {
+    pvdf::app::check_output_file(o.preview_path.empty() ? default_preview_path(o.output_path) : o.preview_path, "--preview");
+  }
   pvdf::mesh::MeshParameters parameters;
   parameters.size_factor = o.size_factor;
   parameters.verbose = o.verbose;
@@ -86,11 +91,15 @@ PVDF_COMMAND(20, [](CLI::App& root) {
       "mesh", "Mesh a scene's film with Gmsh: quads, electrodes and probe footprints as mesh edges; writes .msh + PNG");
   auto o = std::make_shared<MeshCommandOptions>();
   sub->add_option("scene", o->scene_path, "Scene file (default: the built-in seed-001 scene)");
-  sub->add_option("-o,--output", o->output_path, "Gmsh .msh file to write (format 4.1, metres)")->capture_default_str();
-  sub->add_option("--preview", o->preview_path, "PNG preview path (default: the output with .png)");
+  sub->add_option("-o,--output", o->output_path, "Gmsh .msh file to write (format 4.1, metres)")
+      ->capture_default_str()
+      ->check(pvdf::app::output_file());
+  sub->add_option("--preview", o->preview_path, "PNG preview path (default: the output with .png)")
+      ->check(pvdf::app::output_file());
   sub->add_flag("--no-preview", o->no_preview, "Do not write the PNG preview");
   sub->add_option("--size-factor", o->size_factor, "Multiply the scene's mesh sizes (0.5 = about 4x the cells)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(pvdf::app::number_in(pvdf::mesh::size_factor_min, pvdf::mesh::size_factor_max));
   sub->add_flag("--json", o->json, "Print the quality report as JSON");
   sub->add_flag("--verbose", o->verbose, "Show Gmsh's own log");
   return pvdf::app::Subcommand{sub, [o] { return run_mesh(*o); }};

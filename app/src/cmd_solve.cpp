@@ -5,6 +5,7 @@
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
 #include "pvdf/core/scene.hpp"
+#include "pvdf/core/scene_geometry.hpp"
 #include "pvdf/fem/solver.hpp"
 
 #include <nlohmann/json.hpp>
@@ -37,6 +38,13 @@ int run_solve(const SolveOptions& o) {
     scene.loads.clear();
     for (const auto& text : o.loads) {
       const auto v = pvdf::parse_number_list(text, "--load X_M,Y_M,F_N", 3);
+      // The rules of the scene's loads[]: |force_N| <= 1e4, the footprint clear of the rim.
+      if (!(std::abs(v[2]) <= 1e4)) {
+        throw pvdf::InputError("--load " + pvdf::escape_control_bytes(text) + ": force " + pvdf::format_g(v[2]) +
+                               " N must lie in [-1e4, 1e4] N (the rule of loads[].force_N)");
+      }
+      const std::string problem = pvdf::probe_footprint_problem(scene, {v[0], v[1]}, scene.probe.radius_m);
+      if (!problem.empty()) throw pvdf::InputError("--load " + pvdf::escape_control_bytes(text) + ": " + problem);
       pvdf::Load l;
       l.kind = pvdf::Load::Kind::probe;
       l.position_m = {v[0], v[1]};
@@ -46,15 +54,13 @@ int run_solve(const SolveOptions& o) {
   }
   pvdf::fem::Options options = pvdf::fem::options_from_scene(scene);
   if (!o.model.empty()) options.model = pvdf::fem::parse_model(o.model, "--model");
-  if (o.tolerance != 0) {
-    if (!(o.tolerance > 0 && o.tolerance < 1)) {
-      throw pvdf::InputError("--tolerance " + std::to_string(o.tolerance) + " must be in (0, 1), e.g. 0.01");
-    }
-    options.tolerance = o.tolerance;
-  }
+  if (o.tolerance != 0) options.tolerance = o.tolerance;  // checked where parsed
   if (o.max_refinements >= 0) options.max_refinements = o.max_refinements;
   for (const auto& text : o.samples) {
     const auto v = pvdf::parse_number_list(text, "--sample X_M,Y_M", 2);
+    if (!scene.membrane.outline.contains({v[0], v[1]})) {
+      throw pvdf::InputError("--sample " + pvdf::escape_control_bytes(text) + ": the point lies outside the film; give a point inside the clamped outline");
+    }
     options.sample_points_m.push_back({v[0], v[1]});
   }
   options.vtu_directory = o.vtu_dir;
@@ -154,9 +160,12 @@ PVDF_COMMAND(30, [](CLI::App& root) {
   sub->add_option("--load", o->loads, "Probe load X_M,Y_M,F_N (repeatable; replaces the scene's loads)");
   sub->add_option("--sample", o->samples, "Evaluate the fields at X_M,Y_M (repeatable)");
   sub->add_option("--model", o->model, "Kinematics: auto|linear|von-karman|large-rotation (default: scene)");
-  sub->add_option("--tolerance", o->tolerance, "Requested relative error of the outputs (default: scene, 0.01)");
-  sub->add_option("--max-refinements", o->max_refinements, "Cap on adaptive refinement cycles (default: scene)");
-  sub->add_option("--vtu", o->vtu_dir, "Write VTU files (one per mesh) and film.pvd into this folder");
+  sub->add_option("--tolerance", o->tolerance, "Requested relative error of the outputs (default: scene, 0.01)")
+      ->check(pvdf::app::number_in(1e-8, 0.5, "(the rule of the scene key model.tolerance), e.g. 0.01"));
+  sub->add_option("--max-refinements", o->max_refinements, "Cap on adaptive refinement cycles (default: scene)")
+      ->check(pvdf::app::integer_in(0, 20, "(the rule of the scene key model.max_refinements)"));
+  sub->add_option("--vtu", o->vtu_dir, "Write VTU files (one per mesh) and film.pvd into this folder")
+      ->check(pvdf::app::output_folder());
   sub->add_flag("--json", o->json, "Print one JSON object (status, model, n_dofs, electrodes, samples, ...)");
   sub->add_flag("--verbose", o->verbose, "Print Newton progress");
   return pvdf::app::Subcommand{sub, [o] { return run_solve(*o); }};

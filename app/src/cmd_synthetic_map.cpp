@@ -21,11 +21,12 @@ struct SyntheticMapOptions {
 };
 
 int run_synthetic_map(const SyntheticMapOptions& o) {
-  if (!(o.spacing_m >= 1e-4 && o.spacing_m <= 0.02)) {
-    throw pvdf::InputError("--spacing-m " + std::to_string(o.spacing_m) + " must be in [1e-4, 0.02] (m)");
-  }
-  if (!(o.noise_C > 0)) throw pvdf::InputError("--noise-C " + std::to_string(o.noise_C) + " must be > 0 (C)");
   const auto forces = pvdf::parse_number_list(o.forces, "--forces-N");
+  for (const double f : forces) {
+    if (!(f > 0 && f <= 1e4)) {
+      throw pvdf::InputError("--forces-N " + pvdf::escape_control_bytes(o.forces) + ": " + pvdf::format_g(f) + " must lie in (0, 1e4] N");
+    }
+  }
   pvdf::mapping::SyntheticModel model;
   pvdf::mapping::write_map(o.output, pvdf::mapping::build_synthetic_map(model, o.spacing_m, o.rim_margin_m, forces, o.noise_C));
   std::printf("wrote %s (analytic stand-in, not an FEM result)\n", o.output.c_str());
@@ -38,10 +39,10 @@ PVDF_COMMAND(990, [](CLI::App& root) {
   auto* sub = root.add_subcommand("synthetic-map", "Write a map of the analytic stand-in model (tests, examples)");
   sub->group("");  // hidden from `pvdfkit --help`
   auto o = std::make_shared<SyntheticMapOptions>();
-  sub->add_option("-o,--output", o->output, "Map file to write (HDF5)")->required();
-  sub->add_option("--spacing-m", o->spacing_m, "Grid spacing (m); default 0.001");
-  sub->add_option("--rim-margin-m", o->rim_margin_m, "Unmapped margin at the rim (m); default 0.003");
+  sub->add_option("-o,--output", o->output, "Map file to write (HDF5)")->required()->check(pvdf::app::output_file());
+  sub->add_option("--spacing-m", o->spacing_m, "Grid spacing (m); default 0.001")->check(pvdf::app::number_in(1e-4, 0.02, "m"));
+  sub->add_option("--rim-margin-m", o->rim_margin_m, "Unmapped margin at the rim (m); default 0.003")->check(pvdf::app::number_in(0, 1, "m"));
   sub->add_option("--forces-N", o->forces, "Force levels F1,F2,... (N, ascending); default 1");
-  sub->add_option("--noise-C", o->noise_C, "1-sigma charge noise per electrode (C); default 5e-14");
+  sub->add_option("--noise-C", o->noise_C, "1-sigma charge noise per electrode (C); default 5e-14")->check(pvdf::app::number_in(0, 1e-6, "C", true));
   return pvdf::app::Subcommand{sub, [o] { return run_synthetic_map(*o); }};
 });

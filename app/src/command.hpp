@@ -32,8 +32,24 @@ struct CommandRegistrar {
   }
 };
 
-/// Prints a warning line on stderr ("warning: ...").
+/// Prints a warning line on stderr ("warning: ..."), control bytes escaped.
 void warn(const std::string& message);
+
+// Flag checks, applied where CLI11 parses the flag (before any work) with the same rule as the
+// scene key the flag overrides. A failed check is one line `error: --flag: VALUE must ...`, exit 2.
+
+/// A finite number in [lo, hi] (in (lo, hi] when `lo_open`); `why` ends the message.
+CLI::Validator number_in(double lo, double hi, const std::string& why = "", bool lo_open = false);
+/// A whole number in [lo, hi].
+CLI::Validator integer_in(long long lo, long long hi, const std::string& why = "");
+/// An output file: its folder exists and is writable, and the path is not a folder.
+CLI::Validator output_file();
+/// An output folder: missing (it will be created inside an existing folder) or a writable folder,
+/// never an existing file.
+CLI::Validator output_folder();
+/// Throws InputError naming `flag` when `path` could not be written as an output file (the
+/// same rule as output_file), for paths derived from other flags.
+void check_output_file(const std::string& path, const std::string& flag);
 
 }  // namespace pvdf::app
 

@@ -69,6 +69,12 @@ void write_file_atomically(const std::string& path, const std::function<void(std
   });
 }
 
+std::string format_g(double x) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", x);
+  return buf;
+}
+
 bool parse_finite(const std::string& text, double& value) {
   if (text.empty()) return false;
   const char* begin = text.c_str();
@@ -93,13 +99,14 @@ std::vector<double> parse_number_list(const std::string& text, const std::string
     const auto e = item.find_last_not_of(" \t");
     const std::string t = b == std::string::npos ? "" : item.substr(b, e - b + 1);
     if (!parse_finite(t, x)) {
-      throw InputError(what + " = '" + text + "': '" + t + "' is not a finite number; write numbers separated by commas");
+      throw InputError(what + " = '" + escape_control_bytes(text) + "': '" + escape_control_bytes(t) +
+                       "' is not a finite number; write numbers separated by commas");
     }
     out.push_back(x);
   }
-  if (out.empty()) throw InputError(what + " = '" + text + "' is empty; give at least one number");
+  if (out.empty()) throw InputError(what + " = '" + escape_control_bytes(text) + "' is empty; give at least one number");
   if (count != 0 && out.size() != count) {
-    throw InputError(what + " = '" + text + "' has " + std::to_string(out.size()) + " numbers; it needs exactly " +
+    throw InputError(what + " = '" + escape_control_bytes(text) + "' has " + std::to_string(out.size()) + " numbers; it needs exactly " +
                      std::to_string(count));
   }
   return out;
@@ -113,14 +120,14 @@ std::vector<double> parse_range(const std::string& text, const std::string& what
   double start = 0, step = 0, stop = 0;
   if (parts.size() != 3 || !parse_finite(parts[0], start) || !parse_finite(parts[1], step) ||
       !parse_finite(parts[2], stop)) {
-    throw InputError(what + " = '" + text + "' must be START:STEP:STOP with three finite numbers, e.g. 0:5:90");
+    throw InputError(what + " = '" + escape_control_bytes(text) + "' must be START:STEP:STOP with three finite numbers, e.g. 0:5:90");
   }
   if (step == 0 || (stop - start) / step < 0) {
-    throw InputError(what + " = '" + text + "': STEP must be non-zero and lead from START to STOP");
+    throw InputError(what + " = '" + escape_control_bytes(text) + "': STEP must be non-zero and lead from START to STOP");
   }
   const double n_real = std::floor((stop - start) / step + 1e-9) + 1;
   if (n_real > static_cast<double>(max_count)) {
-    throw InputError(what + " = '" + text + "' gives " + std::to_string(static_cast<long long>(n_real)) +
+    throw InputError(what + " = '" + escape_control_bytes(text) + "' gives " + std::to_string(static_cast<long long>(n_real)) +
                      " values; the limit is " + std::to_string(max_count) + ": use a larger STEP");
   }
   std::vector<double> out;
@@ -128,22 +135,66 @@ std::vector<double> parse_range(const std::string& text, const std::string& what
   return out;
 }
 
-std::vector<std::string> split_csv_line(const std::string& line) {
-  std::vector<std::string> out;
-  std::string cur;
-  for (char c : line) {
-    if (c == ',') {
-      out.push_back(cur);
-      cur.clear();
-    } else if (c != '\r') {
-      cur += c;
+namespace {
+
+/// Splits one CSV line (RFC 4180 quoting: "a, b" is one field, "" inside quotes is one quote);
+/// a UTF-8 byte-order mark at its start and a trailing CR are dropped, unquoted fields trimmed.
+/// Returns false for an unterminated quote.
+bool split_fields(const std::string& line, std::vector<std::string>& out) {
+  out.clear();
+  std::size_t i = line.compare(0, 3, "\xEF\xBB\xBF") == 0 ? 3 : 0;
+  std::size_t end = line.size();
+  if (end > i && line[end - 1] == '\r') --end;
+  for (;;) {
+    while (i < end && (line[i] == ' ' || line[i] == '\t')) ++i;
+    std::string field;
+    if (i < end && line[i] == '"') {
+      ++i;
+      bool closed = false;
+      while (i < end) {
+        if (line[i] == '"') {
+          if (i + 1 < end && line[i + 1] == '"') {
+            field += '"';
+            i += 2;
+            continue;
+          }
+          closed = true;
+          ++i;
+          break;
+        }
+        field += line[i++];
+      }
+      if (!closed) return false;
+      while (i < end && line[i] != ',') field += line[i++];  // text after the closing quote
+      const auto e = field.find_last_not_of(" \t");
+      field.erase(e == std::string::npos ? 0 : e + 1);
+    } else {
+      const std::size_t comma = line.find(',', i);
+      const std::size_t stop = comma == std::string::npos || comma > end ? end : comma;
+      field = line.substr(i, stop - i);
+      i = stop;
+      const auto e = field.find_last_not_of(" \t");
+      field.erase(e == std::string::npos ? 0 : e + 1);
+    }
+    out.push_back(field);
+    if (i >= end) break;
+    ++i;  // the comma
+    if (i == end) {
+      out.emplace_back();
+      break;
     }
   }
-  out.push_back(cur);
-  for (auto& s : out) {
-    const auto b = s.find_first_not_of(" \t");
-    const auto e = s.find_last_not_of(" \t");
-    s = b == std::string::npos ? "" : s.substr(b, e - b + 1);
+  return true;
+}
+
+}  // namespace
+
+std::vector<std::string> split_csv_line(const std::string& line) {
+  std::vector<std::string> out;
+  if (!split_fields(line, out)) {
+    // Unterminated quote: keep the raw text as one trailing field, which no number parse accepts.
+    split_fields(line.substr(0, line.rfind('"')), out);
+    out.push_back(line.substr(line.rfind('"')));
   }
   return out;
 }
@@ -171,14 +222,25 @@ CsvTable read_csv(std::istream& in, const std::string& source, BadRowPolicy poli
   std::string line;
   std::size_t line_no = 0;
   bool have_header = false;
+  std::vector<std::string> fields;
   while (std::getline(in, line)) {
     ++line_no;
+    if (line_no == 1 && line.compare(0, 3, "\xEF\xBB\xBF") == 0) line.erase(0, 3);  // UTF-8 byte-order mark
     const auto first = line.find_first_not_of(" \t\r");
     if (first == std::string::npos || line[first] == '#') continue;
-    auto fields = split_csv_line(line);
+    if (!split_fields(line, fields)) {
+      const std::string msg = source + ":" + std::to_string(line_no) + ": unterminated quote (a field opens \" and never closes it)";
+      if (policy == BadRowPolicy::refuse || !have_header) throw InputError(msg + "; close the quote or remove the row");
+      if (skipped) skipped->push_back(msg);
+      continue;
+    }
     if (!have_header) {
       for (const auto& f : fields) {
         if (f.empty()) throw InputError(source + ":" + std::to_string(line_no) + ": empty column name in the header; name every column");
+        if (escape_control_bytes(f) != f) {
+          throw InputError(source + ":" + std::to_string(line_no) + ": column name '" + escape_control_bytes(f) +
+                           "' holds control bytes; is this a CSV file?");
+        }
       }
       t.columns = fields;
       have_header = true;
@@ -192,7 +254,7 @@ CsvTable read_csv(std::istream& in, const std::string& source, BadRowPolicy poli
       for (std::size_t j = 0; j < fields.size(); ++j) {
         double x = 0;
         if (!parse_finite(fields[j], x)) {
-          problem = "column " + t.columns[j] + " = '" + fields[j] + "' is not a finite number";
+          problem = "column " + t.columns[j] + " = '" + escape_control_bytes(fields[j].substr(0, 40)) + "' is not a finite number";
           break;
         }
         row.push_back(x);

@@ -3,10 +3,11 @@
 
 #include "pvdf/core/error.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <limits>
-#include <regex>
+#include <utility>
 #include <sstream>
 
 namespace pvdf {
@@ -33,9 +34,43 @@ std::string format_number(double x) {
 }  // namespace
 
 std::string json_excerpt(const nlohmann::json& value) {
-  std::string s = value.dump();
-  if (s.size() > 60) s = s.substr(0, 57) + "...";
-  return s;
+  // Iterative and bounded: a value nested 10^5 deep or a megabyte long costs ~60 characters of
+  // work, never a recursion per level or a full dump.
+  constexpr std::size_t limit = 60;
+  std::string out;
+  struct Frame {
+    const nlohmann::json* node;
+    nlohmann::json::const_iterator next;
+    bool first;
+  };
+  std::vector<Frame> stack;
+  auto scalar = [](const nlohmann::json& v) {
+    return v.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace);
+  };
+  auto open = [&](const nlohmann::json& v) {
+    if (v.is_structured() && !v.empty()) {
+      out += v.is_object() ? '{' : '[';
+      stack.push_back({&v, v.cbegin(), true});
+    } else {
+      out += v.is_structured() ? (v.is_object() ? "{}" : "[]") : scalar(v);
+    }
+  };
+  open(value);
+  while (!stack.empty() && out.size() <= limit) {
+    Frame& f = stack.back();
+    if (f.next == f.node->cend()) {
+      out += f.node->is_object() ? '}' : ']';
+      stack.pop_back();
+      continue;
+    }
+    if (!f.first) out += ',';
+    f.first = false;
+    const auto it = f.next++;
+    if (f.node->is_object()) out += scalar(nlohmann::json(it.key())) + ':';
+    open(*it);  // may grow the stack: `f` is not used after this
+  }
+  if (out.size() > limit) out = out.substr(0, limit - 3) + "...";
+  return escape_control_bytes(out);
 }
 
 JsonObjectReader::JsonObjectReader(std::string source, std::string path, const nlohmann::json& value)
@@ -214,63 +249,168 @@ void JsonObjectReader::finish() const {
   }
 }
 
-nlohmann::json parse_json_text(const std::string& text, const std::string& source) {
-  try {
-    return nlohmann::json::parse(text);
-  } catch (const nlohmann::json::parse_error& e) {
-    // Work out line and column of the failure, and the key just before it, so that a NaN or a
-    // stray character is reported against the key the user wrote it under.
-    std::size_t offset = e.byte > 0 ? e.byte - 1 : 0;
-    if (offset > text.size()) offset = text.size();
-    std::size_t line = 1, column = 1;
-    for (std::size_t i = 0; i < offset; ++i) {
-      if (text[i] == '\n') {
-        ++line;
-        column = 1;
-      } else {
-        ++column;
-      }
+namespace {
+
+/// Line and column (1-based) of byte `offset` in `text`.
+std::pair<std::size_t, std::size_t> line_column(const std::string& text, std::size_t offset) {
+  std::size_t line = 1, column = 1;
+  for (std::size_t i = 0; i < offset && i < text.size(); ++i) {
+    if (text[i] == '\n') {
+      ++line;
+      column = 1;
+    } else {
+      ++column;
     }
-    std::string before = text.substr(0, offset);
-    std::string key;
-    static const std::regex key_re("\"([^\"\\\\]+)\"\\s*:\\s*[^\"]*$");
-    std::smatch m;
-    if (std::regex_search(before, m, key_re)) key = m[1];
+  }
+  return {line, column};
+}
+
+std::string position(const std::string& source, const std::string& text, std::size_t offset) {
+  const auto [line, column] = line_column(text, offset);
+  return source + ":" + std::to_string(line) + ":" + std::to_string(column);
+}
+
+/// Offset of the first bracket that nests deeper than `max_depth`, or npos. One pass, no
+/// recursion; strings (with escapes) are skipped.
+std::size_t too_deep_at(const std::string& text, std::size_t max_depth) {
+  std::size_t depth = 0;
+  bool in_string = false, escaped = false;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (in_string) {
+      if (escaped) escaped = false;
+      else if (c == '\\') escaped = true;
+      else if (c == '"') in_string = false;
+    } else if (c == '"') {
+      in_string = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > max_depth) return i;
+    } else if ((c == ']' || c == '}') && depth > 0) {
+      --depth;
+    }
+  }
+  return std::string::npos;
+}
+
+/// The key whose value holds byte `offset` — the last `"key":` before it with no string
+/// opened since — or "". One forward pass, no backtracking.
+std::string key_before(const std::string& text, std::size_t offset) {
+  std::string key, last_string;
+  bool string_since_colon = true;
+  for (std::size_t i = 0; i < offset && i < text.size(); ++i) {
+    const char c = text[i];
+    if (c == '"') {
+      std::size_t j = i + 1;
+      std::string s;
+      while (j < offset && j < text.size() && text[j] != '"') {
+        if (text[j] == '\\' && j + 1 < text.size()) s += text[j++];
+        s += text[j++];
+      }
+      if (j >= offset || j >= text.size()) {  // the error is inside this string
+        string_since_colon = true;
+        break;
+      }
+      last_string = s;
+      string_since_colon = true;
+      i = j;
+    } else if (c == ':') {
+      key = last_string;
+      string_since_colon = false;
+    }
+  }
+  return string_since_colon ? std::string() : key;
+}
+
+/// Thrown from the parser callback on a repeated key.
+struct DuplicateKey {
+  std::string path;
+};
+
+}  // namespace
+
+nlohmann::json parse_json_text(const std::string& text, const std::string& source) {
+  // Nesting first: the parser and every later walk over the value stay shallow.
+  const std::size_t deep = too_deep_at(text, max_json_depth);
+  if (deep != std::string::npos) {
+    throw InputError(position(source, text, deep) + ": JSON nested deeper than " + std::to_string(max_json_depth) +
+                     " levels; pvdfkit files nest a few levels: fix the file");
+  }
+  // Duplicate keys: a key path per open object; "radius_m" twice in one object is refused
+  // (JSON leaves it undefined, and a silent "last one wins" hides typos).
+  std::vector<std::pair<std::string, std::set<std::string>>> objects;
+  std::string pending_key;
+  std::vector<std::string> path;
+  const nlohmann::json::parser_callback_t callback = [&](int, nlohmann::json::parse_event_t event,
+                                                         nlohmann::json& parsed) {
+    using E = nlohmann::json::parse_event_t;
+    switch (event) {
+      case E::object_start:
+      case E::array_start: {
+        std::string here = objects.empty() ? std::string() : objects.back().first;
+        if (!pending_key.empty()) here += (here.empty() ? "" : ".") + pending_key;
+        pending_key.clear();
+        objects.push_back({here, {}});
+        break;
+      }
+      case E::key: {
+        const std::string k = parsed.get<std::string>();
+        if (!objects.empty() && !objects.back().second.insert(k).second) {
+          const std::string& where = objects.back().first;
+          throw DuplicateKey{where.empty() ? k : where + "." + k};
+        }
+        pending_key = k;
+        break;
+      }
+      case E::object_end:
+      case E::array_end:
+        if (!objects.empty()) objects.pop_back();
+        break;
+      case E::value: pending_key.clear(); break;
+    }
+    return true;
+  };
+  try {
+    return nlohmann::json::parse(text, callback);
+  } catch (const DuplicateKey& d) {
+    throw InputError(source + ": duplicate key " + escape_control_bytes(d.path) +
+                     "; each key may appear once in an object: remove one of them");
+  } catch (const nlohmann::json::parse_error& e) {
+    // Line and column of the failure, and the key just before it, so that a NaN or a stray
+    // character is reported against the key the user wrote it under.
+    const std::size_t offset = std::min<std::size_t>(e.byte > 0 ? e.byte - 1 : 0, text.size());
+    const std::string key = key_before(text, offset);
     std::string token = text.substr(offset, 12);
     for (char& c : token) {
       if (c == '\n' || c == '\r' || c == '\t') c = ' ';
     }
-    std::string msg = source + ":" + std::to_string(line) + ":" + std::to_string(column) +
-                      ": invalid JSON";
-    if (!key.empty()) msg += " in the value of key \"" + key + "\"";
-    if (!token.empty()) msg += " near '" + token + "'";
+    std::string msg = position(source, text, offset) + ": invalid JSON";
+    if (!key.empty()) msg += " in the value of key \"" + escape_control_bytes(key) + "\"";
+    if (!token.empty()) msg += " near '" + escape_control_bytes(token) + "'";
     const bool nan_like = token.rfind("NaN", 0) == 0 || token.rfind("nan", 0) == 0 ||
                           token.rfind("Inf", 0) == 0 || token.rfind("-Inf", 0) == 0;
     if (nan_like) {
       msg += "; NaN and Infinity are not numbers in JSON: write a finite number";
+    } else if (offset >= text.size()) {
+      msg += "; the file ends too early (truncated?): complete it";
     } else {
       msg += "; fix the syntax (strict JSON: double quotes, no comments, no trailing commas)";
     }
     throw InputError(msg);
   } catch (const nlohmann::json::exception& e) {
     // e.g. a number too large for a double ("1e400"): name the key it was written under.
-    std::string what = e.what();
-    std::string key;
+    const std::string what = e.what();
     const auto q1 = what.find('\'');
     const auto q2 = q1 == std::string::npos ? q1 : what.find('\'', q1 + 1);
     if (q2 != std::string::npos) {
       const std::string token = what.substr(q1 + 1, q2 - q1 - 1);
       const auto at = text.find(token);
-      if (at != std::string::npos) {
-        static const std::regex key_re("\"([^\"\\\\]+)\"\\s*:\\s*[^\"]*$");
-        std::smatch m;
-        const std::string before = text.substr(0, at);
-        if (std::regex_search(before, m, key_re)) key = m[1];
-      }
-      throw InputError(source + ": number '" + token + "'" + (key.empty() ? "" : " in the value of key \"" + key + "\"") +
+      const std::string key = at == std::string::npos ? std::string() : key_before(text, at);
+      throw InputError((at == std::string::npos ? source : position(source, text, at)) + ": number '" +
+                       escape_control_bytes(token) + "'" +
+                       (key.empty() ? "" : " in the value of key \"" + escape_control_bytes(key) + "\"") +
                        " is out of the range of a double (not finite); write a finite number");
     }
-    throw InputError(source + ": invalid JSON (" + what + "); fix the file");
+    throw InputError(source + ": invalid JSON (" + escape_control_bytes(what) + "); fix the file");
   }
 }
 

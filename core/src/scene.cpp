@@ -1,10 +1,11 @@
-// Scene parsing and validation (per key); geometric consistency (overlaps, rim clearance) is
-// checked by pvdf::mesh, which knows the mesh sizes.
+// Scene parsing and validation: per key here, then the scene's geometry as a whole
+// (scene_geometry.cpp); pvdf::mesh adds the clearances that depend on mesh sizes.
 #include "pvdf/core/scene.hpp"
 
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/json_reader.hpp"
 #include "pvdf/core/planar.hpp"
+#include "pvdf/core/scene_geometry.hpp"
 
 #include <cmath>
 #include <set>
@@ -377,6 +378,7 @@ Scene parse_scene(const nlohmann::json& json, const std::string& source) {
     top.string_or("description", "");
   }
   top.finish();
+  check_scene_geometry(s);
   return s;
 }
 

@@ -57,10 +57,10 @@ else
     --spacing-m 0.006 --out-dir "$OUT/sweep"
 fi
 
-echo "== 4. A layout that cannot work is said so: electrode C moved onto B (exit 3, no numbers)"
+echo "== 4. A layout that cannot work is refused: electrode C moved onto B overlaps it (exit 2, the file and key named)"
 sed 's/"name": "C", "center_m": \[0.00866025403784439, -0.005\]/"name": "C", "center_m": [-0.00866025403784439, -0.005]/' \
   "$SCENES/seed001.json" > "$OUT/coincident.json"
 if "$PVDFKIT" design "$OUT/coincident.json" --synthetic --spacing-m 0.002 --no-plots > "$OUT/coincident.txt" 2>&1; then
-  echo "expected exit 3 for coincident electrodes"; exit 1
+  echo "expected exit 2 for coincident electrodes"; exit 1
 fi
-grep "UNABLE TO LOCATE" "$OUT/coincident.txt"
+grep "electrodes\[2\].*overlaps" "$OUT/coincident.txt"

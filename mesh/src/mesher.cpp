@@ -37,6 +37,26 @@ void make_counter_clockwise(std::array<unsigned int, 4>& quad, const std::vector
 
 constexpr double pi = 3.14159265358979323846;
 
+/// An estimate of the quadrilateral count before meshing, to refuse runaway requests: the far
+/// field at size_max, plus a graded band (sizes growing by mesh.growth per ring) along every
+/// electrode outline and embedded probe circle, times the ~5 quads Gmsh's recombination and
+/// subdivision make per triangle-sized cell (seed 001: estimate 2300, Gmsh 2472).
+double estimated_cells(const pvdf::Scene& scene, const std::array<double, 2>& sizes_m, std::size_t n_extras) {
+  const double h_min = sizes_m[0], h_max = sizes_m[1];
+  const double g = scene.mesh.growth;
+  double perimeter = 0;
+  for (const auto& e : scene.electrodes) {
+    perimeter += e.shape == pvdf::Electrode::Shape::circle ? 2 * pi * e.radius_m : planar::perimeter(e.outline());
+  }
+  for (const auto& l : scene.loads) {
+    if (l.kind == pvdf::Load::Kind::probe) perimeter += 2 * pi * (l.radius_m > 0 ? l.radius_m : scene.probe.radius_m);
+  }
+  perimeter += static_cast<double>(n_extras) * 2 * pi * scene.probe.radius_m;
+  const double far = scene.membrane.outline.area_m2() / (h_max * h_max);
+  const double bands = perimeter / h_min * g / (g - 1);
+  return 5 * (far + bands);
+}
+
 /// Gmsh is a process-wide singleton: initialized on first use, finalized once at exit, and
 /// used by one thread at a time.
 class GmshSession {
@@ -129,6 +149,24 @@ int add_electrode(const pvdf::Electrode& e, double scale) {
   return add_polygon(e.outline(), scale);
 }
 
+/// Runs one Gmsh geometry call for the scene entity `label`; a Gmsh refusal (e.g. "Could not
+/// create line" for two vertices closer than its tolerance) becomes an InputError naming it.
+int named(const pvdf::Scene& scene, const std::string& label, const std::function<int()>& f) {
+  std::string why;
+  try {
+    return f();
+  } catch (const std::string& e) {
+    why = e;
+  } catch (const std::exception& e) {
+    why = e.what();
+  } catch (...) {
+    why = gmsh_error_text();
+  }
+  throw pvdf::InputError(scene.source + ": " + label + ": Gmsh could not build its outline (" +
+                         pvdf::escape_control_bytes(why) +
+                         "); two of its vertices nearly coincide or an edge is too short: remove the short edge");
+}
+
 struct Model {
   FilmMesh mesh;
   bool accepted = false;            ///< quality at or above the threshold
@@ -178,9 +216,11 @@ Model mesh_scene(const pvdf::Scene& scene, const MeshParameters& params,
   std::vector<int> rim_curves, inner_curves;
   std::map<int, int> face_material;
   guarded("building the geometry", [&] {
-    const int film = add_film(scene.membrane.outline, s);
+    const int film = named(scene, "membrane (the film outline)", [&] { return add_film(scene.membrane.outline, s); });
     gmsh::vectorpair tools;
-    for (const auto& e : scene.electrodes) tools.push_back({2, add_electrode(e, s)});
+    for (std::size_t k = 0; k < n_el; ++k) {
+      tools.push_back({2, named(scene, detail::electrode_label(scene, k), [&] { return add_electrode(scene.electrodes[k], s); })});
+    }
     std::vector<std::size_t> embedded;
     for (std::size_t i = 0; i < footprints.size(); ++i) {
       const auto& f = footprints[i];
@@ -404,13 +444,21 @@ Model mesh_scene(const pvdf::Scene& scene, const MeshParameters& params,
 FilmMesh run(const pvdf::Scene& scene, const MeshParameters& params, MeshReport* report,
              const std::vector<std::array<double, 2>>& extras, const std::function<void(const Model&)>& after) {
   const auto start = std::chrono::steady_clock::now();
-  if (!(std::isfinite(params.size_factor) && params.size_factor > 0)) {
-    throw pvdf::InputError("mesh size factor = " + detail::fmt(params.size_factor) + " must be > 0");
+  if (!(params.size_factor >= size_factor_min && params.size_factor <= size_factor_max)) {
+    throw pvdf::InputError("mesh size factor = " + detail::fmt(params.size_factor) + " must lie in [" +
+                           detail::fmt(size_factor_min) + ", " + detail::fmt(size_factor_max) + "]");
   }
   detail::validate_geometry(scene, extras);
   auto sizes = target_sizes_m(scene);
   sizes[0] *= params.size_factor;
   sizes[1] *= params.size_factor;
+  const double n_estimated = estimated_cells(scene, sizes, extras.size());
+  if (n_estimated > max_cells) {
+    throw pvdf::InputError(scene.source + ": the mesh would have about " + detail::fmt(n_estimated) +
+                           " quadrilaterals (sizes " + detail::fmt(sizes[0]) + " .. " + detail::fmt(sizes[1]) +
+                           " m), more than the limit " + detail::fmt(max_cells) +
+                           "; raise mesh.size_min_m / mesh.size_max_m or the size factor");
+  }
 
   GmshSession& session = GmshSession::instance();
   std::lock_guard<std::mutex> lock(session.mutex());

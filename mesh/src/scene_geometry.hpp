@@ -4,17 +4,16 @@
 
 #include "pvdf/core/planar.hpp"
 #include "pvdf/core/scene.hpp"
+#include "pvdf/core/scene_geometry.hpp"
 
 #include <string>
 #include <vector>
 
 namespace pvdf::mesh::detail {
 
-/// The electrode outline as a region (rectangles and polygons as polygons, circles exact).
-planar::Region electrode_region(const pvdf::Electrode& e);
-/// The length an electrode must exceed to be meshed (m): the smaller side of a rectangle, the
-/// diameter of a circle, the hydraulic diameter 4·area/perimeter of a polygon.
-double electrode_feature_size_m(const pvdf::Electrode& e);
+// The electrode outline as a region and its feature size live with the scene reader's checks.
+using pvdf::electrode_feature_size_m;
+using pvdf::electrode_region;
 /// "electrodes[1] (\"B\")" for messages.
 std::string electrode_label(const pvdf::Scene& scene, std::size_t index);
 

@@ -4,6 +4,7 @@
 #include "scene_geometry.hpp"
 
 #include "pvdf/core/error.hpp"
+#include "pvdf/core/scene_geometry.hpp"
 #include "pvdf/mesh/mesher.hpp"
 
 #include <algorithm>
@@ -21,62 +22,9 @@ std::string fmt(double x) {
   return os.str();
 }
 
-planar::Region electrode_region(const pvdf::Electrode& e) {
-  planar::Region r;
-  if (e.shape == pvdf::Electrode::Shape::circle) {
-    r.is_circle = true;
-    r.center = e.center_m;
-    r.radius = e.radius_m;
-  } else {
-    r.vertices = e.outline();
-  }
-  return r;
-}
-
-double electrode_feature_size_m(const pvdf::Electrode& e) {
-  switch (e.shape) {
-    case pvdf::Electrode::Shape::rectangle: return std::min(e.size_m[0], e.size_m[1]);
-    case pvdf::Electrode::Shape::circle: return 2 * e.radius_m;
-    case pvdf::Electrode::Shape::polygon:
-      return 4 * std::abs(planar::signed_area(e.vertices_m)) / planar::perimeter(e.vertices_m);
-  }
-  return 0;
-}
-
 std::string electrode_label(const pvdf::Scene& scene, std::size_t index) {
   return "electrodes[" + std::to_string(index) + "] (\"" + scene.electrodes[index].name + "\")";
 }
-
-namespace {
-
-/// The film outline as a region; the ellipse is sampled finely (only used for display-level
-/// decisions there; its checks go through FilmOutline::inside_distance_m).
-planar::Region film_region(const pvdf::FilmOutline& o) {
-  planar::Region r;
-  switch (o.shape) {
-    case pvdf::FilmOutline::Shape::circle:
-      r.is_circle = true;
-      r.radius = o.radius_m;
-      break;
-    case pvdf::FilmOutline::Shape::rectangle: {
-      const double hx = 0.5 * o.size_m[0], hy = 0.5 * o.size_m[1];
-      r.vertices = {{-hx, -hy}, {hx, -hy}, {hx, hy}, {-hx, hy}};
-      break;
-    }
-    case pvdf::FilmOutline::Shape::ellipse: {
-      const int n = 1024;
-      for (int i = 0; i < n; ++i) {
-        const double t = 2 * 3.14159265358979323846 * i / n;
-        r.vertices.push_back({o.semi_axes_m[0] * std::cos(t), o.semi_axes_m[1] * std::sin(t)});
-      }
-      break;
-    }
-    case pvdf::FilmOutline::Shape::polygon: r.vertices = o.vertices_m; break;
-  }
-  return r;
-}
-
-}  // namespace
 
 std::vector<Footprint> probe_footprints(const pvdf::Scene& scene, const std::vector<std::array<double, 2>>& extras,
                                         double sliver_gap_m) {
@@ -236,50 +184,8 @@ void check_sizes(const pvdf::Scene& s) {
   }
 }
 
-/// Where an electrode sits relative to the film: inside with a clearance, crossing, or outside.
-struct RimRelation {
-  enum class Kind { inside, crossing, outside } kind = Kind::inside;
-  double clearance_m = 0;  ///< smallest distance from the electrode outline to the rim (inside only)
-};
-
-RimRelation rim_relation(const pvdf::FilmOutline& o, const pvdf::Electrode& e) {
-  RimRelation rel;
-  if (o.shape == pvdf::FilmOutline::Shape::ellipse) {
-    // The ellipse is convex: the signed distance to its outline is concave inside, so its
-    // minimum over a polygon is at a vertex; circles are sampled and the sagitta subtracted.
-    const int n = 256;
-    const auto pts = e.outline(n);
-    const double sagitta = e.shape == pvdf::Electrode::Shape::circle
-                               ? e.radius_m * (1 - std::cos(3.14159265358979323846 / n))
-                               : 0.0;
-    double lo = 1e300, hi = -1e300;
-    for (const auto& p : pts) {
-      const double d = o.inside_distance_m(p);
-      lo = std::min(lo, d);
-      hi = std::max(hi, d);
-    }
-    lo -= sagitta;
-    if (lo > 0) {
-      rel.clearance_m = lo;
-    } else if (hi > 0) {
-      rel.kind = RimRelation::Kind::crossing;
-    } else {
-      rel.kind = RimRelation::Kind::outside;
-    }
-    return rel;
-  }
-  const planar::Region film = film_region(o);
-  const planar::Region reg = electrode_region(e);
-  const double d = planar::boundary_distance(film, reg);
-  if (d <= 0) {
-    rel.kind = RimRelation::Kind::crossing;
-  } else if (!planar::region_contains(film, planar::boundary_point(reg))) {
-    rel.kind = RimRelation::Kind::outside;
-  } else {
-    rel.clearance_m = d;
-  }
-  return rel;
-}
+using pvdf::RimRelation;
+using pvdf::rim_relation;
 
 }  // namespace
 

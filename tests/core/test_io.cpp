@@ -74,3 +74,57 @@ TEST_CASE("CSV: bad rows are refused or skipped with their line numbers", "[io]"
   CHECK(t.column("m1_V") == 1);
   CHECK_THROWS_AS(t.column("m2_V"), pvdf::InputError);
 }
+
+TEST_CASE("CSV as users write it: BOM, quoted fields, CRLF, comments", "[io][csv]") {
+  // Excel's "CSV UTF-8" (BOM), pandas QUOTE_ALL, Windows line ends, comment lines.
+  const std::string text =
+      "\xEF\xBB\xBF# exported by a spreadsheet\r\n"
+      "\"x_m\",\"m1_V\",\"note, with comma\"\r\n"
+      "# a comment between rows\r\n"
+      "\"0.0\",\"1.5\",\"2\"\r\n"
+      "\"0.1\", 2.5 ,\"3\"\r\n"
+      "  # indented comment\r\n"
+      "\r\n"
+      "0.2,3.5,4\n";
+  std::istringstream in(text);
+  const auto t = pvdf::read_csv(in, "excel.csv");
+  REQUIRE(t.columns.size() == 3);
+  CHECK(t.columns[0] == "x_m");
+  CHECK(t.columns[2] == "note, with comma");
+  REQUIRE(t.rows.size() == 3);
+  CHECK(t.rows[0][1] == 1.5);
+  CHECK(t.rows[1][1] == 2.5);
+  CHECK(t.rows[2][2] == 4.0);
+  CHECK(t.line_numbers[0] == 4);
+  CHECK(t.line_numbers[2] == 8);
+  CHECK(t.column("m1_V") == 1);
+  // A BOM before the header without a comment line.
+  std::istringstream bom("\xEF\xBB\xBFx_m,m1_V\n0,1\n");
+  CHECK(pvdf::read_csv(bom, "bom.csv").column("x_m") == 0);
+  // Doubled quotes inside a quoted field; split_csv_line alone (used by the streaming reader).
+  const auto f = pvdf::split_csv_line("\xEF\xBB\xBF\"t_s\",\"a \"\"b\"\"\" , 3\r");
+  REQUIRE(f.size() == 3);
+  CHECK(f[0] == "t_s");
+  CHECK(f[1] == "a \"b\"");
+  CHECK(f[2] == "3");
+  // An unterminated quote is refused with its line number, never read as a number.
+  std::istringstream bad("x_m,m1_V\n\"0.1,2\n");
+  try {
+    pvdf::read_csv(bad, "bad.csv");
+    FAIL("unterminated quote accepted");
+  } catch (const pvdf::InputError& e) {
+    CHECK_THAT(std::string(e.what()), Catch::Contains("bad.csv:2") && Catch::Contains("quote"));
+  }
+}
+
+TEST_CASE("CSV messages escape control bytes", "[io][csv][hostile]") {
+  std::istringstream in(std::string("x_m,m1_V\n0.1,\x01\x1b[2J\x00z\n", 21));
+  try {
+    pvdf::read_csv(in, "ctl.csv");
+    FAIL("garbage accepted");
+  } catch (const pvdf::InputError& e) {
+    const std::string m = e.what();
+    CHECK_THAT(m, Catch::Contains("ctl.csv:2") && Catch::Contains("\\x1b") && Catch::Contains("\\x00"));
+    for (const char c : m) CHECK_FALSE((static_cast<unsigned char>(c) < 0x20 || c == 0x7f));
+  }
+}

@@ -138,3 +138,111 @@ TEST_CASE("syntax errors and NaN name the line and the key", "[scene][errors]") 
     CHECK_THAT(std::string(e.what()), Catch::Contains("/nonexistent/scene.json"));
   }
 }
+
+// ---------------------------------------------------------------------------- hostile input
+
+namespace {
+
+/// A valid scene whose description is `n` characters long (so the file is about n bytes).
+std::string scene_with_description(std::size_t n) {
+  return "{\"description\": \"" + std::string(n, 'x') + "\",\n \"membrane\": {\"radius_m\": 0.045}}";
+}
+
+}  // namespace
+
+TEST_CASE("a large JSON file with a syntax error gets its line, not a crash", "[scene][errors][hostile]") {
+  for (const std::size_t n : {20000u, 40000u, 1000000u}) {
+    std::string text = scene_with_description(n);
+    text.pop_back();  // the final '}' is missing
+    INFO("description of " << n << " characters");
+    try {
+      pvdf::parse_json_text(text, "big.json");
+      FAIL("truncated file accepted");
+    } catch (const pvdf::InputError& e) {
+      CHECK_THAT(std::string(e.what()), Catch::StartsWith("big.json:2:"));
+    }
+  }
+  // A truncated long array: the key under which the file ends is named.
+  std::string arr = "{\"electrodes\": [";
+  for (int i = 0; i < 5000; ++i) arr += "{\"name\": \"E" + std::to_string(i) + "\", \"center_m\": [0, 0]},";
+  CHECK_THROWS_AS(pvdf::parse_json_text(arr, "arr.json"), pvdf::InputError);
+}
+
+TEST_CASE("deeply nested JSON is refused at a depth limit with its position", "[scene][errors][hostile]") {
+  for (const char* open : {"[", "{\"a\":"}) {
+    std::string text;
+    for (int i = 0; i < 100000; ++i) text += open;
+    try {
+      pvdf::parse_json_text(text, "deep.json");
+      FAIL("deep nesting accepted");
+    } catch (const pvdf::InputError& e) {
+      CHECK_THAT(std::string(e.what()), Catch::StartsWith("deep.json:1:") && Catch::Contains("nest"));
+    }
+  }
+  // A nested value that is valid JSON is refused as well (never dumped recursively).
+  std::string ok;
+  for (int i = 0; i < 50000; ++i) ok += "[";
+  for (int i = 0; i < 50000; ++i) ok += "]";
+  CHECK_THROWS_AS(parse("{\"name\": " + ok + "}"), pvdf::InputError);
+  // json_excerpt of a deep value built in code is short and does not recurse.
+  nlohmann::json deep = nlohmann::json::array();
+  nlohmann::json* leaf = &deep;
+  for (int i = 0; i < 200000; ++i) {
+    leaf->push_back(nlohmann::json::array());
+    leaf = &leaf->back();
+  }
+  CHECK(pvdf::json_excerpt(deep).size() <= 64);
+}
+
+TEST_CASE("a duplicate key is refused, naming the key", "[scene][errors][hostile]") {
+  CHECK_THAT(error_of(R"({"membrane": {"radius_m": 0.045, "radius_m": 0.03}})"),
+             Catch::Contains("duplicate key") && Catch::Contains("membrane.radius_m"));
+  CHECK_THAT(error_of(R"({"model": {}, "model": {}})"), Catch::Contains("duplicate key") && Catch::Contains("model"));
+  // The same key in two different objects is fine.
+  CHECK_NOTHROW(parse(R"({"electrodes": [{"name": "A", "center_m": [0, 0.01]}, {"name": "B", "center_m": [0, -0.01]}]})"));
+}
+
+TEST_CASE("control bytes in a garbage file are escaped in the message", "[scene][errors][hostile]") {
+  const std::string garbage("\x01\x02\x1b[31m\x00\x7f zz", 12);
+  try {
+    pvdf::parse_json_text(garbage, "garbage.json");
+    FAIL("garbage accepted");
+  } catch (const pvdf::InputError& e) {
+    const std::string m = e.what();
+    CHECK_THAT(m, Catch::StartsWith("garbage.json:1:1"));
+    for (const char c : m) CHECK_FALSE((static_cast<unsigned char>(c) < 0x20 || c == 0x7f));
+    CHECK_THAT(m, Catch::Contains("\\x01"));
+  }
+}
+
+TEST_CASE("electrode geometry is checked by the scene reader", "[scene][errors][hostile]") {
+  // Outside the film, across the rim, two overlapping: refused for every command.
+  CHECK_THAT(error_of(R"({"electrodes": [{"name": "A", "center_m": [0, 0.06]}]})"),
+             Catch::Contains("electrodes[0]") && Catch::Contains("outside the film"));
+  CHECK_THAT(error_of(R"({"electrodes": [{"name": "A", "center_m": [0, 0.0445]}]})"),
+             Catch::Contains("electrodes[0]") && Catch::Contains("rim"));
+  CHECK_THAT(error_of(R"({"electrodes": [{"name": "A", "center_m": [0, 0.01]}, {"name": "B", "center_m": [0.001, 0.0105]}]})"),
+             Catch::Contains("electrodes[1]") && Catch::Contains("overlaps") && Catch::Contains("electrodes[0]"));
+  CHECK_THAT(error_of(R"({"electrodes": [{"shape": "circle", "center_m": [0, 0.01], "radius_m": 0.003},
+                                         {"shape": "polygon", "vertices_m": [[0, 0.01], [0.01, 0.01], [0.01, 0.02]]}]})"),
+             Catch::Contains("electrodes[1]") && Catch::Contains("overlaps"));
+  // The seed-001 layout and a layout near (not at) the rim are fine.
+  CHECK_NOTHROW(parse(R"({"electrodes": [{"name": "A", "center_m": [0, 0.040]}, {"name": "B", "center_m": [0, 0.036]}]})"));
+}
+
+TEST_CASE("sizes outside the documented physical range are refused", "[scene][errors][hostile]") {
+  CHECK_THAT(error_of(R"({"membrane": {"radius_m": 1e308}})"), Catch::Contains("membrane.radius_m") && Catch::Contains("1e+308"));
+  CHECK_THAT(error_of(R"({"membrane": {"radius_m": 1e-9}})"), Catch::Contains("membrane.radius_m"));
+  CHECK_THAT(error_of(R"({"membrane": {"shape": "rectangle", "size_m": [1e300, 0.05]}})"), Catch::Contains("membrane.size_m"));
+  CHECK_THAT(error_of(R"({"probe": {"radius_m": 1e-20}})"), Catch::Contains("probe.radius_m") && Catch::Contains("1e-20"));
+  CHECK_THAT(error_of(R"({"probe": {"radius_m": 1e-300}})"), Catch::Contains("probe.radius_m"));
+  CHECK_THAT(error_of(R"({"probe": {"radius_m": 0.04}})"), Catch::Contains("probe.radius_m"));
+  CHECK_THAT(error_of(R"({"electrodes": [{"name": "A", "center_m": [0, 0.01], "size_m": [1e-9, 0.002]}]})"),
+             Catch::Contains("electrodes[0].size_m"));
+  CHECK_THAT(error_of(R"({"mesh": {"size_min_m": 1e-9}})"), Catch::Contains("mesh.size_min_m"));
+  // The probe footprint must stay a probe radius clear of the rim (the margin maps keep).
+  CHECK_THAT(error_of(R"({"loads": [{"position_m": [0, 0.044]}]})"), Catch::Contains("loads[0]") && Catch::Contains("rim"));
+  CHECK_THAT(error_of(R"({"loads": [{"position_m": [0, 0.0435]}]})"), Catch::Contains("loads[0]"));
+  CHECK_NOTHROW(parse(R"({"loads": [{"position_m": [0, 0.043]}]})"));
+  CHECK_NOTHROW(parse(R"({"probe": {"radius_m": 1e-4}})"));
+}

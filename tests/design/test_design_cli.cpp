@@ -35,33 +35,28 @@ std::string coincident_scene() {
 
 }  // namespace
 
-TEST_CASE("design ranks layouts and reports coincident electrodes as unable to locate", "[design][cli]") {
+TEST_CASE("design ranks a layout; coincident electrodes are refused as bad input", "[design][cli]") {
   const std::string out = dir() + "/out1";
-  const auto r = run_pvdfkit("design " + seed_scene() + " " + coincident_scene() +
-                             " --synthetic --spacing-m 0.002 --json --out-dir " + out);
+  const auto r = run_pvdfkit("design " + seed_scene() + " --synthetic --spacing-m 0.002 --json --out-dir " + out);
   INFO(r.err);
   REQUIRE(r.exit_code == 0);
   CHECK(r.out.find("nan") == std::string::npos);
   CHECK(r.out.find("inf\"") == std::string::npos);
   const auto j = nlohmann::json::parse(r.out);
   CHECK(j["synthetic"] == true);
-  REQUIRE(j["layouts"].size() == 2);
+  REQUIRE(j["layouts"].size() == 1);
   CHECK(j["layouts"][0]["label"] == "seed001");
   CHECK(j["layouts"][0]["status"] == "ok");
-  CHECK(j["layouts"][1]["label"] == "coincident");
-  CHECK(j["layouts"][1]["status"] == "unable_to_locate");
-  CHECK(j["layouts"][1]["median_sigma_pos_m"].is_null());
-  CHECK(j["layouts"][1]["coverage"] == 0.0);
   CHECK(j["best"] == "seed001");
   CHECK(std::filesystem::file_size(out + "/design_position.png") > 10000);
   CHECK(std::filesystem::file_size(out + "/design_force.png") > 10000);
   CHECK(std::filesystem::exists(out + "/design.json"));
 
-  // Alone, the coincident layout is a numerical outcome: exit 3, said in words.
+  // Two electrodes in one place overlap: the scene reader refuses the file (exit 2), naming it.
   const auto alone = run_pvdfkit("design " + coincident_scene() + " --synthetic --spacing-m 0.002 --no-plots");
-  CHECK(alone.exit_code == 3);
-  CHECK(alone.out.find("UNABLE TO LOCATE") != std::string::npos);
-  CHECK(alone.err.find("no layout can locate") != std::string::npos);
+  CHECK(alone.exit_code == 2);
+  CHECK(alone.err.find("electrodes[2]") != std::string::npos);
+  CHECK(alone.err.find("overlaps") != std::string::npos);
 }
 
 TEST_CASE("design --vary sweeps a scene key; rotation leaves the figures of merit unchanged", "[design][cli]") {

@@ -143,10 +143,20 @@ TEST_CASE("probe footprints partly outside the film are refused", "[mesh][valida
   CHECK_THROWS_AS(pvdf::mesh::build_film_mesh(seed(), nullptr, {{0.0, -0.0445}}), pvdf::InputError);
 }
 
-TEST_CASE("the scene's own parser and the mesh validation agree on JSON input", "[mesh][validate]") {
-  // An overlap only the mesh module can see: the scene parses, the geometry is refused.
+TEST_CASE("the scene reader refuses what the mesh validation refuses, with the same message", "[mesh][validate]") {
+  // Overlapping electrodes are caught once, when the file is read, for every command.
   auto j = nlohmann::json::parse(pvdf::default_scene_json());
   j["electrodes"][2]["center_m"] = {-0.0080, -0.0050};
-  const auto s = pvdf::parse_scene(j, "overlap.json");
-  CHECK_THAT(rejection(s), Catch::StartsWith("overlap.json: electrodes[2] (\"C\") overlaps electrodes[1] (\"B\")"));
+  const std::string expected = "overlap.json: electrodes[2] (\"C\") overlaps electrodes[1] (\"B\")";
+  try {
+    pvdf::parse_scene(j, "overlap.json");
+    FAIL("overlap accepted by the scene reader");
+  } catch (const pvdf::InputError& e) {
+    CHECK_THAT(std::string(e.what()), Catch::StartsWith(expected));
+  }
+  // A scene built in code (not read from a file) is still checked by the mesher.
+  auto s = seed();
+  s.source = "overlap.json";
+  s.electrodes[2].center_m = {-0.0080, -0.0050};
+  CHECK_THAT(rejection(s), Catch::StartsWith(expected));
 }

@@ -26,7 +26,8 @@ std::vector<double> parse_range(const std::string& text, const std::string& what
 /// Parses "A,B,C" into finite numbers; `count` = 0 accepts any count >= 1.
 std::vector<double> parse_number_list(const std::string& text, const std::string& what, std::size_t count = 0);
 
-/// A table read from CSV with a header row. Numbers only; comments start with '#'.
+/// A table read from CSV with a header row. Numbers only; comment lines start with '#'. Read as
+/// spreadsheets and pandas write it: a UTF-8 byte-order mark, quoted fields and CRLF line ends.
 struct CsvTable {
   std::vector<std::string> columns;
   std::vector<std::vector<double>> rows;   ///< rows[i][j] is column j of data row i
@@ -50,8 +51,11 @@ CsvTable read_csv(const std::string& path, BadRowPolicy policy = BadRowPolicy::r
 CsvTable read_csv(std::istream& in, const std::string& source, BadRowPolicy policy = BadRowPolicy::refuse,
                   std::vector<std::string>* skipped = nullptr);
 
-/// Splits one CSV line on commas, trimming spaces.
+/// Splits one CSV line on commas: quoted fields ("a, b", "" for a quote), a leading UTF-8
+/// byte-order mark and a trailing CR are handled, unquoted fields trimmed.
 std::vector<std::string> split_csv_line(const std::string& line);
+/// A number as printf's %g (six significant digits): for messages.
+std::string format_g(double x);
 /// Parses a finite double from the whole of `text`; false if it is not one.
 bool parse_finite(const std::string& text, double& value);
 

@@ -74,13 +74,18 @@ class JsonObjectReader {
   mutable std::set<std::string> used_;
 };
 
+/// Deepest nesting of arrays and objects a pvdfkit JSON file may have (they need about 4).
+inline constexpr std::size_t max_json_depth = 64;
+
 /// Parses a JSON file strictly (no comments, no trailing commas). Throws InputError naming
 /// the file and the line/column for a syntax error, or the file for a missing/unreadable one.
 nlohmann::json read_json_file(const std::string& path);
-/// Parses JSON text; `source` names it in messages.
+/// Parses JSON text; `source` names it in messages. Linear in the text, without recursion or
+/// backtracking; refuses nesting deeper than max_json_depth and a key repeated in one object.
 nlohmann::json parse_json_text(const std::string& text, const std::string& source);
 
-/// Shortens a JSON value for an error message (at most ~60 characters).
+/// Shortens a JSON value for an error message (at most 60 characters, control bytes escaped);
+/// iterative, so any value is safe.
 std::string json_excerpt(const nlohmann::json& value);
 
 }  // namespace pvdf

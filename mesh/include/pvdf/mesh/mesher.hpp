@@ -35,10 +35,17 @@ struct MeshReport {
 inline constexpr int msh_tag_offset = 1;
 inline constexpr int msh_probe_tag_base = 101;
 
+/// Range of MeshParameters::size_factor (`pvdfkit mesh --size-factor`).
+inline constexpr double size_factor_min = 0.01;
+inline constexpr double size_factor_max = 100.0;
+/// Largest mesh pvdf::mesh makes: a request estimated above it is refused before Gmsh runs
+/// (exit 2), instead of exhausting memory (2e6 quadrilaterals take ~1 GB in Gmsh).
+inline constexpr double max_cells = 2e6;
+
 /// Extra knobs beyond the scene's mesh section.
 struct MeshParameters {
   /// Multiplies both target sizes (size_min, size_max): 0.5 gives roughly 4× the cells. For
-  /// refinement studies. Must be > 0.
+  /// refinement studies. Must lie in [size_factor_min, size_factor_max].
   double size_factor = 1.0;
   /// Print Gmsh's own log to stdout.
   bool verbose = false;

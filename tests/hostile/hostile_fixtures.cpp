@@ -1,0 +1,86 @@
+// Fixture files of the hostile-input table (see hostile_fixtures.hpp).
+#include "hostile_fixtures.hpp"
+
+#include "pvdf/core/scene.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <fstream>
+
+namespace pvdf::test {
+
+namespace {
+
+/// A string literal with its embedded NUL bytes kept.
+template <std::size_t N>
+std::string bytes(const char (&s)[N]) {
+  return std::string(s, N - 1);
+}
+
+void write(const std::filesystem::path& p, const std::string& text) {
+  std::ofstream out(p, std::ios::binary);
+  out << text;
+}
+
+}  // namespace
+
+std::string seed001_with(const std::string& patch_json) {
+  nlohmann::json j = nlohmann::json::parse(pvdf::default_scene_json());
+  j.merge_patch(nlohmann::json::parse(patch_json));
+  return j.dump(1);
+}
+
+void write_hostile_fixtures(const std::filesystem::path& d) {
+  write(d / "good.json", pvdf::default_scene_json());
+  // Syntax: truncated large files, nesting, garbage, empty, NaN, not an object.
+  std::string big = seed001_with("{}");
+  big.insert(big.find("\"name\""), "\"description\": \"" + std::string(40000, 'x') + "\",\n");
+  write(d / "trunc40k.json", big.substr(0, big.size() - 2));
+  write(d / "trunc_half.json", big.substr(0, big.size() / 2));
+  write(d / "deep_array.json", std::string(100000, '['));
+  std::string deep_obj;
+  for (int i = 0; i < 50000; ++i) deep_obj += "{\"a\":";
+  write(d / "deep_object.json", deep_obj);
+  std::string nested_ok = "{\"name\": ";
+  for (int i = 0; i < 20000; ++i) nested_ok += "[";
+  for (int i = 0; i < 20000; ++i) nested_ok += "]";
+  write(d / "deep_valid.json", nested_ok + "}");
+  write(d / "garbage.json", bytes("\x01\x02\x1b[31mRED\x00\x7fgarbage\xff\xfe"));
+  write(d / "empty.json", "");
+  write(d / "nan.json", "{\"membrane\": {\"thickness_m\": NaN}}");
+  write(d / "array.json", "[1, 2, 3]");
+  write(d / "huge_number.json", "{\"membrane\": {\"radius_m\": 1e400}}");
+  write(d / "dup_key.json", "{\"membrane\": {\"radius_m\": 0.045, \"radius_m\": 0.03}}");
+  write(d / "dup_top.json", "{\"model\": {}, \"model\": {\"tolerance\": 0.1}}");
+  write(d / "unknown_key.json", seed001_with("{\"membrane\": {\"thicknes_m\": 2.5e-5}}"));
+  write(d / "bad_utf8.json", "{\"name\": \"\xc3\x28\"}");
+  // Geometry: electrodes outside, across the rim, overlapping; sizes out of range.
+  write(d / "e_outside.json", seed001_with(R"({"electrodes": [{"name": "A", "center_m": [0, 0.06]}]})"));
+  write(d / "e_crossing.json", seed001_with(R"({"electrodes": [{"name": "A", "center_m": [0, 0.0445]}]})"));
+  write(d / "e_overlap.json", seed001_with(R"({"electrodes": [{"name": "A", "center_m": [0, 0.01]},
+                                                              {"name": "B", "center_m": [0.001, 0.0105]}]})"));
+  write(d / "e_tiny.json", seed001_with(R"({"electrodes": [{"name": "A", "center_m": [0, 0.01], "size_m": [1e-12, 0.002]}]})"));
+  write(d / "radius_huge.json", seed001_with(R"({"membrane": {"radius_m": 1e308}})"));
+  write(d / "radius_tiny.json", seed001_with(R"({"membrane": {"radius_m": 1e-9}})"));
+  write(d / "rect_huge.json", seed001_with(R"({"membrane": {"shape": "rectangle", "size_m": [1e300, 0.09], "radius_m": null}})"));
+  write(d / "probe_1e-20.json", seed001_with(R"({"probe": {"radius_m": 1e-20}})"));
+  write(d / "probe_1e-300.json", seed001_with(R"({"probe": {"radius_m": 1e-300}})"));
+  write(d / "probe_huge.json", seed001_with(R"({"probe": {"radius_m": 0.04}})"));
+  write(d / "load_rim.json", seed001_with(R"({"loads": [{"position_m": [0, 0.044], "force_N": 1}]})"));
+  write(d / "load_outside.json", seed001_with(R"({"loads": [{"position_m": [0, 0.05], "force_N": 1}]})"));
+  write(d / "e_short_edge.json", seed001_with(R"({"electrodes": [{"name": "P", "shape": "polygon",
+      "vertices_m": [[0, 0.01], [0.002, 0.01], [0.002, 0.012], [1e-13, 0.012], [0, 0.012]]}]})"));
+  write(d / "size_min_tiny.json", seed001_with(R"({"mesh": {"size_min_m": 1e-9}})"));
+  write(d / "tolerance_tiny.json", seed001_with(R"({"model": {"tolerance": 1e-12}})"));
+  write(d / "thickness_neg.json", seed001_with(R"({"membrane": {"thickness_m": -2.5e-5}})"));
+  // CSV and filter files.
+  write(d / "garbage.csv", bytes("x_m,y_m,force_N,charge_A_C\n0.1,\x01\x1b[2J\x00,1,2\n"));
+  write(d / "empty.csv", "");
+  write(d / "noheader.csv", "# only a comment\n");
+  write(d / "filter_trunc.json", "{\"format\": \"pvdfkit-restore-filter\", \"taps\": 4, \"filters\": {\"h11\": [" +
+                                     std::string(40000, '1').insert(0, "0.") + ", ");
+  write(d / "filter_deep.json", std::string(100000, '['));
+  write(d / "scan.csv", "x_m,m1_V,m2_V\n0,0,0\n0.001,0,0\n0.002,0,0\n0.003,0,0\n");
+}
+
+}  // namespace pvdf::test

@@ -1,0 +1,273 @@
+// Hostile input, end to end: each row runs `pvdfkit` on a bad scene, flag or file and asserts the
+// project's promise — the documented exit code, exactly one `error:` line that names the input
+// (no raw control bytes on stderr), no output file (or temporary) left behind, and a wall-time
+// bound. Rows are data; the fixture files are written by hostile_fixtures.cpp.
+#include "hostile_fixtures.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Row {
+  const char* id;
+  /// Arguments after `pvdfkit`; run in the fixture folder. `$M` is a synthetic charge map. A row
+  /// that contains `$X` is a whole shell command instead, `$X` standing for the pvdfkit call
+  /// (it must send stderr to .err itself).
+  const char* args;
+  int exit_code;
+  /// Text the single `error:` line must contain (the input it names); "" = no error line at all.
+  const char* names;
+  /// Paths (relative to the folder, comma-separated) that must not exist afterwards.
+  const char* absent = "";
+  double max_wall_s = 20;
+};
+
+// clang-format off
+const std::vector<Row> rows = {
+  // ---- scene files: syntax, nesting, garbage, duplicates (read by every command)
+  {"solve-trunc40k", "solve trunc40k.json", 2, "trunc40k.json:"},
+  {"solve-trunc-half", "solve trunc_half.json", 2, "trunc_half.json:"},
+  {"solve-deep-array", "solve deep_array.json", 2, "deep_array.json:1:"},
+  {"solve-deep-object", "solve deep_object.json", 2, "deep_object.json:1:"},
+  {"solve-deep-valid", "solve deep_valid.json", 2, "deep_valid.json:1:"},
+  {"solve-garbage", "solve garbage.json", 2, "garbage.json:1:1"},
+  {"solve-empty", "solve empty.json", 2, "empty.json"},
+  {"solve-nan", "solve nan.json", 2, "thickness_m"},
+  {"solve-array", "solve array.json", 2, "array.json"},
+  {"solve-huge-number", "solve huge_number.json", 2, "radius_m"},
+  {"solve-dup-key", "solve dup_key.json", 2, "membrane.radius_m"},
+  {"solve-dup-top", "solve dup_top.json", 2, "model"},
+  {"solve-unknown-key", "solve unknown_key.json", 2, "membrane.thicknes_m"},
+  {"solve-bad-utf8", "solve bad_utf8.json", 2, "bad_utf8.json"},
+  {"solve-missing-file", "solve no_such_scene.json", 2, "no_such_scene.json"},
+  {"solve-folder-as-scene", "solve .", 2, "."},
+  // ---- scene geometry, refused by the scene reader for every command
+  {"solve-e-outside", "solve e_outside.json", 2, "electrodes[0]"},
+  {"solve-e-crossing", "solve e_crossing.json", 2, "electrodes[0]"},
+  {"solve-e-overlap", "solve e_overlap.json", 2, "electrodes[1]"},
+  {"solve-e-tiny", "solve e_tiny.json", 2, "electrodes[0].size_m"},
+  {"solve-radius-huge", "solve radius_huge.json", 2, "membrane.radius_m"},
+  {"solve-radius-tiny", "solve radius_tiny.json", 2, "membrane.radius_m"},
+  {"solve-rect-huge", "solve rect_huge.json", 2, "membrane.size_m"},
+  {"solve-probe-1e-20", "solve probe_1e-20.json", 2, "probe.radius_m"},
+  {"solve-probe-1e-300", "solve probe_1e-300.json", 2, "probe.radius_m"},
+  {"solve-probe-huge", "solve probe_huge.json", 2, "probe.radius_m"},
+  {"solve-load-rim", "solve load_rim.json", 2, "loads[0]"},
+  {"solve-load-outside", "solve load_outside.json", 2, "loads[0]"},
+  {"solve-size-min-tiny", "solve size_min_tiny.json", 2, "mesh.size_min_m"},
+  {"solve-tolerance-tiny", "solve tolerance_tiny.json", 2, "model.tolerance"},
+  {"solve-thickness-neg", "solve thickness_neg.json", 2, "membrane.thickness_m"},
+  {"map-e-outside", "map e_outside.json -o m1.h5 --quiet", 2, "electrodes[0]", "m1.h5,m1.h5.checkpoint"},
+  {"map-e-overlap", "map e_overlap.json -o m2.h5 --quiet", 2, "electrodes[1]", "m2.h5"},
+  {"map-probe-1e-20", "map probe_1e-20.json -o m3.h5 --quiet", 2, "probe.radius_m", "m3.h5"},
+  {"map-trunc40k", "map trunc40k.json -o m4.h5 --quiet", 2, "trunc40k.json:", "m4.h5"},
+  {"map-dup-key", "map dup_key.json -o m5.h5 --quiet", 2, "membrane.radius_m", "m5.h5"},
+  {"map-radius-huge", "map radius_huge.json -o m6.h5 --quiet", 2, "membrane.radius_m", "m6.h5"},
+  {"mesh-e-outside", "mesh e_outside.json -o k1.msh", 2, "electrodes[0]", "k1.msh,k1.png"},
+  {"mesh-deep-array", "mesh deep_array.json -o k2.msh", 2, "deep_array.json:1:", "k2.msh,k2.png"},
+  {"mesh-radius-huge", "mesh radius_huge.json -o k3.msh", 2, "membrane.radius_m", "k3.msh,k3.png"},
+  {"mesh-probe-1e-300", "mesh probe_1e-300.json -o k4.msh", 2, "probe.radius_m", "k4.msh,k4.png"},
+  {"mesh-short-edge", "mesh e_short_edge.json -o k6.msh", 2, "electrodes[0]", "k6.msh,k6.png"},
+  {"mesh-size-min-tiny", "mesh size_min_tiny.json -o k5.msh", 2, "mesh.size_min_m", "k5.msh,k5.png"},
+  {"design-e-outside", "design e_outside.json --synthetic --no-plots", 2, "electrodes[0]"},
+  {"design-e-crossing", "design e_crossing.json --synthetic --no-plots", 2, "electrodes[0]"},
+  {"design-e-overlap", "design e_overlap.json --synthetic --no-plots", 2, "electrodes[1]"},
+  {"design-garbage", "design garbage.json --synthetic --no-plots", 2, "garbage.json:1:1"},
+  {"moduli-garbage", "moduli --scene garbage.json", 2, "garbage.json:1:1"},
+  {"moduli-trunc40k", "moduli --scene trunc40k.json", 2, "trunc40k.json:"},
+  {"moduli-deep", "moduli --scene deep_array.json", 2, "deep_array.json:1:"},
+  {"restore-filter-trunc", "restore apply filter_trunc.json scan.csv -o forces1.csv", 2, "filter_trunc.json:", "forces1.csv"},
+  {"restore-filter-deep", "restore apply filter_deep.json scan.csv -o forces2.csv", 2, "filter_deep.json:1:", "forces2.csv"},
+  // ---- solve flags: the scene's rules, checked where the flag is parsed
+  {"solve-tolerance-0", "solve good.json --tolerance 0", 2, "--tolerance"},
+  {"solve-tolerance-1e-12", "solve good.json --tolerance 1e-12", 2, "--tolerance"},
+  {"solve-tolerance-0.9", "solve good.json --tolerance 0.9", 2, "--tolerance"},
+  {"solve-tolerance-nan", "solve good.json --tolerance nan", 2, "--tolerance"},
+  {"solve-max-ref-neg", "solve good.json --max-refinements -1", 2, "--max-refinements"},
+  {"solve-max-ref-99", "solve good.json --max-refinements 99", 2, "--max-refinements"},
+  {"solve-load-rim", "solve good.json --load 0,0.044,1", 2, "--load"},
+  {"solve-load-near-rim", "solve good.json --load 0,0.0435,1", 2, "--load"},
+  {"solve-load-outside", "solve good.json --load 0,0.06,1", 2, "--load"},
+  {"solve-load-1e308", "solve good.json --load 1e308,0,1", 2, "--load"},
+  {"solve-load-force-1e9", "solve good.json --load 0,0,1e9", 2, "--load"},
+  {"solve-load-two", "solve good.json --load 0,0", 2, "--load"},
+  {"solve-load-nan", "solve good.json --load nan,0,1", 2, "--load"},
+  {"solve-model", "solve good.json --model magic", 2, "--model"},
+  {"solve-sample-outside", "solve good.json --sample 0.1,0", 2, "--sample"},
+  // ---- map flags and output
+  {"map-nodir", "map good.json -o nodir/m.h5 --quiet", 2, "nodir", "nodir", 10},
+  {"map-tolerance-0", "map good.json -o m.h5 --quiet --tolerance 0", 2, "--tolerance", "m.h5"},
+  {"map-tolerance-1e-12", "map good.json -o m.h5 --quiet --tolerance 1e-12", 2, "--tolerance", "m.h5"},
+  {"map-setup-checks-5", "map good.json -o m.h5 --quiet --setup-checks 5", 2, "--setup-checks", "m.h5"},
+  {"map-setup-checks-neg", "map good.json -o m.h5 --quiet --setup-checks -1", 2, "--setup-checks", "m.h5"},
+  {"map-spacing-0", "map good.json -o m.h5 --quiet --spacing-m 0", 2, "--spacing-m", "m.h5"},
+  {"map-spacing-1e-9", "map good.json -o m.h5 --quiet --spacing-m 1e-9", 2, "--spacing-m", "m.h5"},
+  {"map-spacing-neg", "map good.json -o m.h5 --quiet --spacing-m -0.001", 2, "--spacing-m", "m.h5"},
+  {"map-forces-0", "map good.json -o m.h5 --quiet --forces-N 0", 2, "--forces-N", "m.h5"},
+  {"map-forces-neg", "map good.json -o m.h5 --quiet --forces-N -1,1", 2, "--forces-N", "m.h5"},
+  {"map-region-empty", "map good.json -o m.h5 --quiet --region 0.01,0,0,0.01", 2, "--region", "m.h5"},
+  {"map-threads-neg", "map good.json -o m.h5 --quiet --threads -1", 2, "--threads", "m.h5"},
+  {"map-stride-0", "map good.json -o m.h5 --quiet --scaling-check-stride 0", 2, "--scaling-check-stride", "m.h5"},
+  {"map-rim-margin-neg", "map good.json -o m.h5 --quiet --rim-margin-m -1", 2, "--rim-margin-m", "m.h5"},
+  {"map-noise-neg", "map good.json -o m.h5 --quiet --noise-C -1e-14,5e-14,5e-14", 2, "--noise-C", "m.h5"},
+  // ---- mesh flags and outputs
+  {"mesh-size-factor-1e-6", "mesh good.json -o k.msh --size-factor 1e-6", 2, "--size-factor", "k.msh,k.png"},
+  {"mesh-size-factor-0", "mesh good.json -o k.msh --size-factor 0", 2, "--size-factor", "k.msh,k.png"},
+  {"mesh-size-factor-neg", "mesh good.json -o k.msh --size-factor -1", 2, "--size-factor", "k.msh,k.png"},
+  {"mesh-size-factor-nan", "mesh good.json -o k.msh --size-factor nan", 2, "--size-factor", "k.msh,k.png"},
+  {"mesh-size-factor-1e6", "mesh good.json -o k.msh --size-factor 1e6", 2, "--size-factor", "k.msh,k.png"},
+  {"mesh-preview-nodir", "mesh good.json -o film2.msh --preview nodir/p.png", 2, "nodir", "film2.msh,nodir"},
+  {"mesh-output-nodir", "mesh good.json -o nodir/f.msh", 2, "nodir", "nodir"},
+  // ---- design flags
+  {"design-spacing-0", "design good.json --synthetic --no-plots --spacing-m 0", 2, "--spacing-m"},
+  {"design-spacing-1e-9", "design good.json --synthetic --no-plots --spacing-m 1e-9", 2, "--spacing-m"},
+  {"design-fem-spacing-1e-9", "design good.json --no-plots --spacing-m 1e-9", 2, "--spacing-m"},
+  {"design-target-0", "design good.json --synthetic --no-plots --target-mm 0", 2, "--target-mm"},
+  {"design-adc-bits-99", "design good.json --synthetic --no-plots --adc-bits 99", 2, "--adc-bits"},
+  {"design-tolerance-1e-12", "design good.json --no-plots --tolerance 1e-12", 2, "--tolerance"},
+  {"design-force-0", "design good.json --synthetic --no-plots --force-N 0", 2, "--force-N"},
+  {"design-noise-neg", "design good.json --synthetic --no-plots --noise-C -1e-14", 2, "--noise-C"},
+  {"design-refine-neg", "design good.json --synthetic --no-plots --refine-best -1", 2, "--refine-best"},
+  {"design-out-dir-file", "design good.json --synthetic --out-dir good.json", 2, "good.json"},
+  // ---- rays flags and outputs (map from synthetic-map)
+  {"rays-step-1e-9", "rays $M --angle-step-deg 1e-9", 2, "--angle-step-deg"},
+  {"rays-step-0", "rays $M --angle-step-deg 0", 2, "--angle-step-deg"},
+  {"rays-step-neg", "rays $M --angle-step-deg -10", 2, "--angle-step-deg"},
+  {"rays-step-400", "rays $M --angle-step-deg 400", 2, "--angle-step-deg"},
+  {"rays-samples-2e9", "rays $M --n-samples 2000000000", 2, "--n-samples"},
+  {"rays-samples-0", "rays $M --n-samples 0", 2, "--n-samples"},
+  {"rays-d-min-0", "rays $M --d-min-m 0", 2, "--d-min-m"},
+  {"rays-d-order", "rays $M --d-min-m 0.02 --d-max-m 0.01", 2, "--d-max-m"},
+  {"rays-min-points-0", "rays $M --min-points 0", 2, "--min-points"},
+  {"rays-force-0", "rays $M --force-N 0", 2, "--force-N"},
+  {"rays-plot-nodir", "rays $M --plot nodir/p.png", 2, "nodir", "nodir"},
+  {"rays-csv-nodir", "rays $M --csv nodir/r.csv", 2, "nodir", "nodir"},
+  // ---- other map consumers
+  {"isocharge-out-dir-file", "isocharge $M --out-dir good.json", 2, "good.json"},
+  {"isocharge-zoom-neg", "isocharge $M --out-dir iso --zoom-m -1", 2, "--zoom-m", "iso"},
+  {"compare-garbage", "compare $M garbage.csv", 2, "garbage.csv:2"},
+  {"compare-empty", "compare $M empty.csv", 2, "empty.csv"},
+  {"compare-noheader", "compare $M noheader.csv", 2, "noheader.csv"},
+  {"calibrate-garbage", "calibrate $M garbage.csv -o cal.h5", 2, "garbage.csv:2", "cal.h5"},
+  {"calibrate-nodir", "calibrate $M garbage.csv -o nodir/cal.h5", 2, "nodir", "nodir"},
+  // ---- moduli flags, stdout faults
+  {"moduli-range-step-0", "moduli --angles-deg 0:0:90", 2, "--angles-deg"},
+  {"moduli-range-tiny-step", "moduli --angles-deg 0:1e-9:90", 2, "--angles-deg"},
+  {"moduli-range-nan", "moduli --angles-deg nan:1:2", 2, "--angles-deg"},
+  {"moduli-plot-nodir", "moduli --plot nodir/m.png", 2, "nodir", "nodir"},
+  {"moduli-json-dev-full", "$X moduli --json >/dev/full 2>.err", 2, "stdout"},
+  {"moduli-csv-dev-full", "$X moduli --csv >/dev/full 2>.err", 2, "stdout"},
+  {"moduli-table-dev-full", "$X moduli >/dev/full 2>.err", 2, "stdout"},
+  {"moduli-pipe-head", "$X moduli --csv --angles-deg 0:0.002:180 2>.err | head -2 >/dev/null; exit ${PIPESTATUS[0]}", 2, ""},
+  {"synthetic-map-nodir", "synthetic-map -o nodir/x.h5", 2, "nodir", "nodir"},
+  {"synthetic-map-spacing-0", "synthetic-map -o s.h5 --spacing-m 0", 2, "--spacing-m", "s.h5"},
+  {"synthetic-map-forces-0", "synthetic-map -o s.h5 --forces-N 0", 2, "--forces-N", "s.h5"},
+  // ---- the command line itself
+  {"unknown-command", "frobnicate", 2, "frobnicate"},
+  {"unknown-command-ctl", "$X $'fro\\x1bbnicate' 2>.err", 2, "fro\\x1bbnicate"},
+  {"no-command", "", 2, "command"},
+  {"unknown-flag", "solve good.json --bogus", 2, "--bogus"},
+  {"missing-scene-arg", "solve", 2, "scene"},
+};
+// clang-format on
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::string replace_all(std::string s, const std::string& from, const std::string& to) {
+  for (std::size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size())) {
+    s.replace(at, from.size(), to);
+  }
+  return s;
+}
+
+std::string quote(const std::string& s) { return "'" + s + "'"; }
+
+/// The fixture folder, written once (with a small synthetic map for the map-reading commands).
+const fs::path& fixture_dir() {
+  static const fs::path dir = [] {
+    const fs::path d = fs::temp_directory_path() / ("pvdf_hostile_" + std::to_string(::getpid()));
+    fs::remove_all(d);
+    fs::create_directories(d);
+    pvdf::test::write_hostile_fixtures(d);
+    const std::string cmd = quote(PVDFKIT_EXE) + " synthetic-map -o " + quote((d / "map.h5").string()) +
+                            " --spacing-m 0.002 >/dev/null 2>&1";
+    REQUIRE(std::system(cmd.c_str()) == 0);
+    return d;
+  }();
+  return dir;
+}
+
+bool has_temporary(const fs::path& dir) {
+  for (const auto& e : fs::recursive_directory_iterator(dir)) {
+    if (e.path().filename().string().find(".tmp.") != std::string::npos) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+TEST_CASE("hostile input: every row fails cleanly, fast, with one error line and no output", "[hostile][cli]") {
+  const fs::path& dir = fixture_dir();
+  CHECK(rows.size() >= 80);
+  for (const Row& row : rows) {
+    // Memory is capped as well as time: a row that tries to allocate without bound fails here
+    // instead of taking the machine down.
+    const std::string limit = "ulimit -v 6000000; ";
+    const std::string call = "timeout -k 2 " + std::to_string(static_cast<int>(row.max_wall_s) + 5) + " " + quote(PVDFKIT_EXE);
+    std::string args = replace_all(row.args, "$M", "map.h5");
+    std::string script;
+    if (args.find("$X") != std::string::npos) {
+      script = limit + replace_all(args, "$X", call);
+    } else {
+      script = limit + call + " " + args + " </dev/null >.out 2>.err";
+    }
+    const std::string cmd = "cd " + quote(dir.string()) + " && bash -c " + quote(replace_all(script, "'", "'\\''"));
+    fs::remove(dir / ".err");
+    const auto t0 = std::chrono::steady_clock::now();
+    const int status = std::system(cmd.c_str());
+    const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const int code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    const std::string err = slurp(dir / ".err");
+
+    INFO("row " << row.id << ": pvdfkit " << row.args);
+    INFO("exit " << code << ", " << wall_s << " s, stderr: " << err);
+    CHECK(code == row.exit_code);
+    CHECK(wall_s < row.max_wall_s);
+    std::size_t n_error_lines = 0;
+    std::istringstream lines(err);
+    for (std::string line; std::getline(lines, line);) {
+      if (line.rfind("error:", 0) != 0) continue;
+      ++n_error_lines;
+      CHECK_THAT(line, Catch::Contains(row.names));
+    }
+    CHECK(n_error_lines == (std::string(row.names).empty() ? 0u : 1u));
+    bool clean = true;
+    for (const char c : err) clean = clean && !((static_cast<unsigned char>(c) < 0x20 && c != '\n') || c == 0x7f);
+    CHECK(clean);
+    std::stringstream absent(row.absent);
+    for (std::string p; std::getline(absent, p, ',');) {
+      INFO("output " << p);
+      CHECK_FALSE(fs::exists(dir / p));
+    }
+    CHECK_FALSE(has_temporary(dir));
+  }
+  fs::remove_all(dir);
+}
