@@ -1,7 +1,7 @@
 // JSON and PNG reports of a fit.
 #include "pvdf/fit/report.hpp"
 
-#include "pvdf/core/plot.hpp"
+#include "pvdf/plot/plot.hpp"
 
 #include <algorithm>
 #include <cmath>
