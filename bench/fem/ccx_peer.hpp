@@ -1,7 +1,9 @@
 // CalculiX (ccx 2.20) as the peer FEM tool for the seed-001 film: a conforming polar quad mesh,
 // an M3D4 membrane deck (thermal pretension pre-step released in the load step, NLGEOM, dead
 // vertical nodal loads on the probe disk), the run, and the parsing of its results.
-// See NOTES.md for why each of these choices is needed.
+// Why: with CalculiX 2.20 S8R shells converge from the flat film unaided but slowly; M3D4 membranes need a
+// small pretension to start; a *DLOAD on membranes in the first step is silently dropped (so an empty step
+// comes first and the rim reaction is checked against the applied force).
 #pragma once
 
 #include "pvdf/core/material.hpp"

@@ -8,7 +8,7 @@ runs `PVDFKIT solve SCENE --load X,Y,F --tolerance T --model M --json` and print
 charge error max_k |dQ_k| / max_k |Q_k| of the map against that solve, the deflection error and the
 solve's own error estimate, worst first; then the median and worst charge error and how many nodes
 exceed the map's tolerance. Reads the map with h5dump (hdf5-tools). Used for docs/map-generation.md
-section 9 (session 3): `bench/mapping/audit_map.py build/app/pvdfkit examples/scenes/seed001.json
+section 9: `bench/mapping/audit_map.py build/app/pvdfkit examples/scenes/seed001.json
 seed001_4mm.h5 --stride 2 --tolerance 0.002 --model large-rotation`.
 """
 import argparse

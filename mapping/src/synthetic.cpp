@@ -69,7 +69,7 @@ ChargeMap build_synthetic_map(const SyntheticModel& model, double spacing_m, dou
           continue;
         }
         m.status[p] = std::uint8_t(PointStatus::ok);
-        // A membrane-like deflection under the probe: w ∝ F^(1/3) (NOTES.md), zero at the rim.
+        // A membrane-like deflection under the probe: w ∝ F^(1/3) (pure-membrane scaling), zero at the rim.
         const double r = std::hypot(m.x_m[i], m.y_m[j]);
         m.deflection_at_load_m[p] = -3.3e-3 * std::cbrt(m.forces_N[f]) * (1.0 - r * r / (R * R));
         for (std::size_t k = 0; k < m.ne(); ++k) {

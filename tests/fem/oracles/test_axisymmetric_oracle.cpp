@@ -55,7 +55,7 @@ TEST_CASE("probe-loaded membrane: grid convergence to 1e-5 in centre deflection 
   const double r = 10e-3;
   CHECK(std::abs(coarse.radial_force_N_per_m(r) - fine.radial_force_N_per_m(r)) >
         std::abs(mid.radial_force_N_per_m(r) - fine.radial_force_N_per_m(r)));
-  // NOTES.md: a 1 N probe deflects this film by about 3.3 mm.
+  // Known value: a 1 N probe deflects this film by about 3.3 mm.
   CHECK(fine.centre_deflection_m() == Approx(3.26e-3).epsilon(0.01));
   for (double rr : {2e-3, 20e-3, 45e-3}) CHECK(fine.vertical_force_N(rr) == Approx(1.0).epsilon(1e-5));
 }
