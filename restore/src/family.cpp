@@ -62,18 +62,6 @@ double signal(const FamilyScanner& s, int i, int c, double x_rel) {
   return area * rf * s.speed_m_per_s * (charge(s, i, c, x_rel + h) - charge(s, i, c, x_rel - h)) / (2 * h);
 }
 
-std::vector<double> convolve(const std::vector<double>& a, const std::vector<double>& b) {
-  const std::size_t n_out = a.size() + b.size() - 1;
-  detail::RealFft fft(detail::good_fft_size(n_out));
-  std::vector<std::complex<double>> A(fft.bins()), B(fft.bins());
-  fft.forward(a.data(), a.size(), A.data());
-  fft.forward(b.data(), b.size(), B.data());
-  for (std::size_t k = 0; k < A.size(); ++k) A[k] *= B[k];
-  std::vector<double> y(fft.size());
-  fft.inverse(A.data(), y.data());
-  y.resize(n_out);
-  return y;
-}
 
 std::size_t n_samples(const FamilyScene& s) {
   return static_cast<std::size_t>(std::floor((s.x_end_m - s.x_start_m) / s.scanner.sample_spacing_m())) + 1;
@@ -253,8 +241,8 @@ Scan scan_surface(const FamilyScene& scene, const std::vector<FamilyEdge>& edges
   std::normal_distribution<double> normal(0.0, 1.0);
   std::vector<double> v[2];
   for (int i = 0; i < 2; ++i) {
-    const auto yx = convolve(scan.fx_N, kern[i][0]);
-    const auto yz = convolve(scan.fz_N, kern[i][1]);
+    const auto yx = detail::linear_convolution(scan.fx_N, kern[i][0]);
+    const auto yz = detail::linear_convolution(scan.fz_N, kern[i][1]);
     v[i].resize(n);
     const double half_codes = std::ldexp(1.0, s.adc_bits - 1), lsb = range / half_codes;
     for (std::size_t k = 0; k < n; ++k) {

@@ -64,4 +64,17 @@ std::size_t good_fft_size(std::size_t n) {
   return best;
 }
 
+std::vector<double> linear_convolution(const std::vector<double>& a, const std::vector<double>& b) {
+  const std::size_t n_out = a.size() + b.size() - 1;
+  RealFft fft(good_fft_size(n_out));
+  std::vector<std::complex<double>> A(fft.bins()), B(fft.bins());
+  fft.forward(a.data(), a.size(), A.data());
+  fft.forward(b.data(), b.size(), B.data());
+  for (std::size_t k = 0; k < A.size(); ++k) A[k] *= B[k];
+  std::vector<double> y(fft.size());
+  fft.inverse(A.data(), y.data());
+  y.resize(n_out);
+  return y;
+}
+
 }  // namespace pvdf::restore::detail

@@ -34,4 +34,7 @@ class RealFft {
 /// Smallest 2^a 3^b 5^c >= n.
 std::size_t good_fft_size(std::size_t n);
 
+/// Linear (not circular) convolution y[n] = sum_k a[k] b[n - k], n in [0, a.size() + b.size() - 1), by FFT.
+std::vector<double> linear_convolution(const std::vector<double>& a, const std::vector<double>& b);
+
 }  // namespace pvdf::restore::detail

@@ -18,19 +18,6 @@ double signal_per_N(const ScannerScene& s, int strip, int component, double x_re
                             s.speed_m_per_s, component == 0 ? ForceComponent::x : ForceComponent::z, x_rel_m);
 }
 
-// Linear convolution y[n] = sum_k a[k] b[n - k] for n in [0, a.size() + b.size() - 1).
-std::vector<double> convolve(const std::vector<double>& a, const std::vector<double>& b) {
-  const std::size_t n_out = a.size() + b.size() - 1;
-  detail::RealFft fft(detail::good_fft_size(n_out));
-  std::vector<std::complex<double>> A(fft.bins()), B(fft.bins());
-  fft.forward(a.data(), a.size(), A.data());
-  fft.forward(b.data(), b.size(), B.data());
-  for (std::size_t k = 0; k < A.size(); ++k) A[k] *= B[k];
-  std::vector<double> y(fft.size());
-  fft.inverse(A.data(), y.data());
-  y.resize(n_out);
-  return y;
-}
 
 }  // namespace
 
@@ -125,8 +112,8 @@ Scan simulate_scan(const ScannerScene& scene, const SimulateOptions& options) {
     const long lag_min = -static_cast<long>(n - 1);
     const auto g = analytic_impulse_responses(scene, lag_min, 2 * n - 1, false);
     for (int i = 0; i < 2; ++i) {
-      const auto yx = convolve(fx, g[i][0]);
-      const auto yz = convolve(fz, g[i][1]);
+      const auto yx = detail::linear_convolution(fx, g[i][0]);
+      const auto yz = detail::linear_convolution(fz, g[i][1]);
       // y[m] = sum_k f[k] g[m - k] with g index m - k = lag - lag_min: signal sample s = m + lag_min.
       for (std::size_t k = 0; k < n; ++k) v[i][k] += yx[k + n - 1] + yz[k + n - 1];
     }
