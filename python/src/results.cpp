@@ -62,22 +62,26 @@ Units: m, N; sigmas from the charge-noise model, (J^T W J)^-1.)doc")
       }, "False where outside_map or no_press is set, bool shape (N,)")
       .def_property_readonly("n_solutions", [=](const LocationBatch& b) { return column(b.items, [](const Location& l) { return l.n_solutions; }, always).attr("astype")("int32"); }, "distinct positions that fit within noise (> 1: ambiguous), int shape (N,)")
       .def_property_readonly("iterations", [=](const LocationBatch& b) { return column(b.items, [](const Location& l) { return l.iterations; }, always).attr("astype")("int32"); }, "Levenberg-Marquardt iterations of the reported solution, int shape (N,)")
+      .def_property_readonly("probability", [=](const LocationBatch& b) { return column(b.items, [](const Location& l) { return l.probability; }, always); }, "posterior probability of the reported (most probable) solution among the n_solutions (docs/lookup.md), shape (N,)")
       .def_property_readonly("alternatives", [](const LocationBatch& b) {
-        // (N, 3, 4): up to three other solutions within noise, best first: x_m, y_m, force_N, residual.
-        py::array_t<double> out({py::ssize_t(b.items.size()), py::ssize_t(3), py::ssize_t(4)});
+        // (N, max_solutions - 1, 5): every other solution, most probable first:
+        // x_m, y_m, force_N, residual, probability; NaN where absent.
+        constexpr int n_alt = Location::max_solutions - 1;
+        py::array_t<double> out({py::ssize_t(b.items.size()), py::ssize_t(n_alt), py::ssize_t(5)});
         double* p = out.mutable_data();
         for (const auto& l : b.items) {
-          for (int a = 0; a < 3; ++a) {
+          for (int a = 0; a < n_alt; ++a) {
             const bool ok = a < l.n_alternatives;
             const auto& alt = l.alternatives[std::size_t(a)];
             *p++ = ok ? alt.x_m : nan;
             *p++ = ok ? alt.y_m : nan;
             *p++ = ok ? alt.force_N : nan;
             *p++ = ok ? alt.residual : nan;
+            *p++ = ok ? alt.probability : nan;
           }
         }
         return out;
-      }, "other solutions within noise (flag ambiguous), shape (N, 3, 4): [x_m, y_m, force_N, residual], NaN where absent");
+      }, "the other solutions (flag ambiguous), most probable first, shape (N, 7, 5): [x_m, y_m, force_N, residual, probability], NaN where absent");
 }
 
 void bind_design(py::module_& m) {

@@ -19,11 +19,24 @@ head -1 "$W/sim.csv" | grep -qx 't_s,ch0_V,ch1_V,ch2_V' || fail "sim header"
 "$P" acquire --device replay:"$W/a.pvdfrec" --quiet --output "$W/b.csv" || fail "replay exit $?"
 cmp -s "$W/a.csv" "$W/b.csv" || fail "replay differs from the recorded run"
 
+# Waits (at most 60 s) until FILE holds at least BYTES bytes: a signal is sent only once the run is
+# really recording frames (process start alone can take seconds on a loaded machine, and a background
+# job of a non-interactive shell ignores SIGINT until pvdfkit installs its handler).
+wait_for_bytes() {
+  local file=$1 bytes=$2 i
+  for i in $(seq 600); do
+    [ -f "$file" ] && [ "$(stat -c %s "$file")" -ge "$bytes" ] && return 0
+    sleep 0.1
+  done
+  fail "$file did not reach $bytes bytes within 60 s"
+}
+
 # 3. Ctrl-C during a real-time run: exit 130, CSV and recording hold the same samples.
 printf '{"duration_s": 30}\n' > "$W/long.json"
+rm -f "$W/int.pvdfrec" "$W/int.csv"   # a stale file from an earlier run would end the wait at once
 "$P" acquire --device sim:"$W/long.json" --realtime --quiet --record "$W/int.pvdfrec" --output "$W/int.csv" &
 pid=$!
-sleep 1
+wait_for_bytes "$W/int.pvdfrec" 16384   # frames on disk: past the header, the Ctrl-C handler is installed
 kill -INT $pid
 wait $pid
 code=$?
@@ -34,9 +47,10 @@ n=$(lines "$W/int.csv")
 cmp -s "$W/int.csv" "$W/int2.csv" || fail "recording after Ctrl-C differs from the CSV"
 
 # 4. SIGKILL: no chance to clean up; the recording still replays every complete frame.
+rm -f "$W/kill.pvdfrec" "$W/kill.csv"
 "$P" acquire --device sim:"$W/long.json" --realtime --quiet --record "$W/kill.pvdfrec" --output "$W/kill.csv" &
 pid=$!
-sleep 1
+wait_for_bytes "$W/kill.pvdfrec" 32768
 kill -KILL $pid
 wait $pid 2>/dev/null
 "$P" acquire --device replay:"$W/kill.pvdfrec" --quiet --output "$W/kill2.csv" 2> "$W/kill2.err" || fail "replay after SIGKILL exit $?"

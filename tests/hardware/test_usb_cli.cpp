@@ -102,8 +102,13 @@ TEST_CASE("pvdfkit acquire: Ctrl-C stops the device and writes out everything re
   MockFrontEnd device(script);
   const std::string record = temp_path("cli_sigint.pvdfrec"), csv = temp_path("cli_sigint.csv"),
                     err = temp_path("cli_sigint.err");
+  std::remove(record.c_str());  // the wait below watches this file grow: no stale copy from an earlier run
   const int code = shell(std::string(PVDFKIT_EXE) + " acquire --device usb --stall-timeout-s 20 --record " + record +
-                         " --output " + csv + " 2> " + err + " & pid=$!; sleep 1; kill -INT $pid; wait $pid");
+                         " --output " + csv + " 2> " + err +
+                         // signal only once frames reach the recording (start-up alone can take seconds under load; before
+                         // pvdfkit's handler is installed a background job ignores SIGINT)
+                         " & pid=$!; for i in $(seq 600); do [ $(stat -c %s " + record + " 2>/dev/null || echo 0) -ge 4096 ] && break;"
+                         " sleep 0.1; done; sleep 1; kill -INT $pid; wait $pid");
   const std::string messages = read_text(err);
   INFO(messages);
   CHECK(code == 130);

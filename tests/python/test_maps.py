@@ -100,6 +100,13 @@ def test_vectorised_locate_recovers_known_presses(locator):
     assert np.allclose(out.force_N[single], F[single], rtol=1e-2)
     amb = ok & ~single
     assert (out.n_solutions[amb] >= 2).all() and np.isfinite(out.alternatives[amb, 0, 0]).all()
+    # Every solution is reported: n_solutions - 1 alternatives, and their posterior probabilities
+    # with the main answer's form a distribution whose largest member is the main answer.
+    n_alt = np.isfinite(out.alternatives[:, :, 0]).sum(axis=1)
+    assert (n_alt[ok] == out.n_solutions[ok] - 1).all()
+    total = out.probability + np.nansum(out.alternatives[:, :, 4], axis=1)
+    assert np.allclose(total[ok], 1.0, atol=1e-9)
+    assert (out.probability[amb] >= np.nanmax(out.alternatives[amb, :, 4], axis=1) - 1e-12).all()
     # One row at a time gives the same answers as the batch.
     one = locator.locate(q[7])
     assert len(one) == 1 and one.x_m[0] == out.x_m[7] and one.flags[0] == out.flags[7]
