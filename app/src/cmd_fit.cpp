@@ -157,12 +157,17 @@ PVDF_COMMAND(67, [](CLI::App& root) {
   sub->add_option("--params", o->params,
                   "Parameters to fit, comma-separated: pretension_N_per_m, E_scale, d31_C_per_N, d32_C_per_N, "
                   "gain_<electrode> (default: E_scale if deflections are given, d31_C_per_N if charges are)");
-  sub->add_option("-o,--output", o->output_path, "Fitted scene (JSON, same format as SCENE)")->required();
+  sub->add_option("-o,--output", o->output_path, "Fitted scene (JSON, same format as SCENE)")
+      ->required()
+      ->check(pvdf::app::output_file());
   sub->add_flag("--json", o->json, "Print the result as JSON (keys in docs/fem-vs-experiment.md)");
-  sub->add_option("--plot", o->plot_path, "PNG: measured against FEM before and after the fit");
+  sub->add_option("--plot", o->plot_path, "Figure (.png, .svg or .pdf): measured against FEM before and after the fit")
+      ->check(pvdf::app::output_file());
   sub->add_option("--start", o->start, "Starting values NAME=VALUE,... (default: the scene's, E_scale 1, gains 1)");
-  sub->add_option("--tolerance", o->tolerance, "FEM relative tolerance of the sweep mesh (default: the scene's)");
-  sub->add_option("--max-iterations", o->max_iterations, "Levenberg-Marquardt iterations (default 40)");
+  sub->add_option("--tolerance", o->tolerance, "FEM relative tolerance of the sweep mesh (default: the scene's)")
+      ->check(pvdf::app::number_in(1e-8, 0.5, "(the rule of the scene key model.tolerance), e.g. 0.01"));
+  sub->add_option("--max-iterations", o->max_iterations, "Levenberg-Marquardt iterations (default 40)")
+      ->check(pvdf::app::integer_in(1, 10000));
   sub->add_flag("--verbose", o->verbose, "One line per iteration on stderr even when it is not a terminal");
   return pvdf::app::Subcommand{sub, [o] { return run_fit(*o); }};
 });
