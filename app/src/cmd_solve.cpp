@@ -103,8 +103,7 @@ int run_solve(const SolveOptions& o) {
         j["loads"].push_back({{"x_m", l.x_m},
                               {"y_m", l.y_m},
                               {"force_N", l.force_N},
-                              {"deflection_m", l.deflection_m},
-                              {"deflection_error_m", l.deflection_error_m}});
+                              {"deflection_m", l.deflection_m}});
       }
       j["electrodes"] = nlohmann::json::array();
       for (const auto& e : r.electrodes) {

@@ -102,7 +102,7 @@ NewtonOutcome FilmSolver::refine_until_tolerance(Model model, std::string& where
   const int max_cycles = options_.adaptive ? options_.max_refinements : 0;
   while (true) {
     goal_ = estimate_goal_errors(solution_, model);
-    if (goal_.model_estimated) {
+    if (goal_.model_estimated && bending_switchable_) {
       const bool leave_out = bending_may_be_left_out(goal_.relative_model, options_.tolerance, bending_reason_);
       if (!leave_out) {  // the richer model, from the membrane solution on this mesh
         enable_bending();

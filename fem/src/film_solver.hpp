@@ -180,7 +180,12 @@ class FilmSolver {
   GoalErrors estimate_goal_errors(const Vector<double>& u, Model model);
   /// Assemble the bending operator and its sparsity even when the model leaves bending out (call
   /// before the first setup_system()): needed to estimate what bending would change.
-  void keep_bending_pattern() { bending_pattern_ = true; }
+  /// `switchable`: the adaptive loop switches bending on when its estimated effect is too large
+  /// (`auto`); otherwise the effect is only reported.
+  void keep_bending_pattern(bool switchable) {
+    bending_pattern_ = true;
+    bending_switchable_ = switchable;
+  }
   /// Switch the bending term of the residual on (the pattern must hold it).
   void enable_bending() { options_.include_bending = true; }
   bool bending_included() const { return options_.include_bending; }
@@ -317,6 +322,7 @@ class FilmSolver {
   // goal_error.cpp: the same mesh with FE_Q(p+1) (residual and adjoint reconstruction there).
   std::unique_ptr<FilmSolver> enriched_;
   bool bending_pattern_ = false;  // bending operator assembled although the model leaves it out
+  bool bending_switchable_ = false;
   unsigned int form_degree_ = 0;  // > 0: quadrature and penalty of this degree (the enriched space)
   bool residual_only_ = false;    // no tangent storage (the enriched space)
   GoalErrors goal_;               // the estimates on the final mesh (run())

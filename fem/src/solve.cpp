@@ -174,10 +174,19 @@ void FilmSolver::add_error_estimates(Result& result) const {
     if (j < model.size() && std::isfinite(model[j])) e += std::abs(model[j]);
     return e + kinematics_model_error_ * std::abs(value);
   };
-  for (std::size_t k = 0; k < result.electrodes.size(); ++k)
-    result.electrodes[k].charge_error_C = bar(goal_.charge_discretization_C, goal_.charge_model_C, k, result.electrodes[k].charge_C);
-  for (std::size_t l = 0; l < result.loads.size(); ++l)
-    result.loads[l].deflection_error_m = bar(goal_.deflection_discretization_m, goal_.deflection_model_m, l, result.loads[l].deflection_m);
+  auto at = [](const std::vector<double>& v, std::size_t j) { return j < v.size() && std::isfinite(v[j]) ? v[j] : 0.0; };
+  for (std::size_t k = 0; k < result.electrodes.size(); ++k) {
+    ElectrodeResult& e = result.electrodes[k];
+    e.charge_error_C = bar(goal_.charge_discretization_C, goal_.charge_model_C, k, e.charge_C);
+    e.charge_discretization_error_C = at(goal_.charge_discretization_C, k);
+    e.charge_model_error_C = at(goal_.charge_model_C, k);
+  }
+  for (std::size_t l = 0; l < result.loads.size(); ++l) {
+    LoadResult& r = result.loads[l];
+    r.deflection_error_m = bar(goal_.deflection_discretization_m, goal_.deflection_model_m, l, r.deflection_m);
+    r.deflection_discretization_error_m = at(goal_.deflection_discretization_m, l);
+    r.deflection_model_error_m = at(goal_.deflection_model_m, l);
+  }
 }
 
 namespace {
@@ -194,7 +203,8 @@ Result run_with_model_choice(const pvdf::Scene& scene, const Options& options,
   // `auto` left bending out a priori: the solver keeps its operator so that the adjoint-weighted
   // estimate of its effect decides on every mesh (bending switched on where it matters).
   const bool bending_by_estimate = options.model == Model::automatic && options.include_bending && !choice.include_bending;
-  if (bending_by_estimate) solver.keep_bending_pattern();
+  if (bending_by_estimate) solver.keep_bending_pattern(true);
+  else if (!used.include_bending && options.estimate_bending_effect) solver.keep_bending_pattern(false);
   make_grid(solver);
   Result r = solver.run();
   const bool decided_a_priori = options.model == Model::automatic && choice.model != Model::automatic;

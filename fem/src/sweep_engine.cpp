@@ -107,7 +107,7 @@ SweepEngine::SweepEngine(const pvdf::Scene& scene, const Options& options, Model
   o.vtu_directory.clear();
   impl_->options = o;
   impl_->solver = std::make_unique<FilmSolver>(impl_->scene, o);
-  if (estimate_errors && !include_bending) impl_->solver->keep_bending_pattern();
+  if (estimate_errors && !include_bending) impl_->solver->keep_bending_pattern(false);
   impl_->solver->prepare_sweep();
 }
 

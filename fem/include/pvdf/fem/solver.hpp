@@ -73,6 +73,9 @@ struct Options {
   /// Work cap of the adaptive loop: no refinement that would take the DOFs past this (the solve
   /// then ends tolerance_not_met with its estimate).
   std::size_t max_dofs = 400000;
+  /// Without bending (include_bending = false): still estimate what bending would change
+  /// (Summary::estimated_model_error, *_model_error_* of the results) without switching it on.
+  bool estimate_bending_effect = false;
 
   // Newton–Raphson.
   int max_newton_iterations = 40;       ///< per continuation stage
@@ -135,6 +138,8 @@ struct ElectrodeResult {
   double charge_C = 0;
   /// Estimated absolute error of charge_C (C): |discretization estimate| + |model estimate|.
   double charge_error_C = 0;
+  double charge_discretization_error_C = 0;  ///< signed estimate of (exact − computed) on this mesh (C)
+  double charge_model_error_C = 0;           ///< signed estimate of what bending left out would change (C)
 };
 
 struct SampleResult {
@@ -149,6 +154,8 @@ struct LoadResult {
   double force_N = 0;                       ///< total vertical force applied (probe: exact; pressure: p·area)
   double deflection_m = 0;                  ///< w at the load position (pressure: at the film centre)
   double deflection_error_m = 0;            ///< estimated absolute error of deflection_m (as charge_error_C)
+  double deflection_discretization_error_m = 0;  ///< signed, as ElectrodeResult's
+  double deflection_model_error_m = 0;           ///< signed, as ElectrodeResult's
 };
 
 /// Fields for the caller; empty unless usable(summary.status).
