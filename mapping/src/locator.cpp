@@ -1171,7 +1171,8 @@ PVDF_CLONES int Locator::add_fold_twins(const Query& Q, std::array<Fit, 8>& fits
   return n_starts;
 }
 
-PVDF_CLONES Location Locator::locate_impl(const double* charges_C, bool fixed_force, double log_known_force) const {
+PVDF_CLONES Location Locator::locate_impl(const double* charges_C, bool fixed_force, double log_known_force,
+                                          const std::array<double, 3>* hints, int n_hints) const {
   Query Q;
   Location early;
   if (!prepare(charges_C, fixed_force, log_known_force, Q, early)) return early;
@@ -1212,6 +1213,25 @@ PVDF_CLONES Location Locator::locate_impl(const double* charges_C, bool fixed_fo
   n_starts = add_fold_twins(Q, fits, n_starts);
   bool any_within = false;
   for (int s = 0; s < n_starts; ++s) any_within = any_within || (fits[std::size_t(s)].ok && fits[std::size_t(s)].chi2 <= limit);
+  if (!any_within && n_hints > 0) {
+    // Hints (the last sample's held fit of a tracked stream): when their fits are held by the
+    // map's edge or the force range and do not fit within noise either, the press is still
+    // outside — the fallback below is skipped. Otherwise it runs as in locate().
+    const int n_with_hints = add_hint_fits(Q, hints, n_hints, fits, n_starts);
+    bool all_held = n_with_hints > n_starts;
+    for (int s = n_starts; s < n_with_hints; ++s) {
+      const Fit& f = fits[std::size_t(s)];
+      all_held = all_held && f.ok && f.blocked && f.chi2 > limit;
+    }
+    if (all_held) {
+      Location out;
+      out.n_starts = n_with_hints;
+      out.flags = flag::outside_map;
+      const Fit& f = fits[std::size_t(n_starts)];
+      out.held = {f.x, f.y, std::exp(f.l)};
+      return out;
+    }
+  }
   if (!any_within) {
     // No cell's linear model reaches the charges, or none of its fits is within noise (outside
     // the map, far off the model, or a strongly curved cell): the angular shortlist, starts at
@@ -1243,6 +1263,32 @@ PVDF_CLONES Location Locator::locate_impl(const double* charges_C, bool fixed_fo
     }
   }
   return finish(Q, fits, n_starts);
+}
+
+int Locator::add_hint_fits(const Query& Q, const std::array<double, 3>* hints, int n_hints, std::array<Fit, 8>& fits,
+                           int n_fits) const {
+  // A hint no fit has ended near (half a cell) is fitted (from locate_near, only when no fit of
+  // the coarse search is within noise).
+  for (int h = 0; h < n_hints && n_fits < int(fits.size()); ++h) {
+    const std::array<double, 3>& st = hints[h];
+    if (!(st[2] > 0) || !std::isfinite(st[2]) || !interp_.inside(st[0], st[1])) continue;
+    bool found = false;
+    for (int o = 0; o < n_fits && !found; ++o) {
+      const Fit& g = fits[std::size_t(o)];
+      found = g.ok && std::abs(g.x - st[0]) < 0.5 * interp_.hx() && std::abs(g.y - st[1]) < 0.5 * interp_.hy();
+    }
+    if (found) continue;
+    const double l = Q.fixed_force ? Q.log_known_force : std::clamp(std::log(st[2]), Q.log_lo, Q.log_hi);
+    fits[std::size_t(n_fits)] =
+        levenberg_marquardt(Q.q.data(), Q.w.data(), st[0], st[1], l, Q.fixed_force, Q.log_lo, Q.log_hi, fits.data(), n_fits);
+    ++n_fits;
+  }
+  return n_fits;
+}
+
+Location Locator::locate_near(const double* charges_C, const std::array<double, 3>* hints, int n_hints) const {
+  return fixed_force_ ? locate_impl(charges_C, true, log_force_lo_, hints, n_hints)
+                      : locate_impl(charges_C, false, 0.0, hints, n_hints);
 }
 
 std::int64_t Locator::search_bin(const double* charges_C) const {
@@ -1305,6 +1351,7 @@ PVDF_CLONES Location Locator::finish(const Query& Q, std::array<Fit, 8>& fits, i
       out = Location{};
       out.n_starts = n_starts;
       out.flags = flag::outside_map;
+      out.held = {b.x, b.y, std::exp(b.l)};
       return out;
     }
     out.flags |= flag::poor_fit;

@@ -87,6 +87,9 @@ struct Location {
   /// With `ambiguous`: every other solution, most probable first (n_alternatives = n_solutions − 1).
   std::array<Alternative, max_solutions - 1> alternatives{};
   int n_alternatives = 0;
+  /// With outside_map: where the best fit was held (x_m, y_m, force_N) by the map's edge or the
+  /// force range — not an answer, a start for the next sample of a stream (Tracker). Else 0.
+  std::array<double, 3> held{};
   bool has_position() const { return (flags & (flag::outside_map | flag::no_press | flag::saturated)) == 0; }
 };
 
@@ -118,6 +121,14 @@ class Locator {
   /// fitted); none left gives outside_map. Thread-safe, no allocation.
   Location locate_from(const double* charges_C, const std::array<double, 3>* starts, int n_starts) const;
 
+  /// The full search with hints — (x_m, y_m, force_N) each, e.g. the last sample's answer of a
+  /// tracked stream (docs/lookup.md §1.9): locate()'s coarse search, fits and fold twins; only
+  /// when none of them fits within noise are the hints fitted, and if every hint's fit is held
+  /// by the map's edge or the force range outside noise the answer is outside_map without
+  /// locate()'s angular fallback (starts at cell centres). Otherwise locate()'s answer.
+  /// Thread-safe, no allocation.
+  Location locate_near(const double* charges_C, const std::array<double, 3>* hints, int n_hints) const;
+
   /// The coarse search's bin of the charges' direction (the cells a search would test come
   /// from it); −1 when there is nothing to locate (no press, non-finite charges). Two samples in
   /// one bin are searched over the same candidate cells (used by Tracker to decide when to search).
@@ -145,7 +156,8 @@ class Locator {
                           double log_lo, double log_hi, const Fit* found, int n_found) const;
   /// Fills fit.sigma / fit.singular from fit.jtj (only for the fits that are reported).
   void covariance(Fit& fit, bool fixed_force) const;
-  Location locate_impl(const double* charges_C, bool fixed_force, double log_known_force) const;
+  Location locate_impl(const double* charges_C, bool fixed_force, double log_known_force,
+                       const std::array<double, 3>* hints = nullptr, int n_hints = 0) const;
   /// A query prepared for fitting: calibration undone, weights, unit direction, force bounds.
   struct Query {
     std::array<double, max_electrodes> q, w, q_unit;  ///< entries 0..ne−1 are set by prepare()
@@ -183,6 +195,9 @@ class Locator {
     std::array<Start, capacity> start{};
     int n = 0;
   };
+  /// Fits the hints no fit has ended near (within half a cell); returns the new count.
+  int add_hint_fits(const Query& query, const std::array<double, 3>* hints, int n_hints, std::array<Fit, 8>& fits,
+                    int n_fits) const;
   /// Coarse search: bins of the direction table → cells whose linearized direction reaches the
   /// query inside (or next to) the cell → distinct starts, best first. Returns false when no
   /// cell can produce the direction (then the old angular shortlist is used).
