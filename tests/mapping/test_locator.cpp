@@ -476,3 +476,27 @@ TEST_CASE("locate_from fits only its starts: from the lookup's answers it reprod
   const std::array<double, 3> good{0.002, 0.003, 1.0};
   CHECK((locator.locate_from(quiet.data(), &good, 1).flags & flag::no_press) != 0);
 }
+
+TEST_CASE("the map's own charge error widens the reported sigma, and only where it is stored", "[mapping][locator]") {
+  // Oracle: with the force known and every electrode's map error e = 3 σ_noise at the press,
+  // the reported σ's scale by √(1 + 3²) (the fit itself is unchanged; the widened σ's use the
+  // Jacobian at the end point, the plain ones the fit's last evaluated one: 1 % allowed).
+  const SyntheticModel model;
+  ChargeMap map = build_synthetic_map(model, 1e-3, 3e-3, {1.0}, 0.05e-12);
+  const pvdf_test::Press p{0.0031, -0.0017, 1.0};
+  const auto q = pvdf_test::charges(model, p);
+  const Locator plain(map);
+  const Location a = plain.locate(q, 1.0);
+  map.estimated_charge_error_C.assign(map.charge_C.size(), 3.0 * 0.05e-12);
+  const Locator widened(map);
+  const Location b = widened.locate(q, 1.0);
+  REQUIRE(a.has_position());
+  REQUIRE(b.has_position());
+  CHECK(b.x_m == a.x_m);
+  CHECK(b.y_m == a.y_m);
+  CHECK(b.sigma_x_m == Approx(std::sqrt(10.0) * a.sigma_x_m).epsilon(1e-2));
+  CHECK(b.sigma_y_m == Approx(std::sqrt(10.0) * a.sigma_y_m).epsilon(1e-2));
+  // A wrong size is refused.
+  map.estimated_charge_error_C.resize(3);
+  CHECK_THROWS_AS(Locator(map), pvdf::InputError);
+}

@@ -13,6 +13,10 @@
 
 namespace pvdf::mapping {
 
+namespace detail {
+struct LmPoint;  // Levenberg–Marquardt's working point (locator_fit.cpp)
+}
+
 /// Flags of a Location (bit mask). A result with outside_map, no_press or saturated carries no position.
 namespace flag {
 inline constexpr std::uint32_t outside_map = 1u << 0;        ///< best fit is held by the map's edge or force range and does not fit within noise
@@ -129,11 +133,6 @@ class Locator {
   /// Thread-safe, no allocation.
   Location locate_near(const double* charges_C, const std::array<double, 3>* hints, int n_hints) const;
 
-  /// The coarse search's bin of the charges' direction (the cells a search would test come
-  /// from it); −1 when there is nothing to locate (no press, non-finite charges). Two samples in
-  /// one bin are searched over the same candidate cells (used by Tracker to decide when to search).
-  std::int64_t search_bin(const double* charges_C) const;
-
   /// The map's (calibrated, if enabled) charges for a press at (x, y) with force F; false outside.
   bool predict(double x_m, double y_m, double force_N, double* charges_C) const;
 
@@ -145,6 +144,29 @@ class Locator {
   bool calibrated() const { return calibrated_; }
 
  private:
+  struct Query;
+  // ---- construction (locator_tables.cpp), in this order
+  struct CellLevelModel;  ///< one cell's local direction model at one force level
+  struct DirectionRanges {
+    double phi_lo, phi_hi, theta_lo, theta_hi;
+  };
+  /// Noise, calibration, χ² limits and the force range from the options.
+  void configure(const ChargeMap& map, const LocatorOptions& options);
+  /// cells_, cell_dir_, cell_norm_, cell_radius2_, cell_xy_; returns each cell's box of
+  /// direction keys (φ lo, hi, θ lo, hi) and their overall range.
+  std::vector<std::array<double, 4>> build_coarse_table(const ChargeMap& map, DirectionRanges& ranges);
+  /// One cell's model at one level (ln F = lf).
+  CellLevelModel cell_level_model(std::size_t cell, double lf) const;
+  /// Every cell's model at every level ([cell][level]), level_log_, cell_slot_, cell_log_norm_,
+  /// and per cell the linear model's worst squared error at its corners.
+  std::vector<CellLevelModel> build_cell_models(const ChargeMap& map, std::vector<double>& linear_error2);
+  void build_scan_table(const std::vector<CellLevelModel>& models, const std::vector<double>& linear_error2);
+  void build_model_table(const std::vector<CellLevelModel>& models);
+  void mark_fold_cells(const std::vector<CellLevelModel>& models);
+  void build_direction_bins(const std::vector<std::array<double, 4>>& boxes, const DirectionRanges& ranges);
+  /// The map's own charge error (ChargeMap::estimated_charge_error_C), when stored.
+  void set_map_error(const ChargeMap& map);
+
   struct Fit {
     double x = 0, y = 0, l = 0, chi2 = 0;
     std::array<double, 3> sigma{0, 0, 0};
@@ -154,8 +176,23 @@ class Locator {
   };
   Fit levenberg_marquardt(const double* q, const double* inv_sigma, double x, double y, double l, bool fixed_force,
                           double log_lo, double log_hi, const Fit* found, int n_found) const;
+  /// The model, χ² and normal equations at (x, y, ln F) into a working point (locator_fit.cpp);
+  /// false off the usable cells.
+  bool lm_evaluate(double x, double y, double l, bool fixed_force, const double* q, const double* w,
+                   detail::LmPoint& point) const;
+  /// A nearly undamped Gauss–Newton step small enough to be taken without an evaluation.
+  bool final_step_ok(double x, double y, double l, const std::array<double, 3>& step, double lambda, double log_lo,
+                     double log_hi) const;
+  /// The minimum at (x, y, l) is held by the map's edge or the force range.
+  bool held_by_edge(const std::array<double, 6>& JtJ, const std::array<double, 3>& Jtr, double x, double y, double l,
+                    bool fixed_force, double log_lo, double log_hi) const;
   /// Fills fit.sigma / fit.singular from fit.jtj (only for the fits that are reported).
-  void covariance(Fit& fit, bool fixed_force) const;
+  void covariance(Fit& fit, const Query& query) const;
+  /// The weighted JᵀJ behind the reported σ's: fit.jtj, or with the map's own error added to
+  /// the charge noise where the map stores one.
+  std::array<double, 6> reported_jtj(const Fit& fit, const Query& query) const;
+  /// The map's charge error (C) at (x, y, ln F); false off the grid or when none is stored.
+  bool map_error_at(double x, double y, double l, double* error_C) const;
   Location locate_impl(const double* charges_C, bool fixed_force, double log_known_force,
                        const std::array<double, 3>* hints = nullptr, int n_hints = 0) const;
   /// A query prepared for fitting: calibration undone, weights, unit direction, force bounds.
@@ -234,6 +271,8 @@ class Locator {
   std::vector<std::string> names_;
   std::vector<double> noise_;
   std::vector<double> gain_, offset_;
+  /// The map's own charge error per node, level and electrode, divided by F_level^p (empty: none).
+  std::vector<double> map_error_;
   bool calibrated_ = false;
   LocatorOptions options_;
   double chi2_limit_ = 0, chi2_limit_free_ = 0, chi2_limit_fixed_ = 0;
