@@ -138,6 +138,16 @@ PVDF_CLONES Locator::Fit Locator::levenberg_marquardt(const double* q, const dou
                                                       bool fixed_force, double log_lo, double log_hi, const Fit* found,
                                                       int n_found) const {
   Fit fit;
+  Vec w_map{};
+  if (!map_error_.empty()) {
+    // The map's own error joins the charge noise (σ_k² + e_k², e at the start: the weights are
+    // held during the fit; finish() takes χ² with e at the end point).
+    Vec error{};
+    if (map_error_at(x, y, l, error.data())) {
+      for (std::size_t k = 0; k < ne_; ++k) w_map[k] = 1.0 / std::sqrt(1.0 / (w[k] * w[k]) + error[k] * error[k]);
+      w = w_map.data();
+    }
+  }
   LmPoint p;
   if (!lm_evaluate(x, y, l, fixed_force, q, w, p)) return fit;
   double lambda = 1e-3;
@@ -354,8 +364,30 @@ bool Locator::distinct_minima(const double* q, const double* w, const Fit& a, co
   return false;
 }
 
+void Locator::add_map_error(const Query& Q, std::array<Fit, 8>& fits, int n_fits) const {
+  // With the map's own error stored, each end point's χ² is taken under the charge noise plus
+  // the map error there (σ_k² + e_k²): a press the map reproduces only to its own error still
+  // fits, and a second solution is not hidden behind the first one's map error (§1.6).
+  for (int s = 0; s < n_fits; ++s) {
+    Fit& f = fits[std::size_t(s)];
+    Vec model{}, error{};
+    if (!f.ok || f.duplicate || !interp_.evaluate(f.x, f.y, f.l, model.data(), nullptr) ||
+        !map_error_at(f.x, f.y, f.l, error.data())) {
+      continue;
+    }
+    double chi2 = 0;
+    for (std::size_t k = 0; k < ne_; ++k) {
+      const double sigma = 1.0 / Q.w[k];
+      const double r = (model[k] - Q.q[k]) / std::sqrt(sigma * sigma + error[k] * error[k]);
+      chi2 += r * r;
+    }
+    f.chi2 = chi2;
+  }
+}
+
 PVDF_CLONES Location Locator::finish(const Query& Q, std::array<Fit, 8>& fits, int n_starts) const {
   const double limit = Q.limit;
+  if (!map_error_.empty()) add_map_error(Q, fits, n_starts);
   Location out;
   out.n_starts = n_starts;
   // Rank: fits within noise first, among them forces inside the map's levels first, then χ².

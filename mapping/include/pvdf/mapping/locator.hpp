@@ -191,6 +191,8 @@ class Locator {
   /// The weighted JᵀJ behind the reported σ's: fit.jtj, or with the map's own error added to
   /// the charge noise where the map stores one.
   std::array<double, 6> reported_jtj(const Fit& fit, const Query& query) const;
+  /// Replaces each fit's χ² by the one under the charge noise plus the map's own error.
+  void add_map_error(const Query& query, std::array<Fit, 8>& fits, int n_fits) const;
   /// The map's charge error (C) at (x, y, ln F); false off the grid or when none is stored.
   bool map_error_at(double x, double y, double l, double* error_C) const;
   Location locate_impl(const double* charges_C, bool fixed_force, double log_known_force,
