@@ -2,6 +2,7 @@
 #include "fixture.hpp"
 
 #include "pvdf/core/error.hpp"
+#include "pvdf/mapping/ambiguity.hpp"
 #include "pvdf/mapping/locator.hpp"
 #include "pvdf/mapping/synthetic.hpp"
 
@@ -559,4 +560,35 @@ TEST_CASE("a known-force press the map reproduces only to its own error is not s
   INFO("with the map's error: " << silent_after << " silently far, truth among the answers " << among_after);
   CHECK(silent_after == 0);
   CHECK(among_after >= 95);
+}
+
+TEST_CASE("the ambiguous share of a film and its remedies", "[mapping][locator][ambiguity]") {
+  // Oracle: docs/lookup.md §2's measurement on the synthetic seed-001 map — most presses are
+  // ambiguous with the force unknown; a force reading removes most of it; a ±25 % force range
+  // lies between. Independent count: the same nodes located one by one here.
+  const SyntheticModel model;
+  const ChargeMap map = build_synthetic_map(model, 2e-3, 3e-3, {0.5, 1.0, 2.0}, 0.05e-12);
+  const AmbiguityShare a = ambiguity_share(map);
+  INFO("nodes " << a.nodes << ": unknown " << a.force_unknown << ", known " << a.force_known << ", +-25 % "
+                << a.force_within_25);
+  CHECK(a.nodes > 500);
+  CHECK(a.force_N == 1.0);
+  CHECK(a.force_unknown > 0.5);
+  CHECK(a.force_known < 0.5 * a.force_unknown);
+  CHECK(a.force_within_25 <= a.force_unknown);
+  const Locator locator(map);
+  std::size_t n = 0, ambiguous = 0;
+  for (std::size_t j = 0; j < map.ny(); ++j) {
+    for (std::size_t i = 0; i < map.nx(); ++i) {
+      if (!locator.interpolant().node_usable(i, j)) continue;
+      std::vector<double> q(3);
+      for (std::size_t k = 0; k < 3; ++k) q[k] = map.charge_C[map.charge_index(1, j, i, k)];
+      const Location r = locator.locate(q);
+      if (!r.has_position()) continue;
+      ++n;
+      ambiguous += r.n_solutions > 1;
+    }
+  }
+  CHECK(n == a.nodes);
+  CHECK(double(ambiguous) / double(n) == Approx(a.force_unknown));
 }
