@@ -23,7 +23,7 @@
 // No fused multiply-add contraction in the lookup's sources: with it the compiler's choice of
 // where to fuse depends on how the code is cut into functions (a helper compiled for the default
 // target is not inlined into a clone), and the answers would change in the last bits with
-// every refactoring. Measured cost: none beyond noise (docs/lookup.md §3).
+// every refactoring (docs/lookup.md §3).
 #if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC optimize("fp-contract=off")
 #endif
