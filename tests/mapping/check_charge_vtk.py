@@ -12,7 +12,7 @@ import vtk
 
 
 def model_pC(x, y, k):
-    # SyntheticModel defaults (mapping/include/pvdf/mapping/synthetic.hpp), F = 1 N, draw angle 0.
+    # SyntheticModel defaults (mapping/studies/include/pvdf/mapping/synthetic.hpp), F = 1 N, draw angle 0.
     centres = [(0.0, 0.010), (-0.00866025403784439, -0.005), (0.00866025403784439, -0.005)]
     R, scale, core, expo, aniso, r, rim = 0.045, 6.0e-13, 0.002, 0.8, 1.3, 0.1, 0.5
     u, v = x - centres[k][0], y - centres[k][1]
