@@ -7,6 +7,7 @@
 #include "pvdf/core/io.hpp"
 #include "pvdf/core/progress.hpp"
 #include "pvdf/core/scene.hpp"
+#include "pvdf/mapping/ambiguity.hpp"
 #include "pvdf/mapping/generate.hpp"
 
 #include <nlohmann/json.hpp>
@@ -208,6 +209,15 @@ int run_map(const MapCommandOptions& o) {
     std::printf("symmetry: %s\n", report.symmetry_reason.c_str());
     std::printf("%d rank(s) x %d thread(s), %.1f s, %.3g s per solved position and core\n", report.ranks,
                 report.threads, report.wall_s, report.per_position_s);
+  }
+  if (!o.json && map.ne() == 3 && report.n_failed == 0) {
+    // How much of the film three charges leave ambiguous with the force unknown, and the remedies.
+    const pvdf::mapping::AmbiguityShare a = pvdf::mapping::ambiguity_share(map);
+    std::printf("ambiguity at %g N (%zu nodes): more than one press fits the charges at %.0f %% of the film with the force "
+                "unknown (range %g-%g N); remedies: a force reading (--force-N) %.0f %%, the force known within +-25 %% "
+                "(--force-range-N) %.0f %%, a fourth electrode (pvdfkit design quantifies it; docs/lookup.md section 2)\n",
+                a.force_N, a.nodes, 100 * a.force_unknown, a.min_force_N, a.max_force_N, 100 * a.force_known,
+                100 * a.force_within_25);
   }
   if (report.n_failed > 0) {
     std::cerr << "error: " << report.n_failed << " map point(s) did not converge and are marked not_converged in "

@@ -68,6 +68,7 @@ struct ChargeMap {
   /// Optional exact derivatives of the charge with respect to the probe position (C/m),
   /// [nf][ny][nx][ne] each; empty when absent (the interpolant then uses finite differences).
   std::vector<double> dcharge_dx_C_per_m, dcharge_dy_C_per_m;
+  std::vector<double> estimated_charge_error_C;  // [nf][ny][nx][ne], C; empty = not stored
 
   std::optional<Calibration> calibration;     ///< fitted from measurements (pvdfkit calibrate)
 
