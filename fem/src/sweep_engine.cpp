@@ -15,8 +15,28 @@ using namespace dealii;
 
 // The sweep mesh is graded to the electrodes only (the scene copy given to this solver carries
 // no loads), capped everywhere by the coarse size, which is therefore the size under any probe.
-void FilmSolver::prepare_sweep() {
+void FilmSolver::prepare_sweep(const SweepMeshSizes& sizes) {
   make_grid();
+  if (sizes.rim_size_m > 0) {
+    const auto& outline = scene_.membrane.outline;
+    for (int pass = 0; pass < 30; ++pass) {
+      bool marked = false;
+      for (const auto& cell : triangulation_.active_cell_iterators()) {
+        const Point<dim> c = cell->center();
+        const double off = std::remainder(std::atan2(c[1], c[0]) - sizes.rim_angle_rad, 2 * M_PI);
+        if (std::abs(off) > sizes.rim_half_angle_rad) continue;
+        const double d = std::max(0.0, outline.inside_distance_m({c[0], c[1]}) - 0.5 * cell->diameter());
+        const double target = std::max(sizes.rim_size_m, sizes.rim_grading * d);
+        if (cell->diameter() / std::sqrt(2.0) > 1.3 * target) {
+          cell->set_refine_flag();
+          marked = true;
+        }
+      }
+      if (!marked) break;
+      triangulation_.execute_coarsening_and_refinement();
+    }
+    set_material_ids();
+  }
   setup_system();
 }
 
@@ -105,7 +125,7 @@ SweepEngine::SweepEngine(const pvdf::Scene& scene, const Options& options, Model
   o.vtu_directory.clear();
   impl_->options = o;
   impl_->solver = std::make_unique<FilmSolver>(impl_->scene, o);
-  impl_->solver->prepare_sweep();
+  impl_->solver->prepare_sweep(sizes);
 }
 
 SweepEngine::~SweepEngine() = default;

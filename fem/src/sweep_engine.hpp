@@ -20,6 +20,14 @@ struct SweepMeshSizes {
   double electrode_size_m = 0;  ///< cell size on the electrodes
   double grading = 1.0;         ///< away from the electrodes: size <= grading x distance
   int global_refinements = 0;   ///< uniform refinements after the grading
+  /// Grading toward the clamped rim (0 = none): cells within the arc are refined until their size
+  /// is <= max(rim_size_m, rim_grading x distance to the rim), so the bending boundary layer
+  /// sqrt(D/N) at the clamp is resolved. The arc is the part of the rim seen from the film centre
+  /// within rim_half_angle_rad of the direction rim_angle_rad (>= pi: the whole rim).
+  double rim_size_m = 0;
+  double rim_grading = 1.0;
+  double rim_angle_rad = 0;
+  double rim_half_angle_rad = 4.0;
 };
 
 /// Outcome of one probe solve on the sweep mesh.
@@ -33,6 +41,9 @@ struct EngineSolution {
   double rim_reaction_N = 0;
   std::vector<double> charge_C;
   std::vector<std::array<double, 3>> mean_membrane_force_material_N_per_m;
+  // Error estimates of the outputs (absolute; empty/0 = not estimated).
+  std::vector<double> charge_error_discretization_C, charge_error_model_C;
+  double deflection_error_discretization_m = 0, deflection_error_model_m = 0;
 };
 
 /// Accumulated cost of the probe solves: the public pvdf::fem::SweepTiming.

@@ -137,6 +137,8 @@ void validate(const ChargeMap& m, const std::string& source) {
     shape(m.dcharge_dx_C_per_m.size(), n_points * m.ne(), "/derivatives/dcharge_dx_C_per_m", "[nf][ny][nx][ne]");
     shape(m.dcharge_dy_C_per_m.size(), n_points * m.ne(), "/derivatives/dcharge_dy_C_per_m", "[nf][ny][nx][ne]");
   }
+  const bool has_err = !m.estimated_charge_error_C.empty();
+  if (has_err) shape(m.estimated_charge_error_C.size(), n_points * m.ne(), "/estimated_charge_error_C", "[nf][ny][nx][ne]");
   std::size_t n_ok = 0;
   for (std::size_t f = 0; f < m.nf(); ++f) {
     for (std::size_t j = 0; j < m.ny(); ++j) {
@@ -157,6 +159,10 @@ void validate(const ChargeMap& m, const std::string& source) {
           }
           if (has_dx && (!std::isfinite(m.dcharge_dx_C_per_m[p * m.ne() + k]) || !std::isfinite(m.dcharge_dy_C_per_m[p * m.ne() + k]))) {
             bad(source, "/derivatives" + at + "[" + std::to_string(k) + "] is not finite at an ok point" + regenerate);
+          }
+          if (has_err && !(std::isfinite(m.estimated_charge_error_C[p * m.ne() + k]) && m.estimated_charge_error_C[p * m.ne() + k] >= 0)) {
+            bad(source, "/estimated_charge_error_C" + at + "[" + std::to_string(k) + "] = " +
+                            num(m.estimated_charge_error_C[p * m.ne() + k]) + " must be finite and >= 0 at an ok point" + regenerate);
           }
         }
       }
@@ -483,6 +489,10 @@ void write_map(const std::string& path, const ChargeMap& map) {
       w.doubles(d.get(), "dcharge_dx_C_per_m", {nf, ny, nx, ne}, map.dcharge_dx_C_per_m, "C/m", "dQ/dx of the probe position");
       w.doubles(d.get(), "dcharge_dy_C_per_m", {nf, ny, nx, ne}, map.dcharge_dy_C_per_m, "C/m", "dQ/dy of the probe position");
     }
+    if (!map.estimated_charge_error_C.empty()) {
+      w.doubles(root, "estimated_charge_error_C", {nf, ny, nx, ne}, map.estimated_charge_error_C, "C",
+                "estimated absolute error of each charge (discretization + model) [force][y][x][electrode]");
+    }
     if (map.calibration) {
       Handle c = w.group(root, "calibration");
       w.doubles(c.get(), "gain", {ne}, map.calibration->gain, "1", "q_measured = gain * q_map + offset");
@@ -508,8 +518,8 @@ ChargeMap read_map(const std::string& path) {
     r.fail("attribute /:format = '" + format + "' but '" + map_format_name + "' is required (is this a charge map?)");
   }
   const double version = r.read_number_attribute(root, "format_version", "/:");
-  if (version != map_format_version) {
-    r.fail("attribute /:format_version = " + num(version) + " is not supported (this pvdfkit reads version " +
+  if (version != 1 && version != map_format_version) {
+    r.fail("attribute /:format_version = " + num(version) + " is not supported (this pvdfkit reads versions 1 to " +
            std::to_string(map_format_version) + "); use a matching pvdfkit");
   }
   ChargeMap m;
@@ -540,6 +550,9 @@ ChargeMap read_map(const std::string& path) {
   if (r.exists("/derivatives")) {
     m.dcharge_dx_C_per_m = r.doubles("/derivatives/dcharge_dx_C_per_m", {hf, hy, hx, he}, "[nf][ny][nx][ne]", "C/m");
     m.dcharge_dy_C_per_m = r.doubles("/derivatives/dcharge_dy_C_per_m", {hf, hy, hx, he}, "[nf][ny][nx][ne]", "C/m");
+  }
+  if (version >= 2 && r.exists("/estimated_charge_error_C")) {
+    m.estimated_charge_error_C = r.doubles("/estimated_charge_error_C", {hf, hy, hx, he}, "[nf][ny][nx][ne]", "C");
   }
   if (r.exists("/calibration")) {
     Calibration c;
