@@ -27,6 +27,7 @@ struct SolveOptions {
   bool json = false;
   bool verbose = false;
   int max_refinements = -1;
+  std::string refinement = "goal";
 };
 
 nlohmann::json arr(const std::array<double, 3>& a) { return nlohmann::json::array({a[0], a[1], a[2]}); }
@@ -56,6 +57,10 @@ int run_solve(const SolveOptions& o) {
   if (!o.model.empty()) options.model = pvdf::fem::parse_model(o.model, "--model");
   if (o.tolerance != 0) options.tolerance = o.tolerance;  // checked where parsed
   if (o.max_refinements >= 0) options.max_refinements = o.max_refinements;
+  if (o.refinement != "goal" && o.refinement != "kelly") {
+    throw pvdf::InputError("--refinement '" + pvdf::escape_control_bytes(o.refinement) + "' is not a refinement; use goal or kelly");
+  }
+  options.refinement = o.refinement == "kelly" ? pvdf::fem::Refinement::kelly : pvdf::fem::Refinement::goal;
   for (const auto& text : o.samples) {
     const auto v = pvdf::parse_number_list(text, "--sample X_M,Y_M", 2);
     if (!scene.membrane.outline.contains({v[0], v[1]})) {
@@ -84,6 +89,8 @@ int run_solve(const SolveOptions& o) {
     j["wall_s"] = s.wall_s;
     j["time_breakdown_s"] = {{"setup", s.setup_s}, {"assembly", s.assembly_s}, {"linear_solve", s.linear_solve_s}};
     j["estimated_relative_error"] = s.estimated_relative_error;
+    j["estimated_discretization_error"] = s.estimated_discretization_error;
+    j["estimated_model_error"] = s.estimated_model_error;
     j["error_estimator"] = s.error_estimator;
     j["stress_measure"] = "second Piola-Kirchhoff membrane resultant (N/m), undeformed axes";
     if (ok) {
@@ -93,7 +100,11 @@ int run_solve(const SolveOptions& o) {
       j["strain_energy_J"] = r.strain_energy_J;
       j["loads"] = nlohmann::json::array();
       for (const auto& l : r.loads) {
-        j["loads"].push_back({{"x_m", l.x_m}, {"y_m", l.y_m}, {"force_N", l.force_N}, {"deflection_m", l.deflection_m}});
+        j["loads"].push_back({{"x_m", l.x_m},
+                              {"y_m", l.y_m},
+                              {"force_N", l.force_N},
+                              {"deflection_m", l.deflection_m},
+                              {"deflection_error_m", l.deflection_error_m}});
       }
       j["electrodes"] = nlohmann::json::array();
       for (const auto& e : r.electrodes) {
@@ -101,7 +112,8 @@ int run_solve(const SolveOptions& o) {
                                    {"area_m2", e.area_m2},
                                    {"mean_membrane_force_material_N_per_m", arr(e.mean_membrane_force_material_N_per_m)},
                                    {"mean_membrane_force_global_N_per_m", arr(e.mean_membrane_force_global_N_per_m)},
-                                   {"charge_C", e.charge_C}});
+                                   {"charge_C", e.charge_C},
+                                   {"charge_error_C", e.charge_error_C}});
       }
       j["samples"] = nlohmann::json::array();
       for (const auto& p : r.samples) {
@@ -125,7 +137,8 @@ int run_solve(const SolveOptions& o) {
                 "(assembly %.3f s, linear solves %.3f s, setup %.3f s)\n",
                 s.n_dofs, s.n_cells, s.newton_iterations, s.load_steps, s.refinement_cycles, s.wall_s, s.assembly_s,
                 s.linear_solve_s, s.setup_s);
-    std::printf("estimated relative error %.3g (%s)\n", s.estimated_relative_error, s.error_estimator.c_str());
+    std::printf("estimated relative error %.3g = discretization %.3g + model %.3g (%s)\n", s.estimated_relative_error,
+                s.estimated_discretization_error, s.estimated_model_error, s.error_estimator.c_str());
     if (ok) {
       std::printf("max deflection %.4f mm, deflection at load %.4f mm, rim reaction %.6g N\n",
                   r.max_deflection_m * 1e3, r.deflection_at_load_m * 1e3, r.rim_reaction_N);
@@ -164,6 +177,8 @@ PVDF_COMMAND(30, [](CLI::App& root) {
       ->check(pvdf::app::number_in(1e-8, 0.5, "(the rule of the scene key model.tolerance), e.g. 0.01"));
   sub->add_option("--max-refinements", o->max_refinements, "Cap on adaptive refinement cycles (default: scene)")
       ->check(pvdf::app::integer_in(0, 20, "(the rule of the scene key model.max_refinements)"));
+  sub->add_option("--refinement", o->refinement,
+                  "Adaptive refinement indicators: goal (adjoint-weighted residual of the outputs, default) or kelly");
   sub->add_option("--vtu", o->vtu_dir, "Write VTU files (one per mesh) and film.pvd into this folder")
       ->check(pvdf::app::output_folder());
   sub->add_flag("--json", o->json, "Print one JSON object (status, model, n_dofs, electrodes, samples, ...)");

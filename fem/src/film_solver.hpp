@@ -5,6 +5,7 @@
 //   newton.cpp       sparse linear solves, Newton with line search, artificial-pretension continuation
 //   model_choice.cpp the `auto` rule (bending negligible? linear / von Kármán / large rotation)
 //   adaptivity.cpp   output vector, mesh refinement, the output-error estimate
+//   goal_error.cpp   adjoint-weighted residual (DWR) estimates of discretization and bending-model error
 //   outputs.cpp      electrode forces and charges, deflections, rim reaction, energy, samples
 //   vtu_output.cpp   VTU/PVD files
 //   solve.cpp        FilmSolver::run() and the public entry points (pvdf::fem::solve, names)
@@ -145,6 +146,7 @@ class FilmSolver {
     std::string where;      // which trial failed
     Model model = Model::linear;
     std::string reason;
+    double relative_model_error = 0;  // what the chosen kinematics leave out, relative (0: most general)
   };
   KinematicsChoice choose_kinematics(Vector<double>& u);
   KinematicsChoice choose_kinematics_on_first_mesh();
@@ -161,6 +163,27 @@ class FilmSolver {
   void scale_state(Vector<double>& u, double inplane_factor, double w_factor) const;
   // outputs.cpp
   void probe_outputs(const Vector<double>& u, Model model, EngineSolution& out);
+
+  // goal_error.cpp: dual-weighted residual estimates for the outputs (every electrode's charge,
+  // w at every load). Each estimate is signed, (exact − computed).
+  struct GoalErrors {
+    std::vector<double> charge_C, deflection_m;                         // the outputs themselves
+    std::vector<double> charge_discretization_C, deflection_discretization_m;
+    std::vector<double> charge_model_C, deflection_model_m;             // bending's effect (zeros if kept)
+    bool model_estimated = false;
+    double relative_discretization = 0;  // max over outputs of |estimate| / output scale
+    double relative_model = 0;
+    Vector<float> indicators;            // per active cell: Σ_outputs |η_K| / output scale
+  };
+  /// Estimates at the converged state u of `model`. The bending-model part is computed when the
+  /// solver runs without bending but kept the bending pattern (keep_bending_pattern()).
+  GoalErrors estimate_goal_errors(const Vector<double>& u, Model model);
+  /// Assemble the bending operator and its sparsity even when the model leaves bending out (call
+  /// before the first setup_system()): needed to estimate what bending would change.
+  void keep_bending_pattern() { bending_pattern_ = true; }
+  /// Switch the bending term of the residual on (the pattern must hold it).
+  void enable_bending() { options_.include_bending = true; }
+  bool bending_included() const { return options_.include_bending; }
 
   const Summary& summary() const { return summary_; }
   unsigned int n_dofs() const { return dof_handler_.n_dofs(); }
@@ -203,8 +226,14 @@ class FilmSolver {
 
   // adaptivity.cpp
   OutputVector outputs(const Vector<double>& u, Model model) const;
-  void refine_mesh(Vector<double>& u);
+  void refine_mesh(Vector<double>& u, const Vector<float>* goal_indicators = nullptr);
   NewtonOutcome refine_until_tolerance(Model model, std::string& where);
+
+  // goal_error.cpp
+  Vector<double> charge_derivative(const Vector<double>& u, Model model, std::size_t k) const;
+  Vector<double> deflection_derivative(const Point<dim>& x) const;
+  void prepare_enriched();
+  unsigned int form_degree() const { return form_degree_ > 0 ? form_degree_ : options_.fe_degree; }
 
   // outputs.cpp
   void fill_result(Result& result, Model model);
@@ -223,6 +252,7 @@ class FilmSolver {
   Result zero_load_result(Clock::time_point t_start);
   Result failure_result(const NewtonOutcome& o, const std::string& where, Clock::time_point t_start);
   void set_final_status();
+  void add_error_estimates(Result& result) const;
 
   friend class MembranePostprocessor;
 
@@ -284,6 +314,15 @@ class FilmSolver {
   Summary summary_;
   std::vector<std::pair<double, std::string>> pvd_records_;
   std::vector<std::string> vtu_files_;
+  // goal_error.cpp: the same mesh with FE_Q(p+1) (residual and adjoint reconstruction there).
+  std::unique_ptr<FilmSolver> enriched_;
+  bool bending_pattern_ = false;  // bending operator assembled although the model leaves it out
+  unsigned int form_degree_ = 0;  // > 0: quadrature and penalty of this degree (the enriched space)
+  bool residual_only_ = false;    // no tangent storage (the enriched space)
+  GoalErrors goal_;               // the estimates on the final mesh (run())
+  std::string bending_reason_;    // the bending part of `auto` decided by its estimate
+  double kinematics_model_error_ = 0;  // relative, from the `auto` trial solves
+  bool dof_cap_reached_ = false;
 };
 
 }  // namespace pvdf::fem::detail

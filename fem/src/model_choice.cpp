@@ -64,6 +64,7 @@ FilmSolver::KinematicsChoice FilmSolver::choose_kinematics(Vector<double>& u) {
   const double limit = std::sqrt(options_.tolerance) * 0.5;
   if (ratio <= limit && std::isfinite(pretension_) && options_.include_bending) {
     c.model = Model::linear;
+    c.relative_model_error = ratio * ratio;
     c.reason = "linear plate deflection w_max/h = " + fmt(ratio) + " <= 0.5*sqrt(tolerance) = " + fmt(limit) +
                " (membrane coupling changes the outputs by ~(w/h)^2)";
     return c;
@@ -91,6 +92,7 @@ FilmSolver::KinematicsChoice FilmSolver::choose_kinematics(Vector<double>& u) {
   const double d = relative_difference(q_lr, q_vk);
   if (d <= 0.25 * options_.tolerance) {
     c.model = Model::von_karman;
+    c.relative_model_error = d;
     c.reason = "linear w_max/h = " + fmt(ratio) + " too large; von Karman and large-rotation outputs differ by " +
                fmt(d) + " <= tolerance/4 on the first mesh";
   } else {
@@ -109,6 +111,15 @@ FilmSolver::KinematicsChoice FilmSolver::choose_kinematics_on_first_mesh() {
   setup_system();
   Vector<double> u(dof_handler_.n_dofs());
   return choose_kinematics(u);
+}
+
+bool bending_may_be_left_out(double relative_bending_effect, double tolerance, std::string& reason) {
+  const double share = 0.5 * tolerance;
+  const bool ok = std::isfinite(relative_bending_effect) && relative_bending_effect <= share;
+  reason = std::string(ok ? "bending left out" : "bending kept") +
+           ": adjoint-weighted estimate of its effect on the outputs, max relative " + fmt(relative_bending_effect) +
+           (ok ? " <= " : " > ") + "tolerance/2 = " + fmt(share);
+  return ok;
 }
 
 ModelChoice choose_model(const pvdf::Scene& scene, const Options& options, const ForceRange* sweep) {

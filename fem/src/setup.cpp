@@ -276,10 +276,12 @@ void FilmSolver::setup_system() {
   // Cells couple all components; faces (the C0IP bending terms) couple only w with w. Both with
   // the fill-in of the hanging-node condensation (see add_bending_face_couplings).
   DoFTools::make_sparsity_pattern(dof_handler_, dsp, constraints_, true);
-  if (options_.include_bending) add_bending_face_couplings(dsp);
+  if (options_.include_bending || bending_pattern_) add_bending_face_couplings(dsp);
   sparsity_.copy_from(dsp);
-  tangent_.reinit(sparsity_);
-  copy_pattern_to_eigen();
+  if (!residual_only_) {  // the enriched space (goal_error.cpp) assembles residuals only
+    tangent_.reinit(sparsity_);
+    copy_pattern_to_eigen();
+  }
   bending_.reinit(sparsity_);
   bending_raw_.reinit(sparsity_);
   solution_.reinit(dof_handler_.n_dofs());

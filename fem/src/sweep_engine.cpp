@@ -104,11 +104,13 @@ struct SweepEngine::Impl {
   Model model = Model::large_rotation;
   std::unique_ptr<FilmSolver> solver;
   EngineTiming timing;
+  bool estimate_errors = false;
 };
 
 SweepEngine::SweepEngine(const pvdf::Scene& scene, const Options& options, Model model, bool include_bending,
-                         const SweepMeshSizes& sizes)
+                         const SweepMeshSizes& sizes, bool estimate_errors)
     : impl_(std::make_unique<Impl>()) {
+  impl_->estimate_errors = estimate_errors;
   impl_->scene = scene;
   impl_->scene.loads.clear();
   impl_->model = model;
@@ -125,6 +127,7 @@ SweepEngine::SweepEngine(const pvdf::Scene& scene, const Options& options, Model
   o.vtu_directory.clear();
   impl_->options = o;
   impl_->solver = std::make_unique<FilmSolver>(impl_->scene, o);
+  if (estimate_errors && !include_bending) impl_->solver->keep_bending_pattern();
   impl_->solver->prepare_sweep(sizes);
 }
 
@@ -168,6 +171,16 @@ EngineSolution SweepEngine::solve(double x_m, double y_m, double force_N, std::v
   if (o.status != Status::converged) return out;
   const auto t0 = Clock::now();
   fs.probe_outputs(u, impl_->model, out);
+  if (impl_->estimate_errors) {
+    const auto t_estimate = Clock::now();
+    const FilmSolver::GoalErrors ge = fs.estimate_goal_errors(u, impl_->model);
+    impl_->timing.estimate_s += seconds_since(t_estimate);
+    out.errors_estimated = true;
+    out.charge_error_discretization_C = ge.charge_discretization_C;
+    out.charge_error_model_C = ge.charge_model_C;
+    out.deflection_error_discretization_m = ge.deflection_discretization_m.empty() ? 0.0 : ge.deflection_discretization_m[0];
+    out.deflection_error_model_m = ge.deflection_model_m.empty() ? 0.0 : ge.deflection_model_m[0];
+  }
   impl_->timing.outputs_s += seconds_since(t0);
   bool finite = std::isfinite(out.deflection_at_load_m) && std::isfinite(out.rim_reaction_N);
   for (double q : out.charge_C) finite = finite && std::isfinite(q);

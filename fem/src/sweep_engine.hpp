@@ -41,9 +41,18 @@ struct EngineSolution {
   double rim_reaction_N = 0;
   std::vector<double> charge_C;
   std::vector<std::array<double, 3>> mean_membrane_force_material_N_per_m;
-  // Error estimates of the outputs (absolute; empty/0 = not estimated).
-  std::vector<double> charge_error_discretization_C, charge_error_model_C;
-  double deflection_error_discretization_m = 0, deflection_error_model_m = 0;
+
+  /// Goal-oriented (adjoint-weighted residual) error estimates of this probe's outputs, filled
+  /// when the engine was built with estimate_errors (docs/fem.md §6). Each is a signed estimate of
+  /// (exact − computed) for that output, in its unit; take |·| for an error bar.
+  bool errors_estimated = false;
+  /// Discretization error of each electrode's charge on the engine's mesh (C), per electrode.
+  std::vector<double> charge_error_discretization_C;
+  /// What the bending term would change in each charge when the engine runs without bending (C);
+  /// zeros when the engine keeps bending (the richest model it has).
+  std::vector<double> charge_error_model_C;
+  double deflection_error_discretization_m = 0;  ///< of deflection_at_load_m (m)
+  double deflection_error_model_m = 0;           ///< bending's effect on deflection_at_load_m (m); 0 with bending
 };
 
 /// Accumulated cost of the probe solves: the public pvdf::fem::SweepTiming.
@@ -53,8 +62,12 @@ class SweepEngine {
  public:
   /// Builds the mesh (graded to the electrodes, nowhere coarser than sizes.region_size_m), the
   /// DOFs, constraints and sparsity for `model` (with/without bending). The scene's loads are ignored.
+  /// With `estimate_errors`, every converged solve() also fills the EngineSolution error fields:
+  /// one extra factorization of the converged tangent (two without bending: the bending model error
+  /// uses the tangent with bending), one back substitution per output, and one residual evaluation
+  /// in the Q(p+1) space of the same mesh.
   SweepEngine(const pvdf::Scene& scene, const Options& options, Model model, bool include_bending,
-              const SweepMeshSizes& sizes);
+              const SweepMeshSizes& sizes, bool estimate_errors = false);
   ~SweepEngine();
   SweepEngine(const SweepEngine&) = delete;
   SweepEngine& operator=(const SweepEngine&) = delete;
@@ -101,5 +114,10 @@ struct ForceRange {
 /// layer is widest there), step 2 runs now at the largest force, and a film whose bending is
 /// negligible at the largest force only keeps bending with large-rotation kinematics.
 ModelChoice choose_model(const pvdf::Scene& scene, const Options& options, const ForceRange* sweep = nullptr);
+
+/// The bending part of `auto` decided by the dual-weighted residual estimate of bending's effect
+/// (goal_error.cpp): bending may be left out when that relative effect on every output is at most
+/// half the tolerance (the other half is the discretization's). `reason` quotes the numbers.
+bool bending_may_be_left_out(double relative_bending_effect, double tolerance, std::string& reason);
 
 }  // namespace pvdf::fem::detail

@@ -44,6 +44,12 @@ std::string status_name(Status status);
 /// True for the statuses whose fields may be used (converged, tolerance_not_met).
 inline bool usable(Status status) { return status == Status::converged || status == Status::tolerance_not_met; }
 
+/// Which cells an adaptive cycle refines (docs/fem.md §6).
+enum class Refinement {
+  goal,  ///< the cell shares of the adjoint-weighted residual estimates of the outputs (default)
+  kelly  ///< Kelly's gradient-jump indicators of (u_x, u_y) and w (kept for comparison)
+};
+
 /// Solver settings (public members with defaults, DOLFINx style).
 struct Options {
   Model model = Model::automatic;       ///< kinematics; automatic = choose (Summary::model_reason says why)
@@ -63,6 +69,10 @@ struct Options {
   /// Extra uniform refinements of the initial mesh (for convergence studies).
   int initial_global_refinements = 0;
   bool adaptive = true;                 ///< refine until the output error estimate meets `tolerance`
+  Refinement refinement = Refinement::goal;  ///< indicators of the adaptive cycles
+  /// Work cap of the adaptive loop: no refinement that would take the DOFs past this (the solve
+  /// then ends tolerance_not_met with its estimate).
+  std::size_t max_dofs = 400000;
 
   // Newton–Raphson.
   int max_newton_iterations = 40;       ///< per continuation stage
@@ -93,8 +103,16 @@ struct Summary {
   int load_steps = 0;                   ///< continuation stages (artificial-pretension steps) in total
   int refinement_cycles = 0;            ///< meshes solved after the first
   double final_residual_norm = 0;       ///< ‖r‖ of the last Newton solve (N)
-  double estimated_relative_error = 0;  ///< of the outputs (docs/fem.md §6); NaN-free, 1 if unknown
-  std::string error_estimator;          ///< how estimated_relative_error was obtained
+  /// Of the outputs (docs/fem.md §6): estimated_discretization_error + estimated_model_error;
+  /// NaN-free, 1 if unknown.
+  double estimated_relative_error = 0;
+  /// Adjoint-weighted residual estimate of the discretization error: max over the outputs (each
+  /// electrode charge, w at each load) of |estimate| / (largest |charge| or |w| of its kind).
+  double estimated_discretization_error = 0;
+  /// Same normalisation, for what the model leaves out: bending (adjoint-weighted bending residual
+  /// when `auto` left it out) plus the kinematics difference measured by the `auto` trial solves.
+  double estimated_model_error = 0;
+  std::string error_estimator;          ///< how the estimates were obtained
   double wall_s = 0;                    ///< total
   double assembly_s = 0;                ///< residual + tangent assembly
   double linear_solve_s = 0;            ///< factorization + back substitution
@@ -115,6 +133,8 @@ struct ElectrodeResult {
   std::array<double, 3> mean_membrane_force_global_N_per_m{0, 0, 0};
   /// Charge ∫ (d31 σ11 + d32 σ22) dA with σ = N/h the through-thickness mean stress (C), sign by d31.
   double charge_C = 0;
+  /// Estimated absolute error of charge_C (C): |discretization estimate| + |model estimate|.
+  double charge_error_C = 0;
 };
 
 struct SampleResult {
@@ -128,6 +148,7 @@ struct LoadResult {
   double x_m = 0, y_m = 0;
   double force_N = 0;                       ///< total vertical force applied (probe: exact; pressure: p·area)
   double deflection_m = 0;                  ///< w at the load position (pressure: at the film centre)
+  double deflection_error_m = 0;            ///< estimated absolute error of deflection_m (as charge_error_C)
 };
 
 /// Fields for the caller; empty unless usable(summary.status).
