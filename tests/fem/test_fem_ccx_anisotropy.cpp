@@ -2,7 +2,7 @@
 // (orthotropic, so the membrane forces over the three electrodes are not mirror images of each
 // other), 1 N at the centre, large-rotation membrane. The reference
 // (data/ccx_anisotropic_reference.json) was written by bench/fem/ccx_anisotropy_reference.cpp
-// with CalculiX 2.20 (M3D4, NLGEOM) on conforming polar meshes of three levels; the tolerance of
+// with CalculiX 2.20 (M3D4, NLGEOM) on conforming polar meshes of two levels (n = 8, 16); the tolerance of
 // each comparison is the CalculiX change between its two finest levels (its own discretization
 // error, bounded by that change as it converges at second order) plus pvdfkit's requested
 // tolerance, and never below 2e-3.
