@@ -15,8 +15,28 @@ using namespace dealii;
 
 // The sweep mesh is graded to the electrodes only (the scene copy given to this solver carries
 // no loads), capped everywhere by the coarse size, which is therefore the size under any probe.
-void FilmSolver::prepare_sweep() {
+void FilmSolver::prepare_sweep(const SweepMeshSizes& sizes) {
   make_grid();
+  if (sizes.rim_size_m > 0) {
+    const auto& outline = scene_.membrane.outline;
+    for (int pass = 0; pass < 30; ++pass) {
+      bool marked = false;
+      for (const auto& cell : triangulation_.active_cell_iterators()) {
+        const Point<dim> c = cell->center();
+        const double off = std::remainder(std::atan2(c[1], c[0]) - sizes.rim_angle_rad, 2 * M_PI);
+        if (std::abs(off) > sizes.rim_half_angle_rad) continue;
+        const double d = std::max(0.0, outline.inside_distance_m({c[0], c[1]}) - 0.5 * cell->diameter());
+        const double target = std::max(sizes.rim_size_m, sizes.rim_grading * d);
+        if (cell->diameter() / std::sqrt(2.0) > 1.3 * target) {
+          cell->set_refine_flag();
+          marked = true;
+        }
+      }
+      if (!marked) break;
+      triangulation_.execute_coarsening_and_refinement();
+    }
+    set_material_ids();
+  }
   setup_system();
 }
 
@@ -108,7 +128,7 @@ SweepEngine::SweepEngine(const pvdf::Scene& scene, const Options& options, Model
   impl_->options = o;
   impl_->solver = std::make_unique<FilmSolver>(impl_->scene, o);
   if (estimate_errors && !include_bending) impl_->solver->keep_bending_pattern(false);
-  impl_->solver->prepare_sweep();
+  impl_->solver->prepare_sweep(sizes);
 }
 
 SweepEngine::~SweepEngine() = default;
@@ -152,7 +172,9 @@ EngineSolution SweepEngine::solve(double x_m, double y_m, double force_N, std::v
   const auto t0 = Clock::now();
   fs.probe_outputs(u, impl_->model, out);
   if (impl_->estimate_errors) {
+    const auto t_estimate = Clock::now();
     const FilmSolver::GoalErrors ge = fs.estimate_goal_errors(u, impl_->model);
+    impl_->timing.estimate_s += seconds_since(t_estimate);
     out.errors_estimated = true;
     out.charge_error_discretization_C = ge.charge_discretization_C;
     out.charge_error_model_C = ge.charge_model_C;

@@ -20,6 +20,14 @@ struct SweepMeshSizes {
   double electrode_size_m = 0;  ///< cell size on the electrodes
   double grading = 1.0;         ///< away from the electrodes: size <= grading x distance
   int global_refinements = 0;   ///< uniform refinements after the grading
+  /// Grading toward the clamped rim (0 = none): cells within the arc are refined until their size
+  /// is <= max(rim_size_m, rim_grading x distance to the rim), so the bending boundary layer
+  /// sqrt(D/N) at the clamp is resolved. The arc is the part of the rim seen from the film centre
+  /// within rim_half_angle_rad of the direction rim_angle_rad (>= pi: the whole rim).
+  double rim_size_m = 0;
+  double rim_grading = 1.0;
+  double rim_angle_rad = 0;
+  double rim_half_angle_rad = 4.0;
 };
 
 /// Outcome of one probe solve on the sweep mesh.

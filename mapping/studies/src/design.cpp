@@ -198,15 +198,30 @@ DesignSummary evaluate_design(const ChargeMap& map, const DesignOptions& o) {
   for (std::size_t k = 0; k < ne; ++k) sigma[k] = std::sqrt(noise[k] * noise[k] + out.lsb_C * out.lsb_C / 12.0);
   out.lsb_over_noise = out.lsb_C / *std::min_element(noise.begin(), noise.end());
 
-  // Step 3: bounds and dead zones at every evaluated point.
+  // Step 3: bounds and dead zones at every evaluated point. A map with per-node error estimates
+  // (format 2) adds each node's estimated charge error, as a further independent 1-σ term, to the
+  // channel noise there: the map's own error limits the position as noise does (at the force
+  // level nearest to the design force, scaled to it by F^(2/3)).
   std::size_t n_singular = 0, n_dead = 0, n_saturated = 0, n_below = 0;
   std::vector<std::size_t> below_k(ne, 0);
   std::vector<std::array<double, 3>> jp(ne);
+  std::size_t f_near = 0;
+  for (std::size_t f = 0; f < map.nf(); ++f) {
+    if (std::abs(std::log(map.forces_N[f]) - log_f) < std::abs(std::log(map.forces_N[f_near]) - log_f)) f_near = f;
+  }
+  const double err_scale = std::pow(o.force_N / map.forces_N[f_near], 2.0 / 3.0);
+  std::vector<double> sigma_p(ne);
   for (std::size_t p = 0; p < np; ++p) {
     if (!m.evaluated[p]) continue;
-    for (std::size_t k = 0; k < ne; ++k) jp[k] = jac[p * ne + k];
-    const PointBound unknown = cramer_rao_bound(jp, sigma, false, o.singular_rcond);
-    const PointBound known = cramer_rao_bound(jp, sigma, true, o.singular_rcond);
+    for (std::size_t k = 0; k < ne; ++k) {
+      jp[k] = jac[p * ne + k];
+      const double e = map.estimated_charge_error_C.empty()
+                           ? 0.0
+                           : err_scale * map.estimated_charge_error_C[map.charge_index(f_near, p / nx, p % nx, k)];
+      sigma_p[k] = std::isfinite(e) ? std::hypot(sigma[k], e) : sigma[k];
+    }
+    const PointBound unknown = cramer_rao_bound(jp, sigma_p, false, o.singular_rcond);
+    const PointBound known = cramer_rao_bound(jp, sigma_p, true, o.singular_rcond);
     const PointBound& fom = o.force_known ? known : unknown;
     m.sigma_pos_unknown_force_m[p] = unknown.sigma_pos_m;
     m.sigma_pos_known_force_m[p] = known.sigma_pos_m;
