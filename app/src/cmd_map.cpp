@@ -8,6 +8,7 @@
 #include "pvdf/core/progress.hpp"
 #include "pvdf/core/scene.hpp"
 #include "pvdf/mapping/generate.hpp"
+#include "pvdf/mesh/mesher.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -52,6 +53,7 @@ struct MapCommandOptions {
   bool force_mpi = false;
   std::size_t stop_after = 0;
   bool quiet = false;
+  std::string mesh_path;
 };
 
 int run_map(const MapCommandOptions& o) {
@@ -122,6 +124,12 @@ int run_map(const MapCommandOptions& o) {
   std::signal(SIGINT, on_interrupt);
   std::signal(SIGTERM, on_interrupt);
   options.description = "pvdfkit map " + o.scene_path;
+  if (!o.mesh_path.empty()) {
+    auto mesh = std::make_shared<pvdf::mesh::FilmMesh>(pvdf::mesh::read_msh(o.mesh_path));
+    pvdf::mesh::check_mesh_fits_scene(scene, *mesh, o.mesh_path);
+    options.mesh = std::move(mesh);
+    options.description += " --mesh " + o.mesh_path;
+  }
 
   std::unique_ptr<pvdf::Progress> bar;
   if (rank == 0 && !o.quiet) {
@@ -173,6 +181,7 @@ int run_map(const MapCommandOptions& o) {
     const double w_error = map.estimated_deflection_relative_error;
     j["estimated_deflection_relative_error"] = std::isfinite(w_error) ? nlohmann::json(w_error) : nlohmann::json(nullptr);
     j["n_dofs"] = report.n_dofs;
+    j["mesh"] = o.mesh_path.empty() ? std::string("built-in") : o.mesh_path;
     j["ranks"] = report.ranks;
     j["threads"] = report.threads;
     j["wall_s"] = report.wall_s;
@@ -251,6 +260,9 @@ PVDF_COMMAND(35, [](CLI::App& root) {
                   "Direct solves that measure the sweep mesh's charge error at setup (0-3, default 3)")
       ->check(pvdf::app::integer_in(0, 3));
   sub->add_option("--noise-C", o->noise, "1-sigma charge noise per electrode N1,N2,... (C; default 5e-14 each)");
+  sub->add_option("--mesh", o->mesh_path,
+                  "Start the sweep mesh from this Gmsh mesh (.msh from `pvdfkit mesh`, physical groups of docs/mesh.md); "
+                  "it is refined to the sweep's sizes, never coarsened");
   sub->add_flag("--json", o->json, "Print a JSON summary (counts, model, timings)");
   sub->add_flag("--quiet", o->quiet, "No progress bar");
   sub->add_flag("--mpi", o->force_mpi, "Initialize MPI even when not started by mpirun (singleton)");

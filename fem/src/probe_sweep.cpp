@@ -192,7 +192,7 @@ ProbeSweep::ProbeSweep(const pvdf::Scene& scene, const SweepOptions& options) : 
   const std::vector<std::array<double, 2>> checks =
       check_positions(scene, im.options.rim_margin_m, options.n_setup_checks);
   for (int attempt = 0;; ++attempt) {
-    im.engine = std::make_unique<detail::SweepEngine>(scene, so, model, bending, sizes);
+    im.engine = std::make_unique<detail::SweepEngine>(scene, so, model, bending, sizes, options.mesh.get());
     const CheckOutcome c = run_checks(*im.engine, scene, so, model, bending, checks, f_max);
     im.setup.n_dofs = im.engine->n_dofs();
     im.setup.n_cells = im.engine->n_cells();

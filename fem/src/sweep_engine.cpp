@@ -14,9 +14,11 @@ namespace pvdf::fem::detail {
 using namespace dealii;
 
 // The sweep mesh is graded to the electrodes only (the scene copy given to this solver carries
-// no loads), capped everywhere by the coarse size, which is therefore the size under any probe.
-void FilmSolver::prepare_sweep() {
-  make_grid();
+// no loads), capped everywhere by the coarse size, which is therefore the size under any probe. A
+// given mesh (map --mesh) is the starting mesh of that grading.
+void FilmSolver::prepare_sweep(const pvdf::mesh::FilmMesh* mesh) {
+  if (mesh) make_grid_from(*mesh);
+  else make_grid();
   setup_system();
 }
 
@@ -87,7 +89,7 @@ struct SweepEngine::Impl {
 };
 
 SweepEngine::SweepEngine(const pvdf::Scene& scene, const Options& options, Model model, bool include_bending,
-                         const SweepMeshSizes& sizes)
+                         const SweepMeshSizes& sizes, const pvdf::mesh::FilmMesh* mesh)
     : impl_(std::make_unique<Impl>()) {
   impl_->scene = scene;
   impl_->scene.loads.clear();
@@ -105,7 +107,7 @@ SweepEngine::SweepEngine(const pvdf::Scene& scene, const Options& options, Model
   o.vtu_directory.clear();
   impl_->options = o;
   impl_->solver = std::make_unique<FilmSolver>(impl_->scene, o);
-  impl_->solver->prepare_sweep();
+  impl_->solver->prepare_sweep(mesh);
 }
 
 SweepEngine::~SweepEngine() = default;

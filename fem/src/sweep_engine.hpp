@@ -40,10 +40,11 @@ using EngineTiming = SweepTiming;
 
 class SweepEngine {
  public:
-  /// Builds the mesh (graded to the electrodes, nowhere coarser than sizes.region_size_m), the
+  /// Builds the mesh (graded to the electrodes, nowhere coarser than sizes.region_size_m; from `mesh`
+  /// when given, else the built-in one), the
   /// DOFs, constraints and sparsity for `model` (with/without bending). The scene's loads are ignored.
   SweepEngine(const pvdf::Scene& scene, const Options& options, Model model, bool include_bending,
-              const SweepMeshSizes& sizes);
+              const SweepMeshSizes& sizes, const pvdf::mesh::FilmMesh* mesh = nullptr);
   ~SweepEngine();
   SweepEngine(const SweepEngine&) = delete;
   SweepEngine& operator=(const SweepEngine&) = delete;

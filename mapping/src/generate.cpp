@@ -727,6 +727,7 @@ ChargeMap Generator::run(MapReport& report) {
   sweep_options_.rim_margin_m = margin_;
   sweep_options_.forces_N = o_.forces_N;
   sweep_options_.n_setup_checks = o_.n_setup_checks;
+  sweep_options_.mesh = o_.mesh;
   sweeps_.resize(std::size_t(threads_));
   sweeps_[0] = std::make_unique<fem::ProbeSweep>(scene_, sweep_options_);
 
@@ -739,6 +740,10 @@ ChargeMap Generator::run(MapReport& report) {
     for (double f : o_.forces_N) key << ' ' << f;
     key << "|model " << fem::model_name(sweep_options_.solver.model) << "|tol " << tolerance_ << "|margin " << margin_
         << "|scaling " << o_.use_force_scaling << ' ' << o_.scaling_check_stride << "|sym " << sym_.about_x << sym_.about_y;
+    if (o_.mesh) {  // another starting mesh changes every value
+      key << "|mesh " << o_.mesh->n_cells();
+      for (const auto& v : o_.mesh->vertices) key << ' ' << v[0] << ' ' << v[1];
+    }
     hash_ = hex(fnv1a(key.str()));
   }
 

@@ -32,6 +32,9 @@ struct SweepOptions {
   double region_size_m = 0;
   double electrode_size_m = 0;
   double grading = 0;
+  /// Start the sweep mesh from this mesh (e.g. read_msh of `pvdfkit mesh`'s file) instead of the
+  /// built-in one: it is refined to the sizes above (never coarsened). Null = built-in mesh.
+  std::shared_ptr<const pvdf::mesh::FilmMesh> mesh;
 };
 
 /// What the setup decided, for reports and map provenance.
