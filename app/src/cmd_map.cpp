@@ -9,6 +9,7 @@
 #include "pvdf/core/scene.hpp"
 #include "pvdf/mapping/ambiguity.hpp"
 #include "pvdf/mapping/generate.hpp"
+#include "pvdf/mesh/mesher.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -54,6 +55,7 @@ struct MapCommandOptions {
   bool force_mpi = false;
   std::size_t stop_after = 0;
   bool quiet = false;
+  std::string mesh_path;
 };
 
 int run_map(const MapCommandOptions& o) {
@@ -125,6 +127,12 @@ int run_map(const MapCommandOptions& o) {
   std::signal(SIGINT, on_interrupt);
   std::signal(SIGTERM, on_interrupt);
   options.description = "pvdfkit map " + o.scene_path;
+  if (!o.mesh_path.empty()) {
+    auto mesh = std::make_shared<pvdf::mesh::FilmMesh>(pvdf::mesh::read_msh(o.mesh_path));
+    pvdf::mesh::check_mesh_fits_scene(scene, *mesh, o.mesh_path);
+    options.mesh = std::move(mesh);
+    options.description += " --mesh " + o.mesh_path;
+  }
 
   std::unique_ptr<pvdf::Progress> bar;
   if (rank == 0 && !o.quiet) {
@@ -182,6 +190,7 @@ int run_map(const MapCommandOptions& o) {
     j["estimate_s"] = report.estimate_s;
     j["rim_n_dofs"] = report.rim_n_dofs;
     j["n_dofs"] = report.n_dofs;
+    j["mesh"] = o.mesh_path.empty() ? std::string("built-in") : o.mesh_path;
     j["ranks"] = report.ranks;
     j["threads"] = report.threads;
     j["wall_s"] = report.wall_s;
@@ -262,6 +271,9 @@ PVDF_COMMAND(35, [](CLI::App& root) {
   sub->add_option("--rim-model", o->rim_model,
                   "Where bending on a rim-graded mesh solves a node: by-estimate (default), never, always");
   sub->add_option("--noise-C", o->noise, "1-sigma charge noise per electrode N1,N2,... (C; default 5e-14 each)");
+  sub->add_option("--mesh", o->mesh_path,
+                  "Start the sweep mesh from this Gmsh mesh (.msh from `pvdfkit mesh`, physical groups of docs/mesh.md); "
+                  "it is refined to the sweep's sizes, never coarsened");
   sub->add_flag("--json", o->json, "Print a JSON summary (counts, model, timings)");
   sub->add_flag("--quiet", o->quiet, "No progress bar");
   sub->add_flag("--mpi", o->force_mpi, "Initialize MPI even when not started by mpirun (singleton)");

@@ -7,6 +7,7 @@
 #include "pvdf/core/scene.hpp"
 #include "pvdf/core/scene_geometry.hpp"
 #include "pvdf/fem/solver.hpp"
+#include "pvdf/mesh/mesher.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -24,6 +25,7 @@ struct SolveOptions {
   std::string model;
   double tolerance = 0;
   std::string vtu_dir;
+  std::string mesh_path;
   bool json = false;
   bool verbose = false;
   int max_refinements = -1;
@@ -71,7 +73,19 @@ int run_solve(const SolveOptions& o) {
   options.vtu_directory = o.vtu_dir;
   options.verbose = o.verbose;
 
-  const pvdf::fem::Result r = pvdf::fem::solve(scene, options);
+  // --mesh: the first solve on the file's cells exactly as written (what `pvdfkit mesh` previewed),
+  // then the same output-driven refinement as on the built-in mesh (docs/mesh.md, "Solving on a .msh").
+  std::size_t mesh_file_cells = 0;
+  pvdf::fem::Result r;
+  if (!o.mesh_path.empty()) {
+    const pvdf::mesh::FilmMesh mesh = pvdf::mesh::read_msh(o.mesh_path);
+    pvdf::mesh::check_mesh_fits_scene(scene, mesh, o.mesh_path);
+    mesh_file_cells = mesh.n_cells();
+    options.grade_given_mesh = false;
+    r = pvdf::fem::solve(scene, mesh, options);
+  } else {
+    r = pvdf::fem::solve(scene, options);
+  }
   const auto& s = r.summary;
   const bool ok = pvdf::fem::usable(s.status);
 
@@ -83,6 +97,8 @@ int run_solve(const SolveOptions& o) {
     j["model_reason"] = s.model_reason;
     j["n_dofs"] = s.n_dofs;
     j["n_cells"] = s.n_cells;
+    j["mesh"] = o.mesh_path.empty() ? nlohmann::json("built-in") : nlohmann::json(o.mesh_path);
+    if (!o.mesh_path.empty()) j["mesh_file_cells"] = mesh_file_cells;
     j["newton_iterations"] = s.newton_iterations;
     j["load_steps"] = s.load_steps;
     j["refinement_cycles"] = s.refinement_cycles;
@@ -132,6 +148,7 @@ int run_solve(const SolveOptions& o) {
   } else {
     std::printf("%s: %s (%s)\n", scene.source.c_str(), pvdf::fem::status_name(s.status).c_str(), s.message.c_str());
     std::printf("model %s: %s\n", pvdf::fem::model_name(s.model).c_str(), s.model_reason.c_str());
+    if (!o.mesh_path.empty()) std::printf("mesh %s: %zu cells as read, refined from there\n", o.mesh_path.c_str(), mesh_file_cells);
     std::printf("%zu DOFs, %zu cells, %d Newton iterations, %d load steps, %d refinements, %.3f s "
                 "(assembly %.3f s, linear solves %.3f s, setup %.3f s)\n",
                 s.n_dofs, s.n_cells, s.newton_iterations, s.load_steps, s.refinement_cycles, s.wall_s, s.assembly_s,
@@ -180,6 +197,9 @@ PVDF_COMMAND(30, [](CLI::App& root) {
                   "Adaptive refinement indicators: goal (adjoint-weighted residual of the outputs, default) or kelly");
   sub->add_option("--vtu", o->vtu_dir, "Write VTU files (one per mesh) and film.pvd into this folder")
       ->check(pvdf::app::output_folder());
+  sub->add_option("--mesh", o->mesh_path,
+                  "Solve on this Gmsh mesh (.msh from `pvdfkit mesh`, or any quad mesh with the physical groups of "
+                  "docs/mesh.md) instead of the built-in one; the first solve uses its cells as they are");
   sub->add_flag("--json", o->json, "Print one JSON object (status, model, n_dofs, electrodes, samples, ...)");
   sub->add_flag("--verbose", o->verbose, "Print Newton progress");
   return pvdf::app::Subcommand{sub, [o] { return run_solve(*o); }};

@@ -157,7 +157,7 @@ class FilmSolver {
 
   // sweep_engine.cpp: one fixed mesh built without any probe load, then one probe moved over
   // it; DOFs, sparsity and the symbolic factorization are kept.
-  void prepare_sweep(const SweepMeshSizes& sizes);
+  void prepare_sweep(const SweepMeshSizes& sizes, const pvdf::mesh::FilmMesh* mesh = nullptr);
   void set_probe(double x_m, double y_m, double force_N);
   NewtonOutcome solve_probe(Model model, Vector<double>& u, bool warm, int& newton_iterations, bool& warm_used);
   void scale_state(Vector<double>& u, double inplane_factor, double w_factor) const;

@@ -231,7 +231,7 @@ ProbeSweep::ProbeSweep(const pvdf::Scene& scene, const SweepOptions& options) : 
   const std::vector<std::array<double, 2>> checks =
       check_positions(scene, im.options.rim_margin_m, options.n_setup_checks);
   for (int attempt = 0;; ++attempt) {
-    im.engine = std::make_unique<detail::SweepEngine>(scene, so, model, bending, sizes, true);
+    im.engine = std::make_unique<detail::SweepEngine>(scene, so, model, bending, sizes, true, options.mesh.get());
     double disc = 0, total = 0, deflection = 0;
     std::string where = "none";
     bool failed = false;

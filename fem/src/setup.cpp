@@ -197,7 +197,12 @@ void FilmSolver::make_grid_from(const pvdf::mesh::FilmMesh& mesh) {
     triangulation_.set_manifold(pvdf::mesh::rim_manifold_id,
                                 PolarManifold<dim>(Point<dim>(mesh.rim_center_m[0], mesh.rim_center_m[1])));
   }
-  refine_initial_mesh();
+  if (options_.grade_given_mesh) {
+    refine_initial_mesh();
+  } else {
+    if (options_.initial_global_refinements > 0) triangulation_.refine_global(options_.initial_global_refinements);
+    set_material_ids();
+  }
 }
 
 // Graded a-priori refinement: the target size grows linearly (factor `grading`) with the

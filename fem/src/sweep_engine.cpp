@@ -15,8 +15,10 @@ using namespace dealii;
 
 // The sweep mesh is graded to the electrodes only (the scene copy given to this solver carries
 // no loads), capped everywhere by the coarse size, which is therefore the size under any probe.
-void FilmSolver::prepare_sweep(const SweepMeshSizes& sizes) {
-  make_grid();
+// A given mesh (map --mesh) is the starting mesh of that grading.
+void FilmSolver::prepare_sweep(const SweepMeshSizes& sizes, const pvdf::mesh::FilmMesh* mesh) {
+  if (mesh) make_grid_from(*mesh);
+  else make_grid();
   if (sizes.rim_size_m > 0) {
     const auto& outline = scene_.membrane.outline;
     for (int pass = 0; pass < 30; ++pass) {
@@ -108,7 +110,7 @@ struct SweepEngine::Impl {
 };
 
 SweepEngine::SweepEngine(const pvdf::Scene& scene, const Options& options, Model model, bool include_bending,
-                         const SweepMeshSizes& sizes, bool estimate_errors)
+                         const SweepMeshSizes& sizes, bool estimate_errors, const pvdf::mesh::FilmMesh* mesh)
     : impl_(std::make_unique<Impl>()) {
   impl_->estimate_errors = estimate_errors;
   impl_->scene = scene;
@@ -128,7 +130,7 @@ SweepEngine::SweepEngine(const pvdf::Scene& scene, const Options& options, Model
   impl_->options = o;
   impl_->solver = std::make_unique<FilmSolver>(impl_->scene, o);
   if (estimate_errors && !include_bending) impl_->solver->keep_bending_pattern(false);
-  impl_->solver->prepare_sweep(sizes);
+  impl_->solver->prepare_sweep(sizes, mesh);
 }
 
 SweepEngine::~SweepEngine() = default;

@@ -60,14 +60,16 @@ using EngineTiming = SweepTiming;
 
 class SweepEngine {
  public:
-  /// Builds the mesh (graded to the electrodes, nowhere coarser than sizes.region_size_m), the
+  /// Builds the mesh (graded to the electrodes, nowhere coarser than sizes.region_size_m; from `mesh`
+  /// when given, else the built-in one), the
   /// DOFs, constraints and sparsity for `model` (with/without bending). The scene's loads are ignored.
   /// With `estimate_errors`, every converged solve() also fills the EngineSolution error fields:
   /// one extra factorization of the converged tangent (two without bending: the bending model error
   /// uses the tangent with bending), one back substitution per output, and one residual evaluation
   /// in the Q(p+1) space of the same mesh.
   SweepEngine(const pvdf::Scene& scene, const Options& options, Model model, bool include_bending,
-              const SweepMeshSizes& sizes, bool estimate_errors = false);
+              const SweepMeshSizes& sizes, bool estimate_errors = false,
+              const pvdf::mesh::FilmMesh* mesh = nullptr);
   ~SweepEngine();
   SweepEngine(const SweepEngine&) = delete;
   SweepEngine& operator=(const SweepEngine&) = delete;

@@ -10,6 +10,7 @@
 #include <gmsh.h>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -536,8 +537,21 @@ FilmMesh write_msh(const pvdf::Scene& scene, const std::string& path, MeshReport
 
 FilmMesh read_msh(const std::string& path) {
   {
-    std::ifstream probe(path);
-    if (!probe) throw pvdf::InputError(path + ": cannot open the mesh file; check the path");
+    // Gmsh picks its reader by extension and would run any other text as a .geo script (which can
+    // call the shell): only files named .msh that start like one are handed to it.
+    const std::string shown = pvdf::escape_control_bytes(path);
+    const auto dot = path.find_last_of("./");
+    std::string extension = dot == std::string::npos || path[dot] != '.' ? "" : path.substr(dot);
+    for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (extension != ".msh") throw pvdf::InputError(shown + ": a mesh file must be a Gmsh .msh file (name ending in .msh)");
+    std::ifstream probe(path, std::ios::binary);
+    std::string first;
+    if (!probe || !std::getline(probe, first)) throw pvdf::InputError(shown + ": cannot read the mesh file; check the path");
+    if (!first.empty() && first.back() == '\r') first.pop_back();
+    if (first != "$MeshFormat") {
+      throw pvdf::InputError(shown + ": is not a Gmsh mesh file (its first line is not $MeshFormat); write it with "
+                             "pvdfkit mesh or Gmsh");
+    }
   }
   GmshSession& session = GmshSession::instance();
   std::lock_guard<std::mutex> lock(session.mutex());

@@ -123,6 +123,18 @@ const std::vector<Row> rows = {
   {"map-stride-0", "map good.json -o m.h5 --quiet --scaling-check-stride 0", 2, "--scaling-check-stride", "m.h5"},
   {"map-rim-margin-neg", "map good.json -o m.h5 --quiet --rim-margin-m -1", 2, "--rim-margin-m", "m.h5"},
   {"map-noise-neg", "map good.json -o m.h5 --quiet --noise-C -1e-14,5e-14,5e-14", 2, "--noise-C", "m.h5"},
+  // ---- solve --mesh FILE.msh: files Gmsh cannot read, meshes that do not fit the scene
+  {"solve-msh-missing", "solve good.json --mesh no_such.msh", 2, "no_such.msh"},
+  {"solve-msh-json", "solve good.json --mesh good.json", 2, "good.json"},
+  {"solve-msh-folder", "solve good.json --mesh .", 2, "."},
+  {"solve-msh-not-gmsh", "solve good.json --mesh not_gmsh.msh", 2, "not_gmsh.msh"},
+  {"solve-msh-garbage", "solve good.json --mesh garbage.msh", 2, "garbage.msh"},
+  {"solve-msh-huge-count", "solve good.json --mesh huge_count.msh", 2, "huge_count.msh"},
+  {"solve-msh-triangles", "solve good.json --mesh triangles.msh", 2, "triangles.msh"},
+  {"solve-msh-no-rim", "solve good.json --mesh no_rim.msh", 2, "rim"},
+  {"solve-msh-bowtie", "solve good.json --mesh bowtie.msh", 2, "quadrilateral 0"},
+  {"solve-msh-other-film", "solve good.json --mesh square.msh", 2, "square.msh"},
+  {"solve-msh-other-scene", "$X mesh e_tiny_ok.json -o other.msh --no-preview >/dev/null 2>&1; $X solve good.json --mesh other.msh 2>.err", 2, "electrode groups"},
   // ---- mesh flags and outputs
   {"mesh-size-factor-1e-6", "mesh good.json -o k.msh --size-factor 1e-6", 2, "--size-factor", "k.msh,k.png"},
   {"mesh-size-factor-0", "mesh good.json -o k.msh --size-factor 0", 2, "--size-factor", "k.msh,k.png"},

@@ -764,6 +764,7 @@ ChargeMap Generator::run(MapReport& report) {
   else if (o_.rim_model != "by-estimate") {
     throw InputError("--rim-model " + o_.rim_model + ": use by-estimate, never or always");
   }
+  sweep_options_.mesh = o_.mesh;
   sweeps_.resize(std::size_t(threads_));
   sweeps_[0] = std::make_unique<fem::ProbeSweep>(scene_, sweep_options_);
 
@@ -777,6 +778,10 @@ ChargeMap Generator::run(MapReport& report) {
     key << "|model " << fem::model_name(sweep_options_.solver.model) << "|tol " << tolerance_ << "|margin " << margin_
         << "|scaling " << o_.use_force_scaling << ' ' << o_.scaling_check_stride << "|sym " << sym_.about_x << sym_.about_y
         << "|rim " << int(sweep_options_.rim_model) << ' ' << sweep_options_.rim_size_m << ' ' << sweep_options_.rim_grading;
+    if (o_.mesh) {  // another starting mesh changes every value
+      key << "|mesh " << o_.mesh->n_cells();
+      for (const auto& v : o_.mesh->vertices) key << ' ' << v[0] << ' ' << v[1];
+    }
     hash_ = hex(fnv1a(key.str()));
   }
 

@@ -45,6 +45,9 @@ struct SweepOptions {
   /// sectors (seen from the film centre) and a probe uses the mesh graded along its own sector and
   /// the two neighbours, built when first needed (1 = one mesh graded along the whole rim).
   int rim_sectors = 16;
+  /// Start the sweep mesh from this mesh (e.g. read_msh of `pvdfkit mesh`'s file) instead of the
+  /// built-in one: it is refined to the sizes above (never coarsened). Null = built-in mesh.
+  std::shared_ptr<const pvdf::mesh::FilmMesh> mesh;
 };
 
 /// What the setup decided, for reports and map provenance.

@@ -68,6 +68,10 @@ struct Options {
   double grading = 0.8;
   /// Extra uniform refinements of the initial mesh (for convergence studies).
   int initial_global_refinements = 0;
+  /// FilmMesh solves: grade the given mesh to the probes and electrodes (refining only) before the
+  /// first solve. false = the first solve is on the given mesh exactly as it is (`pvdfkit solve
+  /// --mesh`); the output-driven refinement (`adaptive`) follows either way.
+  bool grade_given_mesh = true;
   bool adaptive = true;                 ///< refine until the output error estimate meets `tolerance`
   Refinement refinement = Refinement::goal;  ///< indicators of the adaptive cycles
   /// Work cap of the adaptive loop: no refinement that would take the DOFs past this (the solve

@@ -12,9 +12,14 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
+
+namespace pvdf::mesh {
+struct FilmMesh;  // pvdf/mesh/film_mesh.hpp
+}
 
 namespace pvdf::mapping {
 
@@ -76,6 +81,9 @@ struct MapOptions {
   std::vector<double> noise_C;
   /// Free text stored in the map.
   std::string description;
+  /// Start the FEM sweep mesh from this mesh (`pvdfkit map --mesh FILE.msh`; refined to the sweep's
+  /// sizes, never coarsened) instead of the built-in one. Null = built-in mesh.
+  std::shared_ptr<const pvdf::mesh::FilmMesh> mesh;
 };
 
 /// Per-point provenance flags, stored as uint8 [nf][ny][nx] in the map file's `/provenance`.
