@@ -73,6 +73,36 @@ std::vector<double> aligned_window(const std::vector<double>& m, long first, lon
   return out;
 }
 
+// In the far field of an edge at sample ne (|lag| >= N/4): the slow signal tails removed by a 513-sample
+// running mean, the sum of squared sums over blocks of 64 consecutive samples, divided by 64, is added to
+// `sum` and the number of blocks to `count` (their ratio: the low-frequency noise power per sample).
+void far_field_block_power(const std::vector<double>& m, long ne, long N, double& sum, std::size_t& count) {
+  const long n = static_cast<long>(m.size()), block = 64, half = 256;
+  std::vector<double> prefix(static_cast<std::size_t>(n) + 1, 0.0);
+  for (long q = 0; q < n; ++q) prefix[q + 1] = prefix[q] + m[q];
+  double ss = 0;
+  std::size_t nb = 0;
+  for (long k = half; k + block + half <= n; k += block) {
+    bool far = true;
+    double total = 0;
+    for (long q = k; q < k + block; ++q) {
+      if (std::labs(q - ne) < N / 4) {
+        far = false;
+        break;
+      }
+      total += m[q] - (prefix[q + half + 1] - prefix[q - half]) / (2 * half + 1);
+    }
+    if (far) {
+      ss += total * total;
+      ++nb;
+    }
+  }
+  if (nb > 0) {
+    sum += ss / block;
+    count += nb;
+  }
+}
+
 }  // namespace
 
 std::string to_string(BetaPolicy policy) {
@@ -178,38 +208,8 @@ TransferMatrix identify_transfer(const std::vector<IdentificationScan>& scans, c
                        " m (signal rms " + num(sig_rms) + " V vs noise rms " + num(noise_rms) + " V, ratio " + num(snr) +
                        " < " + num(o.min_snr) + "); check the edge position, the force and the recording");
     }
-    // Low-frequency noise power (the band of G lies below the moving average's first null): in the far
-    // field, remove the slow signal tails with a 513-sample running mean, then take the variance of sums
-    // over blocks of 64 consecutive samples, divided by 64.
-    {
-      const long block = 64, half = 256;
-      for (int c = 0; c < 2; ++c) {
-        const auto& m = c == 0 ? scan.m1_V : scan.m2_V;
-        std::vector<double> prefix(static_cast<std::size_t>(n) + 1, 0.0);
-        for (long q = 0; q < n; ++q) prefix[q + 1] = prefix[q] + m[q];
-        double ss = 0;
-        std::size_t nb = 0;
-        for (long k = half; k + block + half <= n; k += block) {
-          bool far = true;
-          double sum = 0;
-          for (long q = k; q < k + block; ++q) {
-            if (std::labs(q - ne) < N / 4) {
-              far = false;
-              break;
-            }
-            sum += m[q] - (prefix[q + half + 1] - prefix[q - half]) / (2 * half + 1);
-          }
-          if (far) {
-            ss += sum * sum;
-            ++nb;
-          }
-        }
-        if (nb > 0) {
-          psd_sum[c] += ss / block;
-          psd_count[c] += nb;
-        }
-      }
-    }
+    // Low-frequency noise power (the band of G lies below the moving average's first null), per channel.
+    for (int c = 0; c < 2; ++c) far_field_block_power(c == 0 ? scan.m1_V : scan.m2_V, ne, N, psd_sum[c], psd_count[c]);
     noise_sum[0] += ch_noise[0];
     noise_sum[1] += ch_noise[1];
     noise_count += n_noise;
