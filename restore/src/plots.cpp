@@ -95,7 +95,8 @@ void plot_scan(const std::string& path, const Scan& scan, const std::string& tit
 
 void plot_filters(const std::string& path, const InverseFilter& f) {
   plot::Figure fig(1200, 900, 2, 2);
-  fig.suptitle("Inverse filters (seed 000 Fig. 13), β (" + f.beta_policy + ") = " + fmt("%.3g", f.beta) + " relative");
+  fig.suptitle("Inverse filters (seed 000 Fig. 13), " + f.regularization + " regularization, β (" + f.beta_policy +
+               ") = " + fmt("%.3g", f.beta) + " relative");
   std::vector<double> lag(f.taps);
   for (std::size_t t = 0; t < f.taps; ++t) lag[t] = (static_cast<double>(t) - static_cast<double>(f.delay_samples)) * f.sample_spacing_m * 1e3;
   const char* names[2][2] = {{"$h_{11}$ ($f_x$ from $m_1$)", "$h_{12}$ ($f_x$ from $m_2$)"},
@@ -163,7 +164,8 @@ void plot_transfer(const std::string& path, const InverseFilter& f) {
       .line(k, s1, "$s_1$ (strong direction)")
       .line(k, s2, "$s_2$ (weak direction)")
       .line(k, reg, "√β(k)", plot::Color{0, 0, 0}, plot::LineStyle::dashed)
-      .title("Singular values of G and the regularization level")
+      .title(f.regularization == "isotropic" ? "Singular values of G and √β(k): both directions get s₂'s gain"
+                                             : "Singular values of G and √β(k): each direction damped below it")
       .xlabel("spatial frequency 1/λ (1/mm)")
       .ylabel("V/N")
       .log_y()
