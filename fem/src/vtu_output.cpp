@@ -80,6 +80,10 @@ std::string FilmSolver::write_vtu(int cycle, Model model) {
         cell->material_id() == pvdf::mesh::film_material_id ? -1.0f : static_cast<float>(cell->material_id() - 1);
   }
   data_out.add_data_vector(electrode_id, "electrode_id", DataOut<dim>::type_cell_data);
+  // Wrinkling: 0 taut, 1 wrinkled (uniaxial tension), 2 slack; all 0 without the tension-field membrane.
+  const std::vector<float> cell_state = wrinkle_map(solution_, model).cell_state;
+  const Vector<float> membrane_state(cell_state.begin(), cell_state.end());
+  data_out.add_data_vector(membrane_state, "membrane_state", DataOut<dim>::type_cell_data);
   data_out.build_patches(*mapping_, options_.fe_degree, DataOut<dim>::curved_inner_cells);
   const std::string name = "film_cycle" + std::to_string(cycle) + ".vtu";
   const std::string path = options_.vtu_directory + "/" + name;
