@@ -1,6 +1,7 @@
 // `pvdfkit rays`: charge against distance along rays from each electrode of a charge map, with
 // the power-law fit Q = C1(β)·d^C2 of seed 001 eq. 6 per ray (Fig. 7); docs/seed001-reproduction.md.
 #include "command.hpp"
+#include "compare_scene.hpp"
 
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
@@ -85,7 +86,10 @@ int run_rays(const RaysOptions& o) {
       throw pvdf::InputError("--electrode " + name + ": not an electrode of " + o.map_path + " (it has " + names + ")");
     }
     plot_angles = pvdf::parse_number_list(o.plot_angles, "--plot-angles-deg");
-    if (!o.measured_path.empty()) measured = read_measured_csv(o.measured_path, map.electrode_names);
+    if (!o.measured_path.empty()) {
+      measured = read_measured_csv(o.measured_path, map.electrode_names);
+      pvdf::app::warn_if_map_too_coarse(map, measured);  // the same rule as `compare MAP`
+    }
   } else if (!o.measured_path.empty() || !o.electrode.empty()) {
     throw pvdf::InputError("--measured and --electrode choose what --plot draws; give --plot FILE.png (or .svg, .pdf) too");
   }

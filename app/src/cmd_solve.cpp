@@ -114,6 +114,8 @@ int run_solve(const SolveOptions& o) {
       j["deflection_at_load_m"] = r.deflection_at_load_m;
       j["rim_reaction_N"] = r.rim_reaction_N;
       j["strain_energy_J"] = r.strain_energy_J;
+      j["wrinkled_area_fraction"] = r.wrinkled_area_fraction;  // tension-field membrane (slack films)
+      j["slack_area_fraction"] = r.slack_area_fraction;
       j["loads"] = nlohmann::json::array();
       for (const auto& l : r.loads) {
         j["loads"].push_back({{"x_m", l.x_m},
@@ -158,6 +160,9 @@ int run_solve(const SolveOptions& o) {
     if (ok) {
       std::printf("max deflection %.4f mm, deflection at load %.4f mm, rim reaction %.6g N\n",
                   r.max_deflection_m * 1e3, r.deflection_at_load_m * 1e3, r.rim_reaction_N);
+      if (r.wrinkled_area_fraction > 0 || r.slack_area_fraction > 0)
+        std::printf("wrinkled %.1f %% of the film, slack %.1f %% (tension-field membrane)\n",
+                    100 * r.wrinkled_area_fraction, 100 * r.slack_area_fraction);
       for (const auto& e : r.electrodes) {
         const auto& n = e.mean_membrane_force_material_N_per_m;
         std::printf("electrode %-8s N11 %10.4f  N22 %10.4f  N12 %10.4f N/m  charge %.4g pC\n", e.name.c_str(), n[0],

@@ -347,6 +347,7 @@ void FilmSolver::assemble(const Vector<double>& u, Model model, double artificia
   double energy = 0;
   // Block-local arrays: rb[c][a] residual, Kb[c][d][a][b] tangent.
   std::vector<double> rb(3 * nb), Kb(9 * nb * nb);
+  Stiffness3 relaxed_C;
 
   for (std::size_t k = 0; k < cache_.n_cells; ++k) {
     const types::global_dof_index* cd = &cache_.dofs[k * n];
@@ -364,9 +365,14 @@ void FilmSolver::assemble(const Vector<double>& u, Model model, double artificia
           gr[c][0] += ul[c * nb + a] * G[2 * a];
           gr[c][1] += ul[c * nb + a] * G[2 * a + 1];
         }
-      const MembranePoint point = membrane_point(gr, model, membrane_C_, N_tot, jxw, energy);
+      MembranePoint point = membrane_point(gr, model, membrane_C_, N_tot, jxw, energy);
+      const Stiffness3* tangent_C = &membrane_C_;
+      if (tension_field_) {  // wrinkling: relaxed stress, tangent and energy (tension_field.cpp)
+        energy += relax_membrane_point(point.kin, model, artificial_tension, want_matrix, point.S, relaxed_C) * jxw;
+        tangent_C = &relaxed_C;
+      }
       add_point_residual(point, G, nb, jxw, model, N_tot, rb.data());
-      if (want_matrix) add_point_tangent(point, G, nb, jxw, model, N_tot, membrane_C_, Kb.data());
+      if (want_matrix) add_point_tangent(point, G, nb, jxw, model, N_tot, *tangent_C, Kb.data());
     }
     // Back to the FE's local (system) order.
     for (unsigned int i = 0; i < n; ++i) dofs[i] = cd[i];

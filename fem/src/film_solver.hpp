@@ -11,12 +11,14 @@
 //   solve.cpp        FilmSolver::run() and the public entry points (pvdf::fem::solve, names)
 //   checks.cpp       test hooks (tangent by finite differences, bending operator)
 //   sweep_engine.cpp the fixed-mesh probe solver behind pvdf::fem::ProbeSweep
+//   tension_field.cpp slack films: the relaxed (wrinkling) membrane, its continuation, wrinkled area
 // deal.II appears here and in those files only; public headers stay std/Eigen/pvdf.
 #pragma once
 
 #include "pvdf/fem/solver.hpp"
 
 #include "sweep_engine.hpp"
+#include "tension_field.hpp"
 
 #include <deal.II/base/point.h>
 #include <deal.II/base/tensor.h>
@@ -127,6 +129,12 @@ struct OutputVector {
 
 /// max over outputs of |a − b| / scale(a), forces and deflections each on their own scale.
 double relative_difference(const OutputVector& a, const OutputVector& b);
+
+/// Wrinkled and slack share of the film (tension_field.cpp), and each cell's MembraneState.
+struct WrinkleMap {
+  double wrinkled_area_fraction = 0, slack_area_fraction = 0;
+  std::vector<float> cell_state;
+};
 
 /// One film problem on one triangulation (step-8/step-15 shape: setup, assemble, solve, refine,
 /// output). Each group of members below is implemented in the file named in its comment.
@@ -259,12 +267,28 @@ class FilmSolver {
   void set_final_status();
   void add_error_estimates(Result& result) const;
 
+  // tension_field.cpp
+  void setup_natural_state();
+  RelaxedMembrane membrane_law(const std::array<double, 3>& E, double artificial_tension, bool want_tangent) const;
+  std::array<double, 3> membrane_stress(const std::array<double, 3>& E) const;
+  double relax_membrane_point(const Kinematics& k, Model model, double artificial_tension, bool want_tangent,
+                              std::array<double, 3>& S, Stiffness3& D) const;
+  NewtonOutcome solve_slack_from_flat(Model model, Vector<double>& u);
+  double tension_field_regularization() const;
+  WrinkleMap wrinkle_map(const Vector<double>& u, Model model) const;
+
   friend class MembranePostprocessor;
 
   const pvdf::Scene& scene_;
   Options options_;
   double thickness_ = 0;
   double pretension_ = 0;
+  // Natural state and wrinkling (tension_field.cpp): S0 (trial stress of the flat film), C⁻¹S0, C⁻¹(1,1,0).
+  bool tension_field_ = false;
+  std::array<double, 3> initial_stress_{0, 0, 0}, compliance_initial_stress_{0, 0, 0}, unit_compliance_{0, 0, 0};
+  double tangent_regularization_ = tension_field_tangent_regularization;  // 0 in check_jacobian
+  double load_factor_ = 1;  // the slack continuation's force factor on load_
+  mutable double regularization_force_ = -1, regularization_eta_ = 0;
   Stiffness3 membrane_C_;  // h·Q̄
   Stiffness3 bending_D_;   // h³/12·Q̄
   double bending_penalty_scale_ = 0;

@@ -37,7 +37,7 @@ std::string bending_negligible_reason(const pvdf::Scene& scene, const Options& o
   const double E = std::min(m.E1_Pa, m.E2_Pa), h = scene.membrane.thickness_m;
   const double a = scene.membrane.outline.characteristic_radius_m();
   const double D = std::max(m.E1_Pa, m.E2_Pa) * h * h * h / 12.0;
-  const double N = pvdf::membrane_force_scale_N_per_m(E * h, force_N, a) + scene.membrane.pretension_N_per_m;
+  const double N = pvdf::membrane_force_scale_N_per_m(E * h, force_N, a) + std::max(0.0, scene.membrane.pretension_N_per_m);
   const double eta = std::sqrt(D / N) / radius_m;
   const double effect = eta / 50.0;
   if (effect > 0.25 * options.tolerance) return {};
@@ -54,6 +54,13 @@ std::string bending_negligible_reason(const pvdf::Scene& scene, const Options& o
 FilmSolver::KinematicsChoice FilmSolver::choose_kinematics(Vector<double>& u) {
   KinematicsChoice c;
   Summary& s = summary_;
+  if (tension_field_) {  // a wrinkling film has no linear response to compare with: the general kinematics
+    c.model = Model::large_rotation;
+    c.reason = "tension-field (wrinkling) membrane: large rotation, no linear trial";
+    c.outcome = solve_from_flat(c.model, u);
+    c.where = "large-rotation solve of the wrinkling film";
+    return c;
+  }
   const NewtonOutcome o = solve_from_flat(Model::linear, u);
   if (o.status != Status::converged) {
     c.outcome = o;

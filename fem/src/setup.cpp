@@ -67,9 +67,13 @@ FilmSolver::FilmSolver(const pvdf::Scene& scene, const Options& options)
   if (!(thickness_ > 0) || !std::isfinite(thickness_)) {
     throw InputError(scene.source + ": membrane.thickness_m = " + fmt(thickness_) + " must be > 0");
   }
-  if (!(pretension_ >= 0) || !std::isfinite(pretension_)) {
-    throw InputError(scene.source + ": membrane.pretension_N_per_m = " + fmt(pretension_) +
-                     " must be >= 0 (a compressed flat film buckles; the solver models tension only)");
+  if (!std::isfinite(pretension_)) {
+    throw InputError(scene.source + ": membrane.pretension_N_per_m = " + fmt(pretension_) + " must be finite");
+  }
+  const bool slack = pretension_ < 0 || m.slack_strain > 0;
+  if ((slack || m.tension_field) && options.model == Model::linear) {
+    throw InputError(scene.source + ": a slack or wrinkling film (membrane.pretension_N_per_m < 0, slack_strain or "
+                     "tension_field) needs a nonlinear model; use model.kinematics auto, von-karman or large-rotation");
   }
   const std::string pd = scene.material.positive_definiteness_problem();
   if (!pd.empty()) throw InputError(scene.source + ": material: " + pd);
@@ -92,6 +96,7 @@ FilmSolver::FilmSolver(const pvdf::Scene& scene, const Options& options)
       bending_D_.c[i][j] = thickness_ * thickness_ * thickness_ / 12.0 * Q(i, j);
     }
   }
+  setup_natural_state();  // tension_field.cpp
   // Penalty scale: largest eigenvalue of D in Mandel form (shear rows scaled by √2 ... here 2 for
   // engineering shear), so the penalty dominates every direction of anisotropy.
   Eigen::Matrix3d Dm;

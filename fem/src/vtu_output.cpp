@@ -258,10 +258,16 @@ std::string FilmSolver::write_vtu(int cycle, Model model) {
                                             make_array("Int64", "offsets", 1, offsets),
                                             make_array("UInt8", "types", 1, types)};
 
+  // Wrinkling: 0 taut, 1 wrinkled (uniaxial tension), 2 slack; all 0 without the tension-field membrane.
+  const std::vector<float> cell_state = wrinkle_map(solution_, model).cell_state;
+  std::vector<std::int32_t> membrane_state(n_cells, 0);
+  for (std::size_t c = 0; c < n_cells && c < cell_state.size(); ++c) membrane_state[c] = static_cast<std::int32_t>(cell_state[c]);
+
   const std::string name = "film_cycle" + std::to_string(cycle) + ".vtu";
   const std::string path = options_.vtu_directory + "/" + name;
   pvdf::write_file_atomically(path, [&](std::ostream& os) {
-    write_vtu_file(os, n_points, n_cells, point_data, {make_array("Int32", "electrode_id", 1, electrode_id)},
+    write_vtu_file(os, n_points, n_cells, point_data, {make_array("Int32", "electrode_id", 1, electrode_id),
+                                                           make_array("Int32", "membrane_state", 1, membrane_state)},
                    make_array("Float64", "", 3, xyz), cells);
   });
   pvd_records_.emplace_back(static_cast<double>(cycle), name);

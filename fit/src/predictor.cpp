@@ -71,8 +71,10 @@ struct Predictor::Impl {
     w = s.deflection_at_load_m;
     n.resize(s.mean_membrane_force_material_N_per_m.size());
     for (std::size_t k = 0; k < n.size(); ++k) {
-      // The isotropic pre-tension is (N0, N0, 0) in any axes; the amplifier sees only the change.
-      n[k] = {s.mean_membrane_force_material_N_per_m[k][0] - tension, s.mean_membrane_force_material_N_per_m[k][1] - tension};
+      // The isotropic pre-tension is (N0, N0, 0) in any axes; the amplifier sees only the change. A
+      // slack film (N0 < 0) is stress-free when flat (tension-field membrane): nothing to remove.
+      const double flat = std::max(tension, 0.0);
+      n[k] = {s.mean_membrane_force_material_N_per_m[k][0] - flat, s.mean_membrane_force_material_N_per_m[k][1] - flat};
     }
   }
 };
@@ -128,15 +130,12 @@ std::vector<PressResponse> Predictor::predict(const FilmState& state, std::array
   if (!(E > 0) || !std::isfinite(E)) {
     throw pvdf::NumericalError("fit: E_scale = " + std::to_string(E) + " is not a positive finite stiffness factor");
   }
-  if (!(T >= 0) || !std::isfinite(T)) {
-    throw pvdf::InputError("fit: pretension_N_per_m = " + std::to_string(T) +
-                           " must be >= 0 (a slack film needs the tension-field model, not available yet)");
-  }
+  if (!std::isfinite(T)) throw pvdf::NumericalError("fit: pretension_N_per_m = " + std::to_string(T) + " is not finite");
   const double tau = T / E;
   const bool want_f = derivatives[1];
-  const bool want_tau = derivatives[0] || (derivatives[1] && tau > 0);
+  const bool want_tau = derivatives[0] || (derivatives[1] && tau != 0);
   const double h_f = im.options.relative_step;
-  const double h_tau = im.options.relative_step * std::max(tau, im.options.pretension_floor_N_per_m);
+  const double h_tau = im.options.relative_step * std::max(std::abs(tau), im.options.pretension_floor_N_per_m);
   const std::size_t n = im.presses.size();
   const std::size_t planned = n * (1 + (want_f ? 1 : 0) + (want_tau ? 1 : 0));
   std::size_t done = 0;

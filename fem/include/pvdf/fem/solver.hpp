@@ -169,6 +169,9 @@ struct Result {
   double deflection_at_load_m = 0;          ///< w at the first load position
   double rim_reaction_N = 0;                ///< total vertical reaction of the clamped rim (= Σ F at equilibrium)
   double strain_energy_J = 0;               ///< membrane + bending (without pretension work)
+  /// Share of the film's area that is wrinkled (uniaxial tension) and slack (no membrane force); both 0
+  /// unless the tension-field membrane is in use (slack films, membrane.tension_field).
+  double wrinkled_area_fraction = 0, slack_area_fraction = 0;
   std::vector<LoadResult> loads;
   std::vector<ElectrodeResult> electrodes;
   std::vector<SampleResult> samples;
