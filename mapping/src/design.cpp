@@ -2,6 +2,7 @@
 // sensitivity, ADC dynamic range, dead zones; and the scene edits behind `pvdfkit design --vary`.
 #include "pvdf/mapping/design.hpp"
 
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
 #include "pvdf/mapping/interpolant.hpp"
@@ -19,7 +20,6 @@ namespace {
 
 constexpr double inf = std::numeric_limits<double>::infinity();
 constexpr double nan = std::numeric_limits<double>::quiet_NaN();
-constexpr double pi = 3.14159265358979323846;
 
 std::string num(double v) {
   std::ostringstream s;

@@ -1,6 +1,7 @@
 // Identification of G (seed 000 eq. 6 / least squares) against the simulator's analytic G, and refusals.
 #include "restore_test_util.hpp"
 
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 
 #include <catch2/catch.hpp>
@@ -180,7 +181,7 @@ TEST_CASE("The designed filters invert G: H(k) G(k) e^{ikD} = T(k) I where beta 
       for (auto& g : row)
         for (std::size_t l = 0; l < g.size(); ++l) {
           const double d = std::min(static_cast<double>(l), static_cast<double>(g.size() - 1 - l));
-          if (d < taper) g[l] *= 0.5 * (1 - std::cos(3.14159265358979323846 * d / taper));
+          if (d < taper) g[l] *= 0.5 * (1 - std::cos(pvdf::pi * d / taper));
         }
     pvdf::restore::detail::RealFft fft(L);
     std::vector<double> buf(L);
@@ -209,7 +210,7 @@ TEST_CASE("The designed filters invert G: H(k) G(k) e^{ikD} = T(k) I where beta 
       smax = std::max(smax, sv(0));
       smin2[k] = sv(1) * sv(1);
     }
-    const double pi = 3.14159265358979323846, dx = f.sample_spacing_m;
+    const double pi = pvdf::pi, dx = f.sample_spacing_m;
     std::size_t checked = 0;
     double worst = 0, sum2 = 0;
     for (std::size_t k = 1; k < fft.bins(); ++k) {
