@@ -4,6 +4,7 @@
 // a sweep of one scene key the figure of merit against the swept value. docs/design.md.
 #include "command.hpp"
 
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
 #include "pvdf/plot/plot.hpp"
@@ -210,7 +211,7 @@ nlohmann::json candidate_json(const Candidate& c, int rank) {
 
 std::vector<std::array<double, 2>> outline_mm(const pvdf::FilmOutline& o) {
   std::vector<std::array<double, 2>> v;
-  const double pi = std::acos(-1.0);
+  using pvdf::pi;
   switch (o.shape) {
     case pvdf::FilmOutline::Shape::circle:
     case pvdf::FilmOutline::Shape::ellipse: {

@@ -3,6 +3,7 @@
 #include "command.hpp"
 #include "compare_scene.hpp"
 
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
 #include "pvdf/mapping/analysis.hpp"
@@ -120,7 +121,7 @@ int run_rays(const RaysOptions& o) {
     j["d_max_m"] = ro.d_max_m;
     j["n_samples"] = ro.n_samples;
     j["angle_step_deg"] = ro.angle_step_deg;
-    j["draw_angle_deg"] = a.draw_angle_rad * 180.0 / M_PI;
+    j["draw_angle_deg"] = a.draw_angle_rad * 180.0 / pvdf::pi;
     j["law"] = "Q = C1 * (d / 1 mm)^C2, least squares in ln Q against ln d";
     j["paper_decay_exponent_range"] = {paper_exponent_min, paper_exponent_max};
     j["rays"] = nlohmann::json::array();

@@ -6,6 +6,7 @@
 // (tests/fem/data/ccx_anisotropic_reference.json; test_fem_ccx_anisotropy compares pvdfkit with it).
 //
 // Usage: ccx_anisotropy_reference [--levels 16,24,32] [--out FILE] [--work DIR]
+#include "pvdf/core/constants.hpp"
 #include "ccx_peer.hpp"
 
 #include "pvdf/core/scene.hpp"
@@ -40,7 +41,7 @@ int main(int argc, char** argv) {
     }
   }
   pvdf::Scene scene = pvdf::default_scene();
-  scene.material.draw_angle_rad = 30.0 * 3.14159265358979323846 / 180.0;
+  scene.material.draw_angle_rad = 30.0 * pvdf::pi / 180.0;
   const double a = scene.membrane.outline.radius_m, c = scene.probe.radius_m, h = scene.membrane.thickness_m;
   const double force = 1.0;
   std::filesystem::create_directories(work);

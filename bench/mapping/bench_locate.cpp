@@ -5,6 +5,7 @@
 //   bench_locate [--presses N] [--plot docs/img/lookup_error_vs_noise.png]
 //   bench_locate --profile   (only the 6-start lookup, 50 passes: for perf record)
 //   bench_locate --tracking  (only the stream tracker against the full search)
+#include "pvdf/core/constants.hpp"
 #include "pvdf/plot/plot.hpp"
 #include "pvdf/mapping/locator.hpp"
 #include "pvdf/mapping/synthetic.hpp"
@@ -116,12 +117,12 @@ std::vector<std::array<double, 3>> realistic_stream(const SyntheticModel& model,
       y = (2 * u(rng) - 1) * 0.012;
     } while (std::hypot(x, y) > 0.012);
     const bool moving = u(rng) < 0.5;
-    const double speed = moving ? 0.05 * u(rng) : 0.0, heading = 2 * M_PI * u(rng);
+    const double speed = moving ? 0.05 * u(rng) : 0.0, heading = 2 * pvdf::pi * u(rng);
     const std::size_t samples = std::size_t(length_s / dt);
     for (std::size_t i = 0; i < samples && q.size() < n; ++i) {
       const double t = double(i) * dt;
-      const double ramp = t < rise_s ? 0.5 - 0.5 * std::cos(M_PI * t / rise_s)
-                          : t > length_s - rise_s ? 0.5 - 0.5 * std::cos(M_PI * (length_s - t) / rise_s) : 1.0;
+      const double ramp = t < rise_s ? 0.5 - 0.5 * std::cos(pvdf::pi * t / rise_s)
+                          : t > length_s - rise_s ? 0.5 - 0.5 * std::cos(pvdf::pi * (length_s - t) / rise_s) : 1.0;
       const double F = std::max(peak_N * ramp, 1e-6);
       const double px = std::clamp(x + speed * t * std::cos(heading), -0.014, 0.014);
       const double py = std::clamp(y + speed * t * std::sin(heading), -0.014, 0.014);
@@ -305,8 +306,8 @@ int main(int argc, char** argv) {
     std::vector<Press> path;
     for (std::size_t i = 0; i < m; ++i) {
       const double t = double(i) * 1e-4;  // s
-      const double r = 0.012 * std::abs(std::sin(2.0 * M_PI * 0.7 * t)), a = 2.0 * M_PI * 0.9 * t;
-      path.push_back({r * std::cos(a), r * std::sin(a), 1.0 + 0.5 * std::sin(2.0 * M_PI * 2.3 * t)});
+      const double r = 0.012 * std::abs(std::sin(2.0 * pvdf::pi * 0.7 * t)), a = 2.0 * pvdf::pi * 0.9 * t;
+      path.push_back({r * std::cos(a), r * std::sin(a), 1.0 + 0.5 * std::sin(2.0 * pvdf::pi * 2.3 * t)});
     }
     std::vector<std::array<double, 3>> qp(m);
     for (std::size_t i = 0; i < m; ++i) {

@@ -2,6 +2,7 @@
 // (scene_geometry.cpp); pvdf::mesh adds the clearances that depend on mesh sizes.
 #include "pvdf/core/scene.hpp"
 
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/json_reader.hpp"
 #include "pvdf/core/planar.hpp"
@@ -15,7 +16,6 @@ namespace pvdf {
 
 namespace {
 
-constexpr double pi = 3.14159265358979323846;
 constexpr double deg = pi / 180.0;
 
 double polygon_signed_area(const std::vector<Point2>& v) { return planar::signed_area(v); }

@@ -7,6 +7,8 @@
 // adjoint-weighted estimates of its discretization and model errors for every electrode charge;
 // where the cheap model's model-error estimate exceeds its share of the tolerance the probe is
 // solved again with the rim model.
+#include "pvdf/core/membrane_scaling.hpp"
+#include "pvdf/core/constants.hpp"
 #include "pvdf/fem/probe_sweep.hpp"
 
 #include "sweep_engine.hpp"
@@ -112,7 +114,7 @@ double boundary_layer_m(const pvdf::Scene& scene, double force_N) {
   const double R = scene.membrane.outline.characteristic_radius_m();
   const double D = E * h * h * h / 12.0;
   const double n = std::max(scene.membrane.pretension_N_per_m,
-                            std::cbrt(std::pow(force_N / (2 * M_PI * R), 2.0) * E * h / 2.0));
+                            pvdf::membrane_force_scale_N_per_m(E * h, force_N / (2 * pvdf::pi), R) * 0.7937005259840998);  // x 2^(-1/3)
   return std::sqrt(D / n);
 }
 
@@ -136,7 +138,7 @@ struct ProbeSweep::Impl {
 int ProbeSweep::Impl::sector_of(double x_m, double y_m) const {
   const int n = static_cast<int>(rim_engines.size());
   if (n <= 1) return 0;
-  const double turn = std::atan2(y_m, x_m) / (2 * M_PI);  // (-1/2, 1/2]
+  const double turn = std::atan2(y_m, x_m) / (2 * pvdf::pi);  // (-1/2, 1/2]
   return ((static_cast<int>(std::lround(turn * n)) % n) + n) % n;
 }
 
@@ -145,8 +147,8 @@ detail::SweepEngine& ProbeSweep::Impl::rim_engine(int sector) {
   if (!e) {
     const int n = static_cast<int>(rim_engines.size());
     detail::SweepMeshSizes sizes = rim_sizes;
-    sizes.rim_angle_rad = 2 * M_PI * sector / std::max(1, n);
-    sizes.rim_half_angle_rad = n <= 1 ? 4.0 : 1.5 * 2 * M_PI / n;  // its sector and half of each neighbour, and more
+    sizes.rim_angle_rad = 2 * pvdf::pi * sector / std::max(1, n);
+    sizes.rim_half_angle_rad = n <= 1 ? 4.0 : 1.5 * 2 * pvdf::pi / n;  // its sector and half of each neighbour, and more
     Options so = options.solver;
     e = std::make_unique<detail::SweepEngine>(scene, so, setup.model, true, sizes, true);
     if (setup.rim_n_dofs == 0) setup.rim_n_dofs = e->n_dofs();

@@ -2,6 +2,7 @@
 // to the electrodes and built without any probe, its DOFs, sparsity and symbolic factorization kept;
 // each probe re-integrates the load and warm-starts Newton from a neighbour's state, scaled by the
 // pure-membrane laws across forces (pvdf/core/membrane_scaling.hpp).
+#include "pvdf/core/constants.hpp"
 #include "film_solver.hpp"
 
 #include "pvdf/core/membrane_scaling.hpp"
@@ -25,7 +26,7 @@ void FilmSolver::prepare_sweep(const SweepMeshSizes& sizes, const pvdf::mesh::Fi
       bool marked = false;
       for (const auto& cell : triangulation_.active_cell_iterators()) {
         const Point<dim> c = cell->center();
-        const double off = std::remainder(std::atan2(c[1], c[0]) - sizes.rim_angle_rad, 2 * M_PI);
+        const double off = std::remainder(std::atan2(c[1], c[0]) - sizes.rim_angle_rad, 2 * pvdf::pi);
         if (std::abs(off) > sizes.rim_half_angle_rad) continue;
         const double d = std::max(0.0, outline.inside_distance_m({c[0], c[1]}) - 0.5 * cell->diameter());
         const double target = std::max(sizes.rim_size_m, sizes.rim_grading * d);

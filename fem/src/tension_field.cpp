@@ -2,6 +2,7 @@
 // (tension_field.hpp), the film's natural (stress-free) state for pretension of either sign or a
 // slack strain, the continuation that brings a slack film from the flat state to equilibrium, and
 // the wrinkled and slack area of a solution.
+#include "pvdf/core/constants.hpp"
 #include "film_solver.hpp"
 
 #include "pvdf/core/error.hpp"
@@ -65,7 +66,7 @@ double FilmSolver::tension_field_regularization() const {
   const double Eh = std::sqrt(membrane_C_.c[0][0] * membrane_C_.c[1][1]);
   const double n0 = 0.5 * (initial_stress_[0] + initial_stress_[1]);
   double scale = pvdf::membrane_force_scale_N_per_m(Eh, F, radius_) + std::max(0.0, n0);
-  if (n0 < 0) scale = std::min(scale, F / (2 * M_PI * radius_ * std::sqrt(-2 * n0 / Eh)));
+  if (n0 < 0) scale = std::min(scale, F / (2 * pvdf::pi * radius_ * std::sqrt(-2 * n0 / Eh)));
   regularization_force_ = F;
   regularization_eta_ = tangent_regularization_ * scale / Eh;
   return regularization_eta_;

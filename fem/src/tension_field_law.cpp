@@ -1,5 +1,6 @@
 // The tension-field (wrinkling) law of an orthotropic membrane (tension_field.hpp, docs/fem.md §3.3):
 // state, relaxed stress, relaxed energy and its exact tangent at one point. No deal.II.
+#include "pvdf/core/constants.hpp"
 #include "tension_field.hpp"
 
 #include <algorithm>
@@ -81,10 +82,10 @@ RelaxedMembrane relaxed_membrane(const double C[3][3], const std::array<double, 
   constexpr int n_scan = 24;
   // Candidates: t along the smaller principal stress of C·e (most compressed; the compressive window
   // of θ can be narrower than the scan's spacing near the taut state) and a scan of [0, π).
-  const double phi = 0.5 * std::atan2(2 * Se[2], Se[0] - Se[1]) + 0.5 * M_PI;  // smaller principal direction
+  const double phi = 0.5 * std::atan2(2 * Se[2], Se[0] - Se[1]) + 0.5 * pvdf::pi;  // smaller principal direction
   double best = release(C, Se, Direction(std::atan2(-std::cos(phi), std::sin(phi)))).h, th = std::atan2(-std::cos(phi), std::sin(phi));
   for (int i = 0; i < n_scan; ++i) {
-    const double t = M_PI * i / n_scan;
+    const double t = pvdf::pi * i / n_scan;
     const Release r = release(C, Se, Direction(t));
     if (r.h > best) best = r.h, th = t;
   }
@@ -93,8 +94,8 @@ RelaxedMembrane relaxed_membrane(const double C[3][3], const std::array<double, 
   // at round-off level of h, when it reduces |h'| (so θ is found to round-off, not to √ε).
   const double h1_scale = 1e-15 * (std::abs(r.g * r.g1) / r.k + std::abs(r.g * r.g * r.k1) / (r.k * r.k)) + 1e-300;
   for (int it = 0; it < 60 && std::abs(r.h1) > h1_scale; ++it) {
-    double step = r.h2 < 0 ? -r.h1 / r.h2 : (r.h1 > 0 ? 1.0 : -1.0) * M_PI / (4 * n_scan);
-    step = std::clamp(step, -M_PI / (2 * n_scan), M_PI / (2 * n_scan));
+    double step = r.h2 < 0 ? -r.h1 / r.h2 : (r.h1 > 0 ? 1.0 : -1.0) * pvdf::pi / (4 * n_scan);
+    step = std::clamp(step, -pvdf::pi / (2 * n_scan), pvdf::pi / (2 * n_scan));
     Release trial = release(C, Se, Direction(th + step));
     auto better = [&](const Release& x) {
       return x.h > r.h * (1 + 1e-14) || (x.h >= r.h * (1 - 1e-14) && std::abs(x.h1) < std::abs(r.h1));

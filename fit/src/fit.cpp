@@ -4,6 +4,7 @@
 #include "pvdf/fit/fit.hpp"
 
 #include "pvdf/core/error.hpp"
+#include "pvdf/core/piezo.hpp"
 
 #include <ceres/ceres.h>
 
@@ -116,7 +117,7 @@ class Problem {
         const int k = col.electrode;
         const double a = areas[k] / h, g = v.gains[k];
         const auto& b = r[i].force_basis_N_per_m[k];
-        const double q_unit = a * (v.d31 * b[0] + v.d32 * b[1]);
+        const double q_unit = pvdf::piezo_charge_C(areas[k], b[0], b[1], h, v.d31, v.d32);
         out[row] = g * q_unit;
         if (!jac) continue;
         for (std::size_t j = 0; j < n; ++j) {
@@ -124,12 +125,12 @@ class Problem {
           switch (specs_[j].kind) {
             case Kind::pretension: {
               const auto& db = r[i].d_force_basis[0][k];
-              d = g * a * (v.d31 * db[0] + v.d32 * db[1]);
+              d = g * pvdf::piezo_charge_C(areas[k], db[0], db[1], h, v.d31, v.d32);
               break;
             }
             case Kind::log_E: {
               const auto& db = r[i].d_force_basis[1][k];
-              d = g * a * (v.d31 * db[0] + v.d32 * db[1]) * v.E;
+              d = g * pvdf::piezo_charge_C(areas[k], db[0], db[1], h, v.d31, v.d32) * v.E;
               break;
             }
             case Kind::d31: d = g * a * b[0] * pC; break;

@@ -3,6 +3,7 @@
 #include "pvdf/fit/predictor.hpp"
 
 #include "pvdf/core/error.hpp"
+#include "pvdf/core/piezo.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -209,7 +210,7 @@ std::vector<double> charges_C(const PressResponse& response, const std::vector<d
   std::vector<double> q(response.force_basis_N_per_m.size());
   for (std::size_t k = 0; k < q.size(); ++k) {
     const auto& b = response.force_basis_N_per_m[k];
-    q[k] = gains[k] * areas_m2[k] / thickness_m * (d31_C_per_N * b[0] + d32_C_per_N * b[1]);
+    q[k] = gains[k] * pvdf::piezo_charge_C(areas_m2[k], b[0], b[1], thickness_m, d31_C_per_N, d32_C_per_N);
   }
   return q;
 }

@@ -3,6 +3,7 @@
 // 1 m film; coordinates are scaled back to metres on extraction (and on writing .msh files).
 #include "pvdf/mesh/mesher.hpp"
 
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
 #include "scene_geometry.hpp"
@@ -35,8 +36,6 @@ void make_counter_clockwise(std::array<unsigned int, 4>& quad, const std::vector
   }
   if (area2 < 0) std::swap(quad[1], quad[3]);
 }
-
-constexpr double pi = 3.14159265358979323846;
 
 /// An estimate of the quadrilateral count before meshing, to refuse runaway requests: the far
 /// field at size_max, plus a graded band (sizes growing by mesh.growth per ring) along every

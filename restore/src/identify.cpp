@@ -1,6 +1,7 @@
 // Identification of G (seed 000 eq. 6, least squares for more scans) and the regularized inverse (eq. 4).
 #include "fft.hpp"
 #include "select_beta.hpp"
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/restore/filter.hpp"
 #include "pvdf/version.hpp"
@@ -16,7 +17,6 @@
 namespace pvdf::restore {
 
 namespace {
-constexpr double pi = 3.14159265358979323846;
 using cd = std::complex<double>;
 
 std::string num(double v) {

@@ -2,6 +2,7 @@
 #include "pvdf/restore/plots.hpp"
 
 #include "fft.hpp"
+#include "pvdf/core/constants.hpp"
 #include "pvdf/plot/plot.hpp"
 
 #include <algorithm>
@@ -27,7 +28,7 @@ std::vector<double> gaussian_blur(const std::vector<double>& f, double resolutio
   fft.forward(f.data(), f.size(), F.data());
   const double s = resolution_m / 2.3548200450309493;
   for (std::size_t k = 0; k < F.size(); ++k) {
-    const double w = 2 * 3.14159265358979323846 * static_cast<double>(k) / (static_cast<double>(fft.size()) * dx);
+    const double w = 2 * pi * static_cast<double>(k) / (static_cast<double>(fft.size()) * dx);
     F[k] *= std::exp(-0.5 * w * w * s * s);
   }
   std::vector<double> out(fft.size());
@@ -129,7 +130,7 @@ void plot_transfer(const std::string& path, const InverseFilter& f) {
   std::size_t shown = std::max<std::size_t>(4, fft.bins() / 8);
   if (f.resolution_m > 0) {
     const double s = f.resolution_m / 2.3548200450309493, k_max = std::sqrt(2 * std::log(1e3)) / s;
-    shown = std::min(fft.bins(), static_cast<std::size_t>(k_max * static_cast<double>(N) * dx / (2 * 3.14159265358979323846)) + 2);
+    shown = std::min(fft.bins(), static_cast<std::size_t>(k_max * static_cast<double>(N) * dx / (2 * pi)) + 2);
   }
   std::vector<double> k(shown - 1);
   for (std::size_t b = 1; b < shown; ++b) k[b - 1] = static_cast<double>(b) / (static_cast<double>(N) * dx * 1e3);

@@ -4,6 +4,7 @@
 #include "select_beta.hpp"
 
 #include "fft.hpp"
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 
 #include <algorithm>
@@ -14,7 +15,6 @@
 namespace pvdf::restore::detail {
 
 namespace {
-constexpr double pi = 3.14159265358979323846;
 using cd = std::complex<double>;
 
 std::string fmt(double v) {

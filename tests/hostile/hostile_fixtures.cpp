@@ -95,6 +95,13 @@ void write_hostile_fixtures(const std::filesystem::path& d) {
   write(d / "filter_trunc.json", "{\"format\": \"pvdfkit-restore-filter\", \"taps\": 4, \"filters\": {\"h11\": [" +
                                      std::string(40000, '1').insert(0, "0.") + ", ");
   write(d / "filter_deep.json", std::string(100000, '['));
+  const std::string filter_head = R"({"format": "pvdfkit-restore-filter", "format_version": 1, "sample_spacing_m": 0.001,
+      "taps": 2, "delay_samples": 1, "beta": {}, "filters": {"h12": [0, 0], "h21": [0, 0], "h22": [0, 1], )";
+  write(d / "filter_ok.json", filter_head + R"("h11": [1, 0]}})");
+  write(d / "filter_huge_tap.json", filter_head + R"("h11": [1e308, 0]}})");
+  std::string stream = "t_s,charge_A_C,charge_B_C,charge_C_C\n";
+  for (int i = 0; i < 20000; ++i) stream += std::to_string(i * 1e-4) + ",4e-11,2e-11,1.5e-11\n";
+  write(d / "stream.csv", stream);
   write(d / "scan.csv", "x_m,m1_V,m2_V\n0,0,0\n0.001,0,0\n0.002,0,0\n0.003,0,0\n");
 }
 

@@ -1,5 +1,6 @@
 // The streaming lookup: documented columns, malformed rows reported by line number and
 // skipped (or refused with strict), never a crash.
+#include "pvdf/core/constants.hpp"
 #include "fixture.hpp"
 
 #include "pvdf/core/error.hpp"
@@ -164,8 +165,8 @@ TEST_CASE("the tracker answers as the full search does on a noisy stream of pres
     const double peak = 0.6 + 1.2 * u(rng), x0 = 0.02 * u(rng) - 0.01, y0 = 0.02 * u(rng) - 0.01;
     const double speed = u(rng) < 0.5 ? 0.05 * u(rng) : 0.0, heading = 6.283 * u(rng);
     for (int i = 0; i < samples; ++i) {
-      const double t = double(i) / samples, ramp = t < 0.2 ? 0.5 - 0.5 * std::cos(M_PI * t / 0.2)
-                                                 : t > 0.8 ? 0.5 - 0.5 * std::cos(M_PI * (1 - t) / 0.2) : 1.0;
+      const double t = double(i) / samples, ramp = t < 0.2 ? 0.5 - 0.5 * std::cos(pvdf::pi * t / 0.2)
+                                                 : t > 0.8 ? 0.5 - 0.5 * std::cos(pvdf::pi * (1 - t) / 0.2) : 1.0;
       const double time_s = i * 1e-4;
       const pvdf_test::Press p{x0 + speed * time_s * std::cos(heading), y0 + speed * time_s * std::sin(heading),
                                std::max(peak * ramp, 1e-6)};

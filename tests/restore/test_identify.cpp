@@ -1,6 +1,7 @@
 // Identification of G (seed 000 eq. 6 / least squares) against the simulator's analytic G, and refusals.
 #include "restore_test_util.hpp"
 
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 
 #include <catch2/catch.hpp>
@@ -182,7 +183,7 @@ ResponseCheck check_response(const InverseFilter& f, const ScannerScene& scene, 
     for (auto& g : row)
       for (std::size_t l = 0; l < g.size(); ++l) {
         const double d = std::min(static_cast<double>(l), static_cast<double>(g.size() - 1 - l));
-        if (d < taper) g[l] *= 0.5 * (1 - std::cos(3.14159265358979323846 * d / taper));
+        if (d < taper) g[l] *= 0.5 * (1 - std::cos(pvdf::pi * d / taper));
       }
   pvdf::restore::detail::RealFft fft(L);
   std::vector<double> buf(L);
@@ -211,7 +212,7 @@ ResponseCheck check_response(const InverseFilter& f, const ScannerScene& scene, 
     smax = std::max(smax, sv(0));
     smin2[k] = sv(1) * sv(1);
   }
-  const double pi = 3.14159265358979323846, dx = f.sample_spacing_m;
+  const double pi = pvdf::pi, dx = f.sample_spacing_m;
   const double s = f.resolution_m / 2.3548200450309493;
   ResponseCheck c;
   double sum2 = 0;

@@ -7,8 +7,10 @@
 // an interrupted-and-resumed run. Within a row each solve warm-starts from its neighbour.
 #include "pvdf/mapping/generate.hpp"
 
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
+#include "pvdf/core/membrane_scaling.hpp"
 #include "pvdf/fem/probe_sweep.hpp"
 #include "pvdf/version.hpp"
 
@@ -35,7 +37,6 @@ namespace pvdf::mapping {
 namespace {
 
 constexpr double nan = std::numeric_limits<double>::quiet_NaN();
-constexpr double pi = 3.14159265358979323846;
 
 std::string num(double v) {
   std::ostringstream s;
@@ -529,13 +530,13 @@ void Generator::solve_block(fem::ProbeSweep& sweep, const Block& block, std::vec
         const double ratio = o_.forces_N[f] / o_.forces_N[top];
         fem::ProbeSolution s = top_solution;
         s.force_N = o_.forces_N[f];
-        s.deflection_at_load_m *= std::cbrt(ratio);
-        s.deflection_error_m = s.deflection_error_m * std::cbrt(ratio) + task.scaling_error * std::abs(s.deflection_at_load_m);
-        for (auto& q : s.charge_C) q *= std::pow(ratio, 2.0 / 3.0);
+        s.deflection_at_load_m *= pvdf::membrane_deflection_factor(ratio);
+        s.deflection_error_m = s.deflection_error_m * pvdf::membrane_deflection_factor(ratio) + task.scaling_error * std::abs(s.deflection_at_load_m);
+        for (auto& q : s.charge_C) q *= pvdf::membrane_charge_factor(ratio);
         // The top level's estimate scaled alike, plus the worst scaling-check error of its cell.
         double q_max = 0;
         for (double q : s.charge_C) q_max = std::max(q_max, std::abs(q));
-        for (auto& e : s.charge_error_C) e = e * std::pow(ratio, 2.0 / 3.0) + task.scaling_error * q_max;
+        for (auto& e : s.charge_error_C) e = e * pvdf::membrane_charge_factor(ratio) + task.scaling_error * q_max;
         put(f, &s, provenance::scaled);
         continue;
       }
@@ -677,12 +678,12 @@ double Generator::check_error(std::size_t i, std::size_t j) const {
     double qmax = 0, qerr = 0;
     for (std::size_t k = 0; k < ne; ++k) {
       const double solved = map_.charge_C[pt * ne + k];
-      const double predicted = map_.charge_C[pt_top * ne + k] * std::pow(ratio, 2.0 / 3.0);
+      const double predicted = map_.charge_C[pt_top * ne + k] * pvdf::membrane_charge_factor(ratio);
       qmax = std::max(qmax, std::abs(solved));
       qerr = std::max(qerr, std::abs(predicted - solved));
     }
     const double w = map_.deflection_at_load_m[pt];
-    const double w_pred = map_.deflection_at_load_m[pt_top] * std::cbrt(ratio);
+    const double w_pred = map_.deflection_at_load_m[pt_top] * pvdf::membrane_deflection_factor(ratio);
     worst = std::max(worst, qmax > 0 ? qerr / qmax : (qerr > 0 ? 1.0 : 0.0));
     worst = std::max(worst, w != 0 ? std::abs(w_pred - w) / std::abs(w) : 0.0);
   }

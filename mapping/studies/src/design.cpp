@@ -1,7 +1,9 @@
 // Layout evaluation from a charge map: Cramér–Rao bounds, ambiguity through the deployed lookup,
 // sensitivity, ADC dynamic range, dead zones; and the scene edits behind `pvdfkit design --vary`.
+#include "pvdf/core/membrane_scaling.hpp"
 #include "pvdf/mapping/design.hpp"
 
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
 #include "pvdf/mapping/interpolant.hpp"
@@ -19,7 +21,6 @@ namespace {
 
 constexpr double inf = std::numeric_limits<double>::infinity();
 constexpr double nan = std::numeric_limits<double>::quiet_NaN();
-constexpr double pi = 3.14159265358979323846;
 
 std::string num(double v) {
   std::ostringstream s;
@@ -209,7 +210,7 @@ DesignSummary evaluate_design(const ChargeMap& map, const DesignOptions& o) {
   for (std::size_t f = 0; f < map.nf(); ++f) {
     if (std::abs(std::log(map.forces_N[f]) - log_f) < std::abs(std::log(map.forces_N[f_near]) - log_f)) f_near = f;
   }
-  const double err_scale = std::pow(o.force_N / map.forces_N[f_near], 2.0 / 3.0);
+  const double err_scale = pvdf::membrane_charge_factor(o.force_N / map.forces_N[f_near]);
   std::vector<double> sigma_p(ne);
   for (std::size_t p = 0; p < np; ++p) {
     if (!m.evaluated[p]) continue;

@@ -1,6 +1,7 @@
 // Isocharge pictures (pvdf::plot; PNG, SVG or PDF by the file extension) and VTK export of charge maps.
 #include "pvdf/mapping/pictures.hpp"
 
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
 #include "pvdf/plot/plot.hpp"
@@ -245,7 +246,6 @@ void write_rays_png(const RayAnalysis& analysis, const ChargeMap& map, std::size
   if (electrode >= map.ne()) throw InputError("rays picture: electrode index " + std::to_string(electrode) + " out of range");
   plot::Figure fig(1000, 750);
   auto& ax = fig.axes();
-  constexpr double pi = 3.14159265358979323846;
   // Colours follow β along the sequential colour map (dark violet … yellow-green), so that ten
   // or more rays stay distinct and neighbouring angles look alike.
   double beta_lo = std::numeric_limits<double>::infinity(), beta_hi = -beta_lo;
