@@ -1,4 +1,4 @@
-// `pvdfkit calibrate`: fuse a computed charge map with measured presses (issue 6): per-electrode
+// `pvdfkit calibrate`: fuse a computed charge map with measured presses: per-electrode
 // gain and offset by least squares, leave-one-out validation, before/after report, and a
 // calibrated map that `pvdfkit locate` uses.
 #include "command.hpp"

@@ -1,4 +1,4 @@
-// `pvdfkit design`: compare candidate sensor layouts before fabrication (issue 9). Each layout's
+// `pvdfkit design`: compare candidate sensor layouts before fabrication. Each layout's
 // charge map (FEM preview, synthetic stand-in, or a ready map file) → Cramér–Rao error maps,
 // ambiguity, sensitivity, dynamic range, dead zones → a ranking, side-by-side PNG maps, and for
 // a sweep of one scene key the figure of merit against the swept value. docs/design.md.

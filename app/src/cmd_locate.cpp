@@ -1,5 +1,5 @@
 // `pvdfkit locate`: where was the sensor pressed and how hard, from its electrode charges and a
-// charge map (issue 6): one press (--charges-C), a CSV stream, or pictures of the map.
+// charge map: one press (--charges-C), a CSV stream, or pictures of the map.
 #include "command.hpp"
 
 #include "pvdf/core/error.hpp"

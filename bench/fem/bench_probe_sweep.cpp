@@ -2,7 +2,7 @@
 // factorization pattern, warm starts, chord steps) against the naive path (an independent
 // pvdf::fem::solve per position), on the seed-001 scene at 1 N, one thread. Prints one table:
 // path, positions, wall and CPU time per position, Newton iterations and factorizations per
-// position, charge difference against direct solves; then the projected time of the issue-5 map
+// position, charge difference against direct solves; then the projected time of the seed-001 1 mm map
 // (seed 001, 1 mm spacing, ~5000 positions, one force, 2 cores).
 //
 // Usage: bench_probe_sweep [--scene FILE] [--patch N] [--spacing-m S]
@@ -184,7 +184,7 @@ int main(int argc, char** argv) {
     }
     const Line& warm = lines[3];
     const double per = warm.cpu / std::max(1, warm.n);
-    std::printf("\nprojected issue-5 map (seed 001, 1 mm spacing, ~5000 positions, 1 force, 2 cores): %.0f s of CPU "
+    std::printf("\nprojected map (seed 001, 1 mm spacing, ~5000 positions, 1 force, 2 cores): %.0f s of CPU "
                 "per core, %.0f s with the mirror symmetry (plus setup %.0f s)\n",
                 5000 * per / 2, 2500 * per / 2, st.setup_s);
     const auto t = sweep.timing();

@@ -45,7 +45,7 @@ inline double median(std::vector<double> v) {
 }
 
 /// Where the true charges of a press come from. Today: the analytic model the map was sampled
-/// from. Once `pvdfkit map` exists (issue 5), the issue-6 acceptance test plugs in an oracle
+/// from. With `pvdfkit map`, the FEM acceptance test plugs in an oracle
 /// that runs pvdf::fem::solve with the probe at the press and returns each electrode's
 /// charge_C — the rest of the test (measure_accuracy and its thresholds) stays as it is.
 using ChargeOracle = std::function<std::vector<double>(const Press&)>;

@@ -1,4 +1,4 @@
-// Issue 6 acceptance: a map of FEM solves at grid nodes, and presses solved by the FEM at
+// Acceptance: a map of FEM solves at grid nodes, and presses solved by the FEM at
 // positions between the nodes and forces between the levels, are located by the lookup with
 // median position error < 0.05 mm and force error < 0.5 %.
 //
@@ -6,7 +6,7 @@
 // The map and the truth come from the same ProbeSweep, i.e. the same fixed mesh, so this test
 // measures what the lookup adds — interpolation between nodes and levels, and the inversion —
 // and not the FEM's discretization error, which both share (the sweep's charges are within
-// ~0.2–0.5 % of adaptive solves, docs/fem.md; that is a map-accuracy question, issue 5).
+// ~0.2–0.5 % of adaptive solves, docs/fem.md; that is a map-accuracy question).
 //
 // Why this grid is fine enough: the map is bicubic in position with 4th-order node slopes, so
 // its error falls like h⁴ (measured on the analytic stand-in: 0.017 mm at 2 mm spacing, 0.0005 mm
@@ -138,7 +138,7 @@ TEST_CASE("FEM presses between grid nodes and force levels are located to < 0.05
   WARN("FEM acceptance (seed-001 centre, 1 mm map, levels 1/2 N): median position error " << med_pos * 1e3
        << " mm (max " << max_pos * 1e3 << " mm), median force error " << med_force * 100 << " %, known force: median "
        << med_known * 1e3 << " mm");
-  CHECK(med_pos < 0.05e-3);    // issue 6
-  CHECK(med_force < 0.005);    // issue 6
+  CHECK(med_pos < 0.05e-3);    // target
+  CHECK(med_force < 0.005);    // target
   CHECK(med_known < 0.05e-3);
 }

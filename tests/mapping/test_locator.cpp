@@ -59,8 +59,8 @@ TEST_CASE("noise-free presses between grid nodes are located far below the grid 
                                 << a.flagged << ", ambiguous " << a.ambiguous << " of " << presses.size()
                                 << ", unflagged answers off by > 0.2 mm and > 3 sigma: " << a.silent_wrong);
   CHECK(a.flagged == 0);
-  CHECK(med_pos < 0.05e-3);    // issue 6: < 0.05 mm (grid spacing 1 mm)
-  CHECK(med_force < 0.005);    // issue 6: < 0.5 %
+  CHECK(med_pos < 0.05e-3);    // target: < 0.05 mm (grid spacing 1 mm)
+  CHECK(med_force < 0.005);    // target: < 0.5 %
   // Known limitation (docs/lookup.md §2): near an electrode the map folds and the
   // interpolation error (~1 sigma here) can move the fit to the other side of the fold.
   CHECK(a.silent_wrong < int(presses.size()) / 10);

@@ -1,4 +1,4 @@
-// Charge-map generation with the FEM solver (issue 5): every grid position × force level → the
+// Charge-map generation with the FEM solver: every grid position × force level → the
 // charge of every electrode, the deflection at the load and a status. Fast by design (warm
 // starts along rows, F^(2/3) force scaling where checked, mirror symmetry), MPI/thread scale-out,
 // checkpoints. Target pvdf_mapping_fem (needs pvdf_fem); docs/map-generation.md.

@@ -1,4 +1,4 @@
-// Layout evaluation before fabrication (issue 9): from a charge map and a charge-noise model, the
+// Layout evaluation before fabrication: from a charge map and a charge-noise model, the
 // Cramér–Rao bound of the lookup's position and force errors over the film, ambiguity regions,
 // per-electrode sensitivity, dynamic range against the ADC, and dead zones. No deal.II: the
 // analysis takes ChargeMaps (FEM or synthetic); docs/design.md explains every definition.
