@@ -271,7 +271,8 @@ ProbeSweep::ProbeSweep(const pvdf::Scene& scene, const SweepOptions& options) : 
 
   // 5. The rim model: bending kept on a mesh graded toward the clamp, for the probes where the
   // cheap model's estimate says bending matters (ProbeSweep::solve).
-  if (!bending && options.rim_model != SweepOptions::RimModel::never) {
+  if (!options.estimate_errors) im.engine->set_estimate_errors(false);
+  if (!bending && options.estimate_errors && options.rim_model != SweepOptions::RimModel::never) {
     im.rim_sizes = sizes;
     const double layer = boundary_layer_m(scene, f_min);
     im.rim_sizes.rim_size_m = options.rim_size_m > 0 ? options.rim_size_m : layer;
@@ -382,7 +383,10 @@ ProbeSolution ProbeSweep::solve(double x_m, double y_m, double force_N, const Sw
                   " > tolerance " + fmt(tol);
     } else {
       s.status = Status::converged;
-      s.message = "Newton converged; " + which + " estimated charge error " + fmt(s.estimated_relative_error);
+      s.message = std::isnan(s.estimated_relative_error)
+                      ? "Newton converged; per-probe estimate off (the setup's estimate " +
+                            fmt(im.setup.estimated_relative_error) + ")"
+                      : "Newton converged; " + which + " estimated charge error " + fmt(s.estimated_relative_error);
     }
     if (state_out) {
       state_out->dofs = std::move(state);

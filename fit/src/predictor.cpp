@@ -101,6 +101,10 @@ Predictor::Predictor(const pvdf::Scene& scene, std::vector<Press> presses, const
     std::sort(ref.forces_N.begin(), ref.forces_N.end());
     ref.forces_N.erase(std::unique(ref.forces_N.begin(), ref.forces_N.end()), ref.forces_N.end());
   }
+  // The fit solves the same presses many times: no per-probe estimates and no rim model (a second,
+  // rim-graded mesh with bending); the fit's model and mesh are the reference setup's, whose
+  // estimate is reported.
+  ref.estimate_errors = false;
   // The grading the sweep would choose, made explicit so that later sweeps build the same mesh.
   if (!(ref.grading > 0)) ref.grading = std::clamp(2.0 * ref.solver.tolerance / 0.01, 0.5, 2.0);
   const auto t0 = Clock::now();

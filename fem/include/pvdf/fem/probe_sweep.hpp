@@ -45,6 +45,10 @@ struct SweepOptions {
   /// sectors (seen from the film centre) and a probe uses the mesh graded along its own sector and
   /// the two neighbours, built when first needed (1 = one mesh graded along the whole rim).
   int rim_sectors = 16;
+  /// Per-probe adjoint-weighted error estimates (docs/fem.md §6): one or two extra factorizations
+  /// per probe. Off (e.g. a fit that solves the same presses many times): probes carry no estimate
+  /// (NaN) and no rim model is used; the setup still sizes the mesh with them and reports its estimate.
+  bool estimate_errors = true;
   /// Start the sweep mesh from this mesh (e.g. read_msh of `pvdfkit mesh`'s file) instead of the
   /// built-in one: it is refined to the sizes above (never coarsened). Null = built-in mesh.
   std::shared_ptr<const pvdf::mesh::FilmMesh> mesh;
