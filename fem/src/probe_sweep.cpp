@@ -233,7 +233,10 @@ ProbeSweep::ProbeSweep(const pvdf::Scene& scene, const SweepOptions& options) : 
   const std::vector<std::array<double, 2>> checks =
       check_positions(scene, im.options.rim_margin_m, options.n_setup_checks);
   for (int attempt = 0;; ++attempt) {
-    im.engine = std::make_unique<detail::SweepEngine>(scene, so, model, bending, sizes, true, options.mesh.get());
+    // Estimates are needed to size the mesh (checks) and per probe (estimate_errors); without
+    // either, the engine keeps no bending pattern, whose face couplings fill the tangent's factor.
+    const bool estimating = options.estimate_errors || !checks.empty();
+    im.engine = std::make_unique<detail::SweepEngine>(scene, so, model, bending, sizes, estimating, options.mesh.get());
     double disc = 0, total = 0, deflection = 0;
     std::string where = "none";
     bool failed = false;
@@ -271,7 +274,9 @@ ProbeSweep::ProbeSweep(const pvdf::Scene& scene, const SweepOptions& options) : 
 
   // 5. The rim model: bending kept on a mesh graded toward the clamp, for the probes where the
   // cheap model's estimate says bending matters (ProbeSweep::solve).
-  if (!options.estimate_errors) im.engine->set_estimate_errors(false);
+  if (!options.estimate_errors && !checks.empty()) {  // sized with estimates; solved without
+    im.engine = std::make_unique<detail::SweepEngine>(scene, so, model, bending, sizes, false, options.mesh.get());
+  }
   if (!bending && options.estimate_errors && options.rim_model != SweepOptions::RimModel::never) {
     im.rim_sizes = sizes;
     const double layer = boundary_layer_m(scene, f_min);

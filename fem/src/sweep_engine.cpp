@@ -136,8 +136,6 @@ SweepEngine::SweepEngine(const pvdf::Scene& scene, const Options& options, Model
 
 SweepEngine::~SweepEngine() = default;
 
-void SweepEngine::set_estimate_errors(bool on) { impl_->estimate_errors = on; }
-
 std::size_t SweepEngine::n_dofs() const { return impl_->solver->n_dofs(); }
 std::size_t SweepEngine::n_cells() const { return impl_->solver->n_cells(); }
 

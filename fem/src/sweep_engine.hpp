@@ -74,8 +74,6 @@ class SweepEngine {
   SweepEngine(const SweepEngine&) = delete;
   SweepEngine& operator=(const SweepEngine&) = delete;
 
-  /// Switches the per-solve error estimates on or off (off: EngineSolution::errors_estimated false).
-  void set_estimate_errors(bool on);
   std::size_t n_dofs() const;
   std::size_t n_cells() const;
   EngineTiming timing() const;

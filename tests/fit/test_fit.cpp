@@ -134,7 +134,7 @@ std::array<int, 3> coverage(double T, double E, double d31, double T_start, doub
   const auto ps = presses();
   const double d32 = s.material.d32_C_per_N;
   // The data come from a finer sweep mesh (tolerance 0.005: cells half the size, finer grading)
-  // than the fit's (the scene's 0.02), so the fit does not see its own discretization.
+  // than the fit's (the scene's 0.04), so the fit does not see its own discretization.
   PredictorOptions fine;
   fine.use_scene_model = false;
   fine.sweep.solver = pvdf::fem::options_from_scene(s);
