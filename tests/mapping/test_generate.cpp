@@ -184,6 +184,9 @@ TEST_CASE("force scaling is used only where its check passes", "[mapping][genera
   o.scaling_check_stride = 2;
 
   SECTION("pure membrane: Q ~ F^(2/3) holds, the shortcut is taken and is right") {
+    // The cheap model everywhere: where the rim model (bending kept) solves a level, the levels are
+    // not one pure membrane and the check rightly fails.
+    o.rim_model = "never";
     const auto scene = small_scene(0.0);
     MapReport report;
     const ChargeMap m = generate_map(scene, o, &report);
@@ -206,7 +209,8 @@ TEST_CASE("force scaling is used only where its check passes", "[mapping][genera
         if (report.provenance[m.point(0, jj, ii)] != provenance::scaled) continue;
         for (std::size_t cj : {std::size_t(0), std::size_t(2)}) {
           for (std::size_t ci : {std::size_t(0), std::size_t(2)}) {
-            REQUIRE(report.provenance[m.point(0, cj, ci)] == provenance::solved);
+            const auto corner = report.provenance[m.point(0, cj, ci)];  // solved (its estimate may exceed the tolerance)
+            REQUIRE((corner == provenance::solved || corner == provenance::tolerance_not_met));
             std::vector<double> predicted;
             for (std::size_t k = 0; k < m.ne(); ++k) {
               predicted.push_back(m.charge_C[m.charge_index(1, cj, ci, k)] * std::pow(0.25, 2.0 / 3.0));
@@ -325,7 +329,11 @@ TEST_CASE("generated map file round trip with /provenance and the per-node error
     const std::size_t mi = m.nx() - 1 - i;
     for (std::size_t j = 0; j < m.ny(); ++j) {
       CHECK(m.estimated_charge_error_C[m.charge_index(0, j, i, 0)] == m.estimated_charge_error_C[m.charge_index(0, j, mi, 0)]);
-      CHECK(m.estimated_charge_error_C[m.charge_index(0, j, i, 1)] == m.estimated_charge_error_C[m.charge_index(0, j, mi, 2)]);
+      const double b = m.estimated_charge_error_C[m.charge_index(0, j, i, 1)];
+      const double c = m.estimated_charge_error_C[m.charge_index(0, j, mi, 2)];
+      INFO("x index " << i << ", y index " << j << ": B " << b << " C, its image " << c << " C");
+      if (i != mi) CHECK(b == c);  // a mirrored node carries its image's estimates
+      else CHECK(b == Approx(c).epsilon(1e-6));  // a node on the mirror line: B and C of one solve, equal up to rounding
     }
   }
 }

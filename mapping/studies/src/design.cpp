@@ -199,10 +199,10 @@ DesignSummary evaluate_design(const ChargeMap& map, const DesignOptions& o) {
   for (std::size_t k = 0; k < ne; ++k) sigma[k] = std::sqrt(noise[k] * noise[k] + out.lsb_C * out.lsb_C / 12.0);
   out.lsb_over_noise = out.lsb_C / *std::min_element(noise.begin(), noise.end());
 
-  // Step 3: bounds and dead zones at every evaluated point. A map with per-node error estimates
-  // (format 2) adds each node's estimated charge error, as a further independent 1-σ term, to the
-  // channel noise there: the map's own error limits the position as noise does (at the force
-  // level nearest to the design force, scaled to it by F^(2/3)).
+  // Step 3: bounds and dead zones at every evaluated point. With include_map_error, a map with
+  // per-node error estimates (format 2) adds each node's estimated charge error, as a further
+  // independent 1-σ term, to the channel noise there (at the force level nearest to the design
+  // force, scaled to it by F^(2/3)): the bound of a lookup that uses this very map.
   std::size_t n_singular = 0, n_dead = 0, n_saturated = 0, n_below = 0;
   std::vector<std::size_t> below_k(ne, 0);
   std::vector<std::array<double, 3>> jp(ne);
@@ -216,7 +216,7 @@ DesignSummary evaluate_design(const ChargeMap& map, const DesignOptions& o) {
     if (!m.evaluated[p]) continue;
     for (std::size_t k = 0; k < ne; ++k) {
       jp[k] = jac[p * ne + k];
-      const double e = map.estimated_charge_error_C.empty()
+      const double e = !o.include_map_error || map.estimated_charge_error_C.empty()
                            ? 0.0
                            : err_scale * map.estimated_charge_error_C[map.charge_index(f_near, p / nx, p % nx, k)];
       sigma_p[k] = std::isfinite(e) ? std::hypot(sigma[k], e) : sigma[k];
