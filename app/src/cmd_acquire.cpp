@@ -353,6 +353,21 @@ std::uint16_t parse_channels(const std::string& text) {
   return mask;
 }
 
+/// The hardware module's messages name its option fields; the user typed flags. Each field the
+/// module names is mapped to the flag that sets it.
+std::string with_flag_names(std::string message) {
+  static const std::pair<const char*, const char*> fields[] = {{"OpenOptions::sample_rate_Hz", "--rate-Hz"},
+                                                               {"OpenOptions::channel_mask", "--channels"},
+                                                               {"source spec ", "--device "},
+                                                               {"Recorder path ", "--record "}};
+  for (const auto& [field, flag] : fields) {
+    for (std::size_t at = message.find(field); at != std::string::npos; at = message.find(field, at + 1)) {
+      message.replace(at, std::strlen(field), flag);
+    }
+  }
+  return message;
+}
+
 int run_acquire(const AcquireOptions& o) {
   if (o.duration_s < 0) throw pvdf::InputError("--duration-s " + std::to_string(o.duration_s) + " must be >= 0 (0 = until the stream ends)");
   pvdf::hardware::OpenOptions open;
@@ -466,5 +481,11 @@ PVDF_COMMAND(70, [](CLI::App& root) {
   sub->add_option("--transfers", o->transfers, "usb: bulk transfers kept in flight")->capture_default_str();
   sub->add_flag("--realtime", o->realtime, "replay/sim: deliver at the recorded pace instead of as fast as possible");
   sub->add_flag("--quiet", o->quiet, "No progress lines on stderr (faults and errors are still reported)");
-  return pvdf::app::Subcommand{sub, [o] { return run_acquire(*o); }};
+  return pvdf::app::Subcommand{sub, [o] {
+    try {
+      return run_acquire(*o);
+    } catch (const pvdf::InputError& e) {
+      throw pvdf::InputError(with_flag_names(e.what()));
+    }
+  }};
 });

@@ -4,6 +4,7 @@
 // a sweep of one scene key the figure of merit against the swept value. docs/design.md.
 #include "command.hpp"
 
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
 #include "pvdf/plot/plot.hpp"
@@ -51,6 +52,7 @@ struct DesignCommandOptions {
   bool json = false;
   std::string out_dir = "design-out";
   bool no_plots = false;
+  bool include_map_error = false;
 };
 
 /// One candidate layout and what the analysis found.
@@ -210,7 +212,7 @@ nlohmann::json candidate_json(const Candidate& c, int rank) {
 
 std::vector<std::array<double, 2>> outline_mm(const pvdf::FilmOutline& o) {
   std::vector<std::array<double, 2>> v;
-  const double pi = std::acos(-1.0);
+  using pvdf::pi;
   switch (o.shape) {
     case pvdf::FilmOutline::Shape::circle:
     case pvdf::FilmOutline::Shape::ellipse: {
@@ -415,6 +417,7 @@ int run_design(const DesignCommandOptions& o) {
   d.force_known = o.force_known;
   d.target_m = o.target_mm * 1e-3;
   d.adc_bits = o.adc_bits;
+  d.include_map_error = o.include_map_error;
   d.full_scale_C = o.full_scale_C;
   d.ambiguity_min_distance_m = o.ambiguity_min_distance_m;
   const double spacing = o.spacing_m > 0 ? o.spacing_m : (o.synthetic ? 0.001 : 0.003);
@@ -588,6 +591,9 @@ PVDF_COMMAND(75, [](CLI::App& root) {
       ->check(pvdf::app::number_in(0, 1e4, "N (the rule of loads[].force_N, pushing)", true));
   sub->add_option("--force-range-N", o->force_range, "Forces the sensor must serve MIN,MAX (N): ADC full scale at MAX, 1-LSB check at MIN")
       ->capture_default_str();
+  sub->add_flag("--include-map-error", o->include_map_error,
+                "Add each map node's estimated charge error to the noise (the bound of a lookup on this map; "
+                "default: the sensor's noise alone)");
   sub->add_flag("--force-known", o->force_known, "Figure of merit with the force measured separately (fit x, y only)");
   sub->add_option("--spacing-m", o->spacing_m, "Preview map spacing (m); default 0.003 (FEM) or 0.001 (--synthetic)")
       ->check(pvdf::app::number_in(1e-4, 0.02, "m (the range of synthetic-map)"));

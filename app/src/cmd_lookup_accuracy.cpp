@@ -26,7 +26,7 @@ namespace {
 
 struct CompareOptions {
   std::string map_path;
-  std::size_t presses = 500;
+  long long presses = 500;
   double radius_m = 0.015;
   std::string noise = "0.01e-12,0.03e-12,0.1e-12,0.3e-12,1e-12";
   std::string plot_path;
@@ -43,11 +43,9 @@ double median(std::vector<double> v) {
 int run_compare(const CompareOptions& o) {
   using namespace pvdf::mapping;
   const ChargeMap map = read_map(o.map_path);
-  if (o.presses < 10 || o.presses > 1000000) throw pvdf::InputError("--presses " + std::to_string(o.presses) + ": use 10..1000000");
-  if (!(o.radius_m > 0)) throw pvdf::InputError("--radius-m must be > 0");
   const auto noise = pvdf::parse_number_list(o.noise, "--noise-C");
   for (double s : noise) {
-    if (!(s > 0)) throw pvdf::InputError("--noise-C: every level must be > 0 (C)");
+    if (!(s > 0)) throw pvdf::InputError("--noise-C " + pvdf::format_g(s) + ": every level must be > 0 (C)");
   }
   LocatorOptions base;
   base.use_calibration = false;  // truth and lookup both use the raw map
@@ -64,7 +62,8 @@ int run_compare(const CompareOptions& o) {
   };
   std::vector<Press> presses;
   std::size_t attempts = 0;
-  while (presses.size() < o.presses && attempts++ < 100 * o.presses) {
+  const auto n_wanted = static_cast<std::size_t>(o.presses);
+  while (presses.size() < n_wanted && attempts++ < 100 * n_wanted) {
     Press p{};
     p.x = (2 * u(rng) - 1) * o.radius_m;
     p.y = (2 * u(rng) - 1) * o.radius_m;
@@ -72,7 +71,9 @@ int run_compare(const CompareOptions& o) {
     if (std::hypot(p.x, p.y) > o.radius_m || !truth.predict(p.x, p.y, p.F, p.q.data())) continue;
     presses.push_back(p);
   }
-  if (presses.size() < 10) throw pvdf::InputError(o.map_path + ": fewer than 10 mapped positions within --radius-m " + std::to_string(o.radius_m));
+  if (presses.size() < 10)
+    throw pvdf::InputError(o.map_path + ": fewer than 10 mapped positions within --radius-m " + pvdf::format_g(o.radius_m) +
+                           " m of the centre; give a radius inside the map");
 
   nlohmann::json rows = nlohmann::json::array();
   std::vector<double> e_known, e_free, e_tri, s_known;
@@ -165,11 +166,16 @@ PVDF_COMMAND(62, [](CLI::App& root) {
                                   "against charge noise and speed (Monte Carlo; docs/lookup.md)");
   auto o = std::make_shared<CompareOptions>();
   sub->add_option("MAP", o->map_path, "Charge map (HDF5)")->required();
-  sub->add_option("--presses", o->presses, "Random presses per noise level")->capture_default_str();
-  sub->add_option("--radius-m", o->radius_m, "Presses within this distance of the centre (m)")->capture_default_str();
+  sub->add_option("--presses", o->presses, "Random presses per noise level")
+      ->capture_default_str()
+      ->check(pvdf::app::integer_in(10, 1000000));
+  sub->add_option("--radius-m", o->radius_m, "Presses within this distance of the centre (m)")
+      ->capture_default_str()
+      ->check(pvdf::app::number_in(0, 10, "m", true));
   sub->add_option("--noise-C", o->noise, "Charge-noise levels, 1-sigma per electrode (C)")->capture_default_str();
   sub->add_option("--seed", o->seed, "Random seed")->capture_default_str();
-  sub->add_option("--plot", o->plot_path, "Figure of median position error against noise (.png, .svg or .pdf)");
+  sub->add_option("--plot", o->plot_path, "Figure of median position error against noise (.png, .svg or .pdf)")
+      ->check(pvdf::app::output_file());
   sub->add_flag("--json", o->json, "Print the table as JSON");
   return pvdf::app::Subcommand{sub, [o] { return run_compare(*o); }};
 });

@@ -7,7 +7,9 @@
 #include "pvdf/core/io.hpp"
 #include "pvdf/core/progress.hpp"
 #include "pvdf/core/scene.hpp"
+#include "pvdf/mapping/ambiguity.hpp"
 #include "pvdf/mapping/generate.hpp"
+#include "pvdf/mesh/mesher.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -47,11 +49,13 @@ struct MapCommandOptions {
   bool no_force_scaling = false;
   int scaling_check_stride = 4;
   int setup_checks = 3;
+  std::string rim_model = "by-estimate";
   std::string noise;
   bool json = false;
   bool force_mpi = false;
   std::size_t stop_after = 0;
   bool quiet = false;
+  std::string mesh_path;
 };
 
 int run_map(const MapCommandOptions& o) {
@@ -105,6 +109,7 @@ int run_map(const MapCommandOptions& o) {
   options.use_force_scaling = !o.no_force_scaling;
   options.scaling_check_stride = o.scaling_check_stride;
   options.n_setup_checks = o.setup_checks;
+  options.rim_model = o.rim_model;
   if (!o.noise.empty()) {
     options.noise_C = pvdf::parse_number_list(o.noise, "--noise-C", scene.electrodes.size());
     for (const double n : options.noise_C) {
@@ -122,6 +127,12 @@ int run_map(const MapCommandOptions& o) {
   std::signal(SIGINT, on_interrupt);
   std::signal(SIGTERM, on_interrupt);
   options.description = "pvdfkit map " + o.scene_path;
+  if (!o.mesh_path.empty()) {
+    auto mesh = std::make_shared<pvdf::mesh::FilmMesh>(pvdf::mesh::read_msh(o.mesh_path));
+    pvdf::mesh::check_mesh_fits_scene(scene, *mesh, o.mesh_path);
+    options.mesh = std::move(mesh);
+    options.description += " --mesh " + o.mesh_path;
+  }
 
   std::unique_ptr<pvdf::Progress> bar;
   if (rank == 0 && !o.quiet) {
@@ -146,7 +157,7 @@ int run_map(const MapCommandOptions& o) {
     }
     return interrupted ? 130 : pvdf::exit_code::numerical;
   }
-  write_generated_map(o.output, map, report.provenance);
+  write_generated_map(o.output, map, report.provenance, report.node_model);
   remove_checkpoint_files(options.checkpoint_path);
 
   if (o.json) {
@@ -169,10 +180,17 @@ int run_map(const MapCommandOptions& o) {
     j["model_reason"] = report.model_reason;
     j["tolerance"] = map.tolerance;
     j["estimated_relative_error"] = report.estimated_relative_error;
-    // Unknown (NaN: --setup-checks 0) is written as null, never as a number.
+    // Unknown (NaN) is written as null, never as a number.
     const double w_error = map.estimated_deflection_relative_error;
     j["estimated_deflection_relative_error"] = std::isfinite(w_error) ? nlohmann::json(w_error) : nlohmann::json(nullptr);
+    j["n_tolerance_not_met"] = report.n_tolerance_not_met;
+    j["n_rim_model"] = report.n_rim_model;
+    j["rim_solves"] = report.rim_solves;
+    j["rim_s"] = report.rim_s;
+    j["estimate_s"] = report.estimate_s;
+    j["rim_n_dofs"] = report.rim_n_dofs;
     j["n_dofs"] = report.n_dofs;
+    j["mesh"] = o.mesh_path.empty() ? std::string("built-in") : o.mesh_path;
     j["ranks"] = report.ranks;
     j["threads"] = report.threads;
     j["wall_s"] = report.wall_s;
@@ -191,23 +209,23 @@ int run_map(const MapCommandOptions& o) {
                 report.n_solved, report.n_scaled, report.n_scaling_checks, report.n_scaling_checks_failed,
                 report.max_scaling_check_error, report.n_mirrored, report.n_resumed, report.n_failed);
     std::printf("model %s: %s\n", report.model.c_str(), report.model_reason.c_str());
-    if (std::isnan(map.estimated_deflection_relative_error)) {
-      std::printf("estimated error: not estimated (--setup-checks 0)\n");
-    } else {
-      std::printf("estimated error (sweep setup): charge %.2g %%, deflection at the load %.2g %% (the sweep mesh is "
-                  "graded to the electrodes, not to the probe: the checks' maximum x 15)\n",
-                  100 * map.estimated_relative_error, 100 * map.estimated_deflection_relative_error);
-      std::printf("  caution: the charge estimate comes from 4 check positions; an audit of seed 001 found up to 3.5x it "
-                  "near the rim (docs/map-generation.md section 9; check a map with bench/mapping/audit_map.py)\n");
-      if (report.model_reason.find("bending neglected") != std::string::npos) {
-        std::printf("  caution: the estimate covers the sweep mesh only, not the neglected bending, which matters near "
-                    "the clamped rim (seed 001: charges 2.5 %% high 5 mm from the rim, 5.9 %% at 2 mm, against solves "
-                    "with bending; docs/map-generation.md section 9)\n");
-      }
-    }
+    std::printf("estimated error (largest per-node estimate): charge %.2g %%, deflection at the load %.2g %%; "
+                "%zu points above the tolerance (tolerance_not_met)\n",
+                100 * map.estimated_relative_error, 100 * map.estimated_deflection_relative_error,
+                report.n_tolerance_not_met);
+    std::printf("rim model (bending, rim-graded mesh, %zu DOFs): %zu points\n", report.rim_n_dofs, report.n_rim_model);
     std::printf("symmetry: %s\n", report.symmetry_reason.c_str());
     std::printf("%d rank(s) x %d thread(s), %.1f s, %.3g s per solved position and core\n", report.ranks,
                 report.threads, report.wall_s, report.per_position_s);
+  }
+  if (!o.json && map.ne() == 3 && report.n_failed == 0) {
+    // How much of the film three charges leave ambiguous with the force unknown, and the remedies.
+    const pvdf::mapping::AmbiguityShare a = pvdf::mapping::ambiguity_share(map);
+    std::printf("ambiguity at %g N (%zu nodes): more than one press fits the charges at %.0f %% of the film with the force "
+                "unknown (range %g-%g N); remedies: a force reading (--force-N) %.0f %%, the force known within +-25 %% "
+                "(--force-range-N) %.0f %%, a fourth electrode (pvdfkit design quantifies it; docs/lookup.md section 2)\n",
+                a.force_N, a.nodes, 100 * a.force_unknown, a.min_force_N, a.max_force_N, 100 * a.force_known,
+                100 * a.force_within_25);
   }
   if (report.n_failed > 0) {
     std::cerr << "error: " << report.n_failed << " map point(s) did not converge and are marked not_converged in "
@@ -248,9 +266,14 @@ PVDF_COMMAND(35, [](CLI::App& root) {
                   "Force-scaling check positions every N grid steps (default 4)")
       ->check(pvdf::app::integer_in(1, 1000));
   sub->add_option("--setup-checks", o->setup_checks,
-                  "Direct solves that measure the sweep mesh's charge error at setup (0-3, default 3)")
+                  "Probe positions at which the setup evaluates its error estimate to size the mesh (0-3, default 3)")
       ->check(pvdf::app::integer_in(0, 3));
+  sub->add_option("--rim-model", o->rim_model,
+                  "Where bending on a rim-graded mesh solves a node: by-estimate (default), never, always");
   sub->add_option("--noise-C", o->noise, "1-sigma charge noise per electrode N1,N2,... (C; default 5e-14 each)");
+  sub->add_option("--mesh", o->mesh_path,
+                  "Start the sweep mesh from this Gmsh mesh (.msh from `pvdfkit mesh`, physical groups of docs/mesh.md); "
+                  "it is refined to the sweep's sizes, never coarsened");
   sub->add_flag("--json", o->json, "Print a JSON summary (counts, model, timings)");
   sub->add_flag("--quiet", o->quiet, "No progress bar");
   sub->add_flag("--mpi", o->force_mpi, "Initialize MPI even when not started by mpirun (singleton)");

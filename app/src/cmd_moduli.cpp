@@ -2,6 +2,7 @@
 // direction (seed 001 eqs 3–5, corrected, computed by compliance rotation; Fig. 2).
 #include "command.hpp"
 
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
 #include "pvdf/core/material.hpp"
@@ -18,7 +19,7 @@
 
 namespace {
 
-constexpr double pi = 3.14159265358979323846;
+using pvdf::pi;
 
 struct ModuliOptions {
   std::string scene_path;

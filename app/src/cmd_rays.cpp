@@ -1,7 +1,9 @@
 // `pvdfkit rays`: charge against distance along rays from each electrode of a charge map, with
 // the power-law fit Q = C1(β)·d^C2 of seed 001 eq. 6 per ray (Fig. 7); docs/seed001-reproduction.md.
 #include "command.hpp"
+#include "compare_scene.hpp"
 
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
 #include "pvdf/mapping/analysis.hpp"
@@ -85,7 +87,10 @@ int run_rays(const RaysOptions& o) {
       throw pvdf::InputError("--electrode " + name + ": not an electrode of " + o.map_path + " (it has " + names + ")");
     }
     plot_angles = pvdf::parse_number_list(o.plot_angles, "--plot-angles-deg");
-    if (!o.measured_path.empty()) measured = read_measured_csv(o.measured_path, map.electrode_names);
+    if (!o.measured_path.empty()) {
+      measured = read_measured_csv(o.measured_path, map.electrode_names);
+      pvdf::app::warn_if_map_too_coarse(map, measured);  // the same rule as `compare MAP`
+    }
   } else if (!o.measured_path.empty() || !o.electrode.empty()) {
     throw pvdf::InputError("--measured and --electrode choose what --plot draws; give --plot FILE.png (or .svg, .pdf) too");
   }
@@ -116,7 +121,7 @@ int run_rays(const RaysOptions& o) {
     j["d_max_m"] = ro.d_max_m;
     j["n_samples"] = ro.n_samples;
     j["angle_step_deg"] = ro.angle_step_deg;
-    j["draw_angle_deg"] = a.draw_angle_rad * 180.0 / M_PI;
+    j["draw_angle_deg"] = a.draw_angle_rad * 180.0 / pvdf::pi;
     j["law"] = "Q = C1 * (d / 1 mm)^C2, least squares in ln Q against ln d";
     j["paper_decay_exponent_range"] = {paper_exponent_min, paper_exponent_max};
     j["rays"] = nlohmann::json::array();

@@ -33,6 +33,7 @@ struct IdentifyOptions {
   std::vector<std::string> scans, forces;
   std::vector<double> edges;
   std::string output, plot_dir, beta = "auto", policy, window = "tukey", resolution = "auto", low_cut = "auto";
+  std::string regularization = "tikhonov";
   double speed = 0, corner = 0;
   long taps = 8192, g_window = 0, delay = -1;
   CLI::Option* delay_flag = nullptr;
@@ -121,6 +122,11 @@ int run_identify(const IdentifyOptions& o) {
   d.resolution_m = auto_or_length("--resolution-m", o.resolution, 1, "0 = no target (seed 000), auto = 1.5 x the strips' effective depth");
   d.low_cut_wavelength_m = auto_or_length("--low-cut-m", o.low_cut, 100, "0 = off (seed 000), auto = 10 x the strips' effective depth");
   d.g_window = static_cast<std::size_t>(o.g_window);
+  if (o.regularization != "isotropic" && o.regularization != "tikhonov") {
+    throw pvdf::InputError("--regularization = '" + o.regularization + "' must be tikhonov (default, seed 000 eq. 4) or isotropic");
+  }
+  d.isotropic = o.regularization == "isotropic";
+  if (d.isotropic) d.predicted_beta_scale = 1.0;
   const std::map<std::string, std::string> named = {{"auto", "predicted"},         {"predicted", "predicted"},
                                                     {"gcv", "gcv"},                {"lcurve", "lcurve"},
                                                     {"morozov", "morozov"},        {"noise-floor", "discrepancy"},
@@ -169,8 +175,8 @@ int run_identify(const IdentifyOptions& o) {
   for (double s : t.scan_snr) std::printf(" %.3g", s);
   std::printf("\nG conditioning over %.0f %% of the band: min %.3g, median %.3g, max %.3g\n", 100 * f.conditioning.band_fraction,
               f.conditioning.min, f.conditioning.median, f.conditioning.max);
-  std::printf("inverse: beta (%s) = %.3g relative (%.3g V^2/N^2): %s\n", f.beta_policy.c_str(), f.beta, f.beta_abs,
-              f.beta_reason.c_str());
+  std::printf("inverse (%s regularization): beta (%s) = %.3g relative (%.3g V^2/N^2): %s\n", f.regularization.c_str(),
+              f.beta_policy.c_str(), f.beta, f.beta_abs, f.beta_reason.c_str());
   std::printf("target resolution %.3g mm, low cut %.3g mm (effective strip depth %.3g mm), %zu taps, delay %ld samples = "
               "%.4g mm, design FFT %zu, truncated energy %.2e -> %s\n",
               f.resolution_m * 1e3, f.low_cut_wavelength_m * 1e3, f.effective_depth_m * 1e3, f.taps, f.delay_samples,
@@ -293,6 +299,11 @@ PVDF_COMMAND(60, [](CLI::App& root) {
                                                    "(seed 000); auto = 1.5 x the strips' effective depth")->capture_default_str();
   id->add_option("--low-cut-m", io->low_cut, "Damp wavelengths beyond this (m): beta(k) *= 1 + (k_low/k)^2; the sensor "
                                             "cannot see the mean load. 0 = off (seed 000); auto = 10 x the effective depth")
+      ->capture_default_str();
+  id->add_option("--regularization", io->regularization,
+                 "tikhonov: (G^H G + beta I)^-1 G^H as in seed 000 eq. 4; isotropic: both singular directions of G get "
+                 "the weak one's gain, so f_x and f_z are blurred alike and mu is unbiased, at the price of the "
+                 "long-wavelength part of the forces (docs/restore.md section 4)")
       ->capture_default_str();
   id->add_option("--g-window", io->g_window, "Lags of G kept by identification (default = --taps)");
   id->add_option("--beta-corner-m", io->corner, "Wavelength in m for beta(k) = beta (1 + (k L/2pi)^2)");

@@ -7,6 +7,7 @@
 #include "pvdf/core/scene.hpp"
 #include "pvdf/core/scene_geometry.hpp"
 #include "pvdf/fem/solver.hpp"
+#include "pvdf/mesh/mesher.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -24,9 +25,11 @@ struct SolveOptions {
   std::string model;
   double tolerance = 0;
   std::string vtu_dir;
+  std::string mesh_path;
   bool json = false;
   bool verbose = false;
   int max_refinements = -1;
+  std::string refinement = "goal";
 };
 
 nlohmann::json arr(const std::array<double, 3>& a) { return nlohmann::json::array({a[0], a[1], a[2]}); }
@@ -56,6 +59,10 @@ int run_solve(const SolveOptions& o) {
   if (!o.model.empty()) options.model = pvdf::fem::parse_model(o.model, "--model");
   if (o.tolerance != 0) options.tolerance = o.tolerance;  // checked where parsed
   if (o.max_refinements >= 0) options.max_refinements = o.max_refinements;
+  if (o.refinement != "goal" && o.refinement != "kelly") {
+    throw pvdf::InputError("--refinement '" + pvdf::escape_control_bytes(o.refinement) + "' is not a refinement; use goal or kelly");
+  }
+  options.refinement = o.refinement == "kelly" ? pvdf::fem::Refinement::kelly : pvdf::fem::Refinement::goal;
   for (const auto& text : o.samples) {
     const auto v = pvdf::parse_number_list(text, "--sample X_M,Y_M", 2);
     if (!scene.membrane.outline.contains({v[0], v[1]})) {
@@ -66,7 +73,19 @@ int run_solve(const SolveOptions& o) {
   options.vtu_directory = o.vtu_dir;
   options.verbose = o.verbose;
 
-  const pvdf::fem::Result r = pvdf::fem::solve(scene, options);
+  // --mesh: the first solve on the file's cells exactly as written (what `pvdfkit mesh` previewed),
+  // then the same output-driven refinement as on the built-in mesh (docs/mesh.md, "Solving on a .msh").
+  std::size_t mesh_file_cells = 0;
+  pvdf::fem::Result r;
+  if (!o.mesh_path.empty()) {
+    const pvdf::mesh::FilmMesh mesh = pvdf::mesh::read_msh(o.mesh_path);
+    pvdf::mesh::check_mesh_fits_scene(scene, mesh, o.mesh_path);
+    mesh_file_cells = mesh.n_cells();
+    options.grade_given_mesh = false;
+    r = pvdf::fem::solve(scene, mesh, options);
+  } else {
+    r = pvdf::fem::solve(scene, options);
+  }
   const auto& s = r.summary;
   const bool ok = pvdf::fem::usable(s.status);
 
@@ -78,12 +97,16 @@ int run_solve(const SolveOptions& o) {
     j["model_reason"] = s.model_reason;
     j["n_dofs"] = s.n_dofs;
     j["n_cells"] = s.n_cells;
+    j["mesh"] = o.mesh_path.empty() ? nlohmann::json("built-in") : nlohmann::json(o.mesh_path);
+    if (!o.mesh_path.empty()) j["mesh_file_cells"] = mesh_file_cells;
     j["newton_iterations"] = s.newton_iterations;
     j["load_steps"] = s.load_steps;
     j["refinement_cycles"] = s.refinement_cycles;
     j["wall_s"] = s.wall_s;
     j["time_breakdown_s"] = {{"setup", s.setup_s}, {"assembly", s.assembly_s}, {"linear_solve", s.linear_solve_s}};
     j["estimated_relative_error"] = s.estimated_relative_error;
+    j["estimated_discretization_error"] = s.estimated_discretization_error;
+    j["estimated_model_error"] = s.estimated_model_error;
     j["error_estimator"] = s.error_estimator;
     j["stress_measure"] = "second Piola-Kirchhoff membrane resultant (N/m), undeformed axes";
     if (ok) {
@@ -91,9 +114,14 @@ int run_solve(const SolveOptions& o) {
       j["deflection_at_load_m"] = r.deflection_at_load_m;
       j["rim_reaction_N"] = r.rim_reaction_N;
       j["strain_energy_J"] = r.strain_energy_J;
+      j["wrinkled_area_fraction"] = r.wrinkled_area_fraction;  // tension-field membrane (slack films)
+      j["slack_area_fraction"] = r.slack_area_fraction;
       j["loads"] = nlohmann::json::array();
       for (const auto& l : r.loads) {
-        j["loads"].push_back({{"x_m", l.x_m}, {"y_m", l.y_m}, {"force_N", l.force_N}, {"deflection_m", l.deflection_m}});
+        j["loads"].push_back({{"x_m", l.x_m},
+                              {"y_m", l.y_m},
+                              {"force_N", l.force_N},
+                              {"deflection_m", l.deflection_m}});
       }
       j["electrodes"] = nlohmann::json::array();
       for (const auto& e : r.electrodes) {
@@ -101,7 +129,8 @@ int run_solve(const SolveOptions& o) {
                                    {"area_m2", e.area_m2},
                                    {"mean_membrane_force_material_N_per_m", arr(e.mean_membrane_force_material_N_per_m)},
                                    {"mean_membrane_force_global_N_per_m", arr(e.mean_membrane_force_global_N_per_m)},
-                                   {"charge_C", e.charge_C}});
+                                   {"charge_C", e.charge_C},
+                                   {"charge_error_C", e.charge_error_C}});
       }
       j["samples"] = nlohmann::json::array();
       for (const auto& p : r.samples) {
@@ -121,14 +150,19 @@ int run_solve(const SolveOptions& o) {
   } else {
     std::printf("%s: %s (%s)\n", scene.source.c_str(), pvdf::fem::status_name(s.status).c_str(), s.message.c_str());
     std::printf("model %s: %s\n", pvdf::fem::model_name(s.model).c_str(), s.model_reason.c_str());
+    if (!o.mesh_path.empty()) std::printf("mesh %s: %zu cells as read, refined from there\n", o.mesh_path.c_str(), mesh_file_cells);
     std::printf("%zu DOFs, %zu cells, %d Newton iterations, %d load steps, %d refinements, %.3f s "
                 "(assembly %.3f s, linear solves %.3f s, setup %.3f s)\n",
                 s.n_dofs, s.n_cells, s.newton_iterations, s.load_steps, s.refinement_cycles, s.wall_s, s.assembly_s,
                 s.linear_solve_s, s.setup_s);
-    std::printf("estimated relative error %.3g (%s)\n", s.estimated_relative_error, s.error_estimator.c_str());
+    std::printf("estimated relative error %.3g = discretization %.3g + model %.3g (%s)\n", s.estimated_relative_error,
+                s.estimated_discretization_error, s.estimated_model_error, s.error_estimator.c_str());
     if (ok) {
       std::printf("max deflection %.4f mm, deflection at load %.4f mm, rim reaction %.6g N\n",
                   r.max_deflection_m * 1e3, r.deflection_at_load_m * 1e3, r.rim_reaction_N);
+      if (r.wrinkled_area_fraction > 0 || r.slack_area_fraction > 0)
+        std::printf("wrinkled %.1f %% of the film, slack %.1f %% (tension-field membrane)\n",
+                    100 * r.wrinkled_area_fraction, 100 * r.slack_area_fraction);
       for (const auto& e : r.electrodes) {
         const auto& n = e.mean_membrane_force_material_N_per_m;
         std::printf("electrode %-8s N11 %10.4f  N22 %10.4f  N12 %10.4f N/m  charge %.4g pC\n", e.name.c_str(), n[0],
@@ -164,8 +198,13 @@ PVDF_COMMAND(30, [](CLI::App& root) {
       ->check(pvdf::app::number_in(1e-8, 0.5, "(the rule of the scene key model.tolerance), e.g. 0.01"));
   sub->add_option("--max-refinements", o->max_refinements, "Cap on adaptive refinement cycles (default: scene)")
       ->check(pvdf::app::integer_in(0, 20, "(the rule of the scene key model.max_refinements)"));
+  sub->add_option("--refinement", o->refinement,
+                  "Adaptive refinement indicators: goal (adjoint-weighted residual of the outputs, default) or kelly");
   sub->add_option("--vtu", o->vtu_dir, "Write VTU files (one per mesh) and film.pvd into this folder")
       ->check(pvdf::app::output_folder());
+  sub->add_option("--mesh", o->mesh_path,
+                  "Solve on this Gmsh mesh (.msh from `pvdfkit mesh`, or any quad mesh with the physical groups of "
+                  "docs/mesh.md) instead of the built-in one; the first solve uses its cells as they are");
   sub->add_flag("--json", o->json, "Print one JSON object (status, model, n_dofs, electrodes, samples, ...)");
   sub->add_flag("--verbose", o->verbose, "Print Newton progress");
   return pvdf::app::Subcommand{sub, [o] { return run_solve(*o); }};

@@ -6,6 +6,7 @@
 // comes first and the rim reaction is checked against the applied force).
 #pragma once
 
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/material.hpp"
 
 #include <Eigen/Dense>
@@ -54,7 +55,7 @@ inline PolarMesh make_polar_mesh(double a, double c, int n) {
   std::vector<std::array<double, 2>> square_pts, circle_dirs;
   for (int k = 0; k < np; ++k) {
     square_pts.push_back(m.nodes[layer[k]]);
-    const double th = -0.75 * M_PI + 2 * M_PI * k / np;
+    const double th = -0.75 * pi + 2 * pi * k / np;
     circle_dirs.push_back({std::cos(th), std::sin(th)});
   }
   auto add_ring = [&](const std::vector<int>& inner, bool loaded, auto point_of_k) {
@@ -79,7 +80,7 @@ inline PolarMesh make_polar_mesh(double a, double c, int n) {
                                    (1 - t) * square_pts[k][1] + t * c * circle_dirs[k][1]};
     });
   }
-  const int m2 = std::max(2, static_cast<int>(std::lround(np * std::log(a / c) / (2 * M_PI))));
+  const int m2 = std::max(2, static_cast<int>(std::lround(np * std::log(a / c) / (2 * pi))));
   for (int l = 1; l <= m2; ++l) {
     const double r = c * std::pow(a / c, static_cast<double>(l) / m2);
     layer = add_ring(layer, false, [&](int k) {

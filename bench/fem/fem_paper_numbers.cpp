@@ -10,6 +10,7 @@
 #include "membrane_scaling.hpp"
 
 #ifdef PVDF_BENCH_HAVE_FEM
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/scene.hpp"
 #include "pvdf/fem/solver.hpp"
 #endif
@@ -21,7 +22,7 @@
 using namespace pvdf::fem::oracles;
 
 namespace {
-constexpr double E = 2e9, nu = 0.3, a = 45e-3, h = 25e-6, c = 1e-3, pi = M_PI;
+constexpr double E = 2e9, nu = 0.3, a = 45e-3, h = 25e-6, c = 1e-3, pi = pvdf::pi;
 
 // Seed 001 eq. 7 as printed: P = 4Eh/(R(1−ν)) · (3−ν)/4 · (U/R)³  (P comes out in Pa).
 double eq7_pressure(double U) { return 4 * E * h / (a * (1 - nu)) * (3 - nu) / 4 * std::pow(U / a, 3); }

@@ -6,6 +6,7 @@
 // full map time; `--full` generates it for real.
 //   bench_map [--full] [--threads N] [--sample N]
 #include "pvdf/core/scene.hpp"
+#include "pvdf/core/membrane_scaling.hpp"
 #include "pvdf/fem/probe_sweep.hpp"
 #include "pvdf/mapping/generate.hpp"
 
@@ -133,7 +134,7 @@ int main(int argc, char** argv) {
     const auto b = sweep.solve(row[n][0], row[n][1], 1.0);
     if (!pvdf::fem::usable(a.status) || !pvdf::fem::usable(b.status)) continue;
     std::vector<double> predicted = b.charge_C;
-    for (auto& q : predicted) q *= std::pow(0.5, 2.0 / 3.0);
+    for (auto& q : predicted) q *= pvdf::membrane_charge_factor(0.5);
     scaling_error = std::max(scaling_error, relative_charge_error(predicted, a.charge_C));
   }
 

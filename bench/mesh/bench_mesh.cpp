@@ -5,6 +5,7 @@
 // (< 1e-14) at every size and are listed as a check. Median of `repeats` runs.
 //
 //   ./bench_mesh [repeats=5]
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/scene.hpp"
 #include "pvdf/mesh/mesher.hpp"
 
@@ -18,7 +19,7 @@
 
 namespace {
 
-constexpr double pi = 3.14159265358979323846;
+using pvdf::pi;
 
 double total_area(const pvdf::mesh::FilmMesh& m) {
   double a = pvdf::mesh::material_area_m2(m, pvdf::mesh::film_material_id);

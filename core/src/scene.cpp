@@ -2,6 +2,7 @@
 // (scene_geometry.cpp); pvdf::mesh adds the clearances that depend on mesh sizes.
 #include "pvdf/core/scene.hpp"
 
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/json_reader.hpp"
 #include "pvdf/core/planar.hpp"
@@ -15,7 +16,6 @@ namespace pvdf {
 
 namespace {
 
-constexpr double pi = 3.14159265358979323846;
 constexpr double deg = pi / 180.0;
 
 double polygon_signed_area(const std::vector<Point2>& v) { return planar::signed_area(v); }
@@ -310,7 +310,12 @@ Scene parse_scene(const nlohmann::json& json, const std::string& source) {
     s.membrane.outline = parse_outline(*m);
     s.membrane.thickness_m = m->in_range_or("thickness_m", 25e-6, 1e-7, 0.01);
     if (m->has("thickness_m") && !(s.membrane.thickness_m > 0)) m->fail("thickness_m", "must be > 0");
-    s.membrane.pretension_N_per_m = m->non_negative_or("pretension_N_per_m", 0.0);
+    // Negative pre-tension = a slack film (docs/scene.md); slack_strain says the same as a length.
+    s.membrane.pretension_N_per_m = m->number_or("pretension_N_per_m", 0.0);
+    s.membrane.slack_strain = m->in_range_or("slack_strain", 0.0, 0.0, 0.5);
+    if (s.membrane.slack_strain > 0 && s.membrane.pretension_N_per_m != 0)
+      m->fail("slack_strain", "is given together with a non-zero pretension_N_per_m; give one of the two");
+    s.membrane.tension_field = m->boolean_or("tension_field", false);
     m->finish();
   }
   if (auto m = top.object_if("material")) {
@@ -430,6 +435,8 @@ nlohmann::json scene_to_json(const Scene& s) {
   }
   mem["thickness_m"] = s.membrane.thickness_m;
   mem["pretension_N_per_m"] = s.membrane.pretension_N_per_m;
+  if (s.membrane.slack_strain > 0) mem["slack_strain"] = s.membrane.slack_strain;
+  if (s.membrane.tension_field) mem["tension_field"] = true;
   j["membrane"] = mem;
   const auto& m = s.material;
   if (m.isotropic) {

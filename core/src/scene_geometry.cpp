@@ -1,6 +1,7 @@
 // Geometric consistency of a scene, checked by the scene reader (see scene_geometry.hpp).
 #include "pvdf/core/scene_geometry.hpp"
 
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
 
@@ -10,8 +11,6 @@
 namespace pvdf {
 
 namespace {
-
-constexpr double pi = 3.14159265358979323846;
 
 [[noreturn]] void fail(const Scene& s, const std::string& what) { throw InputError(s.source + ": " + what); }
 

@@ -10,19 +10,26 @@
 # sweep of the triangle's size with the best size marked, and the same comparison with the
 # force measured separately.
 #
-# Run:     examples/design/run.sh [PVDFKIT] [OUTDIR] [MAPS]
+# Run:     examples/design/run.sh [OUTDIR] [MAPS]
 #          MAPS = synthetic (default: instant previews on the analytic stand-in, a few seconds)
 #               | fem (FEM maps at a coarse 6 mm preview spacing: ~10-20 min on 2 cores)
+#          pvdfkit is found by examples/find-pvdfkit.sh: $PVDFKIT, else this checkout's
+#          build/app/pvdfkit, else the one on PATH.
 # Expect:  a ranking table on stdout (four electrodes first: the only layout with a large usable
 #          area when the force is unknown), OUTDIR/compare/design_position.png and
 #          design_force.png (maps side by side), OUTDIR/sweep/design_sweep.png (figure of merit
 #          against the triangle's circumradius), OUTDIR/*/design.json.
 # ---------------------------------------------------------------------------------------------
 set -eu
-PVDFKIT=${1:-pvdfkit}
-OUT=${2:-design-example}
-MAPS=${3:-synthetic}
 HERE=$(cd "$(dirname "$0")" && pwd)
+if [ -f "${1:-}" ] && [ -x "${1:-}" ]; then
+  echo "error: $1: the pvdfkit binary is no longer an argument; run examples/design/run.sh [OUTDIR] [MAPS]" \
+       "(set PVDFKIT=$1 to choose it)" >&2
+  exit 2
+fi
+. "$HERE/../find-pvdfkit.sh"
+OUT=${1:-design-example}
+MAPS=${2:-synthetic}
 SCENES="$HERE/../scenes"
 mkdir -p "$OUT"
 if [ "$MAPS" = synthetic ]; then

@@ -11,6 +11,7 @@
 #
 # Run:    examples/mapping/seed001-reproduction.sh OUTDIR [--spacing-m S] [--region X0,X1,Y0,Y1]
 #                                                 [--map MAP.h5] [--pvdfkit EXE]
+#         (pvdfkit: --pvdfkit EXE, else $PVDFKIT, else this checkout's build/app/pvdfkit, else PATH)
 #         (S = grid spacing of the map, default 0.002 m; the region, default ±26 mm around the
 #         centre, covers the electrode triangle and the 20 mm rays; --map reuses an existing map)
 # Expect: OUTDIR/map.h5, OUTDIR/isocharge/*.png + charges.vtk, OUTDIR/rays.{txt,csv,json},
@@ -21,13 +22,13 @@
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 root=$(cd "$here/../.." && pwd)
-usage() { sed -n '2,22p' "$0" | sed 's/^# \{0,1\}//'; }
+usage() { sed -n '2,23p' "$0" | sed 's/^# \{0,1\}//'; }
 [[ $# -ge 1 && $1 != -* ]] || { usage; exit 2; }
 out=$1; shift
 spacing=0.002
 region=-0.026,0.026,-0.026,0.026
 map=""
-pvdfkit=${PVDFKIT:-$root/build/app/pvdfkit}
+pvdfkit=""
 while [[ $# -gt 0 ]]; do
   case $1 in
     --spacing-m) spacing=$2; shift 2 ;;
@@ -38,6 +39,10 @@ while [[ $# -gt 0 ]]; do
     *) echo "error: unknown option $1 (see --help)" >&2; exit 2 ;;
   esac
 done
+if [[ -z $pvdfkit ]]; then
+  . "$here/../find-pvdfkit.sh"  # $PVDFKIT, else this checkout's build/app/pvdfkit, else PATH
+  pvdfkit=$PVDFKIT
+fi
 [[ -x $pvdfkit ]] || { echo "error: $pvdfkit is not an executable; build pvdfkit or pass --pvdfkit EXE" >&2; exit 2; }
 scene=$root/examples/scenes/seed001.json
 measured=$root/examples/data/seed001-measured-style.csv

@@ -10,16 +10,22 @@
 # settings (constant beta = 1e-4, no target, no low cut), once with the defaults (beta chosen by the
 # predicted mu error, a target resolution and a low cut from the strips' effective depth).
 #
-# Run:     examples/restore/run.sh [PVDFKIT] [OUTDIR]
-#          (defaults: pvdfkit from PATH, ./restore-example). About 2 s.
+# Run:     examples/restore/run.sh [OUTDIR]
+#          (default ./restore-example). About 2 s. pvdfkit is found by examples/find-pvdfkit.sh:
+#          $PVDFKIT, else this checkout's build/app/pvdfkit, else the one on PATH.
 # Expect:  the edges of the test surface restored at -30 mm and -15 mm (no shift), PNGs of Figs
 #          11-14 in OUTDIR/plots*, forces in OUTDIR/forces*.csv with columns
 #          x_m,fx_N,fz_N,mu,mu_valid,fx_N_per_m,fz_N_per_m (line forces in N/m, per sample in N).
 # ---------------------------------------------------------------------------------------------
 set -eu
-PVDFKIT=${1:-pvdfkit}
-OUT=${2:-restore-example}
 HERE=$(cd "$(dirname "$0")" && pwd)
+if [ -f "${1:-}" ] && [ -x "${1:-}" ]; then
+  echo "error: $1: the pvdfkit binary is no longer an argument; run examples/restore/run.sh [OUTDIR]" \
+       "(set PVDFKIT=$1 to choose it)" >&2
+  exit 2
+fi
+. "$HERE/../find-pvdfkit.sh"
+OUT=${1:-restore-example}
 mkdir -p "$OUT"
 
 echo "== 1. Scan the two raised edges of seed 000 Fig. 6 (edge at x = -12.5 mm)"

@@ -53,20 +53,26 @@ OutputVector FilmSolver::outputs(const Vector<double>& u, Model model) const {
   return o;
 }
 
-// One refinement cycle: Kelly indicators of (u_x, u_y) and of w, each normalised by its l2 norm
-// so that neither field dominates, the top 30 % of cells refined, the solution transferred.
-void FilmSolver::refine_mesh(Vector<double>& u) {
+// One refinement cycle, the top 30 % of cells by indicator refined and the solution transferred.
+// Indicators: the goal-oriented ones when given (goal_error.cpp), else Kelly's for (u_x, u_y) and
+// for w, each normalised by its l2 norm so that neither field dominates.
+void FilmSolver::refine_mesh(Vector<double>& u, const Vector<float>* goal_indicators) {
   const unsigned int p = options_.fe_degree;
-  Vector<float> est_u(triangulation_.n_active_cells()), est_w(triangulation_.n_active_cells());
-  const ComponentMask mask_u = fe_->component_mask(FEValuesExtractors::Vector(0));
-  const ComponentMask mask_w = fe_->component_mask(FEValuesExtractors::Scalar(2));
-  KellyErrorEstimator<dim>::estimate(*mapping_, dof_handler_, QGauss<dim - 1>(p + 1), {}, u, est_u, mask_u);
-  KellyErrorEstimator<dim>::estimate(*mapping_, dof_handler_, QGauss<dim - 1>(p + 1), {}, u, est_w, mask_w);
-  const double nu = est_u.l2_norm(), nw = est_w.l2_norm();
   Vector<float> indicator(triangulation_.n_active_cells());
-  for (unsigned int i = 0; i < indicator.size(); ++i) {
-    indicator(i) = static_cast<float>((nu > 0 ? est_u(i) / nu : 0.0) + (nw > 0 ? est_w(i) / nw : 0.0));
+  if (goal_indicators) {
+    indicator = *goal_indicators;
+  } else {
+    Vector<float> est_u(triangulation_.n_active_cells()), est_w(triangulation_.n_active_cells());
+    const ComponentMask mask_u = fe_->component_mask(FEValuesExtractors::Vector(0));
+    const ComponentMask mask_w = fe_->component_mask(FEValuesExtractors::Scalar(2));
+    KellyErrorEstimator<dim>::estimate(*mapping_, dof_handler_, QGauss<dim - 1>(p + 1), {}, u, est_u, mask_u);
+    KellyErrorEstimator<dim>::estimate(*mapping_, dof_handler_, QGauss<dim - 1>(p + 1), {}, u, est_w, mask_w);
+    const double nu = est_u.l2_norm(), nw = est_w.l2_norm();
+    for (unsigned int i = 0; i < indicator.size(); ++i) {
+      indicator(i) = static_cast<float>((nu > 0 ? est_u(i) / nu : 0.0) + (nw > 0 ? est_w(i) / nw : 0.0));
+    }
   }
+  enriched_.reset();
   GridRefinement::refine_and_coarsen_fixed_number(triangulation_, indicator, 0.3, 0.0);
   SolutionTransfer<dim, Vector<double>> transfer(dof_handler_);
   triangulation_.prepare_coarsening_and_refinement();
@@ -80,55 +86,64 @@ void FilmSolver::refine_mesh(Vector<double>& u) {
   u = u_new;
 }
 
-// Output-driven refinement (docs/fem.md §6): re-solve on refined meshes from the transferred
-// solution until the change of the outputs between the last two meshes, extrapolated with the
-// observed contraction rho (Richardson: d·rho/(1 − rho), never below d), meets the tolerance.
-// Leaves the estimate and how it was obtained in summary_; a failed re-solve is returned with
-// `where` naming the cycle.
+// Output-driven refinement (docs/fem.md §6): on every mesh the dual-weighted residual estimates of
+// the outputs (goal_error.cpp); when `auto` left bending out, the bending estimate decides first
+// (bending_may_be_left_out, model_choice.cpp) and bending is switched on, on the same mesh, when it
+// matters. Then refine (goal or Kelly indicators) and re-solve from the transferred solution until
+// the discretization estimate meets what the model error leaves of the tolerance, the refinement
+// cap or the DOF cap. Leaves the estimates in summary_ and goal_; a failed re-solve is returned
+// with `where` naming the cycle.
 NewtonOutcome FilmSolver::refine_until_tolerance(Model model, std::string& where) {
   Summary& s = summary_;
-  std::vector<OutputVector> history{outputs(solution_, model)};
-  std::vector<double> diffs;
-  double estimate = 1.0;
-  s.error_estimator = "not estimated (adaptivity off or refinement cap 0)";
+  s.error_estimator = std::string("dual-weighted residual: adjoint of the converged tangent (LDL^T back substitution), ") +
+                      "weights from its patch-wise Q" + std::to_string(options_.fe_degree + 1) +
+                      " extrapolation, residual in Q" + std::to_string(options_.fe_degree + 1) + " on the same mesh; " +
+                      (options_.refinement == Refinement::goal ? "goal-oriented" : "Kelly") + " refinement";
   const int max_cycles = options_.adaptive ? options_.max_refinements : 0;
-  for (int cycle = 1; cycle <= max_cycles; ++cycle) {
-    if (dof_handler_.n_dofs() > 600000) break;
-    refine_mesh(solution_);
+  while (true) {
+    goal_ = estimate_goal_errors(solution_, model);
+    if (goal_.model_estimated && bending_switchable_) {
+      const bool leave_out = bending_may_be_left_out(goal_.relative_model, options_.tolerance, bending_reason_);
+      if (!leave_out) {  // the richer model, from the membrane solution on this mesh
+        enable_bending();
+        NewtonOutcome o = newton(model, 0.0, solution_);
+        ++s.load_steps;
+        s.newton_iterations += o.iterations;
+        if (o.status != Status::converged) o = solve_from_flat(model, solution_);
+        if (o.status != Status::converged) {
+          where = "solve with bending switched on";
+          return o;
+        }
+        continue;
+      }
+    }
+    const double disc = std::isfinite(goal_.relative_discretization) ? goal_.relative_discretization : 1.0;
+    const double bending_model = goal_.model_estimated && std::isfinite(goal_.relative_model) ? goal_.relative_model : 0.0;
+    s.estimated_discretization_error = disc;
+    s.estimated_model_error = bending_model + kinematics_model_error_;
+    s.estimated_relative_error = disc + s.estimated_model_error;
+    if (options_.verbose)
+      std::printf("  mesh %d: %u dofs, estimated discretization error %.3e, model error %.3e\n", s.refinement_cycles,
+                  dof_handler_.n_dofs(), disc, s.estimated_model_error);
+    if (s.estimated_relative_error <= options_.tolerance || s.refinement_cycles >= max_cycles) break;
+    if (2 * static_cast<std::size_t>(dof_handler_.n_dofs()) > options_.max_dofs) {
+      dof_cap_reached_ = true;
+      break;
+    }
+    refine_mesh(solution_, options_.refinement == Refinement::goal ? &goal_.indicators : nullptr);
     NewtonOutcome o = newton(model, 0.0, solution_);
     ++s.load_steps;
     s.newton_iterations += o.iterations;
     if (o.status != Status::converged) {
       o = solve_from_flat(model, solution_);
       if (o.status != Status::converged) {
-        where = "refinement cycle " + std::to_string(cycle);
+        where = "refinement cycle " + std::to_string(s.refinement_cycles + 1);
         return o;
       }
     }
     ++s.refinement_cycles;
-    if (!options_.vtu_directory.empty()) vtu_files_.push_back(write_vtu(cycle, model));
-    history.push_back(outputs(solution_, model));
-    diffs.push_back(relative_difference(history.back(), history[history.size() - 2]));
-    const double d = diffs.back();
-    if (diffs.size() >= 2 && diffs[diffs.size() - 2] > 0) {
-      const double rho = d / diffs[diffs.size() - 2];
-      if (rho < 0.9) {
-        // Never below the last change itself: the Richardson tail alone was 4.2x optimistic
-        // against Timoshenko's plate (test [adaptivity]).
-        estimate = std::max(d, d * std::max(rho, 0.1) / (1 - std::max(rho, 0.1)));
-        s.error_estimator = "Richardson: last change x rho/(1-rho), observed contraction rho = " + fmt(rho, 3);
-      } else {
-        estimate = d;
-        s.error_estimator = "last change between meshes (no contraction observed yet, rho = " + fmt(rho, 3) + ")";
-      }
-    } else {
-      estimate = d;
-      s.error_estimator = "change between the last two meshes";
-    }
-    if (options_.verbose) std::printf("  cycle %d: %u dofs, output change %.3e, estimate %.3e\n", cycle, dof_handler_.n_dofs(), d, estimate);
-    if (estimate <= options_.tolerance) break;
+    if (!options_.vtu_directory.empty()) vtu_files_.push_back(write_vtu(s.refinement_cycles, model));
   }
-  s.estimated_relative_error = estimate;
   NewtonOutcome ok;
   ok.status = Status::converged;
   return ok;

@@ -25,8 +25,8 @@ using namespace dealii;
 void FilmSolver::assemble_bending_matrix() {
   bending_ = 0;
   bending_raw_ = 0;
-  if (!options_.include_bending) return;
-  const unsigned int p = options_.fe_degree;
+  if (!options_.include_bending && !bending_pattern_) return;
+  const unsigned int p = form_degree();  // the primal degree, also in the enriched space (consistent forms)
   const QGauss<dim> quadrature(p + 1);
   const QGauss<dim - 1> face_quadrature(p + 1);
   FEValues<dim> fe_values(*mapping_, *fe_, quadrature, update_hessians | update_JxW_values);
@@ -124,7 +124,7 @@ void FilmSolver::assemble_bending_matrix() {
 // consistent nodal forces of w sum to F exactly; pressures use the standard quadrature.
 void FilmSolver::assemble_load_vector() {
   load_raw_.reinit(dof_handler_.n_dofs());
-  const unsigned int p = options_.fe_degree;
+  const unsigned int p = form_degree();  // the primal degree, also in the enriched space (consistent forms)
   const QGauss<dim> quadrature(p + 1);
   const QIterated<dim> fine_quadrature(QGauss<1>(2), 10);
   FEValues<dim> fe_values(*mapping_, *fe_, quadrature, update_values | update_JxW_values | update_quadrature_points);
@@ -183,7 +183,7 @@ void FilmSolver::assemble_load_vector() {
 // cell are computed once per mesh instead of once per assembly (the triangulation's change
 // signal invalidates the cache).
 void FilmSolver::build_geometry_cache() {
-  const unsigned int p = options_.fe_degree;
+  const unsigned int p = form_degree();  // the primal degree, also in the enriched space (consistent forms)
   const QGauss<dim> quadrature(p + 1);
   FEValues<dim> fe_values(*mapping_, *fe_, quadrature, update_gradients | update_JxW_values);
   const unsigned int n = fe_->n_dofs_per_cell();
@@ -194,7 +194,7 @@ void FilmSolver::build_geometry_cache() {
   cache_.system_index.assign(3 * n_base, 0);
   for (unsigned int c = 0; c < 3; ++c)
     for (unsigned int a = 0; a < n_base; ++a) cache_.system_index[c * n_base + a] = fe_->component_to_system_index(c, a);
-  const std::size_t n_cells = triangulation_.n_active_cells();
+  const std::size_t n_cells = dof_handler_.get_triangulation().n_active_cells();  // (the enriched space shares the mesh)
   cache_.grad.assign(n_cells * n_q * n_base * 2, 0.0);
   cache_.jxw.assign(n_cells * n_q, 0.0);
   cache_.dofs.assign(n_cells * n, 0);
@@ -332,7 +332,7 @@ void add_point_tangent(const MembranePoint& p, const double* G, unsigned int nb,
 void FilmSolver::assemble(const Vector<double>& u, Model model, double artificial_tension, bool want_matrix,
                           Vector<double>& residual) {
   const auto t0 = Clock::now();
-  if (!cache_.valid || cache_.n_cells != triangulation_.n_active_cells()) build_geometry_cache();
+  if (!cache_.valid || cache_.n_cells != dof_handler_.get_triangulation().n_active_cells()) build_geometry_cache();
   const unsigned int n = fe_->n_dofs_per_cell();
   const unsigned int nb = cache_.n_base, n_q = cache_.n_q;
   FullMatrix<double> cell_matrix(n, n);
@@ -347,6 +347,7 @@ void FilmSolver::assemble(const Vector<double>& u, Model model, double artificia
   double energy = 0;
   // Block-local arrays: rb[c][a] residual, Kb[c][d][a][b] tangent.
   std::vector<double> rb(3 * nb), Kb(9 * nb * nb);
+  Stiffness3 relaxed_C;
 
   for (std::size_t k = 0; k < cache_.n_cells; ++k) {
     const types::global_dof_index* cd = &cache_.dofs[k * n];
@@ -364,9 +365,14 @@ void FilmSolver::assemble(const Vector<double>& u, Model model, double artificia
           gr[c][0] += ul[c * nb + a] * G[2 * a];
           gr[c][1] += ul[c * nb + a] * G[2 * a + 1];
         }
-      const MembranePoint point = membrane_point(gr, model, membrane_C_, N_tot, jxw, energy);
+      MembranePoint point = membrane_point(gr, model, membrane_C_, N_tot, jxw, energy);
+      const Stiffness3* tangent_C = &membrane_C_;
+      if (tension_field_) {  // wrinkling: relaxed stress, tangent and energy (tension_field.cpp)
+        energy += relax_membrane_point(point.kin, model, artificial_tension, want_matrix, point.S, relaxed_C) * jxw;
+        tangent_C = &relaxed_C;
+      }
       add_point_residual(point, G, nb, jxw, model, N_tot, rb.data());
-      if (want_matrix) add_point_tangent(point, G, nb, jxw, model, N_tot, membrane_C_, Kb.data());
+      if (want_matrix) add_point_tangent(point, G, nb, jxw, model, N_tot, *tangent_C, Kb.data());
     }
     // Back to the FE's local (system) order.
     for (unsigned int i = 0; i < n; ++i) dofs[i] = cd[i];

@@ -5,17 +5,20 @@
 //   newton.cpp       sparse linear solves, Newton with line search, artificial-pretension continuation
 //   model_choice.cpp the `auto` rule (bending negligible? linear / von Kármán / large rotation)
 //   adaptivity.cpp   output vector, mesh refinement, the output-error estimate
+//   goal_error.cpp   adjoint-weighted residual (DWR) estimates of discretization and bending-model error
 //   outputs.cpp      electrode forces and charges, deflections, rim reaction, energy, samples
 //   vtu_output.cpp   VTU/PVD files
 //   solve.cpp        FilmSolver::run() and the public entry points (pvdf::fem::solve, names)
 //   checks.cpp       test hooks (tangent by finite differences, bending operator)
 //   sweep_engine.cpp the fixed-mesh probe solver behind pvdf::fem::ProbeSweep
+//   tension_field.cpp slack films: the relaxed (wrinkling) membrane, its continuation, wrinkled area
 // deal.II appears here and in those files only; public headers stay std/Eigen/pvdf.
 #pragma once
 
 #include "pvdf/fem/solver.hpp"
 
 #include "sweep_engine.hpp"
+#include "tension_field.hpp"
 
 #include <deal.II/base/point.h>
 #include <deal.II/base/tensor.h>
@@ -127,6 +130,12 @@ struct OutputVector {
 /// max over outputs of |a − b| / scale(a), forces and deflections each on their own scale.
 double relative_difference(const OutputVector& a, const OutputVector& b);
 
+/// Wrinkled and slack share of the film (tension_field.cpp), and each cell's MembraneState.
+struct WrinkleMap {
+  double wrinkled_area_fraction = 0, slack_area_fraction = 0;
+  std::vector<float> cell_state;
+};
+
 /// One film problem on one triangulation (step-8/step-15 shape: setup, assemble, solve, refine,
 /// output). Each group of members below is implemented in the file named in its comment.
 class FilmSolver {
@@ -145,6 +154,7 @@ class FilmSolver {
     std::string where;      // which trial failed
     Model model = Model::linear;
     std::string reason;
+    double relative_model_error = 0;  // what the chosen kinematics leave out, relative (0: most general)
   };
   KinematicsChoice choose_kinematics(Vector<double>& u);
   KinematicsChoice choose_kinematics_on_first_mesh();
@@ -155,12 +165,38 @@ class FilmSolver {
 
   // sweep_engine.cpp: one fixed mesh built without any probe load, then one probe moved over
   // it; DOFs, sparsity and the symbolic factorization are kept.
-  void prepare_sweep();
+  void prepare_sweep(const SweepMeshSizes& sizes, const pvdf::mesh::FilmMesh* mesh = nullptr);
   void set_probe(double x_m, double y_m, double force_N);
   NewtonOutcome solve_probe(Model model, Vector<double>& u, bool warm, int& newton_iterations, bool& warm_used);
   void scale_state(Vector<double>& u, double inplane_factor, double w_factor) const;
   // outputs.cpp
   void probe_outputs(const Vector<double>& u, Model model, EngineSolution& out);
+
+  // goal_error.cpp: dual-weighted residual estimates for the outputs (every electrode's charge,
+  // w at every load). Each estimate is signed, (exact − computed).
+  struct GoalErrors {
+    std::vector<double> charge_C, deflection_m;                         // the outputs themselves
+    std::vector<double> charge_discretization_C, deflection_discretization_m;
+    std::vector<double> charge_model_C, deflection_model_m;             // bending's effect (zeros if kept)
+    bool model_estimated = false;
+    double relative_discretization = 0;  // max over outputs of |estimate| / output scale
+    double relative_model = 0;
+    Vector<float> indicators;            // per active cell: Σ_outputs |η_K| / output scale
+  };
+  /// Estimates at the converged state u of `model`. The bending-model part is computed when the
+  /// solver runs without bending but kept the bending pattern (keep_bending_pattern()).
+  GoalErrors estimate_goal_errors(const Vector<double>& u, Model model);
+  /// Assemble the bending operator and its sparsity even when the model leaves bending out (call
+  /// before the first setup_system()): needed to estimate what bending would change.
+  /// `switchable`: the adaptive loop switches bending on when its estimated effect is too large
+  /// (`auto`); otherwise the effect is only reported.
+  void keep_bending_pattern(bool switchable) {
+    bending_pattern_ = true;
+    bending_switchable_ = switchable;
+  }
+  /// Switch the bending term of the residual on (the pattern must hold it).
+  void enable_bending() { options_.include_bending = true; }
+  bool bending_included() const { return options_.include_bending; }
 
   const Summary& summary() const { return summary_; }
   unsigned int n_dofs() const { return dof_handler_.n_dofs(); }
@@ -203,8 +239,14 @@ class FilmSolver {
 
   // adaptivity.cpp
   OutputVector outputs(const Vector<double>& u, Model model) const;
-  void refine_mesh(Vector<double>& u);
+  void refine_mesh(Vector<double>& u, const Vector<float>* goal_indicators = nullptr);
   NewtonOutcome refine_until_tolerance(Model model, std::string& where);
+
+  // goal_error.cpp
+  Vector<double> charge_derivative(const Vector<double>& u, Model model, std::size_t k) const;
+  Vector<double> deflection_derivative(const Point<dim>& x) const;
+  void prepare_enriched();
+  unsigned int form_degree() const { return form_degree_ > 0 ? form_degree_ : options_.fe_degree; }
 
   // outputs.cpp
   void fill_result(Result& result, Model model);
@@ -223,6 +265,17 @@ class FilmSolver {
   Result zero_load_result(Clock::time_point t_start);
   Result failure_result(const NewtonOutcome& o, const std::string& where, Clock::time_point t_start);
   void set_final_status();
+  void add_error_estimates(Result& result) const;
+
+  // tension_field.cpp
+  void setup_natural_state();
+  RelaxedMembrane membrane_law(const std::array<double, 3>& E, double artificial_tension, bool want_tangent) const;
+  std::array<double, 3> membrane_stress(const std::array<double, 3>& E) const;
+  double relax_membrane_point(const Kinematics& k, Model model, double artificial_tension, bool want_tangent,
+                              std::array<double, 3>& S, Stiffness3& D) const;
+  NewtonOutcome solve_slack_from_flat(Model model, Vector<double>& u);
+  double tension_field_regularization() const;
+  WrinkleMap wrinkle_map(const Vector<double>& u, Model model) const;
 
   friend class MembranePostprocessor;
 
@@ -230,6 +283,12 @@ class FilmSolver {
   Options options_;
   double thickness_ = 0;
   double pretension_ = 0;
+  // Natural state and wrinkling (tension_field.cpp): S0 (trial stress of the flat film), C⁻¹S0, C⁻¹(1,1,0).
+  bool tension_field_ = false;
+  std::array<double, 3> initial_stress_{0, 0, 0}, compliance_initial_stress_{0, 0, 0}, unit_compliance_{0, 0, 0};
+  double tangent_regularization_ = tension_field_tangent_regularization;  // 0 in check_jacobian
+  double load_factor_ = 1;  // the slack continuation's force factor on load_
+  mutable double regularization_force_ = -1, regularization_eta_ = 0;
   Stiffness3 membrane_C_;  // h·Q̄
   Stiffness3 bending_D_;   // h³/12·Q̄
   double bending_penalty_scale_ = 0;
@@ -284,6 +343,16 @@ class FilmSolver {
   Summary summary_;
   std::vector<std::pair<double, std::string>> pvd_records_;
   std::vector<std::string> vtu_files_;
+  // goal_error.cpp: the same mesh with FE_Q(p+1) (residual and adjoint reconstruction there).
+  std::unique_ptr<FilmSolver> enriched_;
+  bool bending_pattern_ = false;  // bending operator assembled although the model leaves it out
+  bool bending_switchable_ = false;
+  unsigned int form_degree_ = 0;  // > 0: quadrature and penalty of this degree (the enriched space)
+  bool residual_only_ = false;    // no tangent storage (the enriched space)
+  GoalErrors goal_;               // the estimates on the final mesh (run())
+  std::string bending_reason_;    // the bending part of `auto` decided by its estimate
+  double kinematics_model_error_ = 0;  // relative, from the `auto` trial solves
+  bool dof_cap_reached_ = false;
 };
 
 }  // namespace pvdf::fem::detail

@@ -37,7 +37,7 @@ std::string bending_negligible_reason(const pvdf::Scene& scene, const Options& o
   const double E = std::min(m.E1_Pa, m.E2_Pa), h = scene.membrane.thickness_m;
   const double a = scene.membrane.outline.characteristic_radius_m();
   const double D = std::max(m.E1_Pa, m.E2_Pa) * h * h * h / 12.0;
-  const double N = pvdf::membrane_force_scale_N_per_m(E * h, force_N, a) + scene.membrane.pretension_N_per_m;
+  const double N = pvdf::membrane_force_scale_N_per_m(E * h, force_N, a) + std::max(0.0, scene.membrane.pretension_N_per_m);
   const double eta = std::sqrt(D / N) / radius_m;
   const double effect = eta / 50.0;
   if (effect > 0.25 * options.tolerance) return {};
@@ -54,6 +54,13 @@ std::string bending_negligible_reason(const pvdf::Scene& scene, const Options& o
 FilmSolver::KinematicsChoice FilmSolver::choose_kinematics(Vector<double>& u) {
   KinematicsChoice c;
   Summary& s = summary_;
+  if (tension_field_) {  // a wrinkling film has no linear response to compare with: the general kinematics
+    c.model = Model::large_rotation;
+    c.reason = "tension-field (wrinkling) membrane: large rotation, no linear trial";
+    c.outcome = solve_from_flat(c.model, u);
+    c.where = "large-rotation solve of the wrinkling film";
+    return c;
+  }
   const NewtonOutcome o = solve_from_flat(Model::linear, u);
   if (o.status != Status::converged) {
     c.outcome = o;
@@ -64,6 +71,7 @@ FilmSolver::KinematicsChoice FilmSolver::choose_kinematics(Vector<double>& u) {
   const double limit = std::sqrt(options_.tolerance) * 0.5;
   if (ratio <= limit && std::isfinite(pretension_) && options_.include_bending) {
     c.model = Model::linear;
+    c.relative_model_error = ratio * ratio;
     c.reason = "linear plate deflection w_max/h = " + fmt(ratio) + " <= 0.5*sqrt(tolerance) = " + fmt(limit) +
                " (membrane coupling changes the outputs by ~(w/h)^2)";
     return c;
@@ -91,6 +99,7 @@ FilmSolver::KinematicsChoice FilmSolver::choose_kinematics(Vector<double>& u) {
   const double d = relative_difference(q_lr, q_vk);
   if (d <= 0.25 * options_.tolerance) {
     c.model = Model::von_karman;
+    c.relative_model_error = d;
     c.reason = "linear w_max/h = " + fmt(ratio) + " too large; von Karman and large-rotation outputs differ by " +
                fmt(d) + " <= tolerance/4 on the first mesh";
   } else {
@@ -109,6 +118,15 @@ FilmSolver::KinematicsChoice FilmSolver::choose_kinematics_on_first_mesh() {
   setup_system();
   Vector<double> u(dof_handler_.n_dofs());
   return choose_kinematics(u);
+}
+
+bool bending_may_be_left_out(double relative_bending_effect, double tolerance, std::string& reason) {
+  const double share = 0.5 * tolerance;
+  const bool ok = std::isfinite(relative_bending_effect) && relative_bending_effect <= share;
+  reason = std::string(ok ? "bending left out" : "bending kept") +
+           ": adjoint-weighted estimate of its effect on the outputs, max relative " + fmt(relative_bending_effect) +
+           (ok ? " <= " : " > ") + "tolerance/2 = " + fmt(share);
+  return ok;
 }
 
 ModelChoice choose_model(const pvdf::Scene& scene, const Options& options, const ForceRange* sweep) {

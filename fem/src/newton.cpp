@@ -238,6 +238,7 @@ double FilmSolver::estimate_tension() const {
 // it geometrically to zero, each stage a Newton solve from the last; a failed stage is retried
 // with a smaller reduction (cutback).
 NewtonOutcome FilmSolver::solve_from_flat(Model model, Vector<double>& u) {
+  if (tension_field_) return solve_slack_from_flat(model, u);  // tension_field.cpp
   NewtonOutcome total;
   u = 0;
   if (model == Model::linear || pretension_ >= estimate_tension()) {

@@ -33,10 +33,7 @@ Kinematics FilmSolver::kinematics_at(const Vector<double>& u, const Point<dim>& 
 // S = h·Q̄·E + N0·I at a point, in the global, material (draw angle) and polar (about the first
 // load) frames.
 MembraneForce FilmSolver::membrane_force(const Kinematics& k, const Point<dim>& x) const {
-  const std::array<double, 3> E = membrane_strain(k, current_model_);
-  std::array<double, 3> S = membrane_C_.apply(E);
-  S[0] += pretension_;
-  S[1] += pretension_;
+  const std::array<double, 3> S = membrane_stress(membrane_strain(k, current_model_));  // relaxed if wrinkling
   MembraneForce n;
   n.global = S;
   const Eigen::Vector3d s(S[0], S[1], S[2]);
@@ -85,14 +82,14 @@ std::array<double, 3> FilmSolver::electrode_mean_force(const Vector<double>& u, 
         kin.g[a] = grad_w[q][a];
         for (int b = 0; b < 2; ++b) kin.H[a][b] = grad_u[q][a][b];
       }
-      const std::array<double, 3> S = membrane_C_.apply(membrane_strain(kin, model));
+      const std::array<double, 3> S = membrane_stress(membrane_strain(kin, model));  // with S0, relaxed if wrinkling
       for (int c = 0; c < 3; ++c) sum[c] += S[c] * fe_values.JxW(q);
       area += fe_values.JxW(q);
     }
   }
   if (integrated_area) *integrated_area = area;
   if (area <= 0) return {0, 0, 0};
-  std::array<double, 3> mean{sum[0] / area + pretension_, sum[1] / area + pretension_, sum[2] / area};
+  std::array<double, 3> mean{sum[0] / area, sum[1] / area, sum[2] / area};
   return mean;
 }
 
@@ -138,7 +135,8 @@ double FilmSolver::strain_energy(const Vector<double>& u, Model model) const {
       }
       const auto E = membrane_strain(k, model);
       const auto S = membrane_C_.apply(E);
-      energy += 0.5 * (S[0] * E[0] + S[1] * E[1] + S[2] * E[2]) * fe_values.JxW(q);
+      const double W = tension_field_ ? membrane_law(E, 0.0, false).W : 0.5 * (S[0] * E[0] + S[1] * E[1] + S[2] * E[2]);
+      energy += W * fe_values.JxW(q);
     }
   }
   if (options_.include_bending) energy += 0.5 * bending_raw_.matrix_norm_square(u);
@@ -221,6 +219,9 @@ void FilmSolver::fill_result(Result& result, Model model) {
   }
   result.rim_reaction_N = rim_reaction(u, model);
   result.strain_energy_J = strain_energy(u, model);
+  const WrinkleMap wm = wrinkle_map(u, model);
+  result.wrinkled_area_fraction = wm.wrinkled_area_fraction;
+  result.slack_area_fraction = wm.slack_area_fraction;
 }
 
 // The outputs a probe sweep keeps: electrode charges and mean forces, w under the probe, the

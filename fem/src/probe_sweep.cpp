@@ -1,9 +1,14 @@
-// ProbeSweep: many single-probe solves on one fixed mesh (docs/bench-fem.md, "ProbeSweep").
-// The setup picks the model (the `auto` rule, model_choice.cpp), one mesh graded to the electrodes and
-// nowhere coarser than a size that serves every probe position, checks the electrode charges on
-// it against direct solves at a few probe positions, and keeps DOFs, sparsity and the symbolic
-// factorization. Each probe solve re-integrates the load exactly and warm-starts Newton from a
-// given state (chord steps reuse the factorized tangent while Newton contracts fast).
+// ProbeSweep: many single-probe solves on one fixed mesh (docs/bench-fem.md, "ProbeSweep";
+// docs/map-generation.md §6). The setup picks the model (the `auto` rule, model_choice.cpp), one
+// mesh graded to the electrodes and nowhere coarser than a size that serves every probe position,
+// sized by the sweep's own error estimate at a few check positions; when that model drops bending
+// it also builds the rim model (bending kept, mesh graded toward the clamped rim). Each probe solve
+// re-integrates the load, warm-starts Newton from a given state, and carries the solver's
+// adjoint-weighted estimates of its discretization and model errors for every electrode charge;
+// where the cheap model's model-error estimate exceeds its share of the tolerance the probe is
+// solved again with the rim model.
+#include "pvdf/core/membrane_scaling.hpp"
+#include "pvdf/core/constants.hpp"
 #include "pvdf/fem/probe_sweep.hpp"
 
 #include "sweep_engine.hpp"
@@ -39,16 +44,6 @@ double smallest_electrode_side(const pvdf::Scene& scene) {
     else side = std::min(side, std::sqrt(e.area_m2()));
   }
   return side;
-}
-
-/// Relative charge difference: max_k |Q_k − Q_ref,k| / max_k |Q_ref,k| (the largest electrode
-/// charge sets the scale, so an electrode far from the probe does not inflate the error).
-double charge_difference(const std::vector<double>& q, const std::vector<double>& ref) {
-  double scale = 0, d = 0;
-  for (double r : ref) scale = std::max(scale, std::abs(r));
-  if (q.size() != ref.size() || !(scale > 0)) return q.size() == ref.size() ? 0.0 : 1.0;
-  for (std::size_t k = 0; k < q.size(); ++k) d = std::max(d, std::abs(q[k] - ref[k]) / scale);
-  return d;
 }
 
 // Step 2 of the setup: one mesh for every probe position, nowhere coarser than `region` (8 probe
@@ -102,42 +97,25 @@ std::vector<std::array<double, 2>> check_positions(const pvdf::Scene& scene, dou
   return checks;
 }
 
-/// The sweep mesh against direct solves (pvdf::fem::solve on meshes graded to each probe) at the
-/// check positions: the largest relative charge and deflection differences.
-struct CheckOutcome {
-  double charge_error = 0;      // max_k |dQ_k| / max_k |Q_k|, worst position
-  double deflection_error = 0;  // |w/w_direct − 1|, worst position
-  std::string where;            // worst position (or the failed check)
-  bool failed = false;          // a check solve did not converge
-};
+/// Relative size of per-electrode absolute errors: max_k err_k / max_k |Q_k| (1 when Q = 0).
+double relative(const std::vector<double>& err, const std::vector<double>& q) {
+  double scale = 0, e = 0;
+  for (double v : q) scale = std::max(scale, std::abs(v));
+  for (double v : err) e = std::max(e, std::abs(v));
+  return scale > 0 ? e / scale : (e > 0 ? 1.0 : 0.0);
+}
 
-CheckOutcome run_checks(detail::SweepEngine& engine, const pvdf::Scene& scene, const Options& solver_options,
-                        Model model, bool bending, const std::vector<std::array<double, 2>>& checks, double force_N) {
-  CheckOutcome c;
-  for (const auto& p : checks) {
-    std::vector<double> state;
-    const detail::EngineSolution s = engine.solve(p[0], p[1], force_N, state, false);
-    Options o = solver_options;
-    o.model = model;
-    o.include_bending = bending;
-    o.adaptive = false;
-    const Result r = pvdf::fem::solve(pvdf::with_probe_load(scene, p[0], p[1], force_N), o);
-    if (!usable(s.status) || !usable(r.summary.status)) {
-      c.failed = true;
-      c.where = "check solve at (" + fmt(p[0]) + ", " + fmt(p[1]) + ") m did not converge";
-      continue;
-    }
-    std::vector<double> ref;
-    for (const auto& e : r.electrodes) ref.push_back(e.charge_C);
-    const double d = charge_difference(s.charge_C, ref);
-    if (d >= c.charge_error) {
-      c.charge_error = d;
-      c.where = "(" + fmt(p[0]) + ", " + fmt(p[1]) + ") m";
-    }
-    if (r.deflection_at_load_m != 0)
-      c.deflection_error = std::max(c.deflection_error, std::abs(s.deflection_at_load_m / r.deflection_at_load_m - 1));
-  }
-  return c;
+// The rim model's cell size at the clamp: the bending boundary layer sqrt(D/N) with N the rim
+// membrane force of the point-loaded membrane at the smallest force, from equilibrium
+// N sin(a) 2 pi R = F and the membrane strain N/(E h) = a^2/2: N = (F/(2 pi R))^(2/3) (E h/2)^(1/3).
+double boundary_layer_m(const pvdf::Scene& scene, double force_N) {
+  const double h = scene.membrane.thickness_m;
+  const double E = std::max(scene.material.E1_Pa, scene.material.E2_Pa);
+  const double R = scene.membrane.outline.characteristic_radius_m();
+  const double D = E * h * h * h / 12.0;
+  const double n = std::max(scene.membrane.pretension_N_per_m,
+                            pvdf::membrane_force_scale_N_per_m(E * h, force_N / (2 * pvdf::pi), R) * 0.7937005259840998);  // x 2^(-1/3)
+  return std::sqrt(D / n);
 }
 
 }  // namespace
@@ -147,7 +125,68 @@ struct ProbeSweep::Impl {
   SweepOptions options;
   SweepSetup setup;
   std::unique_ptr<detail::SweepEngine> engine;
+  // Bending kept, mesh graded toward the clamp along one sector of the rim each (built lazily).
+  std::vector<std::unique_ptr<detail::SweepEngine>> rim_engines;
+  detail::SweepMeshSizes rim_sizes;
+  int sector_of(double x_m, double y_m) const;
+  detail::SweepEngine& rim_engine(int sector);
+  double rim_s = 0;
+  int rim_solves = 0;
+  ProbeSolution from_engine(const detail::EngineSolution& e, SweepModel used) const;
 };
+
+int ProbeSweep::Impl::sector_of(double x_m, double y_m) const {
+  const int n = static_cast<int>(rim_engines.size());
+  if (n <= 1) return 0;
+  const double turn = std::atan2(y_m, x_m) / (2 * pvdf::pi);  // (-1/2, 1/2]
+  return ((static_cast<int>(std::lround(turn * n)) % n) + n) % n;
+}
+
+detail::SweepEngine& ProbeSweep::Impl::rim_engine(int sector) {
+  auto& e = rim_engines[static_cast<std::size_t>(sector)];
+  if (!e) {
+    const int n = static_cast<int>(rim_engines.size());
+    detail::SweepMeshSizes sizes = rim_sizes;
+    sizes.rim_angle_rad = 2 * pvdf::pi * sector / std::max(1, n);
+    sizes.rim_half_angle_rad = n <= 1 ? 4.0 : 1.5 * 2 * pvdf::pi / n;  // its sector and half of each neighbour, and more
+    Options so = options.solver;
+    e = std::make_unique<detail::SweepEngine>(scene, so, setup.model, true, sizes, true);
+    if (setup.rim_n_dofs == 0) setup.rim_n_dofs = e->n_dofs();
+  }
+  return *e;
+}
+
+// The estimates of one engine solve: each part by magnitude, summed per electrode.
+ProbeSolution ProbeSweep::Impl::from_engine(const detail::EngineSolution& e, SweepModel used) const {
+  ProbeSolution s;
+  s.status = e.status;
+  s.message = e.message;
+  s.newton_iterations = e.newton_iterations;
+  s.warm_started = e.warm_started;
+  s.model_used = used;
+  if (!usable(e.status)) return s;
+  const std::size_t ne = e.charge_C.size();
+  s.charge_C = e.charge_C;
+  s.deflection_at_load_m = e.deflection_at_load_m;
+  s.rim_reaction_N = e.rim_reaction_N;
+  s.mean_membrane_force_material_N_per_m = e.mean_membrane_force_material_N_per_m;
+  if (!e.errors_estimated) {
+    s.estimated_relative_error = std::numeric_limits<double>::quiet_NaN();
+    return s;
+  }
+  s.charge_error_discretization_C.assign(ne, 0.0);
+  s.charge_error_model_C.assign(ne, 0.0);
+  s.charge_error_C.assign(ne, 0.0);
+  for (std::size_t k = 0; k < ne; ++k) {
+    if (k < e.charge_error_discretization_C.size()) s.charge_error_discretization_C[k] = std::abs(e.charge_error_discretization_C[k]);
+    if (k < e.charge_error_model_C.size()) s.charge_error_model_C[k] = std::abs(e.charge_error_model_C[k]);
+    s.charge_error_C[k] = s.charge_error_discretization_C[k] + s.charge_error_model_C[k];
+  }
+  s.estimated_relative_error = relative(s.charge_error_C, s.charge_C);
+  s.deflection_error_m = std::abs(e.deflection_error_discretization_m) + std::abs(e.deflection_error_model_m);
+  return s;
+}
+
 
 // Setup, in four steps: check the input; choose the model (the `auto` rule over the force
 // range); size one mesh for every probe position; build it and measure its charge error against
@@ -187,43 +226,66 @@ ProbeSweep::ProbeSweep(const pvdf::Scene& scene, const SweepOptions& options) : 
   im.setup.model_reason = choice.reason;
   im.setup.include_bending = bending;
 
-  // 2.–4. Mesh sizes, check positions, build and measure.
+  // 2.–4. Mesh sizes, check positions, build and measure: the sweep's own estimate at the check
+  // positions (discretization part) sizes the mesh, halving it (at most twice) while that
+  // estimate exceeds half the tolerance, the other half being the model's share.
   detail::SweepMeshSizes sizes = initial_mesh_sizes(scene, options);
   const std::vector<std::array<double, 2>> checks =
       check_positions(scene, im.options.rim_margin_m, options.n_setup_checks);
   for (int attempt = 0;; ++attempt) {
-    im.engine = std::make_unique<detail::SweepEngine>(scene, so, model, bending, sizes);
-    const CheckOutcome c = run_checks(*im.engine, scene, so, model, bending, checks, f_max);
+    // Estimates are needed to size the mesh (checks) and per probe (estimate_errors); without
+    // either, the engine keeps no bending pattern, whose face couplings fill the tangent's factor.
+    const bool estimating = options.estimate_errors || !checks.empty();
+    im.engine = std::make_unique<detail::SweepEngine>(scene, so, model, bending, sizes, estimating, options.mesh.get());
+    double disc = 0, total = 0, deflection = 0;
+    std::string where = "none";
+    bool failed = false;
+    for (const auto& p : checks) {
+      std::vector<double> state;
+      const ProbeSolution c = im.from_engine(im.engine->solve(p[0], p[1], f_max, state, false), SweepModel::cheap);
+      if (!usable(c.status)) {
+        failed = true;
+        where = "check solve at (" + fmt(p[0]) + ", " + fmt(p[1]) + ") m did not converge";
+        continue;
+      }
+      const double d = relative(c.charge_error_discretization_C, c.charge_C);
+      if (d >= disc) {
+        disc = d;
+        where = "(" + fmt(p[0]) + ", " + fmt(p[1]) + ") m";
+      }
+      total = std::max(total, c.estimated_relative_error);
+      if (c.deflection_at_load_m != 0) deflection = std::max(deflection, c.deflection_error_m / std::abs(c.deflection_at_load_m));
+    }
     im.setup.n_dofs = im.engine->n_dofs();
     im.setup.n_cells = im.engine->n_cells();
-    if (checks.empty()) {
-      im.setup.estimated_relative_error = 1.0;
-      im.setup.error_estimator = "not estimated (no setup checks requested)";
-      break;
-    }
-    // Four positions do not find the worst one: on seed 001, nine further positions against
-    // once-refined direct solves peaked at 2.4x the check maximum (docs/bench-fem.md), hence the
-    // factor (the checks' own references are direct solves with error <= 1.4e-3).
-    constexpr double worst_case_factor = 2.5;
-    im.setup.estimated_relative_error = c.failed ? 1.0 : std::min(1.0, worst_case_factor * c.charge_error);
-    // The deflection under the probe is resolved far worse than the charges (the mesh is graded
-    // to the electrodes, not to the probe): on seed 001 five map nodes off the checks against
-    // direct adaptive solves were up to 14x the check maximum (9.4 % at (-36, 12) mm against
-    // 0.67 %; docs/map-generation.md), hence its own factor.
-    constexpr double deflection_worst_case_factor = 15.0;
-    im.setup.estimated_deflection_relative_error =
-        c.failed ? 1.0 : std::min(1.0, deflection_worst_case_factor * c.deflection_error);
+    im.setup.estimated_relative_error = checks.empty() ? 0.0 : (failed ? 1.0 : total);
+    im.setup.estimated_deflection_relative_error = checks.empty() ? 0.0 : (failed ? 1.0 : deflection);
     im.setup.error_estimator =
-        "max over " + std::to_string(checks.size()) + " probe positions (centre, on an electrode, beside one, far) at " +
-        fmt(f_max) + " N of max_k |dQ_k| / max_k |Q_k| against direct solves on meshes graded to each probe (" +
-        fmt(c.charge_error) + ", worst at " + c.where + "), times " + fmt(worst_case_factor) +
-        " for positions between the checks (calibrated on seed 001)" + (c.failed ? "; a check solve failed" : "");
-    if ((c.charge_error <= so.tolerance && !c.failed) || attempt == 2) break;
+        "per probe: adjoint-weighted residual estimates of every electrode charge on the sweep mesh "
+        "(discretization) plus, for a model that drops bending, the bending residual weighted by the same adjoint "
+        "(model); setup: " + std::to_string(checks.size()) + " check positions at " + fmt(f_max) +
+        " N, worst discretization estimate " + fmt(disc) + " at " + where + (failed ? "; a check solve failed" : "");
+    if ((disc <= 0.5 * so.tolerance && !failed) || attempt == 2) break;
     sizes.region_size_m *= 0.5;
     sizes.electrode_size_m *= 0.5;
   }
   im.setup.region_size_m = sizes.region_size_m;
   im.setup.electrode_size_m = sizes.electrode_size_m;
+
+  // 5. The rim model: bending kept on a mesh graded toward the clamp, for the probes where the
+  // cheap model's estimate says bending matters (ProbeSweep::solve).
+  if (!options.estimate_errors && !checks.empty()) {  // sized with estimates; solved without
+    im.engine = std::make_unique<detail::SweepEngine>(scene, so, model, bending, sizes, false, options.mesh.get());
+  }
+  if (!bending && options.estimate_errors && options.rim_model != SweepOptions::RimModel::never) {
+    im.rim_sizes = sizes;
+    const double layer = boundary_layer_m(scene, f_min);
+    im.rim_sizes.rim_size_m = options.rim_size_m > 0 ? options.rim_size_m : layer;
+    im.rim_sizes.rim_grading = options.rim_grading > 0 ? options.rim_grading : 0.5;
+    im.rim_engines.resize(static_cast<std::size_t>(std::max(1, options.rim_sectors)));
+    im.setup.rim_model_available = true;
+    im.setup.rim_size_m = im.rim_sizes.rim_size_m;
+  }
   im.setup.setup_s = seconds_since(t0);
 }
 
@@ -232,7 +294,21 @@ ProbeSweep::~ProbeSweep() = default;
 const SweepSetup& ProbeSweep::setup() const { return impl_->setup; }
 
 SweepTiming ProbeSweep::timing() const {
-  return impl_->engine->timing();
+  SweepTiming t = impl_->engine->timing();
+  for (const auto& engine : impl_->rim_engines) {
+    if (!engine) continue;
+    const SweepTiming r = engine->timing();
+    t.assembly_s += r.assembly_s;
+    t.linear_solve_s += r.linear_solve_s;
+    t.load_vector_s += r.load_vector_s;
+    t.outputs_s += r.outputs_s;
+    t.newton_iterations += r.newton_iterations;
+    t.factorizations += r.factorizations;
+    t.estimate_s += r.estimate_s;
+  }
+  t.rim_solves = impl_->rim_solves;
+  t.rim_s = impl_->rim_s;
+  return t;
 }
 
 ProbeSolution ProbeSweep::solve(double x_m, double y_m, double force_N, const SweepState* warm_start,
@@ -251,6 +327,7 @@ ProbeSolution ProbeSweep::solve(double x_m, double y_m, double force_N, const Sw
       << im.options.rim_margin_m << " m from the rim; choose a position inside the served region";
     throw pvdf::InputError(m.str());
   }
+  const double tol = im.options.solver.tolerance;
   std::vector<double> state;
   double state_force = 0;
   const bool warm = warm_start && !warm_start->dofs.empty() && warm_start->dofs.size() == im.setup.n_dofs;
@@ -258,38 +335,74 @@ ProbeSolution ProbeSweep::solve(double x_m, double y_m, double force_N, const Sw
     state = warm_start->dofs;
     state_force = warm_start->force_N;
   }
-  const detail::EngineSolution e = im.engine->solve(x_m, y_m, force_N, state, warm, state_force);
-
-  ProbeSolution s;
+  ProbeSolution s = im.from_engine(im.engine->solve(x_m, y_m, force_N, state, warm, state_force), SweepModel::cheap);
+  std::vector<double> rim_state;
+  double rim_force = 0, rim_x = 0, rim_y = 0;
+  int rim_sector = -1;
+  if (warm_start && !im.rim_engines.empty() && !warm_start->rim_dofs.empty()) {
+    rim_state = warm_start->rim_dofs;
+    rim_force = warm_start->rim_force_N;
+    rim_x = warm_start->rim_x_m;
+    rim_y = warm_start->rim_y_m;
+    rim_sector = warm_start->rim_sector;
+  }
+  // The rim model where the cheap model's estimate says bending matters: its model part above
+  // half the tolerance (the discretization's share is the other half), or the total above it.
+  const double cheap_model = usable(s.status) ? relative(s.charge_error_model_C, s.charge_C) : 0.0;
+  const bool want_rim = !im.rim_engines.empty() && usable(s.status) &&
+                        (im.options.rim_model == SweepOptions::RimModel::always ||
+                         cheap_model > 0.5 * tol || s.estimated_relative_error > tol);
+  if (want_rim) {
+    const auto t_rim = Clock::now();
+    // Warm only from a rim state converged nearby (a chain's rim probes are its row's ends).
+    const double reach = 8 * im.scene.probe.radius_m;
+    const int sector = im.sector_of(x_m, y_m);
+    detail::SweepEngine& engine = im.rim_engine(sector);
+    const bool rim_warm = !rim_state.empty() && sector == rim_sector && rim_state.size() == engine.n_dofs() &&
+                          std::hypot(rim_x - x_m, rim_y - y_m) <= reach;
+    std::vector<double> rs = rim_warm ? rim_state : std::vector<double>{};
+    ProbeSolution r = im.from_engine(engine.solve(x_m, y_m, force_N, rs, rim_warm, rim_force), SweepModel::rim);
+    ++im.rim_solves;
+    im.rim_s += seconds_since(t_rim);
+    if (usable(r.status)) {
+      r.cheap_model_relative_error = cheap_model;
+      r.newton_iterations += s.newton_iterations;
+      s = std::move(r);
+      rim_state = std::move(rs);
+      rim_force = force_N;
+      rim_x = x_m;
+      rim_y = y_m;
+      rim_sector = sector;
+    } else {
+      s.message += "; the rim model did not converge here (" + r.message + "), the cheap model's result is kept";
+    }
+  }
   s.x_m = x_m;
   s.y_m = y_m;
   s.force_N = force_N;
-  s.newton_iterations = e.newton_iterations;
-  s.warm_started = e.warm_started;
-  s.status = e.status;
-  s.message = e.message;
-  if (usable(e.status)) {
-    const double tol = im.options.solver.tolerance;
-    if (im.options.n_setup_checks <= 0) {
-      s.status = Status::converged;
-      s.message = "Newton converged; no setup check requested, charge error not estimated";
-    } else if (im.setup.estimated_relative_error > tol) {
+  if (usable(s.status)) {
+    const std::string which = s.model_used == SweepModel::rim ? "rim model (bending, rim-graded mesh)" : "sweep model";
+    if (s.estimated_relative_error > tol) {
       s.status = Status::tolerance_not_met;
-      s.message = "Newton converged; the sweep mesh's estimated charge error " +
-                  fmt(im.setup.estimated_relative_error) + " > tolerance " + fmt(tol);
+      s.message = "Newton converged; " + which + " estimated charge error " + fmt(s.estimated_relative_error) +
+                  " > tolerance " + fmt(tol);
     } else {
       s.status = Status::converged;
-      s.message = "Newton converged; sweep mesh estimated charge error " + fmt(im.setup.estimated_relative_error);
+      s.message = std::isnan(s.estimated_relative_error)
+                      ? "Newton converged; per-probe estimate off (the setup's estimate " +
+                            fmt(im.setup.estimated_relative_error) + ")"
+                      : "Newton converged; " + which + " estimated charge error " + fmt(s.estimated_relative_error);
     }
-    s.deflection_at_load_m = e.deflection_at_load_m;
-    s.rim_reaction_N = e.rim_reaction_N;
-    s.charge_C = e.charge_C;
-    s.mean_membrane_force_material_N_per_m = e.mean_membrane_force_material_N_per_m;
     if (state_out) {
       state_out->dofs = std::move(state);
       state_out->force_N = force_N;
       state_out->x_m = x_m;
       state_out->y_m = y_m;
+      state_out->rim_dofs = std::move(rim_state);
+      state_out->rim_force_N = rim_force;
+      state_out->rim_x_m = rim_x;
+      state_out->rim_y_m = rim_y;
+      state_out->rim_sector = rim_sector;
     }
   }
   s.wall_s = seconds_since(t0);

@@ -67,9 +67,13 @@ FilmSolver::FilmSolver(const pvdf::Scene& scene, const Options& options)
   if (!(thickness_ > 0) || !std::isfinite(thickness_)) {
     throw InputError(scene.source + ": membrane.thickness_m = " + fmt(thickness_) + " must be > 0");
   }
-  if (!(pretension_ >= 0) || !std::isfinite(pretension_)) {
-    throw InputError(scene.source + ": membrane.pretension_N_per_m = " + fmt(pretension_) +
-                     " must be >= 0 (a compressed flat film buckles; the solver models tension only)");
+  if (!std::isfinite(pretension_)) {
+    throw InputError(scene.source + ": membrane.pretension_N_per_m = " + fmt(pretension_) + " must be finite");
+  }
+  const bool slack = pretension_ < 0 || m.slack_strain > 0;
+  if ((slack || m.tension_field) && options.model == Model::linear) {
+    throw InputError(scene.source + ": a slack or wrinkling film (membrane.pretension_N_per_m < 0, slack_strain or "
+                     "tension_field) needs a nonlinear model; use model.kinematics auto, von-karman or large-rotation");
   }
   const std::string pd = scene.material.positive_definiteness_problem();
   if (!pd.empty()) throw InputError(scene.source + ": material: " + pd);
@@ -92,6 +96,7 @@ FilmSolver::FilmSolver(const pvdf::Scene& scene, const Options& options)
       bending_D_.c[i][j] = thickness_ * thickness_ * thickness_ / 12.0 * Q(i, j);
     }
   }
+  setup_natural_state();  // tension_field.cpp
   // Penalty scale: largest eigenvalue of D in Mandel form (shear rows scaled by √2 ... here 2 for
   // engineering shear), so the penalty dominates every direction of anisotropy.
   Eigen::Matrix3d Dm;
@@ -197,7 +202,12 @@ void FilmSolver::make_grid_from(const pvdf::mesh::FilmMesh& mesh) {
     triangulation_.set_manifold(pvdf::mesh::rim_manifold_id,
                                 PolarManifold<dim>(Point<dim>(mesh.rim_center_m[0], mesh.rim_center_m[1])));
   }
-  refine_initial_mesh();
+  if (options_.grade_given_mesh) {
+    refine_initial_mesh();
+  } else {
+    if (options_.initial_global_refinements > 0) triangulation_.refine_global(options_.initial_global_refinements);
+    set_material_ids();
+  }
 }
 
 // Graded a-priori refinement: the target size grows linearly (factor `grading`) with the
@@ -276,10 +286,12 @@ void FilmSolver::setup_system() {
   // Cells couple all components; faces (the C0IP bending terms) couple only w with w. Both with
   // the fill-in of the hanging-node condensation (see add_bending_face_couplings).
   DoFTools::make_sparsity_pattern(dof_handler_, dsp, constraints_, true);
-  if (options_.include_bending) add_bending_face_couplings(dsp);
+  if (options_.include_bending || bending_pattern_) add_bending_face_couplings(dsp);
   sparsity_.copy_from(dsp);
-  tangent_.reinit(sparsity_);
-  copy_pattern_to_eigen();
+  if (!residual_only_) {  // the enriched space (goal_error.cpp) assembles residuals only
+    tangent_.reinit(sparsity_);
+    copy_pattern_to_eigen();
+  }
   bending_.reinit(sparsity_);
   bending_raw_.reinit(sparsity_);
   solution_.reinit(dof_handler_.n_dofs());

@@ -69,6 +69,7 @@ Result FilmSolver::run() {
     if (c.outcome.status != Status::converged) return failure_result(c.outcome, c.where, t_start);
     model = c.model;
     s.model_reason = c.reason;
+    kinematics_model_error_ = c.relative_model_error;
   } else {
     s.model_reason = "requested";
     const NewtonOutcome o = solve_from_flat(model, u);
@@ -82,6 +83,7 @@ Result FilmSolver::run() {
   std::string where;
   const NewtonOutcome refined = refine_until_tolerance(model, where);
   if (refined.status != Status::converged) return failure_result(refined, where, t_start);
+  if (!bending_reason_.empty()) s.model_reason += "; " + bending_reason_;
   set_final_status();
 
   // 3. Outputs. Never NaN: a non-finite output is a numerical failure.
@@ -89,6 +91,7 @@ Result FilmSolver::run() {
   s.n_cells = triangulation_.n_active_cells();
   Result result;
   fill_result(result, model);
+  add_error_estimates(result);
   bool finite = std::isfinite(result.max_deflection_m) && std::isfinite(result.rim_reaction_N);
   for (const auto& e : result.electrodes)
     for (double v : e.mean_membrane_force_material_N_per_m) finite = finite && std::isfinite(v);
@@ -147,6 +150,10 @@ void FilmSolver::set_final_status() {
   if (max_cycles == 0) {
     s.status = Status::converged;
     s.message = "Newton converged; no refinement requested, output error not estimated";
+  } else if (dof_cap_reached_ && estimate > options_.tolerance) {
+    s.status = Status::tolerance_not_met;
+    s.message = "Newton converged but the estimated output error " + fmt(estimate) + " > tolerance " +
+                fmt(options_.tolerance) + ": refining further would pass max_dofs = " + std::to_string(options_.max_dofs);
   } else if (estimate <= options_.tolerance) {
     s.status = Status::converged;
     s.message = "Newton converged; estimated output error " + fmt(estimate) + " <= tolerance " + fmt(options_.tolerance);
@@ -154,6 +161,31 @@ void FilmSolver::set_final_status() {
     s.status = Status::tolerance_not_met;
     s.message = "Newton converged but the estimated output error " + fmt(estimate) + " > tolerance " +
                 fmt(options_.tolerance) + " after " + std::to_string(s.refinement_cycles) + " refinements";
+  }
+}
+
+// Per-output error bars from the estimates on the final mesh: |discretization| + |model| (the
+// kinematics part, relative, scaled by each output).
+void FilmSolver::add_error_estimates(Result& result) const {
+  auto bar = [this](const std::vector<double>& disc, const std::vector<double>& model, std::size_t j, double value) {
+    double e = 0;
+    if (j < disc.size() && std::isfinite(disc[j])) e += std::abs(disc[j]);
+    else e += std::abs(value);  // not estimated: the whole value
+    if (j < model.size() && std::isfinite(model[j])) e += std::abs(model[j]);
+    return e + kinematics_model_error_ * std::abs(value);
+  };
+  auto at = [](const std::vector<double>& v, std::size_t j) { return j < v.size() && std::isfinite(v[j]) ? v[j] : 0.0; };
+  for (std::size_t k = 0; k < result.electrodes.size(); ++k) {
+    ElectrodeResult& e = result.electrodes[k];
+    e.charge_error_C = bar(goal_.charge_discretization_C, goal_.charge_model_C, k, e.charge_C);
+    e.charge_discretization_error_C = at(goal_.charge_discretization_C, k);
+    e.charge_model_error_C = at(goal_.charge_model_C, k);
+  }
+  for (std::size_t l = 0; l < result.loads.size(); ++l) {
+    LoadResult& r = result.loads[l];
+    r.deflection_error_m = bar(goal_.deflection_discretization_m, goal_.deflection_model_m, l, r.deflection_m);
+    r.deflection_discretization_error_m = at(goal_.deflection_discretization_m, l);
+    r.deflection_model_error_m = at(goal_.deflection_model_m, l);
   }
 }
 
@@ -168,10 +200,16 @@ Result run_with_model_choice(const pvdf::Scene& scene, const Options& options,
   used.model = choice.model;
   used.include_bending = choice.include_bending;
   FilmSolver solver(scene, used);
+  // `auto` left bending out a priori: the solver keeps its operator so that the adjoint-weighted
+  // estimate of its effect decides on every mesh (bending switched on where it matters).
+  const bool bending_by_estimate = options.model == Model::automatic && options.include_bending && !choice.include_bending;
+  if (bending_by_estimate) solver.keep_bending_pattern(true);
+  else if (!used.include_bending && options.estimate_bending_effect) solver.keep_bending_pattern(false);
   make_grid(solver);
   Result r = solver.run();
   const bool decided_a_priori = options.model == Model::automatic && choice.model != Model::automatic;
-  if (decided_a_priori) r.summary.model_reason = choice.reason;
+  std::string& reason = r.summary.model_reason;
+  if (decided_a_priori) reason = reason.rfind("requested", 0) == 0 ? choice.reason + reason.substr(9) : choice.reason;
   return r;
 }
 

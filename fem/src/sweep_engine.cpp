@@ -2,6 +2,7 @@
 // to the electrodes and built without any probe, its DOFs, sparsity and symbolic factorization kept;
 // each probe re-integrates the load and warm-starts Newton from a neighbour's state, scaled by the
 // pure-membrane laws across forces (pvdf/core/membrane_scaling.hpp).
+#include "pvdf/core/constants.hpp"
 #include "film_solver.hpp"
 
 #include "pvdf/core/membrane_scaling.hpp"
@@ -15,8 +16,30 @@ using namespace dealii;
 
 // The sweep mesh is graded to the electrodes only (the scene copy given to this solver carries
 // no loads), capped everywhere by the coarse size, which is therefore the size under any probe.
-void FilmSolver::prepare_sweep() {
-  make_grid();
+// A given mesh (map --mesh) is the starting mesh of that grading.
+void FilmSolver::prepare_sweep(const SweepMeshSizes& sizes, const pvdf::mesh::FilmMesh* mesh) {
+  if (mesh) make_grid_from(*mesh);
+  else make_grid();
+  if (sizes.rim_size_m > 0) {
+    const auto& outline = scene_.membrane.outline;
+    for (int pass = 0; pass < 30; ++pass) {
+      bool marked = false;
+      for (const auto& cell : triangulation_.active_cell_iterators()) {
+        const Point<dim> c = cell->center();
+        const double off = std::remainder(std::atan2(c[1], c[0]) - sizes.rim_angle_rad, 2 * pvdf::pi);
+        if (std::abs(off) > sizes.rim_half_angle_rad) continue;
+        const double d = std::max(0.0, outline.inside_distance_m({c[0], c[1]}) - 0.5 * cell->diameter());
+        const double target = std::max(sizes.rim_size_m, sizes.rim_grading * d);
+        if (cell->diameter() / std::sqrt(2.0) > 1.3 * target) {
+          cell->set_refine_flag();
+          marked = true;
+        }
+      }
+      if (!marked) break;
+      triangulation_.execute_coarsening_and_refinement();
+    }
+    set_material_ids();
+  }
   setup_system();
 }
 
@@ -84,11 +107,13 @@ struct SweepEngine::Impl {
   Model model = Model::large_rotation;
   std::unique_ptr<FilmSolver> solver;
   EngineTiming timing;
+  bool estimate_errors = false;
 };
 
 SweepEngine::SweepEngine(const pvdf::Scene& scene, const Options& options, Model model, bool include_bending,
-                         const SweepMeshSizes& sizes)
+                         const SweepMeshSizes& sizes, bool estimate_errors, const pvdf::mesh::FilmMesh* mesh)
     : impl_(std::make_unique<Impl>()) {
+  impl_->estimate_errors = estimate_errors;
   impl_->scene = scene;
   impl_->scene.loads.clear();
   impl_->model = model;
@@ -105,7 +130,8 @@ SweepEngine::SweepEngine(const pvdf::Scene& scene, const Options& options, Model
   o.vtu_directory.clear();
   impl_->options = o;
   impl_->solver = std::make_unique<FilmSolver>(impl_->scene, o);
-  impl_->solver->prepare_sweep();
+  if (estimate_errors && !include_bending) impl_->solver->keep_bending_pattern(false);
+  impl_->solver->prepare_sweep(sizes, mesh);
 }
 
 SweepEngine::~SweepEngine() = default;
@@ -148,6 +174,16 @@ EngineSolution SweepEngine::solve(double x_m, double y_m, double force_N, std::v
   if (o.status != Status::converged) return out;
   const auto t0 = Clock::now();
   fs.probe_outputs(u, impl_->model, out);
+  if (impl_->estimate_errors) {
+    const auto t_estimate = Clock::now();
+    const FilmSolver::GoalErrors ge = fs.estimate_goal_errors(u, impl_->model);
+    impl_->timing.estimate_s += seconds_since(t_estimate);
+    out.errors_estimated = true;
+    out.charge_error_discretization_C = ge.charge_discretization_C;
+    out.charge_error_model_C = ge.charge_model_C;
+    out.deflection_error_discretization_m = ge.deflection_discretization_m.empty() ? 0.0 : ge.deflection_discretization_m[0];
+    out.deflection_error_model_m = ge.deflection_model_m.empty() ? 0.0 : ge.deflection_model_m[0];
+  }
   impl_->timing.outputs_s += seconds_since(t0);
   bool finite = std::isfinite(out.deflection_at_load_m) && std::isfinite(out.rim_reaction_N);
   for (double q : out.charge_C) finite = finite && std::isfinite(q);

@@ -20,6 +20,14 @@ struct SweepMeshSizes {
   double electrode_size_m = 0;  ///< cell size on the electrodes
   double grading = 1.0;         ///< away from the electrodes: size <= grading x distance
   int global_refinements = 0;   ///< uniform refinements after the grading
+  /// Grading toward the clamped rim (0 = none): cells within the arc are refined until their size
+  /// is <= max(rim_size_m, rim_grading x distance to the rim), so the bending boundary layer
+  /// sqrt(D/N) at the clamp is resolved. The arc is the part of the rim seen from the film centre
+  /// within rim_half_angle_rad of the direction rim_angle_rad (>= pi: the whole rim).
+  double rim_size_m = 0;
+  double rim_grading = 1.0;
+  double rim_angle_rad = 0;
+  double rim_half_angle_rad = 4.0;
 };
 
 /// Outcome of one probe solve on the sweep mesh.
@@ -33,6 +41,18 @@ struct EngineSolution {
   double rim_reaction_N = 0;
   std::vector<double> charge_C;
   std::vector<std::array<double, 3>> mean_membrane_force_material_N_per_m;
+
+  /// Goal-oriented (adjoint-weighted residual) error estimates of this probe's outputs, filled
+  /// when the engine was built with estimate_errors (docs/fem.md §6). Each is a signed estimate of
+  /// (exact − computed) for that output, in its unit; take |·| for an error bar.
+  bool errors_estimated = false;
+  /// Discretization error of each electrode's charge on the engine's mesh (C), per electrode.
+  std::vector<double> charge_error_discretization_C;
+  /// What the bending term would change in each charge when the engine runs without bending (C);
+  /// zeros when the engine keeps bending (the richest model it has).
+  std::vector<double> charge_error_model_C;
+  double deflection_error_discretization_m = 0;  ///< of deflection_at_load_m (m)
+  double deflection_error_model_m = 0;           ///< bending's effect on deflection_at_load_m (m); 0 with bending
 };
 
 /// Accumulated cost of the probe solves: the public pvdf::fem::SweepTiming.
@@ -40,10 +60,16 @@ using EngineTiming = SweepTiming;
 
 class SweepEngine {
  public:
-  /// Builds the mesh (graded to the electrodes, nowhere coarser than sizes.region_size_m), the
+  /// Builds the mesh (graded to the electrodes, nowhere coarser than sizes.region_size_m; from `mesh`
+  /// when given, else the built-in one), the
   /// DOFs, constraints and sparsity for `model` (with/without bending). The scene's loads are ignored.
+  /// With `estimate_errors`, every converged solve() also fills the EngineSolution error fields:
+  /// one extra factorization of the converged tangent (two without bending: the bending model error
+  /// uses the tangent with bending), one back substitution per output, and one residual evaluation
+  /// in the Q(p+1) space of the same mesh.
   SweepEngine(const pvdf::Scene& scene, const Options& options, Model model, bool include_bending,
-              const SweepMeshSizes& sizes);
+              const SweepMeshSizes& sizes, bool estimate_errors = false,
+              const pvdf::mesh::FilmMesh* mesh = nullptr);
   ~SweepEngine();
   SweepEngine(const SweepEngine&) = delete;
   SweepEngine& operator=(const SweepEngine&) = delete;
@@ -90,5 +116,10 @@ struct ForceRange {
 /// layer is widest there), step 2 runs now at the largest force, and a film whose bending is
 /// negligible at the largest force only keeps bending with large-rotation kinematics.
 ModelChoice choose_model(const pvdf::Scene& scene, const Options& options, const ForceRange* sweep = nullptr);
+
+/// The bending part of `auto` decided by the dual-weighted residual estimate of bending's effect
+/// (goal_error.cpp): bending may be left out when that relative effect on every output is at most
+/// half the tolerance (the other half is the discretization's). `reason` quotes the numbers.
+bool bending_may_be_left_out(double relative_bending_effect, double tolerance, std::string& reason);
 
 }  // namespace pvdf::fem::detail

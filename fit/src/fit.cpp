@@ -4,6 +4,7 @@
 #include "pvdf/fit/fit.hpp"
 
 #include "pvdf/core/error.hpp"
+#include "pvdf/core/piezo.hpp"
 
 #include <ceres/ceres.h>
 
@@ -21,6 +22,12 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 constexpr double pC = 1e-12;  // internal unit of d31, d32 (keeps the parameters near 1)
+
+// The slackest film the fit tries: N0 = −E·h/10 with E = √(E1·E2), a natural strain of about 7 %
+// (pretension of either sign is one parameter: negative = slack, docs/fem-vs-experiment.md).
+double slack_bound_N_per_m(const pvdf::Scene& scene) {
+  return -0.1 * std::sqrt(scene.material.E1_Pa * scene.material.E2_Pa) * scene.membrane.thickness_m;
+}
 
 enum class Kind { pretension, log_E, d31, d32, gain };
 
@@ -110,7 +117,7 @@ class Problem {
         const int k = col.electrode;
         const double a = areas[k] / h, g = v.gains[k];
         const auto& b = r[i].force_basis_N_per_m[k];
-        const double q_unit = a * (v.d31 * b[0] + v.d32 * b[1]);
+        const double q_unit = pvdf::piezo_charge_C(areas[k], b[0], b[1], h, v.d31, v.d32);
         out[row] = g * q_unit;
         if (!jac) continue;
         for (std::size_t j = 0; j < n; ++j) {
@@ -118,12 +125,12 @@ class Problem {
           switch (specs_[j].kind) {
             case Kind::pretension: {
               const auto& db = r[i].d_force_basis[0][k];
-              d = g * a * (v.d31 * db[0] + v.d32 * db[1]);
+              d = g * pvdf::piezo_charge_C(areas[k], db[0], db[1], h, v.d31, v.d32);
               break;
             }
             case Kind::log_E: {
               const auto& db = r[i].d_force_basis[1][k];
-              d = g * a * (v.d31 * db[0] + v.d32 * db[1]) * v.E;
+              d = g * pvdf::piezo_charge_C(areas[k], db[0], db[1], h, v.d31, v.d32) * v.E;
               break;
             }
             case Kind::d31: d = g * a * b[0] * pC; break;
@@ -328,10 +335,9 @@ Prepared prepare(const pvdf::Scene& scene, const MeasuredTable& measured, const 
     }
     if (!std::isfinite(value)) throw pvdf::InputError("--start: " + n + " = " + fmt(value) + " must be finite");
     if (n == "pretension_N_per_m") {
-      if (value < 0) {
-        throw pvdf::InputError("--start: pretension_N_per_m = " + fmt(value) +
-                               " < 0 means a slack film, which needs the tension-field (wrinkling) membrane model "
-                               "that pvdfkit does not have yet; give a value >= 0");
+      if (value < slack_bound_N_per_m(scene)) {
+        throw pvdf::InputError("--start: pretension_N_per_m = " + fmt(value) + " is slacker than the fit allows (" +
+                               fmt(slack_bound_N_per_m(scene)) + " N/m, a slack strain of about 7 %); give a larger value");
       }
       start.T = value;
     } else if (n == "E_scale") {
@@ -490,7 +496,8 @@ FitResult fit_film(Predictor& predictor, const MeasuredTable& measured, const Fi
   ceres::Problem cp;
   cp.AddResidualBlock(new Cost(problem), nullptr, p.data());
   for (std::size_t j = 0; j < n; ++j) {
-    if (specs[j].kind == Kind::pretension) cp.SetParameterLowerBound(p.data(), static_cast<int>(j), 0.0);
+    if (specs[j].kind == Kind::pretension)
+      cp.SetParameterLowerBound(p.data(), static_cast<int>(j), slack_bound_N_per_m(scene));
     if (specs[j].kind == Kind::log_E) {
       cp.SetParameterLowerBound(p.data(), static_cast<int>(j), std::log(1e-4));
       cp.SetParameterUpperBound(p.data(), static_cast<int>(j), std::log(1e4));
@@ -534,7 +541,7 @@ FitResult fit_film(Predictor& predictor, const MeasuredTable& measured, const Fi
   std::vector<bool> at_bound(n, false);
   std::vector<Eigen::Index> free;
   for (std::size_t j = 0; j < n; ++j) {
-    at_bound[j] = (specs[j].kind == Kind::pretension && p[j] <= 0.0) ||
+    at_bound[j] = (specs[j].kind == Kind::pretension && p[j] <= slack_bound_N_per_m(scene) * (1 - 1e-9)) ||
                   (specs[j].kind == Kind::log_E && (p[j] <= std::log(1e-4) + 1e-12 || p[j] >= std::log(1e4) - 1e-12));
     if (!at_bound[j]) free.push_back(static_cast<Eigen::Index>(j));
   }
@@ -580,7 +587,7 @@ FitResult fit_film(Predictor& predictor, const MeasuredTable& measured, const Fi
     } else if (e.at_bound) {
       e.warning = e.name + " ended on its bound (" + fmt(e.value) +
                   "): the data push it beyond what the model allows; held there for the other intervals" +
-                  (specs[j].kind == Kind::pretension ? " (a softer film than pretension 0 gives: slack, not modelled yet)" : "");
+                  (specs[j].kind == Kind::pretension ? " (a slack strain of about 7 %: check the film, or fit E_scale too)" : "");
     } else if (e.value != 0 && e.sigma > 0.5 * std::abs(e.value)) {
       e.warning = e.name + " is weakly determined: 1-sigma " + fmt(e.sigma, 3) + " is " +
                   fmt(100 * e.sigma / std::abs(e.value), 3) + " % of its value";

@@ -3,6 +3,7 @@
 #include "pvdf/fit/predictor.hpp"
 
 #include "pvdf/core/error.hpp"
+#include "pvdf/core/piezo.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -71,8 +72,10 @@ struct Predictor::Impl {
     w = s.deflection_at_load_m;
     n.resize(s.mean_membrane_force_material_N_per_m.size());
     for (std::size_t k = 0; k < n.size(); ++k) {
-      // The isotropic pre-tension is (N0, N0, 0) in any axes; the amplifier sees only the change.
-      n[k] = {s.mean_membrane_force_material_N_per_m[k][0] - tension, s.mean_membrane_force_material_N_per_m[k][1] - tension};
+      // The isotropic pre-tension is (N0, N0, 0) in any axes; the amplifier sees only the change. A
+      // slack film (N0 < 0) is stress-free when flat (tension-field membrane): nothing to remove.
+      const double flat = std::max(tension, 0.0);
+      n[k] = {s.mean_membrane_force_material_N_per_m[k][0] - flat, s.mean_membrane_force_material_N_per_m[k][1] - flat};
     }
   }
 };
@@ -98,6 +101,10 @@ Predictor::Predictor(const pvdf::Scene& scene, std::vector<Press> presses, const
     std::sort(ref.forces_N.begin(), ref.forces_N.end());
     ref.forces_N.erase(std::unique(ref.forces_N.begin(), ref.forces_N.end()), ref.forces_N.end());
   }
+  // The fit solves the same presses many times: no per-probe estimates and no rim model (a second,
+  // rim-graded mesh with bending); the fit's model and mesh are the reference setup's, whose
+  // estimate is reported.
+  ref.estimate_errors = false;
   // The grading the sweep would choose, made explicit so that later sweeps build the same mesh.
   if (!(ref.grading > 0)) ref.grading = std::clamp(2.0 * ref.solver.tolerance / 0.01, 0.5, 2.0);
   const auto t0 = Clock::now();
@@ -128,15 +135,12 @@ std::vector<PressResponse> Predictor::predict(const FilmState& state, std::array
   if (!(E > 0) || !std::isfinite(E)) {
     throw pvdf::NumericalError("fit: E_scale = " + std::to_string(E) + " is not a positive finite stiffness factor");
   }
-  if (!(T >= 0) || !std::isfinite(T)) {
-    throw pvdf::InputError("fit: pretension_N_per_m = " + std::to_string(T) +
-                           " must be >= 0 (a slack film needs the tension-field model, not available yet)");
-  }
+  if (!std::isfinite(T)) throw pvdf::NumericalError("fit: pretension_N_per_m = " + std::to_string(T) + " is not finite");
   const double tau = T / E;
   const bool want_f = derivatives[1];
-  const bool want_tau = derivatives[0] || (derivatives[1] && tau > 0);
+  const bool want_tau = derivatives[0] || (derivatives[1] && tau != 0);
   const double h_f = im.options.relative_step;
-  const double h_tau = im.options.relative_step * std::max(tau, im.options.pretension_floor_N_per_m);
+  const double h_tau = im.options.relative_step * std::max(std::abs(tau), im.options.pretension_floor_N_per_m);
   const std::size_t n = im.presses.size();
   const std::size_t planned = n * (1 + (want_f ? 1 : 0) + (want_tau ? 1 : 0));
   std::size_t done = 0;
@@ -210,7 +214,7 @@ std::vector<double> charges_C(const PressResponse& response, const std::vector<d
   std::vector<double> q(response.force_basis_N_per_m.size());
   for (std::size_t k = 0; k < q.size(); ++k) {
     const auto& b = response.force_basis_N_per_m[k];
-    q[k] = gains[k] * areas_m2[k] / thickness_m * (d31_C_per_N * b[0] + d32_C_per_N * b[1]);
+    q[k] = gains[k] * pvdf::piezo_charge_C(areas_m2[k], b[0], b[1], thickness_m, d31_C_per_N, d32_C_per_N);
   }
   return q;
 }

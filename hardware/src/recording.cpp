@@ -34,7 +34,7 @@ StreamInfo read_header(std::FILE* f, const std::string& path) {
   std::uint8_t len_bytes[4];
   if (std::fread(magic, 1, 8, f) != 8 || std::memcmp(magic, file_magic, 8) != 0)
     throw InputError(path + ": not a pvdfkit recording (it must start with PVDFREC1); record one with "
-                            "'pvdfkit acquire --record FILE'");
+                            "'pvdfkit acquire'");
   if (std::fread(len_bytes, 1, 4, f) != 4)
     throw InputError(path + ": recording header is truncated; the file is damaged");
   const std::uint32_t len = static_cast<std::uint32_t>(len_bytes[0]) | (static_cast<std::uint32_t>(len_bytes[1]) << 8) |
@@ -70,7 +70,7 @@ StreamInfo read_header(std::FILE* f, const std::string& path) {
 
 Recorder::Recorder(const std::string& path, const StreamInfo& info) : path_(path) {
   file_ = std::fopen(path.c_str(), "wb");
-  if (file_ == nullptr) throw InputError("--record " + path + ": cannot create the file (" + errno_text() + ")");
+  if (file_ == nullptr) throw InputError("Recorder path " + path + ": cannot create the file (" + errno_text() + ")");
   const std::string header = info_to_json(info).dump();
   const std::uint32_t len = static_cast<std::uint32_t>(header.size());
   const std::uint8_t len_bytes[4] = {static_cast<std::uint8_t>(len), static_cast<std::uint8_t>(len >> 8),
@@ -80,7 +80,7 @@ Recorder::Recorder(const std::string& path, const StreamInfo& info) : path_(path
   if (!ok) {
     std::fclose(file_);
     file_ = nullptr;
-    throw InputError("--record " + path + ": cannot write the header (" + errno_text() + ")");
+    throw InputError("Recorder path " + path + ": cannot write the header (" + errno_text() + ")");
   }
 }
 
@@ -93,7 +93,7 @@ void Recorder::write(const std::vector<SampleBlock>& blocks) {
   scratch_.clear();
   for (const auto& b : blocks) encode_frame(b.frame, scratch_);
   if (std::fwrite(scratch_.data(), 1, scratch_.size(), file_) != scratch_.size() || std::fflush(file_) != 0)
-    throw InputError("--record " + path_ + ": write failed (" + errno_text() + "); the disk may be full");
+    throw InputError("Recorder path " + path_ + ": write failed (" + errno_text() + "); the disk may be full");
   frames_written_ += blocks.size();
 }
 
@@ -102,7 +102,7 @@ void Recorder::close() {
   const bool ok = std::fflush(file_) == 0;
   const bool closed = std::fclose(file_) == 0;
   file_ = nullptr;
-  if (!ok || !closed) throw InputError("--record " + path_ + ": closing failed (" + errno_text() + ")");
+  if (!ok || !closed) throw InputError("Recorder path " + path_ + ": closing failed (" + errno_text() + ")");
 }
 
 void Pacer::push(std::vector<SampleBlock>&& blocks) {

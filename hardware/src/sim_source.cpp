@@ -1,8 +1,10 @@
 // Simulated charge-amplifier front end (docs/hardware.md, "Simulated device").
 #include "pvdf/hardware/sim_source.hpp"
 
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/json_reader.hpp"
+#include "pvdf/core/membrane_scaling.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -10,7 +12,6 @@
 namespace pvdf::hardware {
 
 namespace {
-constexpr double pi = 3.14159265358979323846;
 }
 
 double SimPress::force_at(double t_s) const {
@@ -30,7 +31,7 @@ double SimScene::charge_C(int channel, double t_s) const {
     if (!p.charges_C.empty()) {
       // Map-driven: Q(F) = Q(F_press)·(F/F_press)^(2/3), exact for the pure membrane (docs/hardware.md).
       if (force > 0 && p.force_N > 0)
-        charge += p.charges_C[static_cast<std::size_t>(channel)] * std::cbrt(std::pow(force / p.force_N, 2.0));
+        charge += p.charges_C[static_cast<std::size_t>(channel)] * pvdf::membrane_charge_factor(force / p.force_N);
       continue;
     }
     const double w = p.weights.empty() ? 1.0 : p.weights[static_cast<std::size_t>(channel)];

@@ -74,13 +74,13 @@ std::unique_ptr<Source> open_source(const std::string& spec, const OpenOptions& 
   }
   const auto not_for = [&](const char* kind) {
     if (options.sample_rate_Hz > 0 || options.channel_mask != 0)
-      throw InputError(std::string("--rate-Hz and --channels configure a USB device; ") + kind +
+      throw InputError(std::string("OpenOptions::sample_rate_Hz and OpenOptions::channel_mask configure a USB device; ") + kind +
                        " streams are what they are (edit the scene, or record with the settings you need)");
   };
   if (spec.rfind("replay:", 0) == 0) {
     not_for("replay");
     const std::string path = spec.substr(7);
-    if (path.empty()) throw InputError("--device replay:FILE: give the recording file, e.g. replay:run.pvdfrec");
+    if (path.empty()) throw InputError("source spec replay:FILE: give the recording file, e.g. replay:run.pvdfrec");
     return with_gain(std::make_unique<ReplaySource>(path, options.realtime), options.gain_mV_per_pC);
   }
   if (spec.rfind("sim:", 0) == 0 || spec == "sim") {
@@ -89,7 +89,7 @@ std::unique_ptr<Source> open_source(const std::string& spec, const OpenOptions& 
     if (path.empty()) return open_sim(default_sim_scene(), "sim <built-in>", options);
     return open_sim(load_sim_scene(path), "sim " + path, options);
   }
-  throw InputError("--device " + spec + ": expected usb[:VID:PID], replay:FILE or sim:SCENE (sim: for the built-in scene)");
+  throw InputError("source spec " + spec + ": expected usb[:VID:PID], replay:FILE or sim:SCENE (sim: for the built-in scene)");
 }
 
 std::unique_ptr<Source> open_sim(const SimScene& scene, const std::string& description, const OpenOptions& options) {

@@ -2,6 +2,7 @@
 #include "pvdf/hardware/usb_source.hpp"
 
 #include "pvdf/core/error.hpp"
+#include "pvdf/core/io.hpp"
 
 #include <libusb.h>
 
@@ -32,7 +33,7 @@ void parse_usb_spec(const std::string& spec, std::uint16_t& vid, std::uint16_t& 
   pid = protocol::default_product_id;
   if (spec == "usb") return;
   const auto bad = [&spec]() {
-    return InputError("--device " + spec + ": expected usb or usb:VID:PID with 4-digit hexadecimal ids, e.g. usb:1209:0001");
+    return InputError("source spec " + spec + ": expected usb or usb:VID:PID with 4-digit hexadecimal ids, e.g. usb:1209:0001");
   };
   if (spec.size() != 13 || spec.compare(0, 4, "usb:") != 0 || spec[8] != ':') throw bad();
   const auto parse = [&](const std::string& text) {
@@ -87,7 +88,7 @@ UsbSource::UsbSource(std::uint16_t vendor_id, std::uint16_t product_id, const Op
   if (found == nullptr) {
     libusb_free_device_list(list, 1);
     throw InputError(name_ + ": no device with VID:PID " + hex4(vendor_id) + ":" + hex4(product_id) + " among " +
-                     std::to_string(n) + " USB devices; plug the front end in, check 'lsusb', or give --device usb:VID:PID");
+                     std::to_string(n) + " USB devices; plug the front end in, check 'lsusb', or name the device as usb:VID:PID");
   }
   const int bus = libusb_get_bus_number(found), address = libusb_get_device_address(found);
   // 2. Open and claim.
@@ -133,7 +134,7 @@ UsbSource::UsbSource(std::uint16_t vendor_id, std::uint16_t product_id, const Op
   control_out(protocol::request_stop, 0, 0, nullptr, 0, "STOP");
   if (options.sample_rate_Hz > 0) {
     if (options.sample_rate_Hz > dev.max_sample_rate_Hz || options.sample_rate_Hz != std::floor(options.sample_rate_Hz))
-      throw InputError("--rate-Hz " + std::to_string(options.sample_rate_Hz) + ": must be a whole number <= " +
+      throw InputError("OpenOptions::sample_rate_Hz " + format_g(options.sample_rate_Hz) + ": must be a whole number <= " +
                        std::to_string(dev.max_sample_rate_Hz) + " Hz (the device's maximum)");
     const auto rate = static_cast<std::uint32_t>(options.sample_rate_Hz);
     const std::uint8_t data[4] = {static_cast<std::uint8_t>(rate), static_cast<std::uint8_t>(rate >> 8),
@@ -142,7 +143,7 @@ UsbSource::UsbSource(std::uint16_t vendor_id, std::uint16_t product_id, const Op
   }
   if (options.channel_mask != 0) {
     if (options.channel_mask >> dev.n_channels)
-      throw InputError("--channels: the device has " + std::to_string(dev.n_channels) + " channels (0.." +
+      throw InputError("OpenOptions::channel_mask: the device has " + std::to_string(dev.n_channels) + " channels (0.." +
                        std::to_string(dev.n_channels - 1) + ")");
     control_out(protocol::request_set_channel_mask, options.channel_mask, 0, nullptr, 0, "SET_CHANNEL_MASK");
   }

@@ -3,6 +3,7 @@
 // 1 m film; coordinates are scaled back to metres on extraction (and on writing .msh files).
 #include "pvdf/mesh/mesher.hpp"
 
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
 #include "scene_geometry.hpp"
@@ -10,6 +11,7 @@
 #include <gmsh.h>
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -34,8 +36,6 @@ void make_counter_clockwise(std::array<unsigned int, 4>& quad, const std::vector
   }
   if (area2 < 0) std::swap(quad[1], quad[3]);
 }
-
-constexpr double pi = 3.14159265358979323846;
 
 /// An estimate of the quadrilateral count before meshing, to refuse runaway requests: the far
 /// field at size_max, plus a graded band (sizes growing by mesh.growth per ring) along every
@@ -536,8 +536,21 @@ FilmMesh write_msh(const pvdf::Scene& scene, const std::string& path, MeshReport
 
 FilmMesh read_msh(const std::string& path) {
   {
-    std::ifstream probe(path);
-    if (!probe) throw pvdf::InputError(path + ": cannot open the mesh file; check the path");
+    // Gmsh picks its reader by extension and would run any other text as a .geo script (which can
+    // call the shell): only files named .msh that start like one are handed to it.
+    const std::string shown = pvdf::escape_control_bytes(path);
+    const auto dot = path.find_last_of("./");
+    std::string extension = dot == std::string::npos || path[dot] != '.' ? "" : path.substr(dot);
+    for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (extension != ".msh") throw pvdf::InputError(shown + ": a mesh file must be a Gmsh .msh file (name ending in .msh)");
+    std::ifstream probe(path, std::ios::binary);
+    std::string first;
+    if (!probe || !std::getline(probe, first)) throw pvdf::InputError(shown + ": cannot read the mesh file; check the path");
+    if (!first.empty() && first.back() == '\r') first.pop_back();
+    if (first != "$MeshFormat") {
+      throw pvdf::InputError(shown + ": is not a Gmsh mesh file (its first line is not $MeshFormat); write it with "
+                             "pvdfkit mesh or Gmsh");
+    }
   }
   GmshSession& session = GmshSession::instance();
   std::lock_guard<std::mutex> lock(session.mutex());

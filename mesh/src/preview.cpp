@@ -1,5 +1,6 @@
 // Preview of a film mesh (PNG, SVG or PDF by extension): the whole film and a zoom on the electrodes, cell edges drawn,
 // electrodes filled in their own colours with a legend, probe footprints outlined, axes in mm.
+#include "pvdf/core/constants.hpp"
 #include "pvdf/plot/plot.hpp"
 #include "pvdf/mesh/mesher.hpp"
 
@@ -40,7 +41,7 @@ void draw(pvdf::plot::Axes& ax, const pvdf::Scene& scene, const FilmMesh& mesh, 
     const double r = (l.radius_m > 0 ? l.radius_m : scene.probe.radius_m) * mm;
     std::vector<double> x, y;
     for (int k = 0; k <= 96; ++k) {
-      const double t = 2 * 3.14159265358979323846 * k / 96;
+      const double t = 2 * pi * k / 96;
       x.push_back(l.position_m[0] * mm + r * std::cos(t));
       y.push_back(l.position_m[1] * mm + r * std::sin(t));
     }

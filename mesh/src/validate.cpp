@@ -284,4 +284,48 @@ std::array<double, 2> target_sizes_m(const pvdf::Scene& scene) {
 
 void validate_geometry(const pvdf::Scene& scene) { detail::validate_geometry(scene, {}); }
 
+// A .msh file from elsewhere (or from another scene) must fit the scene it is solved with: the
+// solver takes the film, material, electrodes and loads from the scene and only the cells from the
+// mesh, so a mesh of another film would silently solve another problem.
+void check_mesh_fits_scene(const pvdf::Scene& scene, const FilmMesh& mesh, const std::string& source) {
+  using detail::fmt;
+  if (mesh.quads.empty()) throw pvdf::InputError(source + ": holds no quadrilaterals; write the mesh with pvdfkit mesh");
+  if (mesh.rim_edges.empty()) {
+    throw pvdf::InputError(source + ": its physical curve \"rim\" holds no edges; the clamped rim must be a group of "
+                           "boundary lines (docs/mesh.md)");
+  }
+  for (std::size_t i = 0; i < mesh.quads.size(); ++i) {
+    const auto& q = mesh.quads[i];
+    const double sj = scaled_jacobian({mesh.vertices[q[0]], mesh.vertices[q[1]], mesh.vertices[q[2]], mesh.vertices[q[3]]});
+    if (!(sj > 0)) {
+      throw pvdf::InputError(source + ": quadrilateral " + std::to_string(i) + " is degenerate or self-crossing (scaled "
+                             "Jacobian " + fmt(sj) + " <= 0); fix or remesh it (pvdfkit mesh)");
+    }
+  }
+  const auto& outline = scene.membrane.outline;
+  const double radius = outline.characteristic_radius_m();
+  for (const auto& v : mesh.vertices) {
+    if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || outline.inside_distance_m({v[0], v[1]}) < -1e-3 * radius) {
+      throw pvdf::InputError(source + ": vertex (" + fmt(v[0]) + ", " + fmt(v[1]) + ") m lies outside the film of " +
+                             scene.source + "; the mesh must be of this scene's film, in metres");
+    }
+  }
+  double area = 0;
+  for (std::uint8_t id = 0; id <= mesh.electrode_names.size(); ++id) area += material_area_m2(mesh, id);
+  const double nominal = outline.area_m2();
+  if (!(std::abs(area - nominal) <= 0.05 * nominal)) {
+    throw pvdf::InputError(source + ": meshes " + fmt(area) + " m^2 but the film of " + scene.source + " has " +
+                           fmt(nominal) + " m^2 (more than 5 % apart); mesh this scene with pvdfkit mesh");
+  }
+  if (mesh.electrode_names.empty()) return;
+  std::string expected;
+  for (const auto& e : scene.electrodes) expected += (expected.empty() ? "" : ", ") + e.name;
+  std::string found;
+  for (const auto& n : mesh.electrode_names) found += (found.empty() ? "" : ", ") + pvdf::escape_control_bytes(n);
+  if (found != expected) {
+    throw pvdf::InputError(source + ": electrode groups [" + found + "] (in tag order) are not the electrodes [" +
+                           expected + "] of " + scene.source + "; mesh this scene with pvdfkit mesh");
+  }
+}
+
 }  // namespace pvdf::mesh

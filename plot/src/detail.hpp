@@ -2,6 +2,7 @@
 // ticks, and the text engine (math markup → Cairo glyph runs). Not installed, not public API.
 #pragma once
 
+#include "pvdf/core/constants.hpp"
 #include "pvdf/plot/plot.hpp"
 
 #include <cairo.h>
@@ -17,7 +18,7 @@
 namespace pvdf::plot::detail {
 
 using P2 = std::array<double, 2>;
-constexpr double kPi = 3.14159265358979323846;
+constexpr double kPi = pvdf::pi;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 inline bool finite(double v) { return std::isfinite(v); }
 

@@ -1,6 +1,7 @@
 // Scenes: read with the C++ reader (same validation, same messages), inspected from Python.
 #include "bindings.hpp"
 
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/json_reader.hpp"
 #include "pvdf/core/scene.hpp"
 
@@ -22,7 +23,7 @@ std::vector<std::array<double, 2>> outline_points(const pvdf::FilmOutline& o, in
     const double a = o.shape == Shape::circle ? o.radius_m : o.semi_axes_m[0];
     const double b = o.shape == Shape::circle ? o.radius_m : o.semi_axes_m[1];
     for (int i = 0; i < n; ++i) {
-      const double t = 2 * M_PI * i / n;
+      const double t = 2 * pi * i / n;
       p.push_back({a * std::cos(t), b * std::sin(t)});
     }
   }

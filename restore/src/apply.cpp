@@ -3,6 +3,7 @@
 
 #include "baseline.hpp"
 #include "fft.hpp"
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 
 #include <algorithm>
@@ -97,7 +98,7 @@ void finish_forces(const InverseFilter& f, RestoredForces& r, const RestoreOptio
   if (o.flat_baseline && n >= 16) {
     double scale = o.baseline_scale_m;
     if (!(scale > 0)) {
-      scale = f.low_cut_wavelength_m > 0 ? f.low_cut_wavelength_m / (2 * 3.14159265358979323846)
+      scale = f.low_cut_wavelength_m > 0 ? f.low_cut_wavelength_m / (2 * pi)
                                          : std::max(1.5e-3, 4 * f.resolution_m);
     }
     detail::fit_flat_baseline(r, scale, f.resolution_m);

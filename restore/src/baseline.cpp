@@ -2,6 +2,8 @@
 // filter damps the longest wavelengths, so a restored feature sits in a shallow trough carrying its
 // missing mean. Where the surface is flat the excess load is zero: that fixes the integration constant
 // (and the missing long wavelengths) as a smooth curve through the flat samples.
+#include "pvdf/core/constants.hpp"
+
 #include "baseline.hpp"
 
 #include "fft.hpp"
@@ -22,7 +24,6 @@ std::vector<double> smooth(const std::vector<double>& v, double sigma) {
   const std::size_t L = fft.size();
   std::vector<std::complex<double>> V(fft.bins());
   fft.forward(v.data(), n, V.data());
-  const double pi = 3.14159265358979323846;
   for (std::size_t k = 0; k < V.size(); ++k) {
     const double w = 2 * pi * static_cast<double>(k) / static_cast<double>(L);
     V[k] *= std::exp(-0.5 * w * w * sigma * sigma);

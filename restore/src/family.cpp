@@ -3,6 +3,7 @@
 #include "pvdf/restore/family.hpp"
 
 #include "fft.hpp"
+#include "pvdf/core/constants.hpp"
 #include "pvdf/restore/physics.hpp"
 
 #include <algorithm>
@@ -14,7 +15,6 @@
 namespace pvdf::restore::family {
 
 namespace {
-constexpr double pi = 3.14159265358979323846;
 
 // Charge density (C/m^2) on strip i per N of force component c at x_rel (strip minus load), point strip.
 double charge_point(const FamilyScanner& s, int i, int c, double x_rel) {

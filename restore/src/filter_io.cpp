@@ -60,7 +60,7 @@ void save_filter(const std::string& path, const InverseFilter& f) {
   j["window"] = f.window;
   j["resolution_m"] = f.resolution_m;
   j["effective_depth_m"] = f.effective_depth_m;
-  j["beta"] = {{"policy", f.beta_policy}, {"relative", f.beta}, {"absolute_V2_per_N2", f.beta_abs},
+  j["beta"] = {{"policy", f.beta_policy}, {"regularization", f.regularization}, {"relative", f.beta}, {"absolute_V2_per_N2", f.beta_abs},
                {"corner_wavelength_m", f.corner_wavelength_m}, {"low_cut_wavelength_m", f.low_cut_wavelength_m}};
   nlohmann::json gcv = nlohmann::json::array();
   for (const auto& [b, v] : f.gcv_curve) gcv.push_back({b, v});
@@ -75,7 +75,8 @@ void save_filter(const std::string& path, const InverseFilter& f) {
                        {"G_cond_max", f.conditioning.max},
                        {"band_fraction", f.conditioning.band_fraction},
                        {"force_matrix_cond", f.transfer.force_condition_number},
-                       {"truncated_energy_fraction", f.truncated_energy_fraction}};
+                       {"truncated_energy_fraction", f.truncated_energy_fraction},
+                       {"peak_fraction", f.peak_fraction}};
   nlohmann::json id = nlohmann::json::array();
   for (std::size_t s = 0; s < f.transfer.forces.size(); ++s) {
     id.push_back({{"fx_N", f.transfer.forces[s][0]}, {"fz_N", f.transfer.forces[s][1]},
@@ -115,6 +116,7 @@ InverseFilter load_filter(const std::string& path) {
   f.effective_depth_m = top.in_range_or("effective_depth_m", 0, 0, 1);
   const auto beta = top.object("beta");
   f.beta_policy = beta.choice_or("policy", "constant", {"constant", "frequency", "gcv", "discrepancy", "lcurve", "morozov", "predicted"});
+  f.regularization = beta.choice_or("regularization", "tikhonov", {"isotropic", "tikhonov"});
   f.beta = beta.non_negative_or("relative", 0);
   f.beta_abs = beta.non_negative_or("absolute_V2_per_N2", 0);
   f.corner_wavelength_m = beta.non_negative_or("corner_wavelength_m", 0);
@@ -135,6 +137,7 @@ InverseFilter load_filter(const std::string& path) {
     f.conditioning.band_fraction = c->in_range_or("band_fraction", 0, 0, 1);
     f.transfer.force_condition_number = c->non_negative_or("force_matrix_cond", 0);
     f.truncated_energy_fraction = c->in_range_or("truncated_energy_fraction", 0, 0, 1);
+    f.peak_fraction = c->non_negative_or("peak_fraction", 0);
     c->finish();
   }
   // Tap arrays are read here (the reader marks them used through object_if/has checks below).

@@ -1,6 +1,7 @@
 // Identification of G (seed 000 eq. 6, least squares for more scans) and the regularized inverse (eq. 4).
 #include "fft.hpp"
 #include "select_beta.hpp"
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/restore/filter.hpp"
 #include "pvdf/version.hpp"
@@ -16,7 +17,6 @@
 namespace pvdf::restore {
 
 namespace {
-constexpr double pi = 3.14159265358979323846;
 using cd = std::complex<double>;
 
 std::string num(double v) {
@@ -41,6 +41,66 @@ std::vector<double> taper(const std::string& kind, std::size_t n) {
   if (kind == "none") return std::vector<double>(n, 1.0);
   if (kind == "hann") return tukey(n, 0.5);
   return tukey(n, 0.125);
+}
+
+// m(first + l + frac) for l in [0, count): the record on a grid shifted by frac (|frac| <= 1/2 sample),
+// band-limited interpolation by FFT over the window padded by 512 samples on each side (samples outside
+// the record are 0). frac = 0 copies.
+std::vector<double> aligned_window(const std::vector<double>& m, long first, long count, double frac) {
+  const long n = static_cast<long>(m.size());
+  std::vector<double> out(static_cast<std::size_t>(count), 0.0);
+  if (std::abs(frac) < 1e-9) {
+    for (long l = 0; l < count; ++l)
+      if (first + l >= 0 && first + l < n) out[static_cast<std::size_t>(l)] = m[static_cast<std::size_t>(first + l)];
+    return out;
+  }
+  const long pad = 512;
+  detail::RealFft fft(detail::good_fft_size(static_cast<std::size_t>(count + 2 * pad)));
+  const std::size_t L = fft.size();
+  std::vector<double> seg(L, 0.0);
+  for (long q = 0; q < count + 2 * pad; ++q) {
+    const long k = first - pad + q;
+    if (k >= 0 && k < n) seg[static_cast<std::size_t>(q)] = m[static_cast<std::size_t>(k)];
+  }
+  std::vector<cd> S(fft.bins());
+  fft.forward(seg.data(), L, S.data());
+  for (std::size_t k = 0; k < S.size(); ++k) {
+    S[k] *= std::polar(1.0, 2 * pi * static_cast<double>(k) * frac / static_cast<double>(L));
+  }
+  if (L % 2 == 0) S.back() = cd(S.back().real() * std::cos(pi * frac), 0.0);  // Nyquist bin stays real
+  fft.inverse(S.data(), seg.data());
+  for (long l = 0; l < count; ++l) out[static_cast<std::size_t>(l)] = seg[static_cast<std::size_t>(l + pad)];
+  return out;
+}
+
+// In the far field of an edge at sample ne (|lag| >= N/4): the slow signal tails removed by a 513-sample
+// running mean, the sum of squared sums over blocks of 64 consecutive samples, divided by 64, is added to
+// `sum` and the number of blocks to `count` (their ratio: the low-frequency noise power per sample).
+void far_field_block_power(const std::vector<double>& m, long ne, long N, double& sum, std::size_t& count) {
+  const long n = static_cast<long>(m.size()), block = 64, half = 256;
+  std::vector<double> prefix(static_cast<std::size_t>(n) + 1, 0.0);
+  for (long q = 0; q < n; ++q) prefix[q + 1] = prefix[q] + m[q];
+  double ss = 0;
+  std::size_t nb = 0;
+  for (long k = half; k + block + half <= n; k += block) {
+    bool far = true;
+    double total = 0;
+    for (long q = k; q < k + block; ++q) {
+      if (std::labs(q - ne) < N / 4) {
+        far = false;
+        break;
+      }
+      total += m[q] - (prefix[q + half + 1] - prefix[q - half]) / (2 * half + 1);
+    }
+    if (far) {
+      ss += total * total;
+      ++nb;
+    }
+  }
+  if (nb > 0) {
+    sum += ss / block;
+    count += nb;
+  }
 }
 
 }  // namespace
@@ -148,38 +208,8 @@ TransferMatrix identify_transfer(const std::vector<IdentificationScan>& scans, c
                        " m (signal rms " + num(sig_rms) + " V vs noise rms " + num(noise_rms) + " V, ratio " + num(snr) +
                        " < " + num(o.min_snr) + "); check the edge position, the force and the recording");
     }
-    // Low-frequency noise power (the band of G lies below the moving average's first null): in the far
-    // field, remove the slow signal tails with a 513-sample running mean, then take the variance of sums
-    // over blocks of 64 consecutive samples, divided by 64.
-    {
-      const long block = 64, half = 256;
-      for (int c = 0; c < 2; ++c) {
-        const auto& m = c == 0 ? scan.m1_V : scan.m2_V;
-        std::vector<double> prefix(static_cast<std::size_t>(n) + 1, 0.0);
-        for (long q = 0; q < n; ++q) prefix[q + 1] = prefix[q] + m[q];
-        double ss = 0;
-        std::size_t nb = 0;
-        for (long k = half; k + block + half <= n; k += block) {
-          bool far = true;
-          double sum = 0;
-          for (long q = k; q < k + block; ++q) {
-            if (std::labs(q - ne) < N / 4) {
-              far = false;
-              break;
-            }
-            sum += m[q] - (prefix[q + half + 1] - prefix[q - half]) / (2 * half + 1);
-          }
-          if (far) {
-            ss += sum * sum;
-            ++nb;
-          }
-        }
-        if (nb > 0) {
-          psd_sum[c] += ss / block;
-          psd_count[c] += nb;
-        }
-      }
-    }
+    // Low-frequency noise power (the band of G lies below the moving average's first null), per channel.
+    for (int c = 0; c < 2; ++c) far_field_block_power(c == 0 ? scan.m1_V : scan.m2_V, ne, N, psd_sum[c], psd_count[c]);
     noise_sum[0] += ch_noise[0];
     noise_sum[1] += ch_noise[1];
     noise_count += n_noise;
@@ -187,13 +217,14 @@ TransferMatrix identify_transfer(const std::vector<IdentificationScan>& scans, c
       t.warnings.push_back(scan.source + ": the scan does not cover the whole identification window of " +
                            std::to_string(N) + " samples around the edge; missing lags are taken as 0");
     }
-    // Least squares G = M F^+ (eq. 6 when S = 2), lag by lag: the forces are impulses at the edge.
+    // Least squares G = M F^+ (eq. 6 when S = 2), lag by lag: the forces are impulses at the edge, taken at
+    // its exact position (the records are shifted by the fraction of a sample between edge and grid).
+    const auto w1 = aligned_window(scan.m1_V, ne + t.lag_min, N, pos - static_cast<double>(ne));
+    const auto w2 = aligned_window(scan.m2_V, ne + t.lag_min, N, pos - static_cast<double>(ne));
     for (long l = 0; l < N; ++l) {
-      const long k = ne + t.lag_min + l;
-      if (k < 0 || k >= n) continue;
       for (int j = 0; j < 2; ++j) {
-        t.g[0][j][static_cast<std::size_t>(l)] += Fpinv(s, j) * scan.m1_V[k];
-        t.g[1][j][static_cast<std::size_t>(l)] += Fpinv(s, j) * scan.m2_V[k];
+        t.g[0][j][static_cast<std::size_t>(l)] += Fpinv(s, j) * w1[static_cast<std::size_t>(l)];
+        t.g[1][j][static_cast<std::size_t>(l)] += Fpinv(s, j) * w2[static_cast<std::size_t>(l)];
       }
     }
     t.forces.push_back({scans[s].fx_N, scans[s].fz_N, scans[s].edge_x_m});
@@ -302,6 +333,7 @@ InverseFilter design_inverse(const TransferMatrix& t, const std::vector<Identifi
   f.delay_samples = o.delay_samples;
   f.design_fft_length = L;
   f.beta_policy = to_string(o.beta_policy);
+  f.regularization = o.isotropic ? "isotropic" : "tikhonov";
   f.corner_wavelength_m = o.corner_wavelength_m;
   f.resolution_m = o.resolution_m;
   f.low_cut_wavelength_m = o.low_cut_wavelength_m;
@@ -337,9 +369,15 @@ InverseFilter design_inverse(const TransferMatrix& t, const std::vector<Identifi
   std::array<std::array<std::vector<cd>, 2>, 2> H;
   for (auto& row : H)
     for (auto& v : row) v.resize(fft.bins());
+  double peak_sum = 0, target_sum = 0;
   for (std::size_t k = 0; k < fft.bins(); ++k) {
     const double b = f.beta_abs * grid.shape[k];
-    const Eigen::Vector2d d(grid.s1[k] / (grid.s1[k] * grid.s1[k] + b), grid.s2[k] / (grid.s2[k] * grid.s2[k] + b));
+    double ak[2], dk[2];
+    grid.gains(k, b, ak, dk);
+    const Eigen::Vector2d d(dk[0], dk[1]);
+    const Eigen::Vector2d a(ak[0], ak[1]);
+    peak_sum += grid.weight(k) * grid.target[k] * (grid.V[k] * a.asDiagonal() * grid.V[k].adjoint())(1, 1).real();
+    target_sum += grid.weight(k) * grid.target[k];
     const Eigen::Matrix2cd Hk = grid.V[k] * d.asDiagonal() * grid.U[k].adjoint();
     const cd phase = grid.target[k] * std::polar(1.0, -2 * pi * static_cast<double>(k) * static_cast<double>(o.delay_samples) / static_cast<double>(L));
     for (int i = 0; i < 2; ++i)
@@ -360,6 +398,7 @@ InverseFilter design_inverse(const TransferMatrix& t, const std::vector<Identifi
     }
   }
   f.truncated_energy_fraction = total > 0 ? outside / total : 0.0;
+  f.peak_fraction = target_sum > 0 ? peak_sum / target_sum : 0.0;
   return f;
 }
 

@@ -1,12 +1,13 @@
 // Flamant stresses, strip charge and the closed-form stress-rate signal (seed 000 eq. 1, corrected).
 #include "pvdf/restore/physics.hpp"
 
+#include "pvdf/core/constants.hpp"
+
 #include <cmath>
 
 namespace pvdf::restore {
 
 namespace {
-constexpr double pi = 3.14159265358979323846;
 }
 
 FlamantStress flamant_stress(double p_N_per_m, double q_N_per_m, double x_m, double z_m) {

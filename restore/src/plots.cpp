@@ -2,6 +2,7 @@
 #include "pvdf/restore/plots.hpp"
 
 #include "fft.hpp"
+#include "pvdf/core/constants.hpp"
 #include "pvdf/plot/plot.hpp"
 
 #include <algorithm>
@@ -27,7 +28,7 @@ std::vector<double> gaussian_blur(const std::vector<double>& f, double resolutio
   fft.forward(f.data(), f.size(), F.data());
   const double s = resolution_m / 2.3548200450309493;
   for (std::size_t k = 0; k < F.size(); ++k) {
-    const double w = 2 * 3.14159265358979323846 * static_cast<double>(k) / (static_cast<double>(fft.size()) * dx);
+    const double w = 2 * pi * static_cast<double>(k) / (static_cast<double>(fft.size()) * dx);
     F[k] *= std::exp(-0.5 * w * w * s * s);
   }
   std::vector<double> out(fft.size());
@@ -95,7 +96,8 @@ void plot_scan(const std::string& path, const Scan& scan, const std::string& tit
 
 void plot_filters(const std::string& path, const InverseFilter& f) {
   plot::Figure fig(1200, 900, 2, 2);
-  fig.suptitle("Inverse filters (seed 000 Fig. 13), β (" + f.beta_policy + ") = " + fmt("%.3g", f.beta) + " relative");
+  fig.suptitle("Inverse filters (seed 000 Fig. 13), " + f.regularization + " regularization, β (" + f.beta_policy +
+               ") = " + fmt("%.3g", f.beta) + " relative");
   std::vector<double> lag(f.taps);
   for (std::size_t t = 0; t < f.taps; ++t) lag[t] = (static_cast<double>(t) - static_cast<double>(f.delay_samples)) * f.sample_spacing_m * 1e3;
   const char* names[2][2] = {{"$h_{11}$ ($f_x$ from $m_1$)", "$h_{12}$ ($f_x$ from $m_2$)"},
@@ -128,7 +130,7 @@ void plot_transfer(const std::string& path, const InverseFilter& f) {
   std::size_t shown = std::max<std::size_t>(4, fft.bins() / 8);
   if (f.resolution_m > 0) {
     const double s = f.resolution_m / 2.3548200450309493, k_max = std::sqrt(2 * std::log(1e3)) / s;
-    shown = std::min(fft.bins(), static_cast<std::size_t>(k_max * static_cast<double>(N) * dx / (2 * 3.14159265358979323846)) + 2);
+    shown = std::min(fft.bins(), static_cast<std::size_t>(k_max * static_cast<double>(N) * dx / (2 * pi)) + 2);
   }
   std::vector<double> k(shown - 1);
   for (std::size_t b = 1; b < shown; ++b) k[b - 1] = static_cast<double>(b) / (static_cast<double>(N) * dx * 1e3);
@@ -163,7 +165,8 @@ void plot_transfer(const std::string& path, const InverseFilter& f) {
       .line(k, s1, "$s_1$ (strong direction)")
       .line(k, s2, "$s_2$ (weak direction)")
       .line(k, reg, "√β(k)", plot::Color{0, 0, 0}, plot::LineStyle::dashed)
-      .title("Singular values of G and the regularization level")
+      .title(f.regularization == "isotropic" ? "Singular values of G and √β(k): both directions get s₂'s gain"
+                                             : "Singular values of G and √β(k): each direction damped below it")
       .xlabel("spatial frequency 1/λ (1/mm)")
       .ylabel("V/N")
       .log_y()

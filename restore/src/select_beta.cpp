@@ -4,6 +4,7 @@
 #include "select_beta.hpp"
 
 #include "fft.hpp"
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 
 #include <algorithm>
@@ -14,7 +15,6 @@
 namespace pvdf::restore::detail {
 
 namespace {
-constexpr double pi = 3.14159265358979323846;
 using cd = std::complex<double>;
 
 std::string fmt(double v) {
@@ -72,8 +72,9 @@ BetaChoice gcv(const RecordPower& r, const DesignOptions& o, double n_scans) {
     double resid = 0, trace = 0;
     for (std::size_t k = 0; k < g.s1.size(); ++k) {
       const double b = b_rel * g.smax * g.smax * g.shape[k];
-      const double q1 = g.s1[k] * g.s1[k], q2 = g.s2[k] * g.s2[k];
-      const double r1 = 1 - g.target[k] * q1 / (q1 + b), r2 = 1 - g.target[k] * q2 / (q2 + b);
+      double a[2], d[2];
+      g.gains(k, b, a, d);
+      const double r1 = 1 - g.target[k] * a[0], r2 = 1 - g.target[k] * a[1];
       resid += g.weight(k) * (r1 * r1 * r.p1[k] + r2 * r2 * r.p2[k]);
       trace += g.weight(k) * n_scans * (r1 + r2);
     }
@@ -94,9 +95,9 @@ void residual_and_size(const RecordPower& r, double b_rel, double& rho2, double&
   rho2 = eta2 = 0;
   for (std::size_t k = 0; k < g.s1.size(); ++k) {
     const double b = b_rel * g.smax * g.smax * g.shape[k];
-    const double q1 = g.s1[k] * g.s1[k], q2 = g.s2[k] * g.s2[k];
-    const double r1 = b / (q1 + b), r2 = b / (q2 + b);
-    const double d1 = g.s1[k] / (q1 + b), d2 = g.s2[k] / (q2 + b);
+    double a[2], d[2];
+    g.gains(k, b, a, d);
+    const double r1 = 1 - a[0], r2 = 1 - a[1], d1 = d[0], d2 = d[1];
     rho2 += g.weight(k) * (r1 * r1 * r.p1[k] + r2 * r2 * r.p2[k]);
     eta2 += g.weight(k) * g.target[k] * g.target[k] * (d1 * d1 * r.p1[k] + d2 * d2 * r.p2[k]);
   }
@@ -158,13 +159,15 @@ BetaChoice predicted(const DesignGrid& g, const TransferMatrix& t, const DesignO
   double t0 = 0;
   for (std::size_t k = 0; k < g.s1.size(); ++k) t0 += g.weight(k) * g.target[k] / L;
   if (t.forces.empty()) throw InputError("--beta predicted needs the identification forces");
-  double best = std::numeric_limits<double>::infinity(), best_bias = 0, best_sd = 0;
+  double best = std::numeric_limits<double>::infinity(), best_bias = 0, best_sd = 0, best_fraction = 1;
+  c.beta = o.gcv_beta_min;
   for (double b_rel : candidates(o)) {
     Eigen::Matrix2d M = Eigen::Matrix2d::Zero(), S = Eigen::Matrix2d::Zero();
     for (std::size_t k = 0; k < g.s1.size(); ++k) {
       const double b = b_rel * g.smax * g.smax * g.shape[k];
-      const double q1 = g.s1[k] * g.s1[k], q2 = g.s2[k] * g.s2[k];
-      const Eigen::Vector2d a(q1 / (q1 + b), q2 / (q2 + b)), d(g.s1[k] / (q1 + b), g.s2[k] / (q2 + b));
+      double ak[2], dk[2];
+      g.gains(k, b, ak, dk);
+      const Eigen::Vector2d a(ak[0], ak[1]), d(dk[0], dk[1]);
       const Eigen::Matrix2cd A = g.V[k] * a.asDiagonal() * g.V[k].adjoint();
       const Eigen::Matrix2cd H = g.V[k] * d.asDiagonal() * g.U[k].adjoint();
       const double w = g.weight(k), T = g.target[k];
@@ -188,16 +191,20 @@ BetaChoice predicted(const DesignGrid& g, const TransferMatrix& t, const DesignO
     const double n = static_cast<double>(t.forces.size());
     const double v = std::sqrt(sum / n);
     c.curve.emplace_back(b_rel, v);
+    // The resolution target: a sharp edge's f_z peak keeps min_peak_fraction of the target's.
+    const double fraction = t0 > 0 ? M(1, 1) / t0 : 0.0;
+    if (fraction < o.min_peak_fraction) continue;
     if (v < best) {
+      best_fraction = fraction;
       best = v;
       c.beta = b_rel;
       best_bias = sum_bias / n;
       best_sd = sum_sd / n;
     }
   }
-  (void)t0;
-  c.reason = fmt(o.predicted_beta_scale) + " x the beta minimizing the mu error predicted at the identification forces (" +
-             fmt(best) + " rms: bias " + fmt(best_bias) + ", noise " + fmt(best_sd) + ")";
+  c.reason = (o.predicted_beta_scale == 1.0 ? std::string("the beta minimizing") : fmt(o.predicted_beta_scale) + " x the beta minimizing") + " the mu error predicted at the identification forces (" +
+             fmt(best) + " rms: bias " + fmt(best_bias) + ", noise " + fmt(best_sd) + ") among those keeping >= " +
+             fmt(o.min_peak_fraction) + " of the target's peak (" + fmt(best_fraction) + ")";
   c.beta *= o.predicted_beta_scale;
   return c;
 }
@@ -238,6 +245,7 @@ DesignGrid design_grid(const TransferMatrix& t, RealFft& fft, const DesignOption
   g.V.resize(B);
   g.shape.resize(B);
   g.target.resize(B);
+  g.isotropic = o.isotropic;
   for (std::size_t k = 0; k < B; ++k) {
     Eigen::Matrix2cd m;
     m << G[0][0][k], G[0][1][k], G[1][0][k], G[1][1][k];

@@ -21,7 +21,24 @@ struct DesignGrid {
   std::vector<double> s1, s2;           ///< singular values (s1 >= s2)
   std::vector<Eigen::Matrix2cd> U, V;
   std::vector<double> shape, target;    ///< beta shape(k) and target T(k)
+  bool isotropic = false;               ///< one gain for both directions (DesignOptions::isotropic)
   double weight(std::size_t k) const { return (k == 0 || (L % 2 == 0 && k == L / 2)) ? 1.0 : 2.0; }
+  /// The regularized inverse at bin k for absolute beta b: H = V diag(d) U^H, its resolution A = H G =
+  /// V diag(a) V^H. Tikhonov: a_i = s_i^2 / (s_i^2 + b), d_i = s_i / (s_i^2 + b). Isotropic: both directions
+  /// get the weak one's gain w = s_2^2 / (s_2^2 + b), a_i = w, d_i = w / s_i, so A = w I.
+  void gains(std::size_t k, double b, double a[2], double d[2]) const {
+    const double s[2] = {s1[k], s2[k]};
+    const double w = s[1] * s[1] / (s[1] * s[1] + b);
+    for (int i = 0; i < 2; ++i) {
+      if (isotropic) {
+        a[i] = w;
+        d[i] = s[i] > 0 ? w / s[i] : 0.0;
+      } else {
+        a[i] = s[i] * s[i] / (s[i] * s[i] + b);
+        d[i] = s[i] / (s[i] * s[i] + b);
+      }
+    }
+  }
 };
 
 /// The chosen relative beta, the criterion's curve over the candidates and a sentence saying why.

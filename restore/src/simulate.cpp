@@ -1,5 +1,6 @@
 // The forward simulator: surface loads -> closed-form strip stress-rate signals -> noise, ADC, moving average.
 #include "fft.hpp"
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/restore/scanner.hpp"
 
@@ -11,7 +12,6 @@
 namespace pvdf::restore {
 
 namespace {
-constexpr double pi = 3.14159265358979323846;
 
 double signal_per_N(const ScannerScene& s, int strip, int component, double x_rel_m) {
   return strip_signal_per_N(s.sensor.strips[strip], s.sensor.poisson_ratio, s.sensor.feedback_resistance_ohm,

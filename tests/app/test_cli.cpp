@@ -2,6 +2,7 @@
 // errors for malformed scene files.
 #include "cli_runner.hpp"
 
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/material.hpp"
 
 #include <catch2/catch.hpp>
@@ -16,7 +17,7 @@ using pvdf::test::run_pvdfkit;
 
 namespace {
 
-constexpr double pi = 3.14159265358979323846;
+using pvdf::pi;
 
 std::string write_temp(const std::string& name, const std::string& text) {
   const auto p = std::filesystem::temp_directory_path() / name;

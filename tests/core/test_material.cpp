@@ -1,5 +1,6 @@
 // PVDF material: off-axis moduli by compliance rotation against an independent fourth-order
 // tensor rotation, the paper's eqs 3–5 where they are right, and the eq. 5 correction.
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/material.hpp"
 
 #include <catch2/catch.hpp>
@@ -10,7 +11,7 @@
 
 namespace {
 
-constexpr double pi = 3.14159265358979323846;
+using pvdf::pi;
 
 pvdf::Material seed001() {
   pvdf::Material m;  // defaults are seed 001 Table 1

@@ -1,4 +1,5 @@
 // Scene files: defaults, every documented key, and each kind of bad input named precisely.
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/json_reader.hpp"
 #include "pvdf/core/scene.hpp"
@@ -79,9 +80,9 @@ TEST_CASE("isotropic material, other outlines and electrode shapes parse", "[sce
                    {"name": "P", "shape": "polygon", "vertices_m": [[0, 0.01], [0.002, 0.01], [0.001, 0.012]]}]})");
   CHECK(s.material.isotropic);
   CHECK(s.material.G12_Pa == Approx(2e9 / 2.6));
-  CHECK(s.membrane.outline.area_m2() == Approx(M_PI * 0.04 * 0.03));
+  CHECK(s.membrane.outline.area_m2() == Approx(pvdf::pi * 0.04 * 0.03));
   CHECK(s.electrodes[0].area_m2() == Approx(2e-6));
-  CHECK(s.electrodes[1].area_m2() == Approx(M_PI * 1e-6));
+  CHECK(s.electrodes[1].area_m2() == Approx(pvdf::pi * 1e-6));
   CHECK(s.electrodes[2].area_m2() == Approx(2e-6));
   const auto o = s.electrodes[0].outline();
   CHECK(o.size() == 4);

@@ -1,5 +1,6 @@
 // Layout evaluation: the Cramér–Rao bound against Monte-Carlo errors of the deployed Locator,
 // coincident electrodes (rank-deficient Fisher matrix), rotation equivariance, closed forms.
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/scene.hpp"
 #include "pvdf/mapping/design.hpp"
 #include "pvdf/mapping/interpolant.hpp"
@@ -214,9 +215,9 @@ TEST_CASE("a layout with two coincident electrodes is reported as unable to loca
 
 TEST_CASE("rotating a layout (electrodes and draw direction) rotates its error map", "[design][rotation]") {
   const pvdf::Scene scene = pvdf::default_scene();
-  const nlohmann::json turned = rotate_scene(scene.original, std::acos(-1.0) / 2, "seed001");
+  const nlohmann::json turned = rotate_scene(scene.original, pvdf::pi / 2, "seed001");
   const pvdf::Scene rotated = pvdf::parse_scene(turned, "rotated");
-  CHECK(rotated.material.draw_angle_rad == Approx(std::acos(-1.0) / 2));
+  CHECK(rotated.material.draw_angle_rad == Approx(pvdf::pi / 2));
   const ChargeMap a = synthetic_map_for_scene(scene, 0.0015, 1.0, 0.05e-12);
   const ChargeMap b = synthetic_map_for_scene(rotated, 0.0015, 1.0, 0.05e-12);
   DesignOptions o;

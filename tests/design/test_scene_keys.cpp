@@ -1,4 +1,5 @@
 // `--vary` keys: JSON paths into the scene and derived layout keys.
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/scene.hpp"
 #include "pvdf/mapping/design.hpp"
@@ -42,7 +43,7 @@ TEST_CASE("scene keys set JSON paths and validate the result", "[design][keys]")
   const auto all = parsed(set_scene_key(seed, "electrodes[*].size_m", 0.003, "seed"));
   for (const auto& e : all.electrodes) CHECK((e.size_m[0] == 0.003 && e.size_m[1] == 0.003));
   CHECK(parsed(set_scene_key(seed, "material.draw_angle_deg", 30, "seed")).material.draw_angle_rad ==
-        Approx(30 * std::acos(-1.0) / 180));
+        Approx(30 * pvdf::pi / 180));
 
   // Unknown keys and non-numeric targets are refused with the key named.
   try {
@@ -74,11 +75,11 @@ TEST_CASE("derived keys scale, size and rotate the layout", "[design][keys]") {
   // A at (0, 10) mm goes to (−10, 0) mm; the draw direction from 0° to 90°.
   CHECK(turned.electrodes[0].center_m[0] == Approx(-0.010));
   CHECK(turned.electrodes[0].center_m[1] == Approx(0.0).margin(1e-15));
-  CHECK(turned.material.draw_angle_rad == Approx(std::acos(-1.0) / 2));
+  CHECK(turned.material.draw_angle_rad == Approx(pvdf::pi / 2));
   // A rectangular film rotated by 30° becomes the rotated polygon with the same area.
   nlohmann::json rect = seed.original;
   rect["membrane"] = {{"shape", "rectangle"}, {"size_m", {0.09, 0.06}}};
-  const auto r30 = pvdf::parse_scene(rotate_scene(rect, std::acos(-1.0) / 6, "rect"), "t");
+  const auto r30 = pvdf::parse_scene(rotate_scene(rect, pvdf::pi / 6, "rect"), "t");
   CHECK(r30.membrane.outline.shape == pvdf::FilmOutline::Shape::polygon);
   CHECK(r30.membrane.outline.area_m2() == Approx(0.09 * 0.06));
 }

@@ -6,6 +6,8 @@
 // accepted by the rule of oracle_compare.hpp: error on the finer of two nested meshes ≤ the change
 // between them (a tolerance from the FEM's own convergence, not tuned). Lines starting "ORACLE"
 // are the table of docs/fem.md ("Verification against oracles").
+#include "pvdf/core/constants.hpp"
+
 #include "oracle_compare.hpp"
 
 #include <catch2/catch.hpp>
@@ -19,7 +21,7 @@ namespace oracles = pvdf::fem::oracles;
 
 namespace {
 
-constexpr double pi = 3.14159265358979323846;
+using pvdf::pi;
 constexpr double a = 0.045, E = 2e9, nu = 0.3, c = 1e-3;
 
 pvdf::fem::Options membrane_mesh(pvdf::fem::Model model, bool bending, int level) {

@@ -2,6 +2,7 @@
 // Hencky membrane, axisymmetric probe membrane, membrane scaling, symmetry/invariance, the
 // tangent against finite differences, equilibrium of the rim reaction. Meshes are kept coarse
 // enough for CI; each tolerance is the issue's.
+#include "pvdf/core/constants.hpp"
 #include "pvdf/fem/solver.hpp"
 
 #include "pvdf/core/error.hpp"
@@ -17,7 +18,7 @@
 
 namespace {
 
-constexpr double pi = 3.14159265358979323846;
+using pvdf::pi;
 
 /// An isotropic circular film without electrodes, loaded by one probe or one pressure.
 pvdf::Scene iso_scene(double radius_m, double thickness_m, double E_Pa, double nu) {

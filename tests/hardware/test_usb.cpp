@@ -211,7 +211,7 @@ TEST_CASE("usb: no device, busy and permission denied are one-line InputErrors",
     MockFrontEnd device(MockScript{});
     OpenOptions options;
     options.sample_rate_Hz = 20000;
-    CHECK_THROWS_WITH(open_source("usb", options), Catch::Contains("--rate-Hz") && Catch::Contains("10000"));
+    CHECK_THROWS_WITH(open_source("usb", options), Catch::Contains("OpenOptions::sample_rate_Hz") && Catch::Contains("10000"));
   }
   SECTION("malformed specifications") {
     CHECK_THROWS_WITH(open_source("usb:12:34"), Catch::Contains("usb:VID:PID"));

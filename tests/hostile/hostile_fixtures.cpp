@@ -60,6 +60,7 @@ void write_hostile_fixtures(const std::filesystem::path& d) {
   write(d / "e_overlap.json", seed001_with(R"({"electrodes": [{"name": "A", "center_m": [0, 0.01]},
                                                               {"name": "B", "center_m": [0.001, 0.0105]}]})"));
   write(d / "e_tiny.json", seed001_with(R"({"electrodes": [{"name": "A", "center_m": [0, 0.01], "size_m": [1e-12, 0.002]}]})"));
+  write(d / "e_tiny_ok.json", seed001_with(R"({"electrodes": [{"name": "X", "center_m": [0, 0.01]}]})"));
   write(d / "radius_huge.json", seed001_with(R"({"membrane": {"radius_m": 1e308}})"));
   write(d / "radius_tiny.json", seed001_with(R"({"membrane": {"radius_m": 1e-9}})"));
   write(d / "rect_huge.json", seed001_with(R"({"membrane": {"shape": "rectangle", "size_m": [1e300, 0.09], "radius_m": null}})"));
@@ -73,6 +74,20 @@ void write_hostile_fixtures(const std::filesystem::path& d) {
   write(d / "size_min_tiny.json", seed001_with(R"({"mesh": {"size_min_m": 1e-9}})"));
   write(d / "tolerance_tiny.json", seed001_with(R"({"model": {"tolerance": 1e-12}})"));
   write(d / "thickness_neg.json", seed001_with(R"({"membrane": {"thickness_m": -2.5e-5}})"));
+  // Gmsh meshes for `solve --mesh` (format 2.2 by hand: a 60 mm square of two cells).
+  const std::string msh_head = "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$PhysicalNames\n2\n1 1 \"rim\"\n2 1 \"film\"\n"
+                               "$EndPhysicalNames\n$Nodes\n4\n1 -0.03 -0.03 0\n2 0.03 -0.03 0\n3 0.03 0.03 0\n"
+                               "4 -0.03 0.03 0\n$EndNodes\n";
+  const std::string rim = "1 1 2 1 1 1 2\n2 1 2 1 1 2 3\n3 1 2 1 1 3 4\n4 1 2 1 1 4 1\n";
+  write(d / "triangles.msh", msh_head + "$Elements\n6\n" + rim + "5 2 2 1 1 1 2 3\n6 2 2 1 1 1 3 4\n$EndElements\n");
+  write(d / "bowtie.msh", msh_head + "$Elements\n5\n" + rim + "5 3 2 1 1 1 2 4 3\n$EndElements\n");
+  write(d / "square.msh", msh_head + "$Elements\n5\n" + rim + "5 3 2 1 1 1 2 3 4\n$EndElements\n");
+  std::string no_rim = msh_head;
+  no_rim.replace(no_rim.find("2\n1 1 \"rim\"\n"), 12, "1\n");
+  write(d / "no_rim.msh", no_rim + "$Elements\n1\n5 3 2 1 1 1 2 3 4\n$EndElements\n");
+  write(d / "not_gmsh.msh", "hello, I am not a mesh\n");
+  write(d / "garbage.msh", bytes("$MeshFormat\n4.1 0 8\n$EndMeshFormat\n$Nodes\n\x01\x1b[2Jgarbage\x00\xff\n"));
+  write(d / "huge_count.msh", "$MeshFormat\n2.2 0 8\n$EndMeshFormat\n$Nodes\n900000000000\n1 0 0 0\n$EndNodes\n");
   // CSV and filter files.
   write(d / "garbage.csv", bytes("x_m,y_m,force_N,charge_A_C\n0.1,\x01\x1b[2J\x00,1,2\n"));
   write(d / "empty.csv", "");
@@ -80,6 +95,13 @@ void write_hostile_fixtures(const std::filesystem::path& d) {
   write(d / "filter_trunc.json", "{\"format\": \"pvdfkit-restore-filter\", \"taps\": 4, \"filters\": {\"h11\": [" +
                                      std::string(40000, '1').insert(0, "0.") + ", ");
   write(d / "filter_deep.json", std::string(100000, '['));
+  const std::string filter_head = R"({"format": "pvdfkit-restore-filter", "format_version": 1, "sample_spacing_m": 0.001,
+      "taps": 2, "delay_samples": 1, "beta": {}, "filters": {"h12": [0, 0], "h21": [0, 0], "h22": [0, 1], )";
+  write(d / "filter_ok.json", filter_head + R"("h11": [1, 0]}})");
+  write(d / "filter_huge_tap.json", filter_head + R"("h11": [1e308, 0]}})");
+  std::string stream = "t_s,charge_A_C,charge_B_C,charge_C_C\n";
+  for (int i = 0; i < 20000; ++i) stream += std::to_string(i * 1e-4) + ",4e-11,2e-11,1.5e-11\n";
+  write(d / "stream.csv", stream);
   write(d / "scan.csv", "x_m,m1_V,m2_V\n0,0,0\n0.001,0,0\n0.002,0,0\n0.003,0,0\n");
 }
 

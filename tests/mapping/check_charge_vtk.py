@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """charges.vtk of `pvdfkit isocharge` opened with VTK's own legacy reader (python3-vtk9): grid,
 spacing, NaN exactly where the map has no value, and node values equal to an independent
-evaluation of the analytic stand-in model (pvdf::mapping::SyntheticModel defaults) in pC.
+evaluation of the analytic stand-in model (pvdf::mapping::SyntheticModel defaults) in C, fields
+named by electrode and force level (`charge_A_C_at_1N`).
 Usage: check_charge_vtk.py PVDFKIT WORKDIR"""
 import math
 import os
@@ -11,7 +12,7 @@ import sys
 import vtk
 
 
-def model_pC(x, y, k):
+def model_C(x, y, k):
     # SyntheticModel defaults (mapping/studies/include/pvdf/mapping/synthetic.hpp), F = 1 N, draw angle 0.
     centres = [(0.0, 0.010), (-0.00866025403784439, -0.005), (0.00866025403784439, -0.005)]
     R, scale, core, expo, aniso, r, rim = 0.045, 6.0e-13, 0.002, 0.8, 1.3, 0.1, 0.5
@@ -19,7 +20,7 @@ def model_pC(x, y, k):
     a = math.sqrt(aniso)
     rho2 = (u / a) ** 2 + (v * a) ** 2
     piezo = (u * u + r * v * v + 0.5 * (1 + r) * core ** 2) / (u * u + v * v + core ** 2)
-    return 1e12 * scale * (1 - rim * (x * x + y * y) / R ** 2) * piezo * (rho2 + core ** 2) ** (-expo / 2)
+    return scale * (1 - rim * (x * x + y * y) / R ** 2) * piezo * (rho2 + core ** 2) ** (-expo / 2)
 
 
 def main():
@@ -40,7 +41,7 @@ def main():
     mask = pd.GetArray("mask")
     worst = 0.0
     for name, k in (("A", 0), ("B", 1), ("C", 2)):
-        arr = pd.GetArray("charge_%s_pC_F0" % name)
+        arr = pd.GetArray("charge_%s_C_at_1N" % name)
         assert arr is not None and arr.GetNumberOfTuples() == nx * ny, name
         for j in range(ny):
             for i in range(nx):
@@ -49,8 +50,10 @@ def main():
                 assert inside == (not math.isnan(value)), (name, i, j, value)
                 if inside:
                     x, y = img.GetOrigin()[0] + i * 0.003, img.GetOrigin()[1] + j * 0.003
-                    worst = max(worst, abs(value / model_pC(x, y, k) - 1))
+                    worst = max(worst, abs(value / model_C(x, y, k) - 1))
     assert worst < 1e-12, worst
+    names = sorted(pd.GetArrayName(i) for i in range(pd.GetNumberOfArrays()))
+    assert names == ["charge_A_C_at_1N", "charge_B_C_at_1N", "charge_C_C_at_1N", "mask"], names
     print("charges.vtk read by VTK: %d x %d, NaN outside the mask, max relative deviation %.2g" % (nx, ny, worst))
     return 0
 

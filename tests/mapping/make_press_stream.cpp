@@ -3,6 +3,7 @@
 // up and down, a gap with nothing pressed, a still press, and one malformed row — with Gaussian
 // charge noise (fixed seed). Charges are the map's own prediction (Locator::predict).
 //   make_press_stream MAP.h5 > stream.csv
+#include "pvdf/core/constants.hpp"
 #include "pvdf/mapping/locator.hpp"
 #include "pvdf/mapping/map.hpp"
 
@@ -36,7 +37,7 @@ int main(int argc, char** argv) {
   };
   for (int i = 0; i < 800; ++i) {  // sliding press, force ramp lo..hi..lo
     const double s = i / 799.0;
-    emit(true, -6e-3 + 12e-3 * s, -3e-3 + 5e-3 * s, lo + (hi - lo) * std::sin(std::acos(-1.0) * s));
+    emit(true, -6e-3 + 12e-3 * s, -3e-3 + 5e-3 * s, lo + (hi - lo) * std::sin(pvdf::pi * s));
   }
   for (int i = 0; i < 100; ++i) emit(false, 0, 0, 0);  // released
   std::printf("%.4f,not-a-number", row++ * 1e-4);     // a malformed row: both programs skip it

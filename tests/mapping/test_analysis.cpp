@@ -3,6 +3,7 @@
 // gives exactly 10 % for charges 1.1× the map's; malformed measurement files are refused by line.
 #include "fixture.hpp"
 
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/mapping/analysis.hpp"
 #include "pvdf/mapping/interpolant.hpp"
@@ -76,7 +77,7 @@ TEST_CASE("rays on a pure power-law map recover the exponent and C1(beta)", "[ma
     REQUIRE(ray.fitted);
     CHECK(ray.n_used == 24);
     CHECK(ray.C2 == Approx(-exponent).margin(1e-3));
-    const double b = ray.beta_deg * M_PI / 180;
+    const double b = ray.beta_deg * pvdf::pi / 180;
     // Oracle: Q = scale·P(β)·d^−0.8 with d in m; at d = 1 mm this is C1.
     const double c1 = model.scale_C * (std::cos(b) * std::cos(b) + r * std::sin(b) * std::sin(b)) * std::pow(1e-3, -exponent);
     CHECK(ray.C1_C == Approx(c1).epsilon(2e-3));
@@ -100,8 +101,8 @@ TEST_CASE("rays leaving the map stop there; too short rays are reported, not fit
   const RayAnalysis a = analyse_rays(map, interpolant, o);
   for (const auto& ray : a.rays) {
     for (double d : ray.d_m) {
-      const double x = map.electrode_centers_m[ray.electrode][0] + d * std::cos(0.3 + ray.beta_deg * M_PI / 180);
-      const double y = map.electrode_centers_m[ray.electrode][1] + d * std::sin(0.3 + ray.beta_deg * M_PI / 180);
+      const double x = map.electrode_centers_m[ray.electrode][0] + d * std::cos(0.3 + ray.beta_deg * pvdf::pi / 180);
+      const double y = map.electrode_centers_m[ray.electrode][1] + d * std::sin(0.3 + ray.beta_deg * pvdf::pi / 180);
       CHECK(std::hypot(x, y) <= 0.042 + 1e-9);
     }
     CHECK(int(ray.d_m.size()) < o.n_samples);
@@ -232,8 +233,8 @@ TEST_CASE("pictures of the analyses are written", "[mapping][analysis]") {
   REQUIRE(a.rays.size() == 9);
   CHECK(a.rays[1].beta_deg == 65);
   const std::string png = temp_file("rays.png");
-  std::vector<MeasuredPress> m{{map.electrode_centers_m[1][0] + 0.005 * std::cos(M_PI / 4),
-                                map.electrode_centers_m[1][1] + 0.005 * std::sin(M_PI / 4), 1.0, {1e-12, 2e-12, 3e-12}, 2}};
+  std::vector<MeasuredPress> m{{map.electrode_centers_m[1][0] + 0.005 * std::cos(pvdf::pi / 4),
+                                map.electrode_centers_m[1][1] + 0.005 * std::sin(pvdf::pi / 4), 1.0, {1e-12, 2e-12, 3e-12}, 2}};
   write_rays_png(a, map, 1, {45, 65, 85}, &m, 2.0, png);
   CHECK(std::filesystem::file_size(png) > 1000);
   CHECK_THROWS_AS(write_rays_png(a, map, 1, {7.0}, nullptr, 2.0, png), pvdf::InputError);  // no such ray

@@ -1,6 +1,7 @@
 // Charge formulas: the charge law of pvdf/core/piezo.hpp (used by the solver) against numbers
 // worked by hand, the quadrature form against the uniform-stress oracle, and seed 001 eq. 2
 // against the tensor transformation (computed independently with pvdf::stress_to_material).
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/material.hpp"
 #include "pvdf/core/piezo.hpp"
@@ -55,7 +56,7 @@ TEST_CASE("a uniformly stressed electrode collects d31*sigma11*area + d32*sigma2
 TEST_CASE("radial-stress charge by tensor rotation; eq. 2 as printed differs off-axis", "[mapping][charge]") {
   const double d31 = 6.5e-12, d32 = 0.65e-12, area = 4e-6, sigma_r = 2e6, sigma_t = 0.3e6;
   for (double beta_deg : {0.0, 15.0, 30.0, 45.0, 60.0, 75.0, 90.0}) {
-    const double beta = beta_deg * M_PI / 180;
+    const double beta = beta_deg * pvdf::pi / 180;
     // Independent oracle: the radial direction at angle β from the draw axis (axis 1) is the
     // global x of a frame in which the draw axis sits at angle −β.
     const Eigen::Vector3d global(sigma_r, sigma_t, 0.0);  // [σrr, σθθ, σrθ]
@@ -65,10 +66,10 @@ TEST_CASE("radial-stress charge by tensor rotation; eq. 2 as printed differs off
   }
   // Along and across the draw eq. 2 agrees with the tensor form (σθ = 0) ...
   CHECK(charge_eq2_printed_C(d31, d32, 0.0, sigma_r, area) == Approx(charge_radial_tensor_C(d31, d32, 0.0, sigma_r, 0, area)));
-  CHECK(charge_eq2_printed_C(d31, d32, M_PI / 2, sigma_r, area) ==
-        Approx(charge_radial_tensor_C(d31, d32, M_PI / 2, sigma_r, 0, area)));
+  CHECK(charge_eq2_printed_C(d31, d32, pvdf::pi / 2, sigma_r, area) ==
+        Approx(charge_radial_tensor_C(d31, d32, pvdf::pi / 2, sigma_r, 0, area)));
   // ... but at 45° it is (cos + sin)/(cos² + sin²) = √2 times too large for any d31, d32.
-  const double ratio = charge_eq2_printed_C(d31, d32, M_PI / 4, sigma_r, area) /
-                       charge_radial_tensor_C(d31, d32, M_PI / 4, sigma_r, 0, area);
+  const double ratio = charge_eq2_printed_C(d31, d32, pvdf::pi / 4, sigma_r, area) /
+                       charge_radial_tensor_C(d31, d32, pvdf::pi / 4, sigma_r, 0, area);
   CHECK(ratio == Approx(std::sqrt(2.0)).epsilon(1e-12));
 }

@@ -184,6 +184,9 @@ TEST_CASE("force scaling is used only where its check passes", "[mapping][genera
   o.scaling_check_stride = 2;
 
   SECTION("pure membrane: Q ~ F^(2/3) holds, the shortcut is taken and is right") {
+    // The cheap model everywhere: where the rim model (bending kept) solves a level, the levels are
+    // not one pure membrane and the check rightly fails.
+    o.rim_model = "never";
     const auto scene = small_scene(0.0);
     MapReport report;
     const ChargeMap m = generate_map(scene, o, &report);
@@ -206,7 +209,8 @@ TEST_CASE("force scaling is used only where its check passes", "[mapping][genera
         if (report.provenance[m.point(0, jj, ii)] != provenance::scaled) continue;
         for (std::size_t cj : {std::size_t(0), std::size_t(2)}) {
           for (std::size_t ci : {std::size_t(0), std::size_t(2)}) {
-            REQUIRE(report.provenance[m.point(0, cj, ci)] == provenance::solved);
+            const auto corner = report.provenance[m.point(0, cj, ci)];  // solved (its estimate may exceed the tolerance)
+            REQUIRE((corner == provenance::solved || corner == provenance::tolerance_not_met));
             std::vector<double> predicted;
             for (std::size_t k = 0; k < m.ne(); ++k) {
               predicted.push_back(m.charge_C[m.charge_index(1, cj, ci, k)] * std::pow(0.25, 2.0 / 3.0));
@@ -277,15 +281,15 @@ TEST_CASE("kill and resume gives the uninterrupted map; a foreign checkpoint is 
   CHECK_FALSE(std::filesystem::exists(checkpoint));
 }
 
-TEST_CASE("generated map file round trip with /provenance and the setup's error estimates", "[mapping][generate][slow]") {
+TEST_CASE("generated map file round trip with /provenance and the per-node error estimates", "[mapping][generate][slow]") {
   const auto scene = small_scene();
   MapOptions o = cheap_options({-0.002, 0.002, -0.002, 0.0});  // x = -2, 0, 2 mm; y = -2, 0 mm
   o.use_symmetry = true;
-  o.n_setup_checks = 1;  // one direct solve (film centre) measures the sweep mesh's errors
+  o.n_setup_checks = 1;
   MapReport report;
   const ChargeMap m = generate_map(scene, o, &report);
   const std::string path = temp_dir() + "/roundtrip.h5";
-  write_generated_map(path, m, report.provenance);
+  write_generated_map(path, m, report.provenance, report.node_model);
   const ChargeMap back = read_map(path);
   CHECK(back.charge_C == m.charge_C);
   CHECK(back.status == m.status);
@@ -294,17 +298,42 @@ TEST_CASE("generated map file round trip with /provenance and the setup's error 
   CHECK(read_provenance(path) == report.provenance);
   CHECK(std::count(report.provenance.begin(), report.provenance.end(), provenance::mirrored) == 2);
 
-  // The error estimates are the sweep setup's, written and read back unchanged; the deflection
-  // one is a measurement (finite, > 0, < 1 = "a check failed"), not the placeholder or NaN.
-  const pvdf::fem::ProbeSweep sweep(scene, sweep_options_like(scene, o));
-  const pvdf::fem::SweepSetup& setup = sweep.setup();
-  INFO("setup: charge " << setup.estimated_relative_error << ", deflection " << setup.estimated_deflection_relative_error);
+  // Every ok point carries its own estimate (finite, >= 0, not all zero), read back unchanged;
+  // mirror images carry their image's (electrodes permuted); the root attributes are the largest.
+  REQUIRE(m.estimated_charge_error_C.size() == m.charge_C.size());
+  CHECK(back.estimated_charge_error_C == m.estimated_charge_error_C);
+  REQUIRE(report.node_model.size() == m.status.size());
+  double largest = 0, sum = 0;
+  for (std::size_t p = 0; p < m.status.size(); ++p) {
+    if (m.status[p] != std::uint8_t(PointStatus::ok)) continue;
+    CHECK(report.node_model[p] <= 1);
+    double e = 0, q = 0;
+    for (std::size_t k = 0; k < m.ne(); ++k) {
+      const double v = m.estimated_charge_error_C[p * m.ne() + k];
+      REQUIRE(std::isfinite(v));
+      CHECK(v >= 0);
+      e = std::max(e, v);
+      q = std::max(q, std::abs(m.charge_C[p * m.ne() + k]));
+      sum += v;
+    }
+    largest = std::max(largest, e / q);
+  }
+  CHECK(sum > 0);
+  CHECK(m.estimated_relative_error == Approx(largest).epsilon(1e-12));
+  CHECK(report.estimated_relative_error == m.estimated_relative_error);
   CHECK(back.estimated_relative_error == m.estimated_relative_error);
   CHECK(back.estimated_deflection_relative_error == m.estimated_deflection_relative_error);
-  CHECK(m.estimated_relative_error == Approx(setup.estimated_relative_error).epsilon(1e-9));
-  CHECK(m.estimated_deflection_relative_error == Approx(setup.estimated_deflection_relative_error).epsilon(1e-9));
-  CHECK(m.estimated_relative_error == report.estimated_relative_error);
   CHECK(std::isfinite(back.estimated_deflection_relative_error));
   CHECK(back.estimated_deflection_relative_error > 0);
-  CHECK(back.estimated_deflection_relative_error < 1);
+  for (std::size_t i = 0; i < m.nx(); ++i) {  // mirror pairs x -> -x: A stays, B <-> C
+    const std::size_t mi = m.nx() - 1 - i;
+    for (std::size_t j = 0; j < m.ny(); ++j) {
+      CHECK(m.estimated_charge_error_C[m.charge_index(0, j, i, 0)] == m.estimated_charge_error_C[m.charge_index(0, j, mi, 0)]);
+      const double b = m.estimated_charge_error_C[m.charge_index(0, j, i, 1)];
+      const double c = m.estimated_charge_error_C[m.charge_index(0, j, mi, 2)];
+      INFO("x index " << i << ", y index " << j << ": B " << b << " C, its image " << c << " C");
+      if (i != mi) CHECK(b == c);  // a mirrored node carries its image's estimates
+      else CHECK(b == Approx(c).epsilon(1e-6));  // a node on the mirror line: B and C of one solve, equal up to rounding
+    }
+  }
 }

@@ -135,6 +135,46 @@ TEST_CASE("a map file without the error estimates (written before they existed) 
   CHECK(std::isnan(again.estimated_deflection_relative_error));
 }
 
+TEST_CASE("format 2: the per-node charge error estimates round-trip; format-1 files still load", "[mapping][io]") {
+  ChargeMap m = small_map();
+  m.estimated_charge_error_C.resize(m.charge_C.size());
+  for (std::size_t i = 0; i < m.charge_C.size(); ++i) m.estimated_charge_error_C[i] = 1e-15 * double(i % 97);
+  m.estimated_charge_error_C[m.charge_index(1, 7, 7, 0)] = std::nan("");  // at the not_converged point: allowed
+  const std::string path = temp_path("format2.h5");
+  write_map(path, m);
+  const ChargeMap r = read_map(path);
+  REQUIRE(r.estimated_charge_error_C.size() == m.estimated_charge_error_C.size());
+  for (std::size_t i = 0; i < m.charge_C.size(); ++i) {
+    if (std::isnan(m.estimated_charge_error_C[i])) CHECK(std::isnan(r.estimated_charge_error_C[i]));
+    else CHECK(r.estimated_charge_error_C[i] == m.estimated_charge_error_C[i]);
+  }
+
+  // The same file as format 1 wrote it: version attribute 1, no per-node estimates.
+  H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
+  auto set_version = [&](int version) {
+    const hid_t file = H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
+    REQUIRE(file >= 0);
+    const hid_t attr = H5Aopen(file, "format_version", H5P_DEFAULT);
+    REQUIRE(attr >= 0);
+    REQUIRE(H5Awrite(attr, H5T_NATIVE_INT, &version) >= 0);
+    H5Aclose(attr);
+    if (H5Lexists(file, "/estimated_charge_error_C", H5P_DEFAULT) > 0) H5Ldelete(file, "/estimated_charge_error_C", H5P_DEFAULT);
+    H5Fclose(file);
+  };
+  set_version(1);
+  const ChargeMap v1 = read_map(path);
+  CHECK(v1.estimated_charge_error_C.empty());
+  CHECK(v1.deflection_at_load_m == m.deflection_at_load_m);
+  CHECK(v1.status == m.status);
+  set_version(3);
+  CHECK_THROWS_WITH(read_map(path), Catch::Contains("format_version = 3"));
+
+  // A negative estimate at an ok point is refused, naming the dataset.
+  ChargeMap bad = m;
+  bad.estimated_charge_error_C[bad.charge_index(0, 7, 7, 1)] = -1e-15;
+  CHECK_THROWS_WITH(write_map(temp_path("format2_bad.h5"), bad), Catch::Contains("/estimated_charge_error_C"));
+}
+
 TEST_CASE("map files are plain HDF5 that h5dump can read", "[mapping][io]") {
   const std::string path = temp_path("dump.h5");
   write_map(path, small_map());

@@ -1,5 +1,6 @@
 // The streaming lookup: documented columns, malformed rows reported by line number and
 // skipped (or refused with strict), never a crash.
+#include "pvdf/core/constants.hpp"
 #include "fixture.hpp"
 
 #include "pvdf/core/error.hpp"
@@ -8,6 +9,9 @@
 
 #include <catch2/catch.hpp>
 
+#include <array>
+#include <cmath>
+#include <random>
 #include <sstream>
 
 using namespace pvdf::mapping;
@@ -142,4 +146,58 @@ TEST_CASE("random garbage never crashes the stream", "[mapping][stream]") {
   CHECK(s.rows == s.skipped + (lines_of(out.str()).size() - 1));
   CHECK(s.located > 0);
   CHECK(out.str().find("nan") == std::string::npos);
+}
+
+TEST_CASE("the tracker answers as the full search does on a noisy stream of presses", "[mapping][stream][tracker]") {
+  // Presses of 20-60 ms at 10 kHz with raised-cosine force ramps to 0.6-1.8 N, half of them
+  // moving at up to 50 mm/s, 0.05 pC noise on every sample, gaps of nothing between them.
+  // Oracle: Locator::locate on every sample (the full search), independent of the tracker's
+  // memory. Agreement: the most probable answer within a tenth of the full search's σ.
+  const Locator& locator = shared_locator();
+  const SyntheticModel model;
+  std::mt19937 rng(31);
+  std::uniform_real_distribution<double> u(0, 1);
+  std::normal_distribution<double> noise(0, 0.05e-12);
+  std::vector<std::array<double, 3>> q;
+  while (q.size() < 30000) {
+    for (int i = 0; i < 100; ++i) q.push_back({noise(rng), noise(rng), noise(rng)});
+    const int samples = 200 + int(400 * u(rng));
+    const double peak = 0.6 + 1.2 * u(rng), x0 = 0.02 * u(rng) - 0.01, y0 = 0.02 * u(rng) - 0.01;
+    const double speed = u(rng) < 0.5 ? 0.05 * u(rng) : 0.0, heading = 6.283 * u(rng);
+    for (int i = 0; i < samples; ++i) {
+      const double t = double(i) / samples, ramp = t < 0.2 ? 0.5 - 0.5 * std::cos(pvdf::pi * t / 0.2)
+                                                 : t > 0.8 ? 0.5 - 0.5 * std::cos(pvdf::pi * (1 - t) / 0.2) : 1.0;
+      const double time_s = i * 1e-4;
+      const pvdf_test::Press p{x0 + speed * time_s * std::cos(heading), y0 + speed * time_s * std::sin(heading),
+                               std::max(peak * ramp, 1e-6)};
+      const auto c = pvdf_test::charges(model, p);
+      q.push_back({c[0] + noise(rng), c[1] + noise(rng), c[2] + noise(rng)});
+    }
+  }
+  Tracker tracker(locator);
+  std::size_t both = 0, same = 0, presence = 0;
+  for (const auto& c : q) {
+    const Location a = locator.locate(c.data());
+    const Location b = tracker.next(c.data());
+    if (a.has_position() != b.has_position()) {
+      ++presence;
+      continue;
+    }
+    if (!a.has_position()) continue;
+    ++both;
+    same += std::abs(a.x_m - b.x_m) <= 0.1 * a.sigma_x_m + 1e-12 && std::abs(a.y_m - b.y_m) <= 0.1 * a.sigma_y_m + 1e-12 &&
+            std::abs(a.force_N - b.force_N) <= 0.1 * a.sigma_F_N + 1e-12 && a.n_solutions == b.n_solutions;
+  }
+  const TrackerSummary& s = tracker.summary();
+  INFO(both << " samples with a position in both, " << same << " the same, " << presence << " with/without a position; "
+            << s.full_searches << " full searches, " << s.tracked << " tracked");
+  CHECK(both > 20000);
+  CHECK(double(same) >= 0.999 * double(both));
+  CHECK(double(presence) <= 0.01 * double(q.size()));
+  CHECK(s.tracked > s.full_searches);  // most samples are tracked
+  // After reset() the next sample is a full search.
+  const auto before = s.full_searches;
+  tracker.reset();
+  tracker.next(q[150].data());
+  CHECK(tracker.summary().full_searches == before + 1);
 }

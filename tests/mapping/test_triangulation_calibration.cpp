@@ -154,18 +154,26 @@ TEST_CASE("isocharge pictures and VTK export", "[mapping][pictures]") {
   std::ifstream in(vtk);
   std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   CHECK(text.find("DIMENSIONS " + std::to_string(map.nx()) + " " + std::to_string(map.ny()) + " 1") != std::string::npos);
-  CHECK(text.find("SCALARS charge_B_pC_F1 double 1") != std::string::npos);
-  // The value of node (i, j) of B at level 1 is the map's charge in pC (binary legacy VTK:
+  // Force levels named by value (1 N here), charges in C.
+  CHECK(charge_vtk_field_name("B", 1.0) == "charge_B_C_at_1N");
+  CHECK(charge_vtk_field_name("A", 0.5) == "charge_A_C_at_0.5N");
+  CHECK(text.find("SCALARS charge_B_C_at_0.5N double 1") != std::string::npos);
+  CHECK(text.find("SCALARS charge_B_C_at_1N double 1") != std::string::npos);
+  CHECK(text.find("charges in C,") != std::string::npos);
+  // No pC left in the header (the binary values after it may hold any two bytes) nor in a field name.
+  CHECK(text.substr(0, text.find("SCALARS mask")).find("pC") == std::string::npos);
+  CHECK(text.find("_pC_F") == std::string::npos);
+  // The value of node (i, j) of B at level 1 (1 N) is the map's charge in C (binary legacy VTK:
   // big-endian doubles after the LOOKUP_TABLE line, because ASCII VTK cannot hold NaN).
   const std::size_t i = map.nx() / 2 + 3, j = map.ny() / 2 - 2;
-  const std::string header = "SCALARS charge_B_pC_F1 double 1\nLOOKUP_TABLE default\n";
+  const std::string header = "SCALARS charge_B_C_at_1N double 1\nLOOKUP_TABLE default\n";
   const std::size_t at = text.find(header) + header.size() + 8 * (j * map.nx() + i);
   REQUIRE(at + 8 <= text.size());
   std::uint64_t bits = 0;
   for (int b = 0; b < 8; ++b) bits = (bits << 8) | std::uint64_t(static_cast<unsigned char>(text[at + std::size_t(b)]));
   double value = 0;
   std::memcpy(&value, &bits, sizeof value);
-  CHECK(value == Approx(map.charge_C[map.charge_index(1, j, i, 1)] * 1e12).epsilon(1e-12));
+  CHECK(value == Approx(map.charge_C[map.charge_index(1, j, i, 1)]).epsilon(1e-12));
 
   const std::string png = temp_path("iso_A.png");
   std::filesystem::remove(png);

@@ -1,6 +1,7 @@
 // Meshing scenes with Gmsh: electrode areas against nominal areas, film area and rim length
 // against the circle, all-quad counter-clockwise cells, determinism, scale robustness (1 mm
 // and 1 m films), O(h²) convergence of curved areas, quality refusal, .msh files Gmsh reopens.
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/scene.hpp"
 #include "pvdf/mesh/mesher.hpp"
@@ -17,7 +18,7 @@
 
 namespace {
 
-constexpr double pi = 3.14159265358979323846;
+using pvdf::pi;
 using pvdf::mesh::FilmMesh;
 
 /// Edges of the cells with material `id` that belong to only one such cell: its outline.

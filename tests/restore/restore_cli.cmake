@@ -18,6 +18,15 @@ expect(0 "simulated" ${PVDFKIT} restore simulate ${EX}/edge_b.json -o ${WORK}/b.
 expect(0 "cond\\(F\\)" ${PVDFKIT} restore identify --scan ${WORK}/a.csv --force 0.6,0.9 --edge-x-m -0.0125
        --scan ${WORK}/b.csv --force 0.2,1.0 --edge-x-m -0.0125 --taps 2048 -o ${WORK}/f.json)
 expect(0 "restored" ${PVDFKIT} restore apply ${WORK}/f.json ${WORK}/a.csv -o ${WORK}/forces.csv)
+# The isotropic regularization is written into the filter file; an unknown one is refused.
+expect(0 "isotropic regularization" ${PVDFKIT} restore identify --scan ${WORK}/a.csv --force 0.6,0.9 --edge-x-m -0.0125
+       --scan ${WORK}/b.csv --force 0.2,1.0 --edge-x-m -0.0125 --taps 2048 --regularization isotropic -o ${WORK}/fi.json)
+file(READ ${WORK}/fi.json fi_json)
+if(NOT fi_json MATCHES "\"regularization\": *\"isotropic\"")
+  message(FATAL_ERROR "fi.json lacks beta.regularization = isotropic")
+endif()
+expect(2 "--regularization" ${PVDFKIT} restore identify --scan ${WORK}/a.csv --force 0.6,0.9 --edge-x-m -0.0125
+       --scan ${WORK}/b.csv --force 0.2,1.0 --edge-x-m -0.0125 --regularization wiener -o ${WORK}/fw.json)
 file(STRINGS ${WORK}/forces.csv header LIMIT_COUNT 2)
 if(NOT "${header}" MATCHES "x_m,fx_N,fz_N,mu")
   message(FATAL_ERROR "forces.csv header is '${header}'")

@@ -91,6 +91,8 @@ TEST_CASE("Filter files round-trip exactly and malformed ones name the key", "[r
   f.beta = 1e-4;
   f.beta_abs = 3.5;
   f.beta_policy = "constant";
+  f.regularization = "isotropic";
+  f.peak_fraction = 0.83;
   f.conditioning = {1.5, 8.0, 900.0, 0.14};
   const std::string path = temp_path("filter_roundtrip.json");
   save_filter(path, f);
@@ -99,6 +101,8 @@ TEST_CASE("Filter files round-trip exactly and malformed ones name the key", "[r
   CHECK(g.delay_samples == f.delay_samples);
   CHECK(g.sample_spacing_m == f.sample_spacing_m);
   CHECK(g.beta == f.beta);
+  CHECK(g.regularization == f.regularization);
+  CHECK(g.peak_fraction == f.peak_fraction);
   CHECK(g.conditioning.median == f.conditioning.median);
   for (int i = 0; i < 2; ++i)
     for (int j = 0; j < 2; ++j) CHECK(g.h[i][j] == f.h[i][j]);

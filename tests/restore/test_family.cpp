@@ -3,6 +3,7 @@
 // seeds 1000-1047) never used; line forces in N/m; the flat-surface level; model mismatch.
 #include "restore_test_util.hpp"
 
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/restore/family.hpp"
 
@@ -107,7 +108,7 @@ TEST_CASE("Line forces are in N/m: the peak and the integral of an edge do not d
     const double s_m = f.resolution_m / 2.3548200450309493;
     INFO("speed " << speeds[v] << ": peak " << peaks[v] << " N/m, integral " << integrals[v] << " N");
     CHECK(integrals[v] == Approx(1.0).epsilon(0.1));
-    CHECK(peaks[v] == Approx(1.0 / (s_m * std::sqrt(2 * 3.14159265358979323846))).epsilon(0.1));
+    CHECK(peaks[v] == Approx(1.0 / (s_m * std::sqrt(2 * pvdf::pi))).epsilon(0.1));
   }
   CHECK(peaks[1] == Approx(peaks[0]).epsilon(0.1));
   // Per sample (N) the same edge is spread over 1.6x fewer samples: its per-sample peak grows with the spacing.

@@ -1,6 +1,8 @@
 // Round trips simulate -> identify -> apply at a realistic noise level (seed 000 Table 1 chain), the
 // automatic beta against badly chosen constants, zero position shift, and the causes of seed 000's
 // 25 mm shift and end noise.
+#include "pvdf/core/constants.hpp"
+
 #include "restore_test_util.hpp"
 
 #include "fft.hpp"
@@ -21,7 +23,7 @@ std::vector<double> blurred(const std::vector<double>& f, double resolution_m, d
   fft.forward(f.data(), f.size(), F.data());
   const double s = resolution_m / 2.3548200450309493;
   for (std::size_t k = 0; k < F.size(); ++k) {
-    const double w = 2 * 3.14159265358979323846 * k / (fft.size() * dx);
+    const double w = 2 * pvdf::pi * k / (fft.size() * dx);
     F[k] *= std::exp(-0.5 * w * w * s * s);
   }
   std::vector<double> out(fft.size());

@@ -331,6 +331,10 @@ void write_map(const std::string& path, const ChargeMap& map) {
       w.doubles(d.get(), "dcharge_dx_C_per_m", {nf, ny, nx, ne}, map.dcharge_dx_C_per_m, "C/m", "dQ/dx of the probe position");
       w.doubles(d.get(), "dcharge_dy_C_per_m", {nf, ny, nx, ne}, map.dcharge_dy_C_per_m, "C/m", "dQ/dy of the probe position");
     }
+    if (!map.estimated_charge_error_C.empty()) {
+      w.doubles(root, "estimated_charge_error_C", {nf, ny, nx, ne}, map.estimated_charge_error_C, "C",
+                "estimated absolute error of each charge (discretization + model) [force][y][x][electrode]");
+    }
     if (map.calibration) {
       Handle c = w.group(root, "calibration");
       w.doubles(c.get(), "gain", {ne}, map.calibration->gain, "1", "q_measured = gain * q_map + offset");
@@ -356,8 +360,8 @@ ChargeMap read_map(const std::string& path) {
     r.fail("attribute /:format = '" + format + "' but '" + map_format_name + "' is required (is this a charge map?)");
   }
   const double version = r.read_number_attribute(root, "format_version", "/:");
-  if (version != map_format_version) {
-    r.fail("attribute /:format_version = " + num(version) + " is not supported (this pvdfkit reads version " +
+  if (version != 1 && version != map_format_version) {
+    r.fail("attribute /:format_version = " + num(version) + " is not supported (this pvdfkit reads versions 1 to " +
            std::to_string(map_format_version) + "); use a matching pvdfkit");
   }
   ChargeMap m;
@@ -388,6 +392,9 @@ ChargeMap read_map(const std::string& path) {
   if (r.exists("/derivatives")) {
     m.dcharge_dx_C_per_m = r.doubles("/derivatives/dcharge_dx_C_per_m", {hf, hy, hx, he}, "[nf][ny][nx][ne]", "C/m");
     m.dcharge_dy_C_per_m = r.doubles("/derivatives/dcharge_dy_C_per_m", {hf, hy, hx, he}, "[nf][ny][nx][ne]", "C/m");
+  }
+  if (version >= 2 && r.exists("/estimated_charge_error_C")) {
+    m.estimated_charge_error_C = r.doubles("/estimated_charge_error_C", {hf, hy, hx, he}, "[nf][ny][nx][ne]", "C");
   }
   if (r.exists("/calibration")) {
     Calibration c;

@@ -7,8 +7,10 @@
 // an interrupted-and-resumed run. Within a row each solve warm-starts from its neighbour.
 #include "pvdf/mapping/generate.hpp"
 
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
+#include "pvdf/core/membrane_scaling.hpp"
 #include "pvdf/fem/probe_sweep.hpp"
 #include "pvdf/version.hpp"
 
@@ -35,7 +37,6 @@ namespace pvdf::mapping {
 namespace {
 
 constexpr double nan = std::numeric_limits<double>::quiet_NaN();
-constexpr double pi = 3.14159265358979323846;
 
 std::string num(double v) {
   std::ostringstream s;
@@ -154,19 +155,23 @@ std::array<double, 4> outline_box(const FilmOutline& o) {
 struct Task {
   std::size_t i = 0, j = 0;
   bool all_levels = true;  // false: solve the largest level only, scale the others
+  double scaling_error = 0;  // worst force-scaling check error at the corners of its lattice cell
 };
 using Block = std::vector<Task>;
 
 // Data of one solved position (all levels): the record format of checkpoints and MPI gathers.
-// [point index j*nx+i, then per level: status, provenance, deflection, charges...]
+// [point index j*nx+i, then per level: status, provenance, deflection, model, deflection error,
+//  charges..., charge errors...]
 struct Layout {
   std::size_t nf = 0, ne = 0;
-  std::size_t size() const { return 1 + nf * (3 + ne); }
-  // Fields of a level's block, at level(rec, f) + field (charges: + charges + k).
-  enum Field : std::size_t { status = 0, provenance = 1, deflection = 2, charges = 3 };
+  std::size_t per_level() const { return 5 + 2 * ne; }
+  std::size_t size() const { return 1 + nf * per_level(); }
+  // Fields of a level's block, at level(rec, f) + field (charges: + charges + k; errors: + errors() + k).
+  enum Field : std::size_t { status = 0, provenance = 1, deflection = 2, model = 3, deflection_error = 4, charges = 5 };
+  std::size_t errors() const { return charges + ne; }
   static constexpr std::size_t point_index = 0;  // rec[point_index] = j*nx + i
-  double* level(double* rec, std::size_t f) const { return rec + 1 + f * (3 + ne); }
-  const double* level(const double* rec, std::size_t f) const { return rec + 1 + f * (3 + ne); }
+  double* level(double* rec, std::size_t f) const { return rec + 1 + f * per_level(); }
+  const double* level(const double* rec, std::size_t f) const { return rec + 1 + f * per_level(); }
 };
 
 std::uint64_t fnv1a(const std::string& text) {
@@ -187,7 +192,7 @@ std::string hex(std::uint64_t v) {
 // ---------------------------------------------------------------------------------------------
 // Checkpoint files: a text header, then `records` × `record_doubles` float64 (native order).
 
-constexpr const char* checkpoint_magic = "pvdfkit-map-checkpoint 1";
+constexpr const char* checkpoint_magic = "pvdfkit-map-checkpoint 2";
 
 void write_checkpoint(const std::string& path, const std::string& hash, const Layout& layout,
                       const std::vector<double>& records) {
@@ -307,6 +312,8 @@ class Generator {
   Layout layout_;
   ChargeMap map_;
   std::vector<std::uint8_t> provenance_;
+  std::vector<std::uint8_t> node_model_;  // [nf][ny][nx] fem::SweepModel codes
+  std::vector<double> deflection_error_;  // [nf][ny][nx] estimated |error| of the deflection (m)
   std::vector<std::uint8_t> known_;      // [ny][nx] 1 = canonical position has its record
   std::vector<std::uint8_t> this_run_;   // [ny][nx] 1 = computed in this run by this process
   std::string hash_;
@@ -484,7 +491,14 @@ void Generator::solve_block(fem::ProbeSweep& sweep, const Block& block, std::vec
       r[Layout::status] = double(ok ? PointStatus::ok : PointStatus::not_converged);
       r[Layout::provenance] = prov;
       r[Layout::deflection] = ok ? s->deflection_at_load_m : nan;
-      for (std::size_t k = 0; k < ne; ++k) r[Layout::charges + k] = ok ? s->charge_C[k] : nan;
+      r[Layout::model] = ok ? double(s->model_used) : 0.0;
+      r[Layout::deflection_error] = ok ? s->deflection_error_m : nan;
+      if (ok && s->status == fem::Status::tolerance_not_met) r[Layout::provenance] = prov | provenance::tolerance_not_met;
+      const bool has_err = ok && s->charge_error_C.size() == ne;
+      for (std::size_t k = 0; k < ne; ++k) {
+        r[Layout::charges + k] = ok ? s->charge_C[k] : nan;
+        r[layout_.errors() + k] = has_err ? s->charge_error_C[k] : nan;
+      }
       if (!ok && s) {
         std::lock_guard<std::mutex> lock(mutex_);
         if (first_failure_.empty()) {
@@ -516,8 +530,13 @@ void Generator::solve_block(fem::ProbeSweep& sweep, const Block& block, std::vec
         const double ratio = o_.forces_N[f] / o_.forces_N[top];
         fem::ProbeSolution s = top_solution;
         s.force_N = o_.forces_N[f];
-        s.deflection_at_load_m *= std::cbrt(ratio);
-        for (auto& q : s.charge_C) q *= std::pow(ratio, 2.0 / 3.0);
+        s.deflection_at_load_m *= pvdf::membrane_deflection_factor(ratio);
+        s.deflection_error_m = s.deflection_error_m * pvdf::membrane_deflection_factor(ratio) + task.scaling_error * std::abs(s.deflection_at_load_m);
+        for (auto& q : s.charge_C) q *= pvdf::membrane_charge_factor(ratio);
+        // The top level's estimate scaled alike, plus the worst scaling-check error of its cell.
+        double q_max = 0;
+        for (double q : s.charge_C) q_max = std::max(q_max, std::abs(q));
+        for (auto& e : s.charge_error_C) e = e * pvdf::membrane_charge_factor(ratio) + task.scaling_error * q_max;
         put(f, &s, provenance::scaled);
         continue;
       }
@@ -550,7 +569,12 @@ void Generator::store_record(const double* rec, bool resumed) {
     map_.status[pt] = std::uint8_t(r[Layout::status]);
     provenance_[pt] = std::uint8_t(r[Layout::provenance]);
     map_.deflection_at_load_m[pt] = r[Layout::deflection];
-    for (std::size_t k = 0; k < ne; ++k) map_.charge_C[pt * ne + k] = r[Layout::charges + k];
+    node_model_[pt] = std::uint8_t(r[Layout::model]);
+    deflection_error_[pt] = r[Layout::deflection_error];
+    for (std::size_t k = 0; k < ne; ++k) {
+      map_.charge_C[pt * ne + k] = r[Layout::charges + k];
+      map_.estimated_charge_error_C[pt * ne + k] = r[layout_.errors() + k];
+    }
     if (resumed) ++n_resumed_points_;
   }
   known_[p] = 1;
@@ -563,7 +587,7 @@ void Generator::commit(const std::vector<double>& records, std::size_t n_positio
     store_record(rec, false);
     this_run_[std::size_t(rec[Layout::point_index])] = 1;
     for (std::size_t f = 0; f < layout_.nf; ++f) {
-      if (layout_.level(rec, f)[Layout::provenance] == provenance::solved) ++fem_points_solved_;
+      if ((std::uint8_t(layout_.level(rec, f)[Layout::provenance]) & (provenance::scaled | provenance::mirrored)) == 0) ++fem_points_solved_;
     }
   }
   progress_done_ += n_positions;
@@ -582,7 +606,10 @@ std::vector<double> Generator::known_records(bool only_this_run) const {
       out.push_back(map_.status[pt]);
       out.push_back(provenance_[pt]);
       out.push_back(map_.deflection_at_load_m[pt]);
+      out.push_back(node_model_[pt]);
+      out.push_back(deflection_error_[pt]);
       for (std::size_t k = 0; k < ne; ++k) out.push_back(map_.charge_C[pt * ne + k]);
+      for (std::size_t k = 0; k < ne; ++k) out.push_back(map_.estimated_charge_error_C[pt * ne + k]);
     }
   }
   return out;
@@ -651,12 +678,12 @@ double Generator::check_error(std::size_t i, std::size_t j) const {
     double qmax = 0, qerr = 0;
     for (std::size_t k = 0; k < ne; ++k) {
       const double solved = map_.charge_C[pt * ne + k];
-      const double predicted = map_.charge_C[pt_top * ne + k] * std::pow(ratio, 2.0 / 3.0);
+      const double predicted = map_.charge_C[pt_top * ne + k] * pvdf::membrane_charge_factor(ratio);
       qmax = std::max(qmax, std::abs(solved));
       qerr = std::max(qerr, std::abs(predicted - solved));
     }
     const double w = map_.deflection_at_load_m[pt];
-    const double w_pred = map_.deflection_at_load_m[pt_top] * std::cbrt(ratio);
+    const double w_pred = map_.deflection_at_load_m[pt_top] * pvdf::membrane_deflection_factor(ratio);
     worst = std::max(worst, qmax > 0 ? qerr / qmax : (qerr > 0 ? 1.0 : 0.0));
     worst = std::max(worst, w != 0 ? std::abs(w_pred - w) / std::abs(w) : 0.0);
   }
@@ -674,6 +701,8 @@ void Generator::fill_mirrors() {
         const std::size_t dst = f * n + j * grid_.nx + i, src = f * n + r.j * grid_.nx + r.i;
         map_.status[dst] = map_.status[src];
         map_.deflection_at_load_m[dst] = map_.deflection_at_load_m[src];
+        node_model_[dst] = node_model_[src];
+        deflection_error_[dst] = deflection_error_[src];
         provenance_[dst] = std::uint8_t(provenance_[src] | provenance::mirrored);
         if (map_.status[src] == std::uint8_t(PointStatus::not_computed)) provenance_[dst] = provenance_[src];
         for (std::size_t k = 0; k < ne; ++k) {
@@ -681,6 +710,7 @@ void Generator::fill_mirrors() {
           if (r.flip_i) m = sym_.perm_about_y[m];
           if (r.flip_j) m = sym_.perm_about_x[m];
           map_.charge_C[dst * ne + k] = map_.charge_C[src * ne + m];
+          map_.estimated_charge_error_C[dst * ne + k] = map_.estimated_charge_error_C[src * ne + m];
         }
       }
     }
@@ -711,6 +741,9 @@ ChargeMap Generator::run(MapReport& report) {
   map_.allocate();
   std::fill(map_.charge_C.begin(), map_.charge_C.end(), nan);
   std::fill(map_.deflection_at_load_m.begin(), map_.deflection_at_load_m.end(), nan);
+  map_.estimated_charge_error_C.assign(map_.charge_C.size(), nan);
+  node_model_.assign(nf * n, 0);
+  deflection_error_.assign(nf * n, nan);
   for (std::size_t f = 0; f < nf; ++f) {
     for (std::size_t p = 0; p < n; ++p) {
       if (!map_.mask[p]) map_.status[f * n + p] = std::uint8_t(PointStatus::outside);
@@ -727,6 +760,12 @@ ChargeMap Generator::run(MapReport& report) {
   sweep_options_.rim_margin_m = margin_;
   sweep_options_.forces_N = o_.forces_N;
   sweep_options_.n_setup_checks = o_.n_setup_checks;
+  if (o_.rim_model == "never") sweep_options_.rim_model = fem::SweepOptions::RimModel::never;
+  else if (o_.rim_model == "always") sweep_options_.rim_model = fem::SweepOptions::RimModel::always;
+  else if (o_.rim_model != "by-estimate") {
+    throw InputError("--rim-model " + o_.rim_model + ": use by-estimate, never or always");
+  }
+  sweep_options_.mesh = o_.mesh;
   sweeps_.resize(std::size_t(threads_));
   sweeps_[0] = std::make_unique<fem::ProbeSweep>(scene_, sweep_options_);
 
@@ -738,7 +777,12 @@ ChargeMap Generator::run(MapReport& report) {
         << grid_.spacing << "|forces";
     for (double f : o_.forces_N) key << ' ' << f;
     key << "|model " << fem::model_name(sweep_options_.solver.model) << "|tol " << tolerance_ << "|margin " << margin_
-        << "|scaling " << o_.use_force_scaling << ' ' << o_.scaling_check_stride << "|sym " << sym_.about_x << sym_.about_y;
+        << "|scaling " << o_.use_force_scaling << ' ' << o_.scaling_check_stride << "|sym " << sym_.about_x << sym_.about_y
+        << "|rim " << int(sweep_options_.rim_model) << ' ' << sweep_options_.rim_size_m << ' ' << sweep_options_.rim_grading;
+    if (o_.mesh) {  // another starting mesh changes every value
+      key << "|mesh " << o_.mesh->n_cells();
+      for (const auto& v : o_.mesh->vertices) key << ' ' << v[0] << ' ' << v[1];
+    }
     hash_ = hex(fnv1a(key.str()));
   }
 
@@ -786,6 +830,7 @@ ChargeMap Generator::run(MapReport& report) {
 
   // Phase A: the force-scaling check positions (every level solved).
   std::vector<std::uint8_t> verdict(n, 0);  // 1 pass, 2 fail (canonical lattice positions)
+  std::vector<double> check_err(n, 0.0);    // their scaling-check errors
   bool stopped_anywhere = false;
   if (scaling) {
     const auto blocks = split_for_rank(rows_of([&](std::size_t i, std::size_t j) { return is_lattice(i, j); }, true));
@@ -795,11 +840,13 @@ ChargeMap Generator::run(MapReport& report) {
       if (map_.mask[p] && known_[p] && is_lattice(i, j) && canonical(i, j)) {
         const double e = check_error(i, j);
         verdict[p] = e <= 0.5 * tolerance_ ? 1 : 2;
+        check_err[p] = std::isfinite(e) ? e : 1.0;
         if (std::isfinite(e)) report.max_scaling_check_error = std::max(report.max_scaling_check_error, e);
       }
     }
     if (use_mpi_) {
       MPI_Allreduce(MPI_IN_PLACE, verdict.data(), int(n), MPI_UNSIGNED_CHAR, MPI_MAX, MPI_COMM_WORLD);
+      MPI_Allreduce(MPI_IN_PLACE, check_err.data(), int(n), MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
       MPI_Allreduce(MPI_IN_PLACE, &report.max_scaling_check_error, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD);
     }
   }
@@ -810,7 +857,8 @@ ChargeMap Generator::run(MapReport& report) {
   // Phase B: every other position; scaled only where all lattice corners of its cell passed.
   if (!stopped_anywhere) {
     const long k = o_.scaling_check_stride;
-    auto decide = [&](std::size_t i, std::size_t j) {
+    auto decide = [&](std::size_t i, std::size_t j, double& worst) {
+      worst = 0;
       if (!scaling) return true;  // all levels
       const long I = grid_.i0 + long(i), J = grid_.j0 + long(j);
       const long Ia = I - (((I % k) + k) % k), Ja = J - (((J % k) + k) % k);
@@ -823,6 +871,7 @@ ChargeMap Generator::run(MapReport& report) {
           const Rep r = rep(ci, cj);
           const std::uint8_t v = verdict[r.j * grid_.nx + r.i];
           if (v != 1) return true;  // failed or unknown: solve every level
+          worst = std::max(worst, check_err[r.j * grid_.nx + r.i]);
           ++counted;
         }
       }
@@ -835,7 +884,9 @@ ChargeMap Generator::run(MapReport& report) {
       for (std::size_t i = 0; i < grid_.nx; ++i) {
         const std::size_t p = j * grid_.nx + i;
         if (!map_.mask[p] || !canonical(i, j) || (scaling && is_lattice(i, j))) continue;
-        b.push_back(Task{i, j, decide(i, j)});
+        double worst = 0;
+        const bool all_levels = decide(i, j, worst);
+        b.push_back(Task{i, j, all_levels, worst});
         if (!known_[p]) complete = false;
       }
       if (!b.empty() && !complete) all.push_back(std::move(b));
@@ -882,18 +933,41 @@ ChargeMap Generator::run(MapReport& report) {
   // Report.
   const fem::SweepSetup& setup = sweeps_[0]->setup();
   map_.model = fem::model_name(setup.model);
-  // Without setup checks SweepSetup holds its placeholder 1 ("not estimated"): the map says unknown.
-  if (o_.n_setup_checks > 0) {
-    map_.estimated_relative_error = setup.estimated_relative_error;
-    map_.estimated_deflection_relative_error = setup.estimated_deflection_relative_error;
-  }
   report = MapReport{};
+  // The map's overall estimates: the largest per-node ones (ok points).
+  {
+    double charge = 0, deflection = 0;
+    for (std::size_t pt = 0; pt < nf * n; ++pt) {
+      if (map_.status[pt] != std::uint8_t(PointStatus::ok)) continue;
+      double e = 0, q = 0;
+      for (std::size_t k = 0; k < ne; ++k) {
+        e = std::max(e, map_.estimated_charge_error_C[pt * ne + k]);
+        q = std::max(q, std::abs(map_.charge_C[pt * ne + k]));
+      }
+      if (q > 0) charge = std::max(charge, e / q);
+      const double w = std::abs(map_.deflection_at_load_m[pt]);
+      if (w > 0) deflection = std::max(deflection, deflection_error_[pt] / w);
+      if (node_model_[pt] == std::uint8_t(fem::SweepModel::rim)) ++report.n_rim_model;
+      if (provenance_[pt] & provenance::tolerance_not_met) ++report.n_tolerance_not_met;
+    }
+    map_.estimated_relative_error = charge;
+    map_.estimated_deflection_relative_error = deflection;
+  }
+  for (const auto& sw : sweeps_) {
+    if (!sw) continue;
+    const fem::SweepTiming t = sw->timing();
+    report.rim_solves += std::size_t(t.rim_solves);
+    report.rim_s += t.rim_s;
+    report.estimate_s += t.estimate_s;
+  }
   report.ranks = size_;
   report.threads = threads_;
   report.model = map_.model;
   report.model_reason = setup.model_reason;
-  report.estimated_relative_error = setup.estimated_relative_error;
+  report.estimated_relative_error = map_.estimated_relative_error;
+  report.estimated_deflection_relative_error = map_.estimated_deflection_relative_error;
   report.n_dofs = setup.n_dofs;
+  report.rim_n_dofs = setup.rim_n_dofs;
   report.setup_s = setup.setup_s;
   report.mirror_x = sym_.about_x;
   report.mirror_y = sym_.about_y;
@@ -937,6 +1011,7 @@ ChargeMap Generator::run(MapReport& report) {
   report.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   report.per_position_s = counters[1] > 0 ? report.wall_s * size_ / double(counters[1]) : 0.0;
   report.provenance = provenance_;
+  report.node_model = node_model_;
   return std::move(map_);
 }
 

@@ -1,5 +1,6 @@
-// The map file's `/provenance` dataset (solved / scaled / mirrored per point), added beside the
-// format-1 datasets that write_map writes; readers that do not know it ignore it.
+// The map file's `/provenance` (solved / scaled / mirrored / tolerance not met per point) and
+// `/model` (which model solved it) datasets, added beside the datasets that write_map writes;
+// readers that do not know them ignore them.
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
 #include "pvdf/mapping/generate.hpp"
@@ -12,6 +13,7 @@ namespace pvdf::mapping {
 namespace {
 
 constexpr const char* provenance_path = "/provenance";
+constexpr const char* model_path = "/model";
 
 void put_string_attribute(hid_t obj, const char* name, const std::string& value) {
   const hid_t type = H5Tcopy(H5T_C_S1);
@@ -24,47 +26,72 @@ void put_string_attribute(hid_t obj, const char* name, const std::string& value)
   if (attr >= 0) H5Aclose(attr);
   H5Sclose(space);
   H5Tclose(type);
-  if (status < 0) throw InputError(std::string("cannot write attribute ") + name + " of " + provenance_path);
+  if (status < 0) throw InputError(std::string("cannot write attribute ") + name);
+}
+
+// One uint8 [nf][ny][nx] dataset with units and description attributes.
+void put_bytes(hid_t file, const char* path, const ChargeMap& map, const std::vector<std::uint8_t>& values,
+               const std::string& description) {
+  const hsize_t dims[3] = {map.nf(), map.ny(), map.nx()};
+  const hid_t space = H5Screate_simple(3, dims, nullptr);
+  const hid_t plist = H5Pcreate(H5P_DATASET_CREATE);
+  const hsize_t chunk[3] = {1, map.ny(), map.nx()};
+  if (values.size() > 4096) {
+    H5Pset_chunk(plist, 3, chunk);
+    H5Pset_shuffle(plist);
+    H5Pset_deflate(plist, 4);
+  }
+  const hid_t ds = H5Dcreate2(file, path, H5T_STD_U8LE, space, H5P_DEFAULT, plist, H5P_DEFAULT);
+  herr_t status = ds < 0 ? -1 : H5Dwrite(ds, H5T_NATIVE_UINT8, H5S_ALL, H5S_ALL, H5P_DEFAULT, values.data());
+  if (status >= 0) {
+    try {
+      put_string_attribute(ds, "units", "1");
+      put_string_attribute(ds, "description", description);
+    } catch (...) {
+      status = -1;
+    }
+  }
+  if (ds >= 0) H5Dclose(ds);
+  H5Pclose(plist);
+  H5Sclose(space);
+  if (status < 0) throw InputError(std::string("cannot write ") + path);
 }
 
 }  // namespace
 
-void write_generated_map(const std::string& path, const ChargeMap& map, const std::vector<std::uint8_t>& provenance) {
-  if (!provenance.empty() && provenance.size() != map.nf() * map.ny() * map.nx()) {
-    throw InputError(path + ": provenance has " + std::to_string(provenance.size()) + " values, the map " +
-                     std::to_string(map.nf() * map.ny() * map.nx()) + " points (nf*ny*nx)");
+void write_generated_map(const std::string& path, const ChargeMap& map, const std::vector<std::uint8_t>& provenance,
+                         const std::vector<std::uint8_t>& node_model) {
+  const std::size_t n_points = map.nf() * map.ny() * map.nx();
+  for (const auto* v : {&provenance, &node_model}) {
+    if (!v->empty() && v->size() != n_points) {
+      throw InputError(path + ": " + (v == &provenance ? "provenance" : "model") + " has " + std::to_string(v->size()) +
+                       " values, the map " + std::to_string(n_points) + " points (nf*ny*nx)");
+    }
   }
   write_path_atomically(path, [&](const std::string& tmp) {
     write_map(tmp, map);
-    if (provenance.empty()) return;
+    if (provenance.empty() && node_model.empty()) return;
     H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
     const hid_t file = H5Fopen(tmp.c_str(), H5F_ACC_RDWR, H5P_DEFAULT);
     if (file < 0) throw InputError(tmp + ": cannot reopen the map to add " + provenance_path);
-    const hsize_t dims[3] = {map.nf(), map.ny(), map.nx()};
-    const hid_t space = H5Screate_simple(3, dims, nullptr);
-    const hid_t plist = H5Pcreate(H5P_DATASET_CREATE);
-    const hsize_t chunk[3] = {1, map.ny(), map.nx()};
-    if (provenance.size() > 4096) {
-      H5Pset_chunk(plist, 3, chunk);
-      H5Pset_shuffle(plist);
-      H5Pset_deflate(plist, 4);
-    }
-    const hid_t ds = H5Dcreate2(file, provenance_path, H5T_STD_U8LE, space, H5P_DEFAULT, plist, H5P_DEFAULT);
-    herr_t status = ds < 0 ? -1 : H5Dwrite(ds, H5T_NATIVE_UINT8, H5S_ALL, H5S_ALL, H5P_DEFAULT, provenance.data());
-    if (status >= 0) {
-      try {
-        put_string_attribute(ds, "units", "1");
-        put_string_attribute(ds, "description",
-                             "per point [nf][ny][nx]: bit flags, 0 = solved by the FEM, 1 = scaled from the largest force "
-                             "level (Q ~ F^(2/3), w ~ F^(1/3)), 2 = copied from the mirror-image position");
-      } catch (...) {
-        status = -1;
+    try {
+      if (!provenance.empty()) {
+        put_bytes(file, provenance_path, map, provenance,
+                  "per point [nf][ny][nx]: bit flags, 0 = solved by the FEM, 1 = scaled from the largest force "
+                  "level (Q ~ F^(2/3), w ~ F^(1/3)), 2 = copied from the mirror-image position, 4 = tolerance_not_met "
+                  "(estimated charge error above the tolerance)");
       }
+      if (!node_model.empty()) {
+        put_bytes(file, model_path, map, node_model,
+                  "per point [nf][ny][nx]: model that solved it, 0 = the root attribute model as the sweep chose it "
+                  "(bending dropped when its estimate allowed), 1 = the same kinematics with bending on a mesh graded "
+                  "toward the clamped rim");
+      }
+    } catch (...) {
+      H5Fclose(file);
+      throw;
     }
-    if (ds >= 0) H5Dclose(ds);
-    H5Pclose(plist);
-    H5Sclose(space);
-    if (H5Fclose(file) < 0 || status < 0) throw InputError(tmp + ": cannot write " + std::string(provenance_path));
+    if (H5Fclose(file) < 0) throw InputError(tmp + ": cannot write " + std::string(provenance_path));
   });
 }
 

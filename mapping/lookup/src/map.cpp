@@ -125,6 +125,8 @@ void validate(const ChargeMap& m, const std::string& source) {
     shape(m.dcharge_dx_C_per_m.size(), n_points * m.ne(), "/derivatives/dcharge_dx_C_per_m", "[nf][ny][nx][ne]");
     shape(m.dcharge_dy_C_per_m.size(), n_points * m.ne(), "/derivatives/dcharge_dy_C_per_m", "[nf][ny][nx][ne]");
   }
+  const bool has_err = !m.estimated_charge_error_C.empty();
+  if (has_err) shape(m.estimated_charge_error_C.size(), n_points * m.ne(), "/estimated_charge_error_C", "[nf][ny][nx][ne]");
   std::size_t n_ok = 0;
   for (std::size_t f = 0; f < m.nf(); ++f) {
     for (std::size_t j = 0; j < m.ny(); ++j) {
@@ -145,6 +147,10 @@ void validate(const ChargeMap& m, const std::string& source) {
           }
           if (has_dx && (!std::isfinite(m.dcharge_dx_C_per_m[p * m.ne() + k]) || !std::isfinite(m.dcharge_dy_C_per_m[p * m.ne() + k]))) {
             bad(source, "/derivatives" + at + "[" + std::to_string(k) + "] is not finite at an ok point" + regenerate);
+          }
+          if (has_err && !(std::isfinite(m.estimated_charge_error_C[p * m.ne() + k]) && m.estimated_charge_error_C[p * m.ne() + k] >= 0)) {
+            bad(source, "/estimated_charge_error_C" + at + "[" + std::to_string(k) + "] = " +
+                            num(m.estimated_charge_error_C[p * m.ne() + k]) + " must be finite and >= 0 at an ok point" + regenerate);
           }
         }
       }

@@ -1,6 +1,7 @@
 // Charge against distance along rays (seed 001 eq. 6, Fig. 7) and map against measurement (Fig. 12).
 #include "pvdf/mapping/analysis.hpp"
 
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
 
@@ -15,7 +16,6 @@ namespace pvdf::mapping {
 
 namespace {
 constexpr double nan_value = std::numeric_limits<double>::quiet_NaN();
-constexpr double pi = 3.14159265358979323846;
 
 double median_of(std::vector<double> v) {
   std::sort(v.begin(), v.end());

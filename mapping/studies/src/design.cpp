@@ -1,7 +1,9 @@
 // Layout evaluation from a charge map: Cramér–Rao bounds, ambiguity through the deployed lookup,
 // sensitivity, ADC dynamic range, dead zones; and the scene edits behind `pvdfkit design --vary`.
+#include "pvdf/core/membrane_scaling.hpp"
 #include "pvdf/mapping/design.hpp"
 
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
 #include "pvdf/mapping/interpolant.hpp"
@@ -19,7 +21,6 @@ namespace {
 
 constexpr double inf = std::numeric_limits<double>::infinity();
 constexpr double nan = std::numeric_limits<double>::quiet_NaN();
-constexpr double pi = 3.14159265358979323846;
 
 std::string num(double v) {
   std::ostringstream s;
@@ -198,15 +199,30 @@ DesignSummary evaluate_design(const ChargeMap& map, const DesignOptions& o) {
   for (std::size_t k = 0; k < ne; ++k) sigma[k] = std::sqrt(noise[k] * noise[k] + out.lsb_C * out.lsb_C / 12.0);
   out.lsb_over_noise = out.lsb_C / *std::min_element(noise.begin(), noise.end());
 
-  // Step 3: bounds and dead zones at every evaluated point.
+  // Step 3: bounds and dead zones at every evaluated point. With include_map_error, a map with
+  // per-node error estimates (format 2) adds each node's estimated charge error, as a further
+  // independent 1-σ term, to the channel noise there (at the force level nearest to the design
+  // force, scaled to it by F^(2/3)): the bound of a lookup that uses this very map.
   std::size_t n_singular = 0, n_dead = 0, n_saturated = 0, n_below = 0;
   std::vector<std::size_t> below_k(ne, 0);
   std::vector<std::array<double, 3>> jp(ne);
+  std::size_t f_near = 0;
+  for (std::size_t f = 0; f < map.nf(); ++f) {
+    if (std::abs(std::log(map.forces_N[f]) - log_f) < std::abs(std::log(map.forces_N[f_near]) - log_f)) f_near = f;
+  }
+  const double err_scale = pvdf::membrane_charge_factor(o.force_N / map.forces_N[f_near]);
+  std::vector<double> sigma_p(ne);
   for (std::size_t p = 0; p < np; ++p) {
     if (!m.evaluated[p]) continue;
-    for (std::size_t k = 0; k < ne; ++k) jp[k] = jac[p * ne + k];
-    const PointBound unknown = cramer_rao_bound(jp, sigma, false, o.singular_rcond);
-    const PointBound known = cramer_rao_bound(jp, sigma, true, o.singular_rcond);
+    for (std::size_t k = 0; k < ne; ++k) {
+      jp[k] = jac[p * ne + k];
+      const double e = !o.include_map_error || map.estimated_charge_error_C.empty()
+                           ? 0.0
+                           : err_scale * map.estimated_charge_error_C[map.charge_index(f_near, p / nx, p % nx, k)];
+      sigma_p[k] = std::isfinite(e) ? std::hypot(sigma[k], e) : sigma[k];
+    }
+    const PointBound unknown = cramer_rao_bound(jp, sigma_p, false, o.singular_rcond);
+    const PointBound known = cramer_rao_bound(jp, sigma_p, true, o.singular_rcond);
     const PointBound& fom = o.force_known ? known : unknown;
     m.sigma_pos_unknown_force_m[p] = unknown.sigma_pos_m;
     m.sigma_pos_known_force_m[p] = known.sigma_pos_m;

@@ -1,6 +1,7 @@
 // Isocharge pictures (pvdf::plot; PNG, SVG or PDF by the file extension) and VTK export of charge maps.
 #include "pvdf/mapping/pictures.hpp"
 
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
 #include "pvdf/plot/plot.hpp"
@@ -162,6 +163,12 @@ void write_intersection_png(const Locator& locator, const ChargeMap& map, const 
   fig.save(path);
 }
 
+std::string charge_vtk_field_name(const std::string& electrode, double force_N) {
+  char level[32];
+  std::snprintf(level, sizeof level, "%.6g", force_N);  // plain ASCII: a field name, not a label
+  return "charge_" + electrode + "_C_at_" + level + "N";
+}
+
 // Legacy VTK in BINARY form (big-endian IEEE): VTK's ASCII reader cannot parse "nan", and
 // the points without a value must stay NaN (ParaView then leaves them blank).
 void write_charge_vtk(const ChargeMap& map, const std::string& path) {
@@ -177,7 +184,7 @@ void write_charge_vtk(const ChargeMap& map, const std::string& path) {
     const double hx = (map.x_m.back() - map.x_m.front()) / double(map.nx() - 1);
     const double hy = (map.y_m.back() - map.y_m.front()) / double(map.ny() - 1);
     out << "# vtk DataFile Version 3.0\n"
-        << "pvdfkit charge map (" << map.model << "), charges in pC, coordinates in m\n"
+        << "pvdfkit charge map (" << map.model << "), charges in C, coordinates in m\n"
         << "BINARY\nDATASET STRUCTURED_POINTS\n"
         << "DIMENSIONS " << map.nx() << ' ' << map.ny() << " 1\n"
         << "ORIGIN " << map.x_m.front() << ' ' << map.y_m.front() << " 0\n"
@@ -188,11 +195,11 @@ void write_charge_vtk(const ChargeMap& map, const std::string& path) {
     out << '\n';
     for (std::size_t f = 0; f < map.nf(); ++f) {
       for (std::size_t k = 0; k < map.ne(); ++k) {
-        out << "SCALARS charge_" << map.electrode_names[k] << "_pC_F" << f << " double 1\nLOOKUP_TABLE default\n";
+        out << "SCALARS " << charge_vtk_field_name(map.electrode_names[k], map.forces_N[f]) << " double 1\nLOOKUP_TABLE default\n";
         for (std::size_t j = 0; j < map.ny(); ++j) {
           for (std::size_t i = 0; i < map.nx(); ++i) {
             const std::size_t p = map.point(f, j, i);
-            put_be64(out, map.status[p] == std::uint8_t(PointStatus::ok) ? map.charge_C[p * map.ne() + k] * 1e12 : nan_value);
+            put_be64(out, map.status[p] == std::uint8_t(PointStatus::ok) ? map.charge_C[p * map.ne() + k] : nan_value);
           }
         }
         out << '\n';
@@ -239,7 +246,6 @@ void write_rays_png(const RayAnalysis& analysis, const ChargeMap& map, std::size
   if (electrode >= map.ne()) throw InputError("rays picture: electrode index " + std::to_string(electrode) + " out of range");
   plot::Figure fig(1000, 750);
   auto& ax = fig.axes();
-  constexpr double pi = 3.14159265358979323846;
   // Colours follow β along the sequential colour map (dark violet … yellow-green), so that ten
   // or more rays stay distinct and neighbouring angles look alike.
   double beta_lo = std::numeric_limits<double>::infinity(), beta_hi = -beta_lo;

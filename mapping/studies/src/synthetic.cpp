@@ -2,6 +2,7 @@
 #include "pvdf/mapping/synthetic.hpp"
 
 #include "pvdf/core/error.hpp"
+#include "pvdf/core/membrane_scaling.hpp"
 #include "pvdf/version.hpp"
 
 #include <nlohmann/json.hpp>
@@ -71,7 +72,7 @@ ChargeMap build_synthetic_map(const SyntheticModel& model, double spacing_m, dou
         m.status[p] = std::uint8_t(PointStatus::ok);
         // A membrane-like deflection under the probe: w ∝ F^(1/3) (pure-membrane scaling), zero at the rim.
         const double r = std::hypot(m.x_m[i], m.y_m[j]);
-        m.deflection_at_load_m[p] = -3.3e-3 * std::cbrt(m.forces_N[f]) * (1.0 - r * r / (R * R));
+        m.deflection_at_load_m[p] = -3.3e-3 * pvdf::membrane_deflection_factor(m.forces_N[f]) * (1.0 - r * r / (R * R));
         for (std::size_t k = 0; k < m.ne(); ++k) {
           m.charge_C[p * m.ne() + k] = model.charge_C(m.x_m[i], m.y_m[j], m.forces_N[f], k);
         }

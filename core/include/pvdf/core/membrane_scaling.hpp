@@ -2,12 +2,17 @@
 // no pretension; Föppl–Hencky): membrane forces, strains, in-plane displacements and electrode
 // charges grow as F^(2/3), the deflection as F^(1/3). Exact for the von Kármán membrane, a close
 // approximation for these films otherwise (docs/fem.md §5). One home for the solver's warm
-// starts and continuation, the map generator's scaled force levels and the bending rule.
+// starts and continuation, the map generator's scaled force levels and its scaling check, the
+// interpolants' default force exponent, the hardware simulator's map-driven presses and the bending rule.
 #pragma once
 
 #include <cmath>
 
 namespace pvdf {
+
+/// The exponent 2/3 of Q ∝ F^(2/3): the default force exponent of the map interpolants, the
+/// triangulation and the synthetic map model (which may fit or set another).
+inline constexpr double membrane_charge_exponent = 2.0 / 3.0;
 
 /// (F/F0)^(2/3): the factor on charges, membrane forces, strains and in-plane displacements when
 /// the force changes by `force_ratio` = F/F0 (> 0).

@@ -40,7 +40,9 @@ struct FilmOutline {
 struct Membrane {
   FilmOutline outline;
   double thickness_m = 25e-6;            ///< film thickness
-  double pretension_N_per_m = 0.0;       ///< uniform isotropic in-plane pre-tension
+  double pretension_N_per_m = 0.0;       ///< uniform isotropic in-plane pre-tension; < 0: slack film (docs/scene.md)
+  double slack_strain = 0.0;             ///< stress-free film (1 + s) times the hole in every direction (slack)
+  bool tension_field = false;            ///< wrinkling (relaxed) membrane; always on for slack films
 };
 
 /// One electrode pair (top and bottom electrode overlap): the sensing area.

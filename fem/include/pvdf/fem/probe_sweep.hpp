@@ -24,14 +24,34 @@ struct SweepOptions {
   /// largest and checks them at the smallest. Empty = the scene's first load force (or 1 N).
   std::vector<double> forces_N;
   /// Probe positions (film centre, on the first electrode, beside the last one, far) at which the
-  /// setup compares the sweep mesh's charges with direct solves (0..4; 0 = no check, error not
-  /// estimated, status `converged` without an error estimate).
+  /// setup evaluates the sweep's own error estimate to size the mesh (0..4; 0 = the first mesh is
+  /// kept unchecked; every probe solve still carries its estimate).
   int n_setup_checks = 4;
   /// Sweep-mesh sizes (m) and grading; 0 = chosen from the tolerance (docs/bench-fem.md,
   /// "ProbeSweep"). The setup check still measures the error of whatever mesh results.
   double region_size_m = 0;
   double electrode_size_m = 0;
   double grading = 0;
+  /// Where the richer rim model (bending kept, mesh graded toward the clamped rim) solves a probe:
+  /// `by_estimate` = where the cheap model's estimated model error exceeds its share of the
+  /// tolerance (only when the cheap model drops bending), `never`, `always`.
+  enum class RimModel { by_estimate, never, always };
+  RimModel rim_model = RimModel::by_estimate;
+  /// Rim-graded mesh: cell size at the clamp (m) and growth with the distance from it; 0 = chosen
+  /// from the bending boundary layer sqrt(D/N) (docs/map-generation.md §9).
+  double rim_size_m = 0;
+  double rim_grading = 0;
+  /// The rim mesh is graded along one arc of the rim only: the rim is cut into this many equal
+  /// sectors (seen from the film centre) and a probe uses the mesh graded along its own sector and
+  /// the two neighbours, built when first needed (1 = one mesh graded along the whole rim).
+  int rim_sectors = 16;
+  /// Per-probe adjoint-weighted error estimates (docs/fem.md §6): one or two extra factorizations
+  /// per probe. Off (e.g. a fit that solves the same presses many times): probes carry no estimate
+  /// (NaN) and no rim model is used; the setup still sizes the mesh with them and reports its estimate.
+  bool estimate_errors = true;
+  /// Start the sweep mesh from this mesh (e.g. read_msh of `pvdfkit mesh`'s file) instead of the
+  /// built-in one: it is refined to the sizes above (never coarsened). Null = built-in mesh.
+  std::shared_ptr<const pvdf::mesh::FilmMesh> mesh;
 };
 
 /// What the setup decided, for reports and map provenance.
@@ -41,9 +61,15 @@ struct SweepSetup {
   bool include_bending = true;          ///< whether bending stiffness is in the model
   std::size_t n_dofs = 0;
   std::size_t n_cells = 0;
-  double estimated_relative_error = 1;  ///< of electrode charges on the sweep mesh (setup check)
-  std::string error_estimator;          ///< how it was obtained
-  double estimated_deflection_relative_error = 1;  ///< of deflection_at_load_m: the checks' maximum × 15 (calibrated)
+  /// Largest per-probe estimate (ProbeSolution::estimated_relative_error) at the setup's check
+  /// positions; every probe solve carries its own.
+  double estimated_relative_error = 1;
+  std::string error_estimator;          ///< how the per-probe estimates are obtained
+  double estimated_deflection_relative_error = 1;  ///< the same for deflection_at_load_m
+  /// The rim model (bending kept, rim-graded mesh), built when the cheap model drops bending.
+  bool rim_model_available = false;
+  std::size_t rim_n_dofs = 0;           ///< of the first rim mesh built (0 = none yet)
+  double rim_size_m = 0;                ///< cell size at the clamp of the rim mesh (m)
   double region_size_m = 0;             ///< largest cell size of the sweep mesh (also under any probe)
   double electrode_size_m = 0;          ///< cell size on the electrodes
   double setup_s = 0;                   ///< wall time of the setup
@@ -55,6 +81,16 @@ struct SweepState {
   std::vector<double> dofs;
   double force_N = 0;                   ///< force it was converged under (warm starts across forces scale it)
   double x_m = 0, y_m = 0;              ///< probe centre it was converged for (m)
+  /// The rim model's last converged state in the same chain (empty = none) and where/under what force.
+  std::vector<double> rim_dofs;
+  double rim_force_N = 0, rim_x_m = 0, rim_y_m = 0;
+  int rim_sector = -1;
+};
+
+/// Which model and mesh solved a probe (stored per map node as uint8).
+enum class SweepModel : unsigned char {
+  cheap = 0,  ///< the setup's model (SweepSetup::model, bending per SweepSetup::include_bending), sweep mesh
+  rim = 1     ///< the setup's kinematics with bending, on the mesh graded toward the clamped rim
 };
 
 /// One probe solve.
@@ -68,6 +104,17 @@ struct ProbeSolution {
   std::vector<double> charge_C;
   /// Mean membrane force over each electrode in material axes [N11, N22, N12] (N/m).
   std::vector<std::array<double, 3>> mean_membrane_force_material_N_per_m;
+  /// Estimated absolute error of each charge (C), scene order: discretization + model parts (the
+  /// adjoint-weighted residual estimates of the solver, docs/fem.md), each part taken by magnitude.
+  std::vector<double> charge_error_C;
+  std::vector<double> charge_error_discretization_C;
+  std::vector<double> charge_error_model_C;
+  /// max_k charge_error_C[k] / max_k |charge_C[k]|: the relative charge error of this probe.
+  double estimated_relative_error = 1;
+  double deflection_error_m = 0;        ///< estimated |error| of deflection_at_load_m (m)
+  SweepModel model_used = SweepModel::cheap;
+  /// When the rim model solved it: the cheap model's own estimated relative model error that sent it there.
+  double cheap_model_relative_error = 0;
   int newton_iterations = 0;
   bool warm_started = false;            ///< Newton started from the given state (not from flat)
   double wall_s = 0;
@@ -81,6 +128,9 @@ struct SweepTiming {
   double outputs_s = 0;       ///< electrode charges, deflection, rim reaction
   int newton_iterations = 0;
   int factorizations = 0;
+  int rim_solves = 0;         ///< probes solved (also) by the rim model
+  double rim_s = 0;           ///< wall time of the rim-model solves
+  double estimate_s = 0;      ///< wall time of the error estimates
 };
 
 /// A reusable single-probe solver for one scene. Not thread-safe: use one instance per thread

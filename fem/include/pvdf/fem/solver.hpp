@@ -44,6 +44,12 @@ std::string status_name(Status status);
 /// True for the statuses whose fields may be used (converged, tolerance_not_met).
 inline bool usable(Status status) { return status == Status::converged || status == Status::tolerance_not_met; }
 
+/// Which cells an adaptive cycle refines (docs/fem.md §6).
+enum class Refinement {
+  goal,  ///< the cell shares of the adjoint-weighted residual estimates of the outputs (default)
+  kelly  ///< Kelly's gradient-jump indicators of (u_x, u_y) and w (kept for comparison)
+};
+
 /// Solver settings (public members with defaults, DOLFINx style).
 struct Options {
   Model model = Model::automatic;       ///< kinematics; automatic = choose (Summary::model_reason says why)
@@ -62,7 +68,18 @@ struct Options {
   double grading = 0.8;
   /// Extra uniform refinements of the initial mesh (for convergence studies).
   int initial_global_refinements = 0;
+  /// FilmMesh solves: grade the given mesh to the probes and electrodes (refining only) before the
+  /// first solve. false = the first solve is on the given mesh exactly as it is (`pvdfkit solve
+  /// --mesh`); the output-driven refinement (`adaptive`) follows either way.
+  bool grade_given_mesh = true;
   bool adaptive = true;                 ///< refine until the output error estimate meets `tolerance`
+  Refinement refinement = Refinement::goal;  ///< indicators of the adaptive cycles
+  /// Work cap of the adaptive loop: no refinement that would take the DOFs past this (the solve
+  /// then ends tolerance_not_met with its estimate).
+  std::size_t max_dofs = 400000;
+  /// Without bending (include_bending = false): still estimate what bending would change
+  /// (Summary::estimated_model_error, *_model_error_* of the results) without switching it on.
+  bool estimate_bending_effect = false;
 
   // Newton–Raphson.
   int max_newton_iterations = 40;       ///< per continuation stage
@@ -93,8 +110,16 @@ struct Summary {
   int load_steps = 0;                   ///< continuation stages (artificial-pretension steps) in total
   int refinement_cycles = 0;            ///< meshes solved after the first
   double final_residual_norm = 0;       ///< ‖r‖ of the last Newton solve (N)
-  double estimated_relative_error = 0;  ///< of the outputs (docs/fem.md §6); NaN-free, 1 if unknown
-  std::string error_estimator;          ///< how estimated_relative_error was obtained
+  /// Of the outputs (docs/fem.md §6): estimated_discretization_error + estimated_model_error;
+  /// NaN-free, 1 if unknown.
+  double estimated_relative_error = 0;
+  /// Adjoint-weighted residual estimate of the discretization error: max over the outputs (each
+  /// electrode charge, w at each load) of |estimate| / (largest |charge| or |w| of its kind).
+  double estimated_discretization_error = 0;
+  /// Same normalisation, for what the model leaves out: bending (adjoint-weighted bending residual
+  /// when `auto` left it out) plus the kinematics difference measured by the `auto` trial solves.
+  double estimated_model_error = 0;
+  std::string error_estimator;          ///< how the estimates were obtained
   double wall_s = 0;                    ///< total
   double assembly_s = 0;                ///< residual + tangent assembly
   double linear_solve_s = 0;            ///< factorization + back substitution
@@ -115,6 +140,10 @@ struct ElectrodeResult {
   std::array<double, 3> mean_membrane_force_global_N_per_m{0, 0, 0};
   /// Charge ∫ (d31 σ11 + d32 σ22) dA with σ = N/h the through-thickness mean stress (C), sign by d31.
   double charge_C = 0;
+  /// Estimated absolute error of charge_C (C): |discretization estimate| + |model estimate|.
+  double charge_error_C = 0;
+  double charge_discretization_error_C = 0;  ///< signed estimate of (exact − computed) on this mesh (C)
+  double charge_model_error_C = 0;           ///< signed estimate of what bending left out would change (C)
 };
 
 struct SampleResult {
@@ -128,6 +157,9 @@ struct LoadResult {
   double x_m = 0, y_m = 0;
   double force_N = 0;                       ///< total vertical force applied (probe: exact; pressure: p·area)
   double deflection_m = 0;                  ///< w at the load position (pressure: at the film centre)
+  double deflection_error_m = 0;            ///< estimated absolute error of deflection_m (as charge_error_C)
+  double deflection_discretization_error_m = 0;  ///< signed, as ElectrodeResult's
+  double deflection_model_error_m = 0;           ///< signed, as ElectrodeResult's
 };
 
 /// Fields for the caller; empty unless usable(summary.status).
@@ -137,6 +169,9 @@ struct Result {
   double deflection_at_load_m = 0;          ///< w at the first load position
   double rim_reaction_N = 0;                ///< total vertical reaction of the clamped rim (= Σ F at equilibrium)
   double strain_energy_J = 0;               ///< membrane + bending (without pretension work)
+  /// Share of the film's area that is wrinkled (uniaxial tension) and slack (no membrane force); both 0
+  /// unless the tension-field membrane is in use (slack films, membrane.tension_field).
+  double wrinkled_area_fraction = 0, slack_area_fraction = 0;
   std::vector<LoadResult> loads;
   std::vector<ElectrodeResult> electrodes;
   std::vector<SampleResult> samples;

@@ -96,6 +96,15 @@ FilmMesh write_msh(const pvdf::Scene& scene, const std::string& path, const Mesh
 /// holds elements other than quadrilaterals in its surfaces.
 FilmMesh read_msh(const std::string& path);
 
+/// Checks that a mesh read from `source` (a .msh file) can carry the scene's solve; throws
+/// pvdf::InputError naming the file, the value and the rule: at least one quad and one rim edge; every
+/// quad counter-clockwise and not degenerate (scaled Jacobian > 0); every vertex on the film (within
+/// 1e-3 of its characteristic radius of the outline); the meshed area within 5 % of the outline's
+/// (a mesh of another film is refused); electrode groups, when the mesh has any, named and ordered
+/// as the scene's electrodes (a mesh without electrode groups is accepted: the solver integrates
+/// charges over the scene's electrode outlines, not over mesh groups).
+void check_mesh_fits_scene(const pvdf::Scene& scene, const FilmMesh& mesh, const std::string& source);
+
 /// Quality of a quad mesh (fills n_cells, n_vertices, size_min/max, min scaled Jacobian, max
 /// aspect ratio; leaves wall_s and target sizes alone).
 void measure_quality(const FilmMesh& mesh, MeshReport& report);

@@ -54,11 +54,20 @@ struct DesignOptions {
   double max_force_condition = 100;   ///< refuse identification force sets with cond(F) above this
   double min_snr = 3;                 ///< refuse scans whose signal rms near the edge is below min_snr x noise rms
   double gcv_beta_min = 1e-9, gcv_beta_max = 1.0;  ///< search range of the selectors (relative)
-  /// BetaPolicy::predicted takes this fraction of the beta that minimizes its prediction: the prediction
-  /// over-regularizes by about 4x against the best constant beta in hindsight (calibrated on the study's
-  /// seeds 1000-1047, checked on the held-out seeds 2000-2047; docs/restore.md section 4).
+  /// BetaPolicy::predicted takes this multiple of the beta that minimizes its prediction: with Tikhonov the
+  /// prediction over-regularizes by about 4x against the best constant beta in hindsight and 0.25 served best
+  /// on the study's tuning seeds 1000-1047; with the isotropic regularization 1 (docs/restore.md section 4).
   double predicted_beta_scale = 0.25;
+  /// Resolution target of BetaPolicy::predicted: beta may not blur a sharp edge's restored f_z peak below this
+  /// fraction of the target's own peak (the filter must deliver the resolution asked for; without this bound
+  /// the isotropic regularization, whose mu is unbiased at any beta, would be driven to ever wider blur).
+  double min_peak_fraction = 0.8;
   int gcv_points = 73;
+  /// Regularize both singular directions of G with the weak one's gain w(k) = s_2^2 / (s_2^2 + beta(k)), so the
+  /// resolution matrix H G = w(k) T(k) I stays diagonal: f_x and f_z are blurred alike and never mixed, and mu
+  /// at a peak is unbiased for any beta (beta then only trades resolution against noise). false = Tikhonov
+  /// per direction, s_i^2 / (s_i^2 + beta) (seed 000 eq. 4), which damps the weak direction more and mixes them.
+  bool isotropic = false;
 };
 
 /// Identified transfer matrix: g[i][j][l] = response of strip i to unit force j (0 = x, 1 = z) at lag
@@ -89,6 +98,7 @@ struct InverseFilter {
   long delay_samples = 0;
   std::size_t design_fft_length = 0;  ///< >= 2 taps: the frequency grid H is sampled on (no wrap-around)
   std::string beta_policy = "constant";
+  std::string regularization = "tikhonov";  ///< tikhonov or isotropic (DesignOptions::isotropic)
   double beta = 0;                    ///< relative beta (chosen one for gcv)
   double beta_abs = 0;                ///< beta * max s^2, in (V/N)^2
   double corner_wavelength_m = 0;
@@ -100,6 +110,9 @@ struct InverseFilter {
   TransferMatrix transfer;
   ConditioningSummary conditioning;
   double truncated_energy_fraction = 0;  ///< energy of the ideal delayed inverse outside the N taps
+  /// Restored f_z peak of a sharp edge as a fraction of the target's peak: sum_k T Re A_zz / sum_k T (1 = the
+  /// target resolution is met; lower = beta blurs beyond it).
+  double peak_fraction = 0;
   std::vector<std::pair<double, double>> gcv_curve;  ///< (beta, GCV) when beta_policy = gcv
   /// (beta, criterion) of the selector (gcv, lcurve, morozov, predicted), and what the criterion is.
   std::vector<std::pair<double, double>> selection_curve;

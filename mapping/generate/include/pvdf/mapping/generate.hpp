@@ -12,9 +12,14 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
+
+namespace pvdf::mesh {
+struct FilmMesh;  // pvdf/mesh/film_mesh.hpp
+}
 
 namespace pvdf::mapping {
 
@@ -43,10 +48,14 @@ struct MapOptions {
   int scaling_check_stride = 4;
   /// Copy results to mirror-image positions when the scene is mirror-symmetric about x and/or y.
   bool use_symmetry = true;
-  /// Probe positions at which the solver setup compares its sweep mesh with direct solves
-  /// (0..3, pvdf::fem::SweepOptions::n_setup_checks); 0 = none (the error is then not estimated:
-  /// ChargeMap::estimated_relative_error and estimated_deflection_relative_error stay NaN).
+  /// Probe positions at which the solver setup evaluates its error estimate to size the sweep
+  /// mesh (0..4, pvdf::fem::SweepOptions::n_setup_checks); 0 = keep the first mesh. Every node
+  /// carries its own estimate either way (/estimated_charge_error_C).
   int n_setup_checks = 3;
+  /// Where the rim model (bending kept, mesh graded toward the clamp) solves a node:
+  /// "by-estimate" (where the cheap model's estimated model error exceeds half the tolerance),
+  /// "never", "always".
+  std::string rim_model = "by-estimate";
   /// Worker threads in this process (one ProbeSweep each); 0 = hardware concurrency.
   int threads = 0;
   /// Checkpoint file ("" = none). Completed rows are saved periodically (atomically); an
@@ -72,6 +81,9 @@ struct MapOptions {
   std::vector<double> noise_C;
   /// Free text stored in the map.
   std::string description;
+  /// Start the FEM sweep mesh from this mesh (`pvdfkit map --mesh FILE.msh`; refined to the sweep's
+  /// sizes, never coarsened) instead of the built-in one. Null = built-in mesh.
+  std::shared_ptr<const pvdf::mesh::FilmMesh> mesh;
 };
 
 /// Per-point provenance flags, stored as uint8 [nf][ny][nx] in the map file's `/provenance`.
@@ -79,6 +91,9 @@ namespace provenance {
 inline constexpr std::uint8_t solved = 0;    ///< solved by the FEM at this position and force
 inline constexpr std::uint8_t scaled = 1;    ///< from the largest level by Q ∝ F^(2/3), w ∝ F^(1/3)
 inline constexpr std::uint8_t mirrored = 2;  ///< copied from the mirror-image position (electrodes permuted)
+/// The node's estimated charge error exceeds the tolerance even with the rim model (values usable,
+/// /estimated_charge_error_C says by how much).
+inline constexpr std::uint8_t tolerance_not_met = 4;
 }  // namespace provenance
 
 /// What a generation did.
@@ -99,8 +114,16 @@ struct MapReport {
   std::string symmetry_reason;    ///< why (or why not) symmetry was used
   std::string model;              ///< kinematics used ("von-karman", ...)
   std::string model_reason;
-  double estimated_relative_error = 1;  ///< of the charges on the sweep mesh (setup check)
-  std::size_t n_dofs = 0;
+  /// Largest per-node estimates of the map: max_k error_k / max_k |Q_k|, and |dw| / |w|.
+  double estimated_relative_error = 1;
+  double estimated_deflection_relative_error = 1;
+  std::size_t n_dofs = 0;         ///< sweep mesh of the cheap model
+  std::size_t rim_n_dofs = 0;     ///< rim-graded mesh of the rim model (0 = none)
+  std::size_t n_rim_model = 0;    ///< map points solved by the rim model (mirror images included)
+  std::size_t n_tolerance_not_met = 0;  ///< map points whose estimate exceeds the tolerance
+  std::size_t rim_solves = 0;     ///< rim-model solves (this process)
+  double rim_s = 0;               ///< thread-seconds spent in rim-model solves (this process)
+  double estimate_s = 0;          ///< thread-seconds spent in the error estimates (this process)
   int ranks = 1;                  ///< MPI ranks
   int threads = 1;                ///< threads per rank
   double setup_s = 0;             ///< ProbeSweep setup (max over threads of this process)
@@ -111,6 +134,8 @@ struct MapReport {
   std::string first_failure;      ///< first failed point and the solver's message ("" = none)
   /// [nf][ny][nx] provenance flags (see namespace provenance).
   std::vector<std::uint8_t> provenance;
+  /// [nf][ny][nx] which model solved each point (pvdf::fem::SweepModel: 0 cheap, 1 rim).
+  std::vector<std::uint8_t> node_model;
 };
 
 /// Generates the charge map of `scene` (its loads are ignored; the probe radius is the scene's).
@@ -121,7 +146,11 @@ ChargeMap generate_map(const pvdf::Scene& scene, const MapOptions& options, MapR
 
 /// Writes a generated map atomically (pvdf::mapping::write_map) with the extra dataset
 /// `/provenance` (uint8 [nf][ny][nx], flags above; empty = not written).
-void write_generated_map(const std::string& path, const ChargeMap& map, const std::vector<std::uint8_t>& provenance);
+/// `node_model` (same shape, empty = not written) becomes `/model`: 0 = the map's model attribute
+/// as chosen by the sweep (bending per its model_reason), 1 = the same kinematics with bending on a
+/// mesh graded toward the clamped rim.
+void write_generated_map(const std::string& path, const ChargeMap& map, const std::vector<std::uint8_t>& provenance,
+                         const std::vector<std::uint8_t>& node_model = {});
 
 /// Deletes a checkpoint and its per-rank files (`<path>.rank<N>`), e.g. after the map was written.
 void remove_checkpoint_files(const std::string& checkpoint_path);

@@ -2,6 +2,7 @@
 // position, and in force the membrane law Q = F^(2/3)·G with G linear in ln F between levels.
 #pragma once
 
+#include "pvdf/core/membrane_scaling.hpp"
 #include "pvdf/mapping/map.hpp"
 
 #include <algorithm>
@@ -88,7 +89,7 @@ class MapInterpolant {
  private:
   std::size_t nx_ = 0, ny_ = 0, nf_ = 0, ne_ = 0;
   double x0_ = 0, y0_ = 0, hx_ = 1, hy_ = 1, ihx_ = 1, ihy_ = 1;
-  double p_ = 2.0 / 3.0;
+  double p_ = pvdf::membrane_charge_exponent;
   std::vector<double> log_f_;
   std::vector<double> data_;  ///< [f][j][i][k][4]: G, hx·Gx, hy·Gy, hx·hy·Gxy
   /// [cell j*(nx−1)+i][f][m*4+n][k]: coefficient of t^m s^n of G in cell units (t, s ∈ [0, 1]).

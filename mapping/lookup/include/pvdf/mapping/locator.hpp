@@ -13,6 +13,10 @@
 
 namespace pvdf::mapping {
 
+namespace detail {
+struct LmPoint;  // Levenberg–Marquardt's working point (locator_fit.cpp)
+}
+
 /// Flags of a Location (bit mask). A result with outside_map, no_press or saturated carries no position.
 namespace flag {
 inline constexpr std::uint32_t outside_map = 1u << 0;        ///< best fit is held by the map's edge or force range and does not fit within noise
@@ -87,6 +91,9 @@ struct Location {
   /// With `ambiguous`: every other solution, most probable first (n_alternatives = n_solutions − 1).
   std::array<Alternative, max_solutions - 1> alternatives{};
   int n_alternatives = 0;
+  /// With outside_map: where the best fit was held (x_m, y_m, force_N) by the map's edge or the
+  /// force range — not an answer, a start for the next sample of a stream (Tracker). Else 0.
+  std::array<double, 3> held{};
   bool has_position() const { return (flags & (flag::outside_map | flag::no_press | flag::saturated)) == 0; }
 };
 
@@ -118,10 +125,13 @@ class Locator {
   /// fitted); none left gives outside_map. Thread-safe, no allocation.
   Location locate_from(const double* charges_C, const std::array<double, 3>* starts, int n_starts) const;
 
-  /// The coarse search's bin of the charges' direction (the cells a search would test come
-  /// from it); −1 when there is nothing to locate (no press, non-finite charges). Two samples in
-  /// one bin are searched over the same candidate cells (used by Tracker to decide when to search).
-  std::int64_t search_bin(const double* charges_C) const;
+  /// The full search with hints — (x_m, y_m, force_N) each, e.g. the last sample's answer of a
+  /// tracked stream (docs/lookup.md §1.9): locate()'s coarse search, fits and fold twins; only
+  /// when none of them fits within noise are the hints fitted, and if every hint's fit is held
+  /// by the map's edge or the force range outside noise the answer is outside_map without
+  /// locate()'s angular fallback (starts at cell centres). Otherwise locate()'s answer.
+  /// Thread-safe, no allocation.
+  Location locate_near(const double* charges_C, const std::array<double, 3>* hints, int n_hints) const;
 
   /// The map's (calibrated, if enabled) charges for a press at (x, y) with force F; false outside.
   bool predict(double x_m, double y_m, double force_N, double* charges_C) const;
@@ -134,6 +144,29 @@ class Locator {
   bool calibrated() const { return calibrated_; }
 
  private:
+  struct Query;
+  // ---- construction (locator_tables.cpp), in this order
+  struct CellLevelModel;  ///< one cell's local direction model at one force level
+  struct DirectionRanges {
+    double phi_lo, phi_hi, theta_lo, theta_hi;
+  };
+  /// Noise, calibration, χ² limits and the force range from the options.
+  void configure(const ChargeMap& map, const LocatorOptions& options);
+  /// cells_, cell_dir_, cell_norm_, cell_radius2_, cell_xy_; returns each cell's box of
+  /// direction keys (φ lo, hi, θ lo, hi) and their overall range.
+  std::vector<std::array<double, 4>> build_coarse_table(const ChargeMap& map, DirectionRanges& ranges);
+  /// One cell's model at one level (ln F = lf).
+  CellLevelModel cell_level_model(std::size_t cell, double lf) const;
+  /// Every cell's model at every level ([cell][level]), level_log_, cell_slot_, cell_log_norm_,
+  /// and per cell the linear model's worst squared error at its corners.
+  std::vector<CellLevelModel> build_cell_models(const ChargeMap& map, std::vector<double>& linear_error2);
+  void build_scan_table(const std::vector<CellLevelModel>& models, const std::vector<double>& linear_error2);
+  void build_model_table(const std::vector<CellLevelModel>& models);
+  void mark_fold_cells(const std::vector<CellLevelModel>& models);
+  void build_direction_bins(const std::vector<std::array<double, 4>>& boxes, const DirectionRanges& ranges);
+  /// The map's own charge error (ChargeMap::estimated_charge_error_C), when stored.
+  void set_map_error(const ChargeMap& map);
+
   struct Fit {
     double x = 0, y = 0, l = 0, chi2 = 0;
     std::array<double, 3> sigma{0, 0, 0};
@@ -143,9 +176,27 @@ class Locator {
   };
   Fit levenberg_marquardt(const double* q, const double* inv_sigma, double x, double y, double l, bool fixed_force,
                           double log_lo, double log_hi, const Fit* found, int n_found) const;
+  /// The model, χ² and normal equations at (x, y, ln F) into a working point (locator_fit.cpp);
+  /// false off the usable cells.
+  bool lm_evaluate(double x, double y, double l, bool fixed_force, const double* q, const double* w,
+                   detail::LmPoint& point) const;
+  /// A nearly undamped Gauss–Newton step small enough to be taken without an evaluation.
+  bool final_step_ok(double x, double y, double l, const std::array<double, 3>& step, double lambda, double log_lo,
+                     double log_hi) const;
+  /// The minimum at (x, y, l) is held by the map's edge or the force range.
+  bool held_by_edge(const std::array<double, 6>& JtJ, const std::array<double, 3>& Jtr, double x, double y, double l,
+                    bool fixed_force, double log_lo, double log_hi) const;
   /// Fills fit.sigma / fit.singular from fit.jtj (only for the fits that are reported).
-  void covariance(Fit& fit, bool fixed_force) const;
-  Location locate_impl(const double* charges_C, bool fixed_force, double log_known_force) const;
+  void covariance(Fit& fit, const Query& query) const;
+  /// The weighted JᵀJ behind the reported σ's: fit.jtj, or with the map's own error added to
+  /// the charge noise where the map stores one.
+  std::array<double, 6> reported_jtj(const Fit& fit, const Query& query) const;
+  /// Replaces each fit's χ² by the one under the charge noise plus the map's own error.
+  void add_map_error(const Query& query, std::array<Fit, 8>& fits, int n_fits) const;
+  /// The map's charge error (C) at (x, y, ln F); false off the grid or when none is stored.
+  bool map_error_at(double x, double y, double l, double* error_C) const;
+  Location locate_impl(const double* charges_C, bool fixed_force, double log_known_force,
+                       const std::array<double, 3>* hints = nullptr, int n_hints = 0) const;
   /// A query prepared for fitting: calibration undone, weights, unit direction, force bounds.
   struct Query {
     std::array<double, max_electrodes> q, w, q_unit;  ///< entries 0..ne−1 are set by prepare()
@@ -183,6 +234,9 @@ class Locator {
     std::array<Start, capacity> start{};
     int n = 0;
   };
+  /// Fits the hints no fit has ended near (within half a cell); returns the new count.
+  int add_hint_fits(const Query& query, const std::array<double, 3>* hints, int n_hints, std::array<Fit, 8>& fits,
+                    int n_fits) const;
   /// Coarse search: bins of the direction table → cells whose linearized direction reaches the
   /// query inside (or next to) the cell → distinct starts, best first. Returns false when no
   /// cell can produce the direction (then the old angular shortlist is used).
@@ -219,6 +273,8 @@ class Locator {
   std::vector<std::string> names_;
   std::vector<double> noise_;
   std::vector<double> gain_, offset_;
+  /// The map's own charge error per node, level and electrode, divided by F_level^p (empty: none).
+  std::vector<double> map_error_;
   bool calibrated_ = false;
   LocatorOptions options_;
   double chi2_limit_ = 0, chi2_limit_free_ = 0, chi2_limit_fixed_ = 0;

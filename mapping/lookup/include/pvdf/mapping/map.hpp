@@ -40,11 +40,9 @@ struct ChargeMap {
   std::string model;               ///< kinematics/model used ("von-karman", "synthetic-analytic", ...)
   double tolerance = 0.0;          ///< requested relative error of the computed charges
   /// Estimated relative error of the charges (max_k |dQ_k| / max_k |Q_k|) and of
-  /// deflection_at_load_m, measured by the FEM sweep setup against direct solves
-  /// (pvdf::fem::SweepSetup). The deflection is the less accurate output (the sweep mesh is graded
-  /// to the electrodes, not to the probe): its estimate is the largest error at the check
-  /// positions × 15, calibrated on seed 001 (docs/map-generation.md §9). NaN = unknown (not estimated,
-  /// synthetic map, file written before these existed).
+  /// deflection_at_load_m: the largest per-node estimate of the map (adjoint-weighted residual
+  /// estimates of the discretization and model errors, docs/map-generation.md §6). NaN = unknown
+  /// (synthetic map, file written before these existed).
   double estimated_relative_error = std::numeric_limits<double>::quiet_NaN();
   double estimated_deflection_relative_error = std::numeric_limits<double>::quiet_NaN();
   double rim_margin_m = 0.0;       ///< positions closer than this to the rim are masked out
@@ -68,6 +66,7 @@ struct ChargeMap {
   /// Optional exact derivatives of the charge with respect to the probe position (C/m),
   /// [nf][ny][nx][ne] each; empty when absent (the interpolant then uses finite differences).
   std::vector<double> dcharge_dx_C_per_m, dcharge_dy_C_per_m;
+  std::vector<double> estimated_charge_error_C;  // [nf][ny][nx][ne], C; empty = not stored
 
   std::optional<Calibration> calibration;     ///< fitted from measurements (pvdfkit calibrate)
 
@@ -99,6 +98,7 @@ void write_map(const std::string& path, const ChargeMap& map);
 
 /// Format identification written into the root attributes.
 inline constexpr const char* map_format_name = "pvdfkit-charge-map";
-inline constexpr int map_format_version = 1;
+/// Version written; read_map also reads version 1 (no per-node error estimate).
+inline constexpr int map_format_version = 2;
 
 }  // namespace pvdf::mapping

@@ -15,9 +15,8 @@ struct StreamOptions {
   bool strict = false;        ///< a malformed row throws InputError (exit 2) instead of being skipped
   std::string source = "<stdin>";  ///< name of the input in messages
   int max_warnings = 20;      ///< skipped-row warnings printed on `warnings` (then only counted)
-  /// Rows are tracked (Tracker: each row fitted from the previous row's solutions, the full
-  /// search at onset, on degradation, on a direction-bin change and at this interval);
-  /// 1 = the full search on every row.
+  /// Rows are tracked (Tracker: the full search with the previous row's answer as hints, a
+  /// search without them at onset and at this interval); 1 = the full search on every row.
   int search_interval = TrackerOptions{}.search_interval;
 };
 

@@ -45,6 +45,10 @@ struct DesignOptions {
   /// (a solution within the target does not spoil the figure of merit).
   double ambiguity_min_distance_m = 0.0;
   bool check_ambiguity = true;
+  /// Add the map's per-node estimated charge error (format-2 maps) to the channel noise as a
+  /// further 1-σ term. Off by default: the bound is then the sensor's, set by its noise alone, and
+  /// does not change with the resolution of the map it is computed from.
+  bool include_map_error = false;
   /// Dead zone: the RMS signal-to-noise √(Σ(q_k/σ_k)²/n) is below this (the lookup's no_press).
   double dead_snr = 3.0;
   /// Fisher matrix singular (bound = +∞, "cannot locate") when its smallest eigenvalue after

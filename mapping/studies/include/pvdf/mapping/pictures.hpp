@@ -30,9 +30,13 @@ void write_isocharge_overlay_png(const Locator& locator, const ChargeMap& map, d
 void write_intersection_png(const Locator& locator, const ChargeMap& map, const double* charges_C,
                             const Location& result, const std::string& path);
 
-/// Legacy VTK STRUCTURED_POINTS (binary, big-endian; opens in ParaView and vtkStructuredPointsReader) of the map: one scalar field `charge_<name>_pC_F<i>` per
-/// electrode and force level (NaN outside the mask / failed points), plus `mask`; coordinates in m.
+/// Legacy VTK STRUCTURED_POINTS (binary, big-endian; opens in ParaView and vtkStructuredPointsReader) of
+/// the map: one scalar field per electrode and force level, named by charge_vtk_field_name (charges
+/// in C, NaN outside the mask / failed points), plus `mask`; coordinates in m.
 void write_charge_vtk(const ChargeMap& map, const std::string& path);
+/// The charges.vtk field of an electrode at a force level: `charge_<electrode>_C_at_<F>N`, F in N
+/// by value (%.6g), e.g. `charge_A_C_at_1N`, `charge_B_C_at_0.5N`.
+std::string charge_vtk_field_name(const std::string& electrode, double force_N);
 
 /// Charge against distance (seed 001 Fig. 7): for electrode `electrode`, the sampled Q(d) of the
 /// rays at the angles `beta_deg` (markers) and their eq. 6 fits (lines), log-log axes in mm and

@@ -2,6 +2,7 @@
 // benchmarks for the lookup before (and besides) FEM-generated maps. Not a physical prediction.
 #pragma once
 
+#include "pvdf/core/membrane_scaling.hpp"
 #include "pvdf/mapping/map.hpp"
 
 #include <array>
@@ -28,7 +29,7 @@ struct SyntheticModel {
   double exponent = 0.8;
   double anisotropy = 1.3;
   double draw_angle_rad = 0.0;
-  double force_exponent = 2.0 / 3.0;
+  double force_exponent = pvdf::membrane_charge_exponent;
   double force_skew = 0.0;
   double d32_over_d31 = 0.1;   ///< seed 001: 0.65 / 6.5 pC/N
   double rim_strength = 0.5;   ///< 0: no rim term (a pure power law when also core→0, r = 1, a = 1)

@@ -3,6 +3,7 @@
 // the three circles in the least-squares sense.
 #pragma once
 
+#include "pvdf/core/membrane_scaling.hpp"
 #include "pvdf/mapping/locator.hpp"
 #include "pvdf/mapping/map.hpp"
 
@@ -53,7 +54,7 @@ class Triangulation {
   std::vector<std::array<double, 2>> centers_;
   TriangulationOptions options_;
   double radius_m_ = 0;
-  double p_ = 2.0 / 3.0;
+  double p_ = pvdf::membrane_charge_exponent;
 };
 
 }  // namespace pvdf::mapping

@@ -1,0 +1,244 @@
+// Goal-oriented error estimates (docs/fem.md §6): the dual-weighted residual (DWR) method for the
+// nonlinear film, for every output J (each electrode's charge, w at each load).
+//   adjoint           K(u_h) z_h = J'(u_h)        (the converged tangent, symmetric: K = ∇²Π)
+//   discretization    J(u) − J(u_h) ≈ −R⁺(u_h)[z⁺ − z_h]
+//   bending (model)   J(u_b) − J(u_h) ≈ −z_b · B u_h   with (K + B) z_b = J'
+// R⁺ is the residual of the same forms in FE_Q(p+1) on the same mesh (quadrature and penalty of
+// degree p, so that R⁺(u_h)[v_h] = R(u_h)[v_h] = 0 for every v_h of the primal space), z⁺ the
+// patch-wise Q(p+1) extrapolation of z_h, B the C0 interior-penalty bending operator.
+#include "film_solver.hpp"
+
+#include "pvdf/core/material.hpp"
+#include "pvdf/core/piezo.hpp"
+
+#include <deal.II/base/quadrature_lib.h>
+#include <deal.II/fe/fe_tools.h>
+#include <deal.II/fe/fe_values.h>
+#include <deal.II/grid/grid_tools.h>
+#include <deal.II/numerics/vector_tools.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace pvdf::fem::detail {
+
+using namespace dealii;
+
+// J'(u) for the charge of electrode k: Q = A/h·(d31 N11 + d32 N22) with N the mean membrane force
+// over the electrode's exact outline (outputs.cpp), so with a = d31·T₁ + d32·T₂ (T the rotation to
+// material axes, Voigt rows) and λ = Cᵀa, dQ/du_i = A/(h·|Ω_k|) ∫_Ω_k λ·δE(φ_i) dA, δE(φ) for
+// component c being (v_c0 φ_x, v_c1 φ_y, v_c0 φ_y + v_c1 φ_x) as in the residual (assembly.cpp).
+Vector<double> FilmSolver::charge_derivative(const Vector<double>& u, Model model, std::size_t k) const {
+  const auto& poly = electrode_polygons_[k];
+  double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
+  for (const auto& v : poly) {
+    xmin = std::min(xmin, v[0]);
+    xmax = std::max(xmax, v[0]);
+    ymin = std::min(ymin, v[1]);
+    ymax = std::max(ymax, v[1]);
+  }
+  const Eigen::Matrix3d T = pvdf::stress_to_material(draw_angle_);
+  const double d31 = scene_.material.d31_C_per_N, d32 = scene_.material.d32_C_per_N;
+  double lam[3] = {0, 0, 0};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) lam[i] += membrane_C_.c[j][i] * (d31 * T(0, j) + d32 * T(1, j));
+
+  const QIterated<dim> quadrature(QGauss<1>(2), 8);
+  FEValues<dim> fe_values(*mapping_, *fe_, quadrature, update_gradients | update_JxW_values | update_quadrature_points);
+  const FEValuesExtractors::Vector inplane(0);
+  const FEValuesExtractors::Scalar w(2);
+  std::vector<Tensor<2, dim>> grad_u(quadrature.size());
+  std::vector<Tensor<1, dim>> grad_w(quadrature.size());
+  const unsigned int n = fe_->n_dofs_per_cell();
+  std::vector<types::global_dof_index> dofs(n);
+  Vector<double> cell_g(n), g(dof_handler_.n_dofs());
+  double area = 0;
+  for (const auto& cell : dof_handler_.active_cell_iterators()) {
+    const auto box = cell->bounding_box();
+    if (box.get_boundary_points().first[0] > xmax || box.get_boundary_points().second[0] < xmin ||
+        box.get_boundary_points().first[1] > ymax || box.get_boundary_points().second[1] < ymin)
+      continue;
+    fe_values.reinit(cell);
+    fe_values[inplane].get_function_gradients(u, grad_u);
+    fe_values[w].get_function_gradients(u, grad_w);
+    cell_g = 0;
+    bool inside = false;
+    for (unsigned int q = 0; q < quadrature.size(); ++q) {
+      const Point<dim>& x = fe_values.quadrature_point(q);
+      if (!polygon_contains(poly, x[0], x[1])) continue;
+      inside = true;
+      double v[3][2];
+      for (unsigned int c = 0; c < 2; ++c)
+        for (unsigned int b = 0; b < 2; ++b)
+          v[c][b] = (c == b ? 1.0 : 0.0) + (model == Model::large_rotation ? grad_u[q][c][b] : 0.0);
+      for (unsigned int b = 0; b < 2; ++b) v[2][b] = model == Model::linear ? 0.0 : grad_w[q][b];
+      const double jxw = fe_values.JxW(q);
+      area += jxw;
+      for (unsigned int i = 0; i < n; ++i) {
+        const unsigned int c = fe_->system_to_component_index(i).first;
+        const Tensor<1, dim> gr = fe_values.shape_grad(i, q);
+        cell_g(i) += (gr[0] * (lam[0] * v[c][0] + lam[2] * v[c][1]) + gr[1] * (lam[1] * v[c][1] + lam[2] * v[c][0])) * jxw;
+      }
+    }
+    if (!inside) continue;
+    cell->get_dof_indices(dofs);
+    for (unsigned int i = 0; i < n; ++i) g(dofs[i]) += cell_g(i);
+  }
+  if (area > 0) g *= scene_.electrodes[k].area_m2() / (thickness_ * area);
+  return g;
+}
+
+// J'(u) for w(x): the w shape functions of the cell holding x, evaluated there.
+Vector<double> FilmSolver::deflection_derivative(const Point<dim>& x) const {
+  Vector<double> g(dof_handler_.n_dofs());
+  const auto found = GridTools::find_active_cell_around_point(*mapping_, dof_handler_, x);
+  const Point<dim> xi = GeometryInfo<dim>::project_to_unit_cell(found.second);
+  std::vector<types::global_dof_index> dofs(fe_->n_dofs_per_cell());
+  found.first->get_dof_indices(dofs);
+  for (unsigned int i = 0; i < dofs.size(); ++i)
+    if (fe_->system_to_component_index(i).first == 2) g(dofs[i]) += fe_->shape_value(i, xi);
+  return g;
+}
+
+// The enriched space: FE_Q(p+1) on this very triangulation (same cells, same mapping), built once
+// per mesh (and again when bending is switched on). Only residuals are assembled there.
+void FilmSolver::prepare_enriched() {
+  if (enriched_ && enriched_->dof_handler_.get_triangulation().n_active_cells() == triangulation_.n_active_cells() &&
+      enriched_->options_.include_bending == options_.include_bending)
+    return;
+  Options o = options_;
+  o.adaptive = false;
+  o.sample_points_m.clear();
+  o.vtu_directory.clear();
+  enriched_ = std::make_unique<FilmSolver>(scene_, o);  // fe_degree p passes the constructor's check
+  FilmSolver& e = *enriched_;
+  e.dof_handler_.reinit(triangulation_);  // this mesh itself (refine_mesh drops enriched_ before refining)
+  e.loads_ = loads_;
+  e.total_force_ = total_force_;
+  e.options_.fe_degree = options_.fe_degree + 1;
+  e.form_degree_ = options_.fe_degree;
+  e.residual_only_ = true;
+  e.setup_system();
+}
+
+namespace {
+
+// Adds |Σ_(i∈K) c_i / m_i| · factor to indicator[K] for every active cell K, where c_i = r_i ψ_i is
+// the contribution of DOF i to r·ψ and m_i the number of cells sharing it (so that the signed cell
+// sums add up to r·ψ exactly).
+void add_cell_shares(const DoFHandler<2>& dofh, const Vector<double>& r, const Vector<double>& psi, double factor,
+                     const std::vector<unsigned int>& multiplicity, Vector<float>& indicator) {
+  std::vector<types::global_dof_index> dofs(dofh.get_fe().n_dofs_per_cell());
+  for (const auto& cell : dofh.active_cell_iterators()) {
+    cell->get_dof_indices(dofs);
+    double sum = 0;
+    for (const auto i : dofs) sum += r(i) * psi(i) / multiplicity[i];
+    indicator(cell->active_cell_index()) += static_cast<float>(std::abs(sum) * factor);
+  }
+}
+
+std::vector<unsigned int> cell_multiplicity(const DoFHandler<2>& dofh) {
+  std::vector<unsigned int> m(dofh.n_dofs(), 0);
+  std::vector<types::global_dof_index> dofs(dofh.get_fe().n_dofs_per_cell());
+  for (const auto& cell : dofh.active_cell_iterators()) {
+    cell->get_dof_indices(dofs);
+    for (const auto i : dofs) ++m[i];
+  }
+  return m;
+}
+
+double relative_max(const std::vector<double>& est, const std::vector<double>& scale) {
+  double r = 0;
+  for (std::size_t j = 0; j < est.size(); ++j) r = std::max(r, std::abs(est[j]) / scale[j]);
+  return std::isfinite(r) ? r : std::numeric_limits<double>::quiet_NaN();
+}
+
+}  // namespace
+
+// All estimates at the converged u (see the file comment). Cost: one factorization of K(u) (the
+// factorization left behind, which a probe sweep's next chord step reuses), one more of K + B for
+// the bending part, one back substitution per output and adjoint, one residual in Q(p+1).
+FilmSolver::GoalErrors FilmSolver::estimate_goal_errors(const Vector<double>& u, Model model) {
+  GoalErrors ge;
+  const std::size_t ne = electrode_polygons_.size(), nl = loads_.size(), n_out = ne + nl;
+  std::vector<Vector<double>> dJ;
+  double q_scale = 0, w_scale = 0;
+  current_model_ = model;
+  for (std::size_t k = 0; k < ne; ++k) {
+    const auto g = electrode_mean_force(u, model, k);
+    const Eigen::Vector3d m = pvdf::stress_to_material(draw_angle_) * Eigen::Vector3d(g[0], g[1], g[2]);
+    ge.charge_C.push_back(electrode_charge(k, {m[0], m[1], m[2]}));
+    q_scale = std::max(q_scale, std::abs(ge.charge_C.back()));
+    dJ.push_back(charge_derivative(u, model, k));
+  }
+  for (const auto& l : loads_) {
+    Vector<double> value(3);
+    VectorTools::point_value(*mapping_, dof_handler_, u, l.center, value);
+    ge.deflection_m.push_back(value[2]);
+    w_scale = std::max(w_scale, std::abs(value[2]));
+    dJ.push_back(deflection_derivative(l.center));
+  }
+  std::vector<double> scale(n_out);
+  for (std::size_t j = 0; j < n_out; ++j) scale[j] = std::max(j < ne ? q_scale : w_scale, 1e-300);
+  for (auto& g : dJ) constraints_.condense(g);
+  ge.indicators.reinit(triangulation_.n_active_cells());
+  const auto multiplicity = cell_multiplicity(dof_handler_);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> model_est(n_out, 0.0), disc_est(n_out, nan);
+  Vector<double> r(u.size()), z(u.size());
+  std::string message;
+
+  // 1. Bending left out: its effect, one Newton step of the model with bending from u.
+  if (!options_.include_bending && bending_pattern_) {
+    assemble(u, model, 0.0, true, r);
+    tangent_.add(1.0, bending_);
+    Vector<double> bu(u.size());
+    bending_.vmult(bu, u);
+    constraints_.set_zero(bu);
+    for (std::size_t j = 0; j < n_out; ++j) {
+      if (!solve_linear(dJ[j], z, message, j == 0)) {
+        model_est[j] = nan;
+        continue;
+      }
+      constraints_.distribute(z);
+      model_est[j] = -(bu * z);
+      add_cell_shares(dof_handler_, bu, z, 1.0 / scale[j], multiplicity, ge.indicators);
+    }
+    ge.model_estimated = true;
+  }
+
+  // 2. Discretization: adjoint with the model's own tangent, weights from the Q(p+1) extrapolation.
+  assemble(u, model, 0.0, true, r);
+  bool patches = true;
+  for (const auto& cell : triangulation_.active_cell_iterators()) patches = patches && cell->level() > 0;
+  if (patches) {
+    prepare_enriched();
+    FilmSolver& e = *enriched_;
+    e.loads_ = loads_;
+    e.total_force_ = total_force_;
+    e.assemble_load_vector();
+    Vector<double> ue(e.n_dofs()), re(e.n_dofs()), zplus(e.n_dofs()), zi(e.n_dofs());
+    FETools::interpolate(dof_handler_, u, e.dof_handler_, e.constraints_, ue);
+    e.assemble(ue, model, 0.0, false, re);
+    const auto e_multiplicity = cell_multiplicity(e.dof_handler_);
+    for (std::size_t j = 0; j < n_out; ++j) {
+      if (!solve_linear(dJ[j], z, message, j == 0)) continue;
+      constraints_.distribute(z);
+      FETools::extrapolate(dof_handler_, z, e.dof_handler_, e.constraints_, zplus);
+      FETools::interpolate(dof_handler_, z, e.dof_handler_, e.constraints_, zi);
+      zplus -= zi;
+      disc_est[j] = -(re * zplus);
+      add_cell_shares(e.dof_handler_, re, zplus, 1.0 / scale[j], e_multiplicity, ge.indicators);
+    }
+  }
+  ge.charge_discretization_C.assign(disc_est.begin(), disc_est.begin() + static_cast<long>(ne));
+  ge.deflection_discretization_m.assign(disc_est.begin() + static_cast<long>(ne), disc_est.end());
+  ge.charge_model_C.assign(model_est.begin(), model_est.begin() + static_cast<long>(ne));
+  ge.deflection_model_m.assign(model_est.begin() + static_cast<long>(ne), model_est.end());
+  ge.relative_discretization = relative_max(disc_est, scale);
+  ge.relative_model = relative_max(model_est, scale);
+  return ge;
+}
+
+}  // namespace pvdf::fem::detail

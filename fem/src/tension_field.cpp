@@ -1,0 +1,243 @@
+// The tension-field (wrinkling) membrane (docs/fem.md §3.3): the relaxed law of an orthotropic film
+// (tension_field.hpp), the film's natural (stress-free) state for pretension of either sign or a
+// slack strain, the continuation that brings a slack film from the flat state to equilibrium, and
+// the wrinkled and slack area of a solution.
+#include "pvdf/core/constants.hpp"
+#include "film_solver.hpp"
+
+#include "pvdf/core/error.hpp"
+#include "pvdf/core/membrane_scaling.hpp"
+
+#include <deal.II/base/quadrature_lib.h>
+#include <deal.II/fe/fe_values.h>
+
+#include <Eigen/LU>
+
+#include <algorithm>
+#include <cmath>
+
+namespace pvdf::fem::detail {
+
+using namespace dealii;
+
+// The natural state: the trial stress of the flat film is S0 = N0·I for a pretension N0 of either
+// sign, or −C·(s, s, 0) for a slack strain s (stress-free film (1 + s) times the hole). Slack films
+// always use the relaxed law; taut films when the scene asks (membrane.tension_field).
+void FilmSolver::setup_natural_state() {
+  const auto& m = scene_.membrane;
+  Eigen::Matrix3d C;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) C(i, j) = membrane_C_.c[i][j];
+  const Eigen::Matrix3d Ci = C.inverse();
+  Eigen::Vector3d S0(m.pretension_N_per_m, m.pretension_N_per_m, 0.0);
+  if (m.slack_strain > 0) S0 = -C * Eigen::Vector3d(m.slack_strain, m.slack_strain, 0.0);
+  const Eigen::Vector3d cs = Ci * S0, cu = Ci * Eigen::Vector3d(1, 1, 0);
+  for (int i = 0; i < 3; ++i) {
+    initial_stress_[i] = S0[i];
+    compliance_initial_stress_[i] = cs[i];
+    unit_compliance_[i] = cu[i];
+  }
+  tension_field_ = m.tension_field || m.pretension_N_per_m < 0 || m.slack_strain > 0;
+}
+
+// The relaxed law at the Green–Lagrange strain E with the artificial isotropic tension t of the
+// continuation: elastic strain e = E + C⁻¹(S0 + t·I).
+RelaxedMembrane FilmSolver::membrane_law(const std::array<double, 3>& E, double artificial_tension,
+                                         bool want_tangent) const {
+  std::array<double, 3> e;
+  for (int i = 0; i < 3; ++i) e[i] = E[i] + compliance_initial_stress_[i] + artificial_tension * unit_compliance_[i];
+  return relaxed_membrane(membrane_C_.c, e, want_tangent);
+}
+
+// Membrane force of a converged state at the strain E (N/m): C·E + S0, relaxed when wrinkling is modelled.
+std::array<double, 3> FilmSolver::membrane_stress(const std::array<double, 3>& E) const {
+  if (tension_field_) return membrane_law(E, 0.0, false).S;
+  std::array<double, 3> S = membrane_C_.apply(E);
+  for (int i = 0; i < 3; ++i) S[i] += initial_stress_[i];
+  return S;
+}
+
+// ε of the tangent regularization (tension_field.hpp): tangent_regularization_ times the tension
+// scale of the current force over E·h — the Hencky-type scale N*(F) of a taut film, or for a slack
+// film the rim force of the inextensible cone its excess length makes, F/(2πa·√(2s)) with s ≈ |N0|/(E·h).
+double FilmSolver::tension_field_regularization() const {
+  const double F = total_force_ * load_factor_;
+  if (F == regularization_force_) return regularization_eta_;
+  const double Eh = std::sqrt(membrane_C_.c[0][0] * membrane_C_.c[1][1]);
+  const double n0 = 0.5 * (initial_stress_[0] + initial_stress_[1]);
+  double scale = pvdf::membrane_force_scale_N_per_m(Eh, F, radius_) + std::max(0.0, n0);
+  if (n0 < 0) scale = std::min(scale, F / (2 * pvdf::pi * radius_ * std::sqrt(-2 * n0 / Eh)));
+  regularization_force_ = F;
+  regularization_eta_ = tangent_regularization_ * scale / Eh;
+  return regularization_eta_;
+}
+
+// The assembly hook: replaces the plain stress of a quadrature point by the relaxed one and the
+// material tangent by the relaxed tangent (+ the regularization where wrinkled or slack); returns
+// the change of the energy density (relaxed − plain, J/m²; the plain density is ½E·C·E + N_tot tr E).
+double FilmSolver::relax_membrane_point(const Kinematics& k, Model model, double artificial_tension,
+                                        bool want_tangent, std::array<double, 3>& S, Stiffness3& D) const {
+  const std::array<double, 3> E = membrane_strain(k, model);
+  const RelaxedMembrane L = membrane_law(E, artificial_tension, want_tangent);
+  const std::array<double, 3> CE = membrane_C_.apply(E);
+  const double n_tot = pretension_ + artificial_tension;
+  const double plain = 0.5 * (CE[0] * E[0] + CE[1] * E[1] + CE[2] * E[2]) + n_tot * (E[0] + E[1]);
+  // The relaxed density ½e·C·e is measured from the natural (stress-free) state, not from the flat
+  // film: it differs from the plain one by a constant where nothing wrinkles, and it stays small
+  // when a slack film carries a small load (the line search compares energies to round-off).
+  S = L.S;
+  if (want_tangent) {
+    const double eta = L.state == MembraneState::taut ? 0.0 : tension_field_regularization();
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) D.c[i][j] = L.D[i][j] + eta * membrane_C_.c[i][j];
+  }
+  return L.W - plain;
+}
+
+namespace {
+// Scales the load vectors by `factor` for a force continuation and restores them on destruction.
+struct LoadScale {
+  Vector<double>& load;
+  Vector<double>& load_raw;
+  Vector<double> saved, saved_raw;
+  LoadScale(Vector<double>& l, Vector<double>& lr, double& f)
+      : load(l), load_raw(lr), saved(l), saved_raw(lr), load_factor(f) {}
+  double& load_factor;
+  void set(double factor) {
+    load_factor = factor;
+    load = saved;
+    load *= factor;
+    load_raw = saved_raw;
+    load_raw *= factor;
+  }
+  ~LoadScale() {
+    load_factor = 1;
+    load = saved;
+    load_raw = saved_raw;
+  }
+};
+}  // namespace
+
+// From the flat film to equilibrium with the relaxed law (docs/fem.md §5.2). A slack flat film has
+// no stiffness at all, so (1) at a force F1 ≥ F large enough for the film's stretch to dominate its
+// slack (membrane force scale N*(F1) ≥ |N0|), start taut under an artificial isotropic tension
+// t0 = N*(F1) + |N0| and lower t to 0 in adaptive steps (doubling after a success, quartering after a
+// failure), each a Newton solve from the last; then (2) lower the force from F1 to F in steps of 5×
+// (halved in log after a failure). A stage that fails after max_cutbacks reductions ends the solve
+// with its status (exit 3 in the app), never with a non-finite state.
+NewtonOutcome FilmSolver::solve_slack_from_flat(Model model, Vector<double>& u) {
+  NewtonOutcome total;
+  u = 0;
+  const double F = total_force_;
+  const double Eh = std::sqrt(membrane_C_.c[0][0] * membrane_C_.c[1][1]);
+  const double n0 = 0.5 * (initial_stress_[0] + initial_stress_[1]);
+  double F1 = F;
+  if (n0 < 0) F1 = std::max(F, Eh * radius_ * std::pow(-n0 / (2 * Eh), 1.5));
+  LoadScale scale(load_, load_raw_, load_factor_);
+  scale.set(F1 / F);
+  const double t0 = 2.0 * pvdf::membrane_force_scale_N_per_m(Eh, F1, radius_) + std::max(0.0, -n0);
+  auto stage = [&](double t) {
+    NewtonOutcome o = newton(model, t, u);
+    ++summary_.load_steps;
+    summary_.newton_iterations += o.iterations;
+    total.residual_norm = o.residual_norm;
+    return o;
+  };
+  // (1) Artificial tension t0 → 0 at F1.
+  double t = t0, step = 0.75 * t0;
+  Vector<double> saved = u;
+  int failures = 0;
+  for (NewtonOutcome o = stage(t); o.status != Status::converged; o = stage(t)) {
+    u = saved;
+    t *= 4;  // even the first stage failed: more tension
+    if (++failures > 3) {
+      total.status = o.status;
+      total.message = o.message + "; the slack film did not converge even under artificial tension " + fmt(t / 4) + " N/m";
+      return total;
+    }
+  }
+  saved = u;
+  failures = 0;
+  while (t > 0) {
+    const double next = t - step < 1e-3 * t0 ? 0.0 : t - step;
+    const NewtonOutcome o = stage(next);
+    if (o.status == Status::converged) {
+      t = next;
+      saved = u;
+      step *= 2;
+      continue;
+    }
+    u = saved;
+    step *= 0.25;
+    if (++failures > 2 * options_.max_cutbacks) {
+      total.status = o.status;
+      total.message = o.message + "; slack-film continuation gave up at artificial tension " + fmt(next) +
+                      " N/m (film slack by " + fmt(-n0) + " N/m at " + fmt(F1) + " N)";
+      return total;
+    }
+  }
+  // (2) Force F1 → F.
+  double lambda = F1 / F, factor = 0.2;
+  failures = 0;
+  while (lambda > 1) {
+    const double next = std::max(1.0, lambda * factor);
+    scale.set(next);
+    const NewtonOutcome o = stage(0.0);
+    if (o.status == Status::converged) {
+      lambda = next;
+      saved = u;
+      continue;
+    }
+    u = saved;
+    factor = std::sqrt(factor);
+    if (++failures > options_.max_cutbacks) {
+      total.status = o.status;
+      total.message = o.message + "; slack-film force continuation gave up at " + fmt(next * F) + " N";
+      return total;
+    }
+  }
+  total.status = Status::converged;
+  return total;
+}
+
+// Share of the film's area that is wrinkled and slack, and each cell's state (the state of the
+// largest share of its area) for the VTU.
+WrinkleMap FilmSolver::wrinkle_map(const Vector<double>& u, Model model) const {
+  WrinkleMap map;
+  map.cell_state.assign(triangulation_.n_active_cells(), 0.0f);
+  if (!tension_field_) return map;
+  const QGauss<dim> quadrature(options_.fe_degree + 1);
+  FEValues<dim> fe_values(*mapping_, *fe_, quadrature, update_gradients | update_JxW_values);
+  const FEValuesExtractors::Vector inplane(0);
+  const FEValuesExtractors::Scalar w(2);
+  std::vector<Tensor<2, dim>> grad_u(quadrature.size());
+  std::vector<Tensor<1, dim>> grad_w(quadrature.size());
+  double total = 0, wrinkled = 0, slack = 0;
+  for (const auto& cell : dof_handler_.active_cell_iterators()) {
+    fe_values.reinit(cell);
+    fe_values[inplane].get_function_gradients(u, grad_u);
+    fe_values[w].get_function_gradients(u, grad_w);
+    double area[3] = {0, 0, 0};
+    for (unsigned int q = 0; q < quadrature.size(); ++q) {
+      Kinematics k;
+      for (int a = 0; a < 2; ++a) {
+        k.g[a] = grad_w[q][a];
+        for (int b = 0; b < 2; ++b) k.H[a][b] = grad_u[q][a][b];
+      }
+      const MembraneState st = membrane_law(membrane_strain(k, model), 0.0, false).state;
+      area[static_cast<int>(st)] += fe_values.JxW(q);
+    }
+    total += area[0] + area[1] + area[2];
+    wrinkled += area[1];
+    slack += area[2];
+    const int dominant = static_cast<int>(std::max_element(area, area + 3) - area);
+    map.cell_state[cell->active_cell_index()] = static_cast<float>(dominant);
+  }
+  if (total > 0) {
+    map.wrinkled_area_fraction = wrinkled / total;
+    map.slack_area_fraction = slack / total;
+  }
+  return map;
+}
+
+}  // namespace pvdf::fem::detail

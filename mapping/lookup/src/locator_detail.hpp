@@ -1,0 +1,132 @@
+// Private to the lookup's sources (locator*.cpp): the small inline helpers they share.
+#pragma once
+
+#include "pvdf/mapping/interpolant.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <string>
+
+
+// The hot paths of the lookup are compiled twice, for any x86-64 and for x86-64-v3 (AVX2, FMA:
+// +6 % locates/s measured, docs/lookup.md §3), and the loader picks the one the CPU runs (GCC
+// function multiversioning). AVX-512 clones measured slower (−3 %): not built.
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__linux__)
+#define PVDF_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
+#else
+#define PVDF_CLONES
+#endif
+
+// No fused multiply-add contraction in the lookup's sources: with it the compiler's choice of
+// where to fuse depends on how the code is cut into functions (a helper compiled for the default
+// target is not inlined into a clone), and the answers would change in the last bits with
+// every refactoring (docs/lookup.md §3).
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC optimize("fp-contract=off")
+#endif
+
+namespace pvdf::mapping::detail {
+
+using Vec = std::array<double, max_electrodes>;
+
+/// The coarse table's key of a direction: two pseudo-angles of its first three components,
+/// no atan2 or sqrt. φ is the "diamond angle" of (n0, n1) (monotone in atan2(n1, n0), in
+/// (−2, 2], cut at n0 < 0, n1 = 0 like atan2), θ = n2 / (|n0| + |n1| + |n2|) (monotone in
+/// the elevation for a fixed φ). Any continuous key serves: the table is built with this one.
+inline void direction_key(const double* n, double& phi, double& theta) {
+  const double a0 = std::abs(n[0]), a1 = std::abs(n[1]);
+  const double l1 = a0 + a1 + 1e-300;
+  const double r = n[1] / l1;
+  phi = n[0] >= 0 ? r : (n[1] >= 0 ? 2.0 - r : -2.0 - r);
+  theta = n[2] / (l1 + std::abs(n[2]));
+}
+
+/// Solves the symmetric positive definite 3×3 system A x = b by a closed-form LDLᵀ (no
+/// pivoting, no square roots: the damped normal equations are SPD; three reciprocals instead
+/// of Cholesky's three square roots and nine divisions, which sat on the critical path).
+/// Returns a non-finite x if A is not SPD (a pivot ≤ 0 or NaN).
+inline std::array<double, 3> solve_spd3(const std::array<double, 6>& A, const std::array<double, 3>& b) {
+  // A: upper triangle 00 01 02 11 12 22.
+  const double d0 = A[0], i0 = 1.0 / d0;
+  const double l10 = A[1] * i0, l20 = A[2] * i0;
+  const double d1 = A[3] - l10 * A[1], i1 = 1.0 / d1;
+  const double l21 = (A[4] - l20 * A[1]) * i1;
+  const double d2 = A[5] - l20 * A[2] - l21 * l21 * d1, i2 = 1.0 / d2;
+  if (!(d0 > 0 && d1 > 0 && d2 > 0)) {
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    return {nan, nan, nan};
+  }
+  const double y0 = b[0], y1 = b[1] - l10 * y0, y2 = b[2] - l20 * y0 - l21 * y1;
+  const double x2 = y2 * i2, x1 = y1 * i1 - l21 * x2, x0 = y0 * i0 - l10 * x1 - l20 * x2;
+  return {x0, x1, x2};
+}
+
+/// The coarse search's test of one candidate cell against the query direction (compact float
+/// record, Locator::scan_): the offset δ its linear model predicts (cell units), the model's
+/// residual² there and the force of a start; false when the cell cannot hold a solution.
+struct CandidateTest {
+  double dt, ds, res2, l;
+};
+template <std::size_t NE>
+inline bool test_candidate(const float* sc, std::size_t ne_runtime, const double* q_unit, double log_q_norm,
+                           double noise2, bool fixed_force, double log_force, double log_lo, double log_hi,
+                           double p_exp, double inv_p, CandidateTest& out) {
+  const std::size_t ne = NE > 0 ? NE : ne_runtime;
+  const float* tail = sc + 6 * ne;
+  // Level: the known force, or the force that makes the cell's mean |G| match |q|.
+  const double l = std::clamp(fixed_force ? log_force : (log_q_norm - double(tail[1])) * inv_p, log_lo, log_hi);
+  // The cell's linear model carried to l predicts the offset δ.
+  const double dl = l - double(tail[0]);
+  double e[NE > 0 ? NE : 8];
+  double dt = 0, ds = 0;
+  for (std::size_t n = 0; n < ne; ++n) {
+    e[n] = q_unit[n] - double(sc[n]) - double(sc[3 * ne + n]) * dl;
+    dt += double(sc[ne + n]) * e[n];
+    ds += double(sc[2 * ne + n]) * e[n];
+  }
+  if (!(std::abs(dt) <= 1.0 && std::abs(ds) <= 1.0)) return false;  // predicted beyond the neighbours
+  double res2 = 0;
+  for (std::size_t n = 0; n < ne; ++n) {
+    const double r = e[n] - double(sc[4 * ne + n]) * dt - double(sc[5 * ne + n]) * ds;
+    res2 += r * r;
+  }
+  // Within what the model's own error and the noise allow: a solution may be here.
+  if (res2 > 4.0 * double(tail[6]) + 9.0 * noise2 + 1e-14) return false;
+  // Force at the predicted point: |q| = F^p |G(δ, l)| with ln |G| linear in δ and l.
+  const double log_g = double(tail[2]) + double(tail[3]) * dt + double(tail[4]) * ds + double(tail[5]) * dl;
+  double l1 = l;
+  if (fixed_force) {
+    // The known force must also explain the magnitude (else: an unknown-force twin).
+    if (std::abs(log_q_norm - p_exp * l - log_g) > 0.05 + 3.0 * std::sqrt(std::max(noise2, 0.0))) return false;
+  } else {
+    l1 = (log_q_norm - log_g) * inv_p;
+    // A solution needs a plausible force: far outside the range, this is not one.
+    if (l1 < log_lo - 0.25 || l1 > log_hi + 0.25) return false;
+    l1 = std::clamp(l1, log_lo, log_hi);
+  }
+  out = {dt, ds, res2, l1};
+  return true;
+}
+
+/// A number for a message, printed like %g (never "-0.000000").
+inline std::string text_g(double v) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%g", v);
+  return buffer;
+}
+
+inline double normalize(double* v, std::size_t n) {
+  double s = 0;
+  for (std::size_t k = 0; k < n; ++k) s += v[k] * v[k];
+  s = std::sqrt(s);
+  if (s > 0) {
+    for (std::size_t k = 0; k < n; ++k) v[k] /= s;
+  }
+  return s;
+}
+
+
+}  // namespace pvdf::mapping::detail

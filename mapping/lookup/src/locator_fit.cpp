@@ -1,0 +1,553 @@
+// The lookup's fits and choice (docs/lookup.md §1.4, 1.6–1.8): Levenberg–Marquardt on the
+// interpolant, covariance, distinct solutions, their probabilities and the reported answer.
+#include "locator_detail.hpp"
+#include "pvdf/mapping/locator.hpp"
+
+#include "pvdf/core/error.hpp"
+
+namespace pvdf::mapping {
+
+using detail::direction_key;
+using detail::normalize;
+using detail::solve_spd3;
+using detail::Vec;
+
+namespace detail {
+
+/// Levenberg–Marquardt's current point: the model's charges and gradient there, χ², and the
+/// weighted normal equations JᵀJ (upper triangle 00 01 02 11 12 22) and Jᵀr.
+struct LmPoint {
+  Vec model;  // entries 0..ne−1 written by evaluate() before any read
+  std::array<std::array<double, 3>, max_electrodes> grad;
+  double chi2 = 0;
+  std::array<double, 6> JtJ;
+  std::array<double, 3> Jtr;
+};
+
+}  // namespace detail
+
+using detail::LmPoint;
+
+namespace {
+
+double chi2_of(const Vec& m, const double* q, const double* w, std::size_t ne) {
+  double s = 0;
+  for (std::size_t k = 0; k < ne; ++k) {
+    const double r = (m[k] - q[k]) * w[k];
+    s += r * r;
+  }
+  return s;
+}
+
+void normal_equations(LmPoint& p, const double* q, const double* w, std::size_t ne) {
+  p.JtJ = {0, 0, 0, 0, 0, 0};
+  p.Jtr = {0, 0, 0};
+  for (std::size_t k = 0; k < ne; ++k) {
+    const double g0 = p.grad[k][0] * w[k], g1 = p.grad[k][1] * w[k], g2 = p.grad[k][2] * w[k];
+    const double r = (p.model[k] - q[k]) * w[k];
+    p.JtJ[0] += g0 * g0;
+    p.JtJ[1] += g0 * g1;
+    p.JtJ[2] += g0 * g2;
+    p.JtJ[3] += g1 * g1;
+    p.JtJ[4] += g1 * g2;
+    p.JtJ[5] += g2 * g2;
+    p.Jtr[0] += g0 * r;
+    p.Jtr[1] += g1 * r;
+    p.Jtr[2] += g2 * r;
+  }
+}
+
+/// vᵀ JᵀJ v.
+double quad_form(const std::array<double, 6>& JtJ, const std::array<double, 3>& v) {
+  return JtJ[0] * v[0] * v[0] + JtJ[3] * v[1] * v[1] + JtJ[5] * v[2] * v[2] +
+         2.0 * (JtJ[1] * v[0] * v[1] + JtJ[2] * v[0] * v[2] + JtJ[4] * v[1] * v[2]);
+}
+
+/// The damped step (JᵀJ + λ diag JᵀJ) step = −Jᵀr (with the force fixed its ln F row is 1);
+/// one that leaves the plausible force range is projected: ln F goes to the bound and (x, y)
+/// are solved with it held there (it keeps the fit from spinning against the bound). False when
+/// the damped system is not positive definite.
+bool damped_step(const LmPoint& p, double lambda, bool fixed_force, double l, double log_lo, double log_hi,
+                 std::array<double, 3>& step) {
+  std::array<double, 6> A = p.JtJ;
+  A[0] += lambda * p.JtJ[0] + 1e-300;
+  A[3] += lambda * p.JtJ[3] + 1e-300;
+  A[5] += lambda * p.JtJ[5] + 1e-300;
+  if (fixed_force) A[5] = 1.0;
+  step = solve_spd3(A, {-p.Jtr[0], -p.Jtr[1], -p.Jtr[2]});
+  if (!(std::isfinite(step[0]) && std::isfinite(step[1]) && std::isfinite(step[2]))) return false;
+  if (!fixed_force && (l + step[2] < log_lo || l + step[2] > log_hi)) {
+    const double dl = (l + step[2] < log_lo ? log_lo : log_hi) - l;
+    const double b0 = -p.Jtr[0] - A[2] * dl, b1 = -p.Jtr[1] - A[4] * dl;
+    const double det = A[0] * A[3] - A[1] * A[1];
+    if (det > 0) step = {(A[3] * b0 - A[1] * b1) / det, (A[0] * b1 - A[1] * b0) / det, dl};
+  }
+  return true;
+}
+
+/// Keeps steps within a few cells (the interpolant is only trusted where it is defined) and
+/// within 1 in ln F: the factor ≤ 1 to apply.
+double step_limit(const std::array<double, 3>& step, double hx, double hy) {
+  double limit = 1.0;
+  if (std::abs(step[0]) > 4.0 * hx) limit = std::min(limit, 4.0 * hx / std::abs(step[0]));
+  if (std::abs(step[1]) > 4.0 * hy) limit = std::min(limit, 4.0 * hy / std::abs(step[1]));
+  if (std::abs(step[2]) > 1.0) limit = std::min(limit, 1.0 / std::abs(step[2]));
+  return limit;
+}
+
+}  // namespace
+
+PVDF_CLONES bool Locator::lm_evaluate(double x, double y, double l, bool fixed_force, const double* q, const double* w,
+                          LmPoint& p) const {
+  if (!interp_.evaluate(x, y, l, p.model.data(), p.grad.data())) return false;
+  p.chi2 = chi2_of(p.model, q, w, ne_);
+  if (fixed_force) {  // only (x, y) move: drop the ln F column
+    for (std::size_t k = 0; k < ne_; ++k) p.grad[k][2] = 0;
+  }
+  normal_equations(p, q, w, ne_);
+  return true;
+}
+
+PVDF_CLONES bool Locator::final_step_ok(double x, double y, double l, const std::array<double, 3>& step, double lambda,
+                            double log_lo, double log_hi) const {
+  // A nearly undamped Gauss–Newton step this small is in the quadratic phase: the error left
+  // after it is ≈ κ δ² / 2 (κ = |H| / σ_min(J) of the cell holding the point). Below 1e-4 cell
+  // (the threshold on δ clamped to 1e-3…1e-2 cell, 1e-3 in ln F; the map's own interpolation
+  // error is ~1e-3 cell) it is taken without evaluating the model there.
+  if (!(lambda < 1e-2 && std::abs(step[2]) < 1e-3)) return false;
+  const std::int32_t slot = slot_at(x, y);
+  const double accept = slot >= 0 ? double(scan_[std::size_t(slot) * scan_stride_ + 6 * ne_ + 7]) : 1e-3;
+  return std::abs(step[0]) < accept * interp_.hx() && std::abs(step[1]) < accept * interp_.hy() &&
+         interp_.inside(x + step[0], y + step[1]) && l + step[2] >= log_lo && l + step[2] <= log_hi;
+}
+
+PVDF_CLONES bool Locator::held_by_edge(const std::array<double, 6>& JtJ, const std::array<double, 3>& Jtr, double x, double y,
+                           double l, bool fixed_force, double log_lo, double log_hi) const {
+  // The undamped Gauss–Newton step from the minimum would leave the map or the force range.
+  std::array<double, 6> A = JtJ;
+  A[0] *= 1.0 + 1e-9;
+  A[3] *= 1.0 + 1e-9;
+  A[5] *= 1.0 + 1e-9;
+  if (fixed_force) A[5] = 1.0;
+  const std::array<double, 3> step = solve_spd3(A, {-Jtr[0], -Jtr[1], -Jtr[2]});
+  return std::isfinite(step[0]) && std::isfinite(step[1]) && std::isfinite(step[2]) &&
+         (!interp_.inside(x + step[0], y + step[1]) || l + step[2] < log_lo || l + step[2] > log_hi);
+}
+
+PVDF_CLONES Locator::Fit Locator::levenberg_marquardt(const double* q, const double* w, double x, double y, double l,
+                                                      bool fixed_force, double log_lo, double log_hi, const Fit* found,
+                                                      int n_found) const {
+  Fit fit;
+  Vec w_map{};
+  if (!map_error_.empty()) {
+    // The map's own error joins the charge noise (σ_k² + e_k², e at the start: the weights are
+    // held during the fit; finish() takes χ² with e at the end point).
+    Vec error{};
+    if (map_error_at(x, y, l, error.data())) {
+      for (std::size_t k = 0; k < ne_; ++k) w_map[k] = 1.0 / std::sqrt(1.0 / (w[k] * w[k]) + error[k] * error[k]);
+      w = w_map.data();
+    }
+  }
+  LmPoint p;
+  if (!lm_evaluate(x, y, l, fixed_force, q, w, p)) return fit;
+  double lambda = 1e-3;
+  const double hx = interp_.hx(), hy = interp_.hy();
+  int it = 0;
+  bool quadratic_exit = false;
+  for (; it < options_.max_iterations; ++it) {
+    std::array<double, 3> step;
+    if (!damped_step(p, lambda, fixed_force, l, log_lo, log_hi, step)) {
+      lambda *= 10;
+      if (lambda > 1e12) break;
+      continue;
+    }
+    const double limit = step_limit(step, hx, hy);
+    if (final_step_ok(x, y, l, step, lambda, log_lo, log_hi)) {
+      // Taken unevaluated; χ² from the linear model, χ² + 2 stepᵀJᵀr + stepᵀJᵀJ step (its
+      // change is second order too).
+      x += step[0];
+      y += step[1];
+      l += step[2];
+      p.chi2 = std::max(0.0, p.chi2 + 2.0 * (p.Jtr[0] * step[0] + p.Jtr[1] * step[1] + p.Jtr[2] * step[2]) +
+                                 quad_form(p.JtJ, step));
+      fit.converged = true;
+      fit.blocked = false;
+      quadratic_exit = true;
+      ++it;
+      break;
+    }
+    const double nx = x + limit * step[0], ny = y + limit * step[1], nl = l + limit * step[2];
+    LmPoint trial;
+    if (nl < log_lo || nl > log_hi || !lm_evaluate(nx, ny, nl, fixed_force, q, w, trial)) {
+      fit.blocked = true;
+      lambda *= 10;
+      if (lambda > 1e12) {
+        fit.converged = true;
+        break;
+      }
+      continue;
+    }
+    if (trial.chi2 <= p.chi2) {
+      // Converged when the step is far below any useful resolution (1e-5 of a cell, 1e-7 in
+      // ln F) or the misfit no longer drops (relative 1e-8).
+      const bool small = std::abs(limit * step[0]) < 1e-5 * hx && std::abs(limit * step[1]) < 1e-5 * hy &&
+                         std::abs(limit * step[2]) < 1e-7;
+      const bool tiny_gain = p.chi2 - trial.chi2 <= 1e-8 * (p.chi2 + 1e-30);
+      x = nx;
+      y = ny;
+      l = nl;
+      p = trial;
+      lambda = std::max(lambda * 0.2, 1e-9);
+      fit.blocked = false;
+      // Heading into a solution an earlier start already found: stop, it adds nothing (two
+      // end points closer than a cell are never distinct solutions).
+      for (int d = 0; d < n_found; ++d) {
+        if (found[d].ok && std::abs(x - found[d].x) < 0.05 * hx && std::abs(y - found[d].y) < 0.05 * hy &&
+            std::abs(l - found[d].l) < 0.01) {
+          fit.duplicate = true;
+          return fit;
+        }
+      }
+      if (small || p.chi2 < 1e-20 || tiny_gain) {
+        fit.converged = true;
+        ++it;
+        break;
+      }
+    } else {
+      lambda *= 8;
+      if (lambda > 1e12) {  // no descent left: a minimum (possibly on the map's edge)
+        fit.converged = true;
+        break;
+      }
+    }
+  }
+  // Is the minimum held by the map's edge? (Only asked of fits that do not fit within noise —
+  // outside_map or poor_fit — so it is skipped after a quadratic-phase exit within noise.)
+  if ((!quadratic_exit || p.chi2 > (fixed_force ? chi2_limit_fixed_ : chi2_limit_free_)) &&
+      held_by_edge(p.JtJ, p.Jtr, x, y, l, fixed_force, log_lo, log_hi)) {
+    fit.blocked = true;
+  }
+  fit.x = x;
+  fit.y = y;
+  fit.l = l;
+  fit.chi2 = p.chi2;
+  fit.iterations = it;
+  fit.jtj = p.JtJ;
+  fit.ok = std::isfinite(p.chi2) && std::isfinite(x) && std::isfinite(y) && std::isfinite(l);
+  return fit;
+}
+
+bool Locator::map_error_at(double x, double y, double l, double* error_C) const {
+  const std::size_t nx = interp_.nx(), ny = interp_.ny(), ne = ne_;
+  const double u = (x - interp_.x0()) * interp_.inv_hx(), v = (y - interp_.y0()) * interp_.inv_hy();
+  if (!(u >= 0 && v >= 0 && u <= double(nx - 1) && v <= double(ny - 1))) return false;
+  const std::size_t i = std::min(std::size_t(u), nx - 2), j = std::min(std::size_t(v), ny - 2);
+  const double a = u - double(i), b = v - double(j);
+  std::size_t f0 = 0;
+  double w = 0;
+  interp_.level_bracket(l, f0, w);
+  const std::size_t f1 = interp_.n_levels() > 1 ? f0 + 1 : f0;
+  const double scale = std::exp(interp_.force_exponent() * l);
+  for (std::size_t k = 0; k < ne; ++k) {
+    auto at = [&](std::size_t f, std::size_t ii, std::size_t jj) { return map_error_[((f * ny + jj) * nx + ii) * ne + k]; };
+    auto level = [&](std::size_t f) {
+      return (1 - a) * (1 - b) * at(f, i, j) + a * (1 - b) * at(f, i + 1, j) + (1 - a) * b * at(f, i, j + 1) +
+             a * b * at(f, i + 1, j + 1);
+    };
+    error_C[k] = scale * ((1 - w) * level(f0) + w * level(f1));
+  }
+  return true;
+}
+
+void Locator::set_map_error(const ChargeMap& map) {
+  // Stored reduced like the interpolant's G (error / F_f^p), so that the scaling law carries it
+  // between and beyond the levels; bilinear in position (map_error_at).
+  if (map.estimated_charge_error_C.empty()) return;
+  const std::size_t n = map.nf() * map.ny() * map.nx() * map.ne();
+  if (map.estimated_charge_error_C.size() != n) {
+    throw InputError("map estimated_charge_error_C has " + std::to_string(map.estimated_charge_error_C.size()) +
+                     " values; the grid needs " + std::to_string(n) + " ([nf][ny][nx][ne])");
+  }
+  map_error_.resize(n);
+  for (std::size_t f = 0; f < map.nf(); ++f) {
+    const double scale = std::pow(map.forces_N[f], -interp_.force_exponent());
+    const std::size_t block = map.ny() * map.nx() * map.ne();
+    for (std::size_t m = 0; m < block; ++m) {
+      const double e = map.estimated_charge_error_C[f * block + m];
+      map_error_[f * block + m] = std::isfinite(e) && e > 0 ? e * scale : 0.0;
+    }
+  }
+}
+
+std::array<double, 6> Locator::reported_jtj(const Fit& fit, const Query& Q) const {
+  // JᵀWJ for the reported σ's: with the map's own error stored, each electrode's weight is
+  // 1 / (σ_k² + e_k²), e_k the map error interpolated at the solution (docs/lookup.md §1.6).
+  if (map_error_.empty()) return fit.jtj;
+  Vec model{}, error{};
+  std::array<std::array<double, 3>, max_electrodes> grad{};
+  if (!interp_.evaluate(fit.x, fit.y, fit.l, model.data(), grad.data()) || !map_error_at(fit.x, fit.y, fit.l, error.data())) {
+    return fit.jtj;
+  }
+  std::array<double, 6> m{0, 0, 0, 0, 0, 0};
+  for (std::size_t k = 0; k < ne_; ++k) {
+    const double sigma = 1.0 / Q.w[k];
+    const double w = 1.0 / std::sqrt(sigma * sigma + error[k] * error[k]);
+    const double g0 = grad[k][0] * w, g1 = grad[k][1] * w, g2 = Q.fixed_force ? 0.0 : grad[k][2] * w;
+    m[0] += g0 * g0;
+    m[1] += g0 * g1;
+    m[2] += g0 * g2;
+    m[3] += g1 * g1;
+    m[4] += g1 * g2;
+    m[5] += g2 * g2;
+  }
+  return m;
+}
+
+PVDF_CLONES void Locator::covariance(Fit& fit, const Query& Q) const {
+  // Covariance of (x, y, ln F): (JᵀWJ)⁻¹ with the weights already in J. Equilibrated first
+  // (S = D JᵀWJ D, D = diag(JᵀWJ)^−½: the x, y columns (C/m) and the ln F column (C) differ by
+  // ~1e3), so S has a unit diagonal; with the force known only the (x, y) block counts.
+  const bool fixed_force = Q.fixed_force;
+  const std::array<double, 6> m = reported_jtj(fit, Q);  // 00 01 02 11 12 22
+  fit.singular = false;
+  fit.sigma = {0, 0, 0};
+  if (!(m[0] > 0 && m[3] > 0 && (fixed_force || m[5] > 0))) {  // a parameter the charges do not see
+    fit.singular = true;
+    return;
+  }
+  const double j00 = m[0], j11 = m[3], j22 = std::max(m[5], 1e-300);
+  const double d0 = 1.0 / std::sqrt(j00), d1 = 1.0 / std::sqrt(j11), d2 = fixed_force ? 0.0 : 1.0 / std::sqrt(j22);
+  const double s01 = m[1] * d0 * d1, s02 = m[2] * d0 * d2, s12 = m[4] * d1 * d2;
+  // S is symmetric with a unit diagonal, so an LDLᵀ with diagonal pivoting starts with pivot 1;
+  // its other two pivots (closed form) say whether S is invertible (each above 1e-12 of the
+  // first), and only the diagonal of S⁻¹ (cofactor / determinant) is needed.
+  const double a11 = 1.0 - s01 * s01, a22 = 1.0 - s02 * s02, a12 = s12 - s01 * s02;  // after pivot 0
+  const double p1 = std::max(a11, a22), p2 = std::min(a11, a22) - a12 * a12 / p1;
+  if (!(p1 > 1e-12 && std::abs(p2) > 1e-12)) {
+    fit.singular = true;
+    return;
+  }
+  const double c00 = 1.0 - s12 * s12, c11 = 1.0 - s02 * s02, c22 = 1.0 - s01 * s01;
+  const double det = c00 - s01 * (s01 - s12 * s02) + s02 * (s01 * s12 - s02);
+  const double inv_det = 1.0 / det;
+  const double v0 = d0 * d0 * c00 * inv_det, v1 = d1 * d1 * c11 * inv_det, v2 = d2 * d2 * c22 * inv_det;
+  fit.sigma = {v0 > 0 ? std::sqrt(v0) : 0.0, v1 > 0 ? std::sqrt(v1) : 0.0, v2 > 0 ? std::sqrt(v2) : 0.0};
+  if (!(std::isfinite(fit.sigma[0]) && std::isfinite(fit.sigma[1]) && std::isfinite(fit.sigma[2]))) {
+    fit.singular = true;
+    fit.sigma = {0, 0, 0};
+  }
+}
+
+bool Locator::distinct_minima(const double* q, const double* w, const Fit& a, const Fit& b, double separation,
+                              double limit) const {
+  if ((a.x - b.x) * (a.x - b.x) + (a.y - b.y) * (a.y - b.y) <= separation * separation) return false;
+  // Two LM end points are different solutions when the misfit rises above the noise limit
+  // somewhere between them (a barrier), or the straight path leaves the map.
+  Vec model{};
+  for (const double t : {0.5, 0.25, 0.75}) {  // the midpoint first: most barriers show there
+    const double x = a.x + t * (b.x - a.x), y = a.y + t * (b.y - a.y), l = a.l + t * (b.l - a.l);
+    if (!interp_.evaluate(x, y, l, model.data(), nullptr)) return true;
+    // Best force at this position (the misfit is nearly quadratic in the amplitude).
+    double mq = 0, mm = 0;
+    for (std::size_t k = 0; k < ne_; ++k) {
+      mq += model[k] * q[k] * w[k] * w[k];
+      mm += model[k] * model[k] * w[k] * w[k];
+    }
+    const double s = mm > 0 ? mq / mm : 1.0;
+    double chi2 = 0;
+    for (std::size_t k = 0; k < ne_; ++k) {
+      const double r = (s * model[k] - q[k]) * w[k];
+      chi2 += r * r;
+    }
+    if (chi2 > limit) return true;
+  }
+  return false;
+}
+
+void Locator::add_map_error(const Query& Q, std::array<Fit, 8>& fits, int n_fits) const {
+  // With the map's own error stored, each end point's χ² is taken under the charge noise plus
+  // the map error there (σ_k² + e_k²): a press the map reproduces only to its own error still
+  // fits, and a second solution is not hidden behind the first one's map error (§1.6).
+  for (int s = 0; s < n_fits; ++s) {
+    Fit& f = fits[std::size_t(s)];
+    Vec model{}, error{};
+    if (!f.ok || f.duplicate || !interp_.evaluate(f.x, f.y, f.l, model.data(), nullptr) ||
+        !map_error_at(f.x, f.y, f.l, error.data())) {
+      continue;
+    }
+    double chi2 = 0;
+    for (std::size_t k = 0; k < ne_; ++k) {
+      const double sigma = 1.0 / Q.w[k];
+      const double r = (model[k] - Q.q[k]) / std::sqrt(sigma * sigma + error[k] * error[k]);
+      chi2 += r * r;
+    }
+    f.chi2 = chi2;
+  }
+}
+
+PVDF_CLONES Location Locator::finish(const Query& Q, std::array<Fit, 8>& fits, int n_starts) const {
+  const double limit = Q.limit;
+  if (!map_error_.empty()) add_map_error(Q, fits, n_starts);
+  Location out;
+  out.n_starts = n_starts;
+  // Rank: fits within noise first, among them forces inside the map's levels first, then χ².
+  auto extrapolated = [&](const Fit& f) {
+    return f.l < interp_.min_log_force() - 1e-9 || f.l > interp_.max_log_force() + 1e-9;
+  };
+  auto better = [&](const Fit& a, const Fit& b) {
+    const bool wa = a.chi2 <= limit, wb = b.chi2 <= limit;
+    if (wa != wb) return wa;
+    if (wa && extrapolated(a) != extrapolated(b)) return !extrapolated(a);
+    return a.chi2 < b.chi2;
+  };
+  int best = -1;
+  for (int s = 0; s < n_starts; ++s) {
+    if (fits[std::size_t(s)].ok && (best < 0 || better(fits[std::size_t(s)], fits[std::size_t(best)]))) best = s;
+  }
+  if (best < 0) {
+    out.flags = flag::outside_map;
+    return out;
+  }
+  Fit& b = fits[std::size_t(best)];
+  covariance(b, Q);
+  fill_main(b, out);
+  if (b.chi2 > limit) {
+    if (b.blocked) {
+      out = Location{};
+      out.n_starts = n_starts;
+      out.flags = flag::outside_map;
+      out.held = {b.x, b.y, std::exp(b.l)};
+      return out;
+    }
+    out.flags |= flag::poor_fit;
+    return out;
+  }
+  // Other minima that also fit within noise and lie elsewhere: ambiguous.
+  std::array<int, 8> group{};
+  const int n_group = distinct_solutions(Q, fits, n_starts, best, group);
+  if (n_group == 1) return out;
+  // Every solution with its posterior probability; the most probable one is the main answer,
+  // the others follow most probable first.
+  std::array<double, 8> p{};
+  double p_max = -std::numeric_limits<double>::infinity();
+  for (int g = 0; g < n_group; ++g) {
+    p[std::size_t(g)] = log_posterior_weight(Q, fits[std::size_t(group[std::size_t(g)])]);
+    p_max = std::max(p_max, p[std::size_t(g)]);
+  }
+  double sum = 0;
+  for (int g = 0; g < n_group; ++g) sum += (p[std::size_t(g)] = std::exp(p[std::size_t(g)] - p_max));
+  for (int g = 0; g < n_group; ++g) p[std::size_t(g)] /= sum;
+  for (int a = 1; a < n_group; ++a) {  // insertion sort of a handful, most probable first
+    for (int c = a; c > 0 && p[std::size_t(c)] > p[std::size_t(c - 1)]; --c) {
+      std::swap(p[std::size_t(c)], p[std::size_t(c - 1)]);
+      std::swap(group[std::size_t(c)], group[std::size_t(c - 1)]);
+    }
+  }
+  const int n_starts_made = out.n_starts;
+  Fit& main = fits[std::size_t(group[0])];
+  if (group[0] != best) {
+    covariance(main, Q);
+    out = Location{};
+    out.n_starts = n_starts_made;
+    fill_main(main, out);
+  }
+  out.flags |= flag::ambiguous;
+  out.n_solutions = n_group;
+  out.probability = p[0];
+  out.n_alternatives = n_group - 1;
+  for (int a = 1; a < n_group; ++a) {
+    Fit& f = fits[std::size_t(group[std::size_t(a)])];
+    if (group[std::size_t(a)] != best) covariance(f, Q);
+    out.alternatives[std::size_t(a - 1)] = {f.x, f.y, std::exp(f.l), std::sqrt(f.chi2), f.sigma[0], f.sigma[1],
+                                            std::exp(f.l) * f.sigma[2], p[std::size_t(a)]};
+  }
+  out.alternative = out.alternatives[0];
+  return out;
+}
+
+void Locator::fill_main(const Fit& b, Location& out) const {
+  out.x_m = b.x;
+  out.y_m = b.y;
+  out.force_N = std::exp(b.l);
+  out.residual = std::sqrt(b.chi2);
+  out.sigma_x_m = b.sigma[0];
+  out.sigma_y_m = b.sigma[1];
+  out.sigma_F_N = out.force_N * b.sigma[2];
+  out.iterations = b.iterations;
+  out.n_solutions = 1;
+  out.probability = 1.0;
+  if (!b.converged) out.flags |= flag::not_converged;
+  if (b.singular) out.flags |= flag::ill_conditioned;
+  // The force is outside the map's levels (the scaling law carries the map there) only when it
+  // is so by more than its own uncertainty: a press at a level's force is not flagged.
+  const double tolerance = std::max(1e-3, 2.0 * b.sigma[2]);
+  const bool off_levels = b.l < interp_.min_log_force() - tolerance || b.l > interp_.max_log_force() + tolerance;
+  if (off_levels) out.flags |= flag::force_extrapolated;
+  if (single_level_ && off_levels) out.flags |= flag::scaling_assumed;
+}
+
+double Locator::log_posterior_weight(const Query& Q, const Fit& f) const {
+  // Laplace approximation of the posterior mass around a solution: exp(−χ²/2) times the volume
+  // (2π)^(k/2) det(A)^(−1/2) of its Gaussian, A = JᵀWJ in (x, y[, ln F]), times the prior's
+  // density there. The prior is uniform over the map's area and uniform in F over the force
+  // range: in ln F its density is ∝ F. Where JᵀWJ is (nearly) singular the prior itself bounds
+  // the posterior's width: A gets the precision of the uniform prior (12 / width²) added.
+  const double wx = double(interp_.nx() - 1) * interp_.hx(), wy = double(interp_.ny() - 1) * interp_.hy();
+  const double rx = 12.0 / (wx * wx), ry = 12.0 / (wy * wy);
+  const auto& m = f.jtj;  // 00 01 02 11 12 22
+  const double a00 = m[0] + rx, a01 = m[1], a11 = m[3] + ry;
+  double det = 0, floor = rx * ry;
+  if (Q.fixed_force) {
+    det = a00 * a11 - a01 * a01;
+  } else {
+    const double width_l = std::max(Q.log_hi - Q.log_lo, 1e-6), rl = 12.0 / (width_l * width_l);
+    const double a02 = m[2], a12 = m[4], a22 = m[5] + rl;
+    det = a00 * (a11 * a22 - a12 * a12) - a01 * (a01 * a22 - a12 * a02) + a02 * (a01 * a12 - a11 * a02);
+    floor *= rl;
+  }
+  return -0.5 * f.chi2 - 0.5 * std::log(std::max(det, floor)) + (Q.fixed_force ? 0.0 : f.l);
+}
+
+int Locator::distinct_solutions(const Query& Q, const std::array<Fit, 8>& fits, int n_starts, int best,
+                                std::array<int, 8>& group) const {
+  const bool fixed_force = Q.fixed_force;
+  const double limit = Q.limit;
+  const double separation = options_.ambiguity_separation_cells * std::max(interp_.hx(), interp_.hy());
+  // Two end points are one solution when they are within 3 σ of each other (Mahalanobis
+  // distance in (x, y) from either one's JᵀWJ, ln F profiled out), or within 1e-3 cell
+  // (convergence tolerance), or closer than the optional separation. Where the position
+  // block is singular (a symmetry line or a flat spot) the misfit barrier between them decides.
+  auto distinct_from = [&](const Fit& a, const Fit& f) {
+    const double dx = f.x - a.x, dy = f.y - a.y;
+    if (std::abs(dx) < 1e-3 * interp_.hx() && std::abs(dy) < 1e-3 * interp_.hy()) return false;
+    if (separation > 0 && dx * dx + dy * dy <= separation * separation) return false;
+    double d2 = std::numeric_limits<double>::infinity();
+    bool singular = false;
+    for (const Fit* g : {&a, &f}) {
+      const auto& m = g->jtj;  // 00 01 02 11 12 22
+      double s00 = m[0], s01 = m[1], s11 = m[3];
+      if (!fixed_force && m[5] > 0) {
+        s00 -= m[2] * m[2] / m[5];
+        s01 -= m[2] * m[4] / m[5];
+        s11 -= m[4] * m[4] / m[5];
+      }
+      const double det = s00 * s11 - s01 * s01;
+      singular = singular || !(det > 1e-12 * (s00 * s11 + 1e-300));
+      d2 = std::min(d2, s00 * dx * dx + 2 * s01 * dx * dy + s11 * dy * dy);
+    }
+    if (singular) return distinct_minima(Q.q.data(), Q.w.data(), a, f, 0.0, limit);
+    return d2 > 9.0;
+  };
+  group[0] = best;
+  int n = 1;
+  for (int s = 0; s < n_starts; ++s) {
+    const Fit& f = fits[std::size_t(s)];
+    if (s == best || !f.ok || f.chi2 > limit) continue;
+    bool is_new = true;
+    for (int d = 0; d < n && is_new; ++d) is_new = distinct_from(fits[std::size_t(group[std::size_t(d)])], f);
+    if (is_new) group[std::size_t(n++)] = s;
+  }
+  return n;
+}
+
+}  // namespace pvdf::mapping

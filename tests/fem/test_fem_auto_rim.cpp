@@ -1,0 +1,54 @@
+// `pvdfkit solve --model auto` near the clamped rim of the seed-001 film. Near the rim bending
+// changes the charges by percents (2.2 % at (28, 28) mm with bending against without, docs/fem.md);
+// the a-priori rule, calibrated on a centred probe, drops bending there. The adjoint-weighted
+// estimate of bending's effect must see it: `auto` keeps bending, and the JSON says why with the
+// numbers. (Whether the kept-bending answer is within the tolerance of a converged one is NOT
+// shown here: on the first mesh the 0.2 mm rim layer is not resolved, see docs/fem.md §6.)
+#include "../app/cli_runner.hpp"
+
+#include <catch2/catch.hpp>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+using pvdf::test::run_pvdfkit;
+
+namespace {
+
+nlohmann::json solve_json(const std::string& args) {
+  const auto r = run_pvdfkit("solve " + std::string(PVDF_SOURCE_DIR) + "/examples/scenes/seed001.json --json " + args);
+  INFO(args << "\n" << r.err);
+  REQUIRE(r.exit_code == 0);
+  return nlohmann::json::parse(r.out);
+}
+
+}  // namespace
+
+TEST_CASE("solve --model auto near the rim of seed 001 keeps bending by its estimated effect", "[fem][cli][rim][slow]") {
+  for (const char* load : {"0,-0.040,1", "0.028,0.028,1"}) {
+    const auto aut = solve_json(std::string("--load ") + load + " --model auto");
+    REQUIRE(aut.at("status") == "converged");
+    for (const char* key : {"estimated_discretization_error", "estimated_model_error", "estimated_relative_error",
+                            "error_estimator", "model_reason"}) {
+      INFO(key);
+      REQUIRE(aut.contains(key));
+    }
+    const double disc = aut.at("estimated_discretization_error").get<double>();
+    const double model = aut.at("estimated_model_error").get<double>();
+    CHECK(aut.at("estimated_relative_error").get<double>() == Approx(disc + model).epsilon(1e-12));
+    const std::string reason = aut.at("model_reason").get<std::string>();
+    INFO(load << ": model_reason " << reason);
+    CHECK_THAT(reason, Catch::Contains("bending kept: adjoint-weighted estimate of its effect"));
+    CHECK_THAT(aut.at("error_estimator").get<std::string>(), Catch::Contains("dual-weighted residual"));
+    for (const auto& e : aut.at("electrodes")) {
+      CHECK(e.contains("charge_error_C"));
+      CHECK(e.at("charge_error_C").get<double>() > 0);
+    }
+    std::printf("RIM %s: auto %s, %zu dofs, %.1f s, estimate %.2e (discretization %.2e + model %.2e)\n  model_reason: %s\n",
+                load, aut.at("model").get<std::string>().c_str(), aut.at("n_dofs").get<std::size_t>(),
+                aut.at("wall_s").get<double>(), disc + model, disc, model, reason.c_str());
+  }
+}

@@ -1,0 +1,110 @@
+// Effectivity of the goal-oriented (dual-weighted residual) error estimates of pvdf::fem
+// (docs/fem.md §6): estimate / true error, the true error taken against the independent
+// axisymmetric oracle (tests/fem/oracles), never against the solver itself. The cases are the
+// oracle cases of test_fem_accuracy.cpp on the meshes the goal-oriented refinement builds from a
+// coarse start (a/3 far field, cells of twice the probe radius under it), where the discretization
+// error (1e-4 .. 1e-2) is well above the oracle's accuracy: the large-rotation membrane the `auto`
+// rule picks, von Kármán + bending, pretension. The model part: what bending would change,
+// estimated from the bending-free solution, against the oracle with minus the oracle without
+// bending. Lines starting "EFFECTIVITY" are the tables of docs/fem.md.
+#include "oracle_compare.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+using namespace pvdf::fem::testing;
+namespace oracles = pvdf::fem::oracles;
+
+namespace {
+
+constexpr double a = 0.045, E = 2e9, nu = 0.3;
+
+/// The rule: the estimate has the sign of the true error and 0.5 <= estimate / error <= 3.
+void check_effectivity(const std::string& what, double estimate, double true_error, double scale) {
+  const double ratio = estimate / true_error;
+  std::printf("EFFECTIVITY %-40s estimate %+.3e  true %+.3e  (relative %.2e)  ratio %.2f\n", what.c_str(), estimate,
+              true_error, std::abs(true_error) / scale, ratio);
+  INFO(what << ": estimate " << estimate << ", true error " << true_error << ", ratio " << ratio);
+  CHECK(ratio >= 0.5);
+  CHECK(ratio <= 3.0);
+}
+
+/// `n` goal-oriented refinement cycles from the coarse start (the tolerance is never met first).
+pvdf::fem::Options refined_mesh(pvdf::fem::Model model, bool bending, double probe_size_m, int n) {
+  pvdf::fem::Options o;
+  o.model = model;
+  o.include_bending = bending;
+  o.coarse_size_m = a / 3;
+  o.probe_size_m = probe_size_m;
+  o.tolerance = 1e-9;
+  o.max_refinements = n;
+  return o;
+}
+
+}  // namespace
+
+TEST_CASE("discretization estimate of w(0) against the oracle: membrane, bending, pretension",
+          "[fem][effectivity][slow]") {
+  struct Case {
+    std::string name;
+    double h_m, probe_m, n0;
+    bool bending;
+    pvdf::fem::Model model;
+    oracles::Kinematics kin;
+    std::vector<int> cycles;
+  };
+  const Case cases[] = {
+      {"large rotation 25um 1N", 25e-6, 1e-3, 0, false, pvdf::fem::Model::large_rotation,
+       oracles::Kinematics::green_lagrange, {1, 2}},
+      {"pretension 10 N/m", 25e-6, 1e-3, 10, false, pvdf::fem::Model::large_rotation,
+       oracles::Kinematics::green_lagrange, {1, 2}},
+      {"vK + bending 400um", 400e-6, 2e-3, 0, true, pvdf::fem::Model::von_karman, oracles::Kinematics::von_karman,
+       {0, 1, 2}},
+  };
+  const oracles::AxisymmetricOptions grid{200};
+  for (const Case& c : cases) {
+    const pvdf::Scene s = centred_probe_scene(a, c.h_m, E, nu, 1.0, c.probe_m, c.n0);
+    const auto oracle = oracles::solve_axisymmetric(oracle_problem(s, c.bending, c.kin), grid);
+    REQUIRE(oracle.converged);
+    for (int n : c.cycles) {
+      const auto r = pvdf::fem::solve(s, refined_mesh(c.model, c.bending, 2 * c.probe_m, n));
+      INFO(c.name << ": " << r.summary.message);
+      REQUIRE(pvdf::fem::usable(r.summary.status));
+      REQUIRE(r.summary.refinement_cycles == n);
+      const double w0 = oracle.centre_deflection_m();
+      check_effectivity(c.name + " w(0), " + std::to_string(r.summary.n_dofs) + " dofs",
+                        r.loads.at(0).deflection_discretization_error_m, w0 - r.loads.at(0).deflection_m, w0);
+    }
+  }
+}
+
+TEST_CASE("bending-free estimate of the bending effect against the oracle with and without bending",
+          "[fem][effectivity][slow]") {
+  // 100 µm, 1 N on a 2 mm probe: bending lowers w(0) by 1.5 % (oracle). The estimate is one
+  // linearised step of the model with bending from the bending-free solution.
+  const oracles::AxisymmetricOptions grid{200};
+  const pvdf::Scene s = centred_probe_scene(a, 100e-6, E, nu, 1.0, 2e-3);
+  const auto with = oracles::solve_axisymmetric(oracle_problem(s, true, oracles::Kinematics::von_karman), grid);
+  const auto without = oracles::solve_axisymmetric(oracle_problem(s, false, oracles::Kinematics::von_karman), grid);
+  REQUIRE(with.converged);
+  REQUIRE(without.converged);
+  pvdf::fem::Options o;
+  o.model = pvdf::fem::Model::von_karman;
+  o.include_bending = false;
+  o.estimate_bending_effect = true;
+  o.adaptive = false;
+  o.coarse_size_m = a / 3;
+  o.probe_size_m = 1e-3;
+  o.initial_global_refinements = 1;
+  const auto r = pvdf::fem::solve(s, o);
+  REQUIRE(pvdf::fem::usable(r.summary.status));
+  const double effect = with.centre_deflection_m() - without.centre_deflection_m();
+  check_effectivity("bending effect 100um on w(0), " + std::to_string(r.summary.n_dofs) + " dofs",
+                    r.loads.at(0).deflection_model_error_m, effect, with.centre_deflection_m());
+  // The relative model error of the Summary is the largest relative bending effect over the outputs.
+  CHECK(r.summary.estimated_model_error >= std::abs(r.loads.at(0).deflection_model_error_m) / std::abs(r.loads.at(0).deflection_m) * (1 - 1e-12));
+}
