@@ -8,6 +8,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <future>
+#include <limits>
+#include <mutex>
+#include <thread>
 #include <sstream>
 
 namespace pvdf::fit {
@@ -29,14 +33,17 @@ struct Predictor::Impl {
   std::vector<double> areas_m2;
   PredictorStats stats;
 
-  fem::ProbeSweep& sweep(double tension_N_per_m) {
+  /// The sweep at this pre-tension, prepared if new; the one at `keep` (if any) is never evicted.
+  fem::ProbeSweep& sweep(double tension_N_per_m, double keep = std::numeric_limits<double>::quiet_NaN()) {
     auto it = sweeps.find(tension_N_per_m);
     if (it != sweeps.end()) return *it->second;
     // Keep a few: the current point, its difference partner and the previous point.
     while (sweeps.size() >= 4) {
-      auto far = sweeps.begin();
-      for (auto j = sweeps.begin(); j != sweeps.end(); ++j)
-        if (std::abs(j->first - tension_N_per_m) > std::abs(far->first - tension_N_per_m)) far = j;
+      auto far = sweeps.end();
+      for (auto j = sweeps.begin(); j != sweeps.end(); ++j) {
+        if (j->first == keep) continue;
+        if (far == sweeps.end() || std::abs(j->first - tension_N_per_m) > std::abs(far->first - tension_N_per_m)) far = j;
+      }
       sweeps.erase(far);
     }
     const auto t0 = Clock::now();
@@ -49,18 +56,20 @@ struct Predictor::Impl {
   }
 
   /// One probe solve in base units (E_scale = 1): deflection and press-caused mean forces.
+  /// `states`: the warm starts this pass reads and updates; `st`: where its cost is counted (each
+  /// thread has its own of both).
   void solve(fem::ProbeSweep& sw, double tension, std::size_t i, double force_N, double& w,
-             std::vector<std::array<double, 2>>& n) {
+             std::vector<std::array<double, 2>>& n, std::vector<fem::SweepState>& states, PredictorStats& st) const {
     const auto t0 = Clock::now();
     const Press& p = presses[i];
     fem::SweepState out;
     // A press never solved before starts from the previous press's state (a neighbour, usually
     // closer than the flat film), as map generation does.
-    const fem::SweepState* start = &warm[i];
-    if (warm[i].dofs.empty() && i > 0 && !warm[i - 1].dofs.empty()) start = &warm[i - 1];
+    const fem::SweepState* start = &states[i];
+    if (states[i].dofs.empty() && i > 0 && !states[i - 1].dofs.empty()) start = &states[i - 1];
     const fem::ProbeSolution s = sw.solve(p.x_m, p.y_m, force_N, start, &out);
-    stats.solve_s += seconds_since(t0);
-    ++stats.n_solves;
+    st.solve_s += seconds_since(t0);
+    ++st.n_solves;
     if (!fem::usable(s.status)) {
       std::ostringstream m;
       m << "FEM solve of the press at (" << p.x_m * 1e3 << ", " << p.y_m * 1e3 << ") mm under " << force_N
@@ -68,7 +77,7 @@ struct Predictor::Impl {
         << " (" << s.message << ")";
       throw pvdf::NumericalError(m.str());
     }
-    warm[i] = std::move(out);
+    states[i] = std::move(out);
     w = s.deflection_at_load_m;
     n.resize(s.mean_membrane_force_material_N_per_m.size());
     for (std::size_t k = 0; k < n.size(); ++k) {
@@ -144,7 +153,9 @@ std::vector<PressResponse> Predictor::predict(const FilmState& state, std::array
   const std::size_t n = im.presses.size();
   const std::size_t planned = n * (1 + (want_f ? 1 : 0) + (want_tau ? 1 : 0));
   std::size_t done = 0;
+  std::mutex tick_mutex;
   auto tick = [&] {
+    const std::lock_guard<std::mutex> lock(tick_mutex);
     ++done;
     if (im.options.progress) im.options.progress(done, planned);
   };
@@ -152,30 +163,46 @@ std::vector<PressResponse> Predictor::predict(const FilmState& state, std::array
   std::vector<PressResponse> out(n);
   std::vector<double> w0(n), wf(n), wt(n);
   std::vector<std::vector<std::array<double, 2>>> n0(n), nf(n), nt(n);
-  {
-    fem::ProbeSweep& sw = im.sweep(tau);
+  // Both sweeps first (the sweep cache is not shared between threads), then the pre-tension pass
+  // on its own sweep and its own copy of the warm states, beside the base and force passes; the
+  // warm states kept are the base point's (the next evaluation is near it).
+  fem::ProbeSweep& base = im.sweep(tau);
+  fem::ProbeSweep* shifted = want_tau ? &im.sweep(tau + h_tau, tau) : nullptr;
+  std::vector<fem::SweepState> tau_states;
+  PredictorStats tau_stats;
+  auto tau_pass = [&] {
     for (std::size_t i = 0; i < n; ++i) {
-      im.solve(sw, tau, i, im.presses[i].force_N / E, w0[i], n0[i]);
+      im.solve(*shifted, tau + h_tau, i, im.presses[i].force_N / E, wt[i], nt[i], tau_states, tau_stats);
       tick();
     }
-    // Force difference on the same sweep, warm-started from the point just solved.
+  };
+  std::future<void> tau_job;
+  if (want_tau) {
+    tau_states = im.warm;
+    if (im.options.parallel && std::thread::hardware_concurrency() > 1) tau_job = std::async(std::launch::async, tau_pass);
+  }
+  try {
+    for (std::size_t i = 0; i < n; ++i) {
+      im.solve(base, tau, i, im.presses[i].force_N / E, w0[i], n0[i], im.warm, im.stats);
+      tick();
+    }
+    // Force difference on the same sweep, warm-started from the point just solved (a copy of the
+    // states, so that the base point's are kept).
     if (want_f) {
+      std::vector<fem::SweepState> f_states = im.warm;
       for (std::size_t i = 0; i < n; ++i) {
-        im.solve(sw, tau, i, im.presses[i].force_N / E * (1 + h_f), wf[i], nf[i]);
+        im.solve(base, tau, i, im.presses[i].force_N / E * (1 + h_f), wf[i], nf[i], f_states, im.stats);
         tick();
       }
     }
+  } catch (...) {
+    if (tau_job.valid()) tau_job.wait();  // never leave the thread running on a sweep we may free
+    throw;
   }
-  if (want_tau) {
-    fem::ProbeSweep& sw = im.sweep(tau + h_tau);
-    for (std::size_t i = 0; i < n; ++i) {
-      im.solve(sw, tau + h_tau, i, im.presses[i].force_N / E, wt[i], nt[i]);
-      tick();
-    }
-    // Leave the warm states at the base point (the next evaluation is near it).
-    fem::ProbeSweep& base = im.sweep(tau);
-    (void)base;
-  }
+  if (tau_job.valid()) tau_job.get();  // rethrows the pass's exception
+  else if (want_tau) tau_pass();
+  im.stats.n_solves += tau_stats.n_solves;
+  im.stats.solve_s += tau_stats.solve_s;
 
   for (std::size_t i = 0; i < n; ++i) {
     PressResponse& r = out[i];

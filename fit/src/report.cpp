@@ -145,6 +145,7 @@ void write_fit_png(const FitResult& r, const MeasuredTable& m, const pvdf::Scene
   b.hline(0.0, Color{0, 0, 0}, LineStyle::solid)
       .title(format("Difference per value (reduced χ² %.3g after the fit)", r.reduced_chi2))
       .xlabel("observation number (row × column order)")
+      .integer_x()
       .ylabel("100·(measured − FEM)/FEM (%)")
       .grid_lines()
       .legend("best");
@@ -174,7 +175,7 @@ void write_fit_png(const FitResult& r, const MeasuredTable& m, const pvdf::Scene
       for (double x : *v) top = std::max(top, x);
     for (std::size_t i = 0; i < dm.size(); ++i) top = std::max(top, dm[i] + de[i]);
     d.ylim(0, 1.15 * top).xlim(0, double(m.n_rows()) + 1);
-    d.title("Deflection under the probe").xlabel("press (data row)").ylabel("deflection (mm)").grid_lines().legend("upper right");
+    d.integer_x().title("Deflection under the probe").xlabel("press (data row)").ylabel("deflection (mm)").grid_lines().legend("upper right");
   } else {
     std::vector<double> idx, res;
     for (std::size_t n = 0; n < r.observations.size(); ++n) {
@@ -183,12 +184,14 @@ void write_fit_png(const FitResult& r, const MeasuredTable& m, const pvdf::Scene
     }
     d.scatter(idx, res, "after fit", plot::cycle_color(0), Marker::circle, 7);
     d.hline(2, grey, LineStyle::dashed, "±2σ").hline(-2, grey, LineStyle::dashed);
-    d.title("Normalized residuals (FEM − measured)/σ").xlabel("observation number").ylabel("residual / σ").grid_lines().legend("upper right");
+    d.integer_x().title("Normalized residuals (FEM − measured)/σ").xlabel("observation number").ylabel("residual / σ").grid_lines().legend("upper right");
   }
   std::string title = "Fit " + status_name(r.status) + ":";
   for (const auto& p : r.parameters) {
     char buf[160];
-    std::snprintf(buf, sizeof buf, "  %s = %.4g ± %.2g", p.name.c_str(), p.value, p.sigma);
+    const bool piezo = p.name.size() > 8 && p.name.compare(p.name.size() - 8, 8, "_C_per_N") == 0;  // shown in pC/N
+    if (piezo) std::snprintf(buf, sizeof buf, "  %s = %.4g ± %.2g pC/N", p.name.substr(0, p.name.size() - 8).c_str(), p.value * 1e12, p.sigma * 1e12);
+    else std::snprintf(buf, sizeof buf, "  %s = %.4g ± %.2g", p.name.c_str(), p.value, p.sigma);
     title += buf;
   }
   fig.suptitle(title);

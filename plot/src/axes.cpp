@@ -157,6 +157,7 @@ Axes& Axes::ylim(double lo, double hi) {
 }
 Axes& Axes::log_x(bool on) { impl_->log_x = on; return *this; }
 Axes& Axes::log_y(bool on) { impl_->log_y = on; return *this; }
+Axes& Axes::integer_x(bool on) { impl_->integer_x = on; return *this; }
 Axes& Axes::equal_aspect(bool on) { impl_->equal = on; return *this; }
 Axes& Axes::grid_lines(bool on) { impl_->grid = on; return *this; }
 Axes& Axes::legend(const std::string& where) {

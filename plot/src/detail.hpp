@@ -63,6 +63,7 @@ struct Axes::Impl {
   std::string title, xlabel, ylabel;
   std::optional<std::array<double, 2>> xlim, ylim;
   bool log_x = false, log_y = false, equal = false, grid = false, colorbar = true;
+  bool integer_x = false;
   std::string legend_where = "best";
   std::size_t color_index = 0;
   std::optional<Color> last_color;
@@ -94,6 +95,7 @@ bool one_double_format(const std::string& f);
 struct Scale {
   double lo = 0, hi = 1;
   bool log = false;
+  bool integer = false;  // ticks on whole numbers only
   double p0 = 0, p1 = 1;  // pixel positions of lo and hi
   bool valid(double v) const { return finite(v) && (!log || v > 0); }
   double t(double v) const {
@@ -122,6 +124,8 @@ std::string with_minus_sign(std::string s);
 std::vector<Tick> linear_ticks(double lo, double hi, int target, std::string* multiplier = nullptr);
 /// Decade ticks 10^k with minor ticks at 2..9 × 10^k; spans shorter than a decade fall back to 1-2-5.
 std::vector<Tick> log_ticks(double lo, double hi, int target);
+/// The whole numbers among linear_ticks(lo, hi, target), labelled without decimals.
+std::vector<Tick> integer_ticks(double lo, double hi, int target);
 
 // ---------------------------------------------------------------------------------------------
 // Text (text.cpp): markup → runs of one size and baseline offset, measured and drawn by Cairo

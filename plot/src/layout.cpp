@@ -61,6 +61,7 @@ void collect_limits(const Axes::Impl& a, bool x_axis, bool log, double& lo, doub
 void resolve_range(const Axes::Impl& a, bool x_axis, Scale& s) {
   const bool log = x_axis ? a.log_x : a.log_y;
   s.log = log;
+  s.integer = x_axis && a.integer_x && !log;
   const auto& user = x_axis ? a.xlim : a.ylim;
   double lo = 0, hi = 0;
   bool tight = false;
@@ -107,6 +108,10 @@ std::vector<Tick> make_ticks(const Scale& s, int target, std::string* multiplier
   if (s.log) {
     multiplier->clear();
     return log_ticks(s.lo, s.hi, target);
+  }
+  if (s.integer) {
+    multiplier->clear();
+    return integer_ticks(s.lo, s.hi, target);
   }
   return linear_ticks(s.lo, s.hi, target, multiplier);
 }

@@ -75,6 +75,18 @@ std::vector<Tick> linear_ticks(double lo, double hi, int target, std::string* mu
   return ticks;
 }
 
+std::vector<Tick> integer_ticks(double lo, double hi, int target) {
+  std::vector<Tick> out;
+  for (const Tick& t : linear_ticks(lo, hi, target)) {
+    const double r = std::round(t.value);
+    if (std::abs(t.value - r) > 1e-9 * std::max(1.0, std::abs(r)) || std::abs(r) > 1e15) continue;
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.0f", r);
+    out.push_back(Tick{r, with_minus_sign(buf)});
+  }
+  return out;
+}
+
 /// Decade ticks 10^k (every `stride` decades) with minor ticks at 2..9 × 10^k; spans shorter
 /// than a decade fall back to 1-2-5 ticks.
 std::vector<Tick> log_ticks(double lo, double hi, int target) {

@@ -82,6 +82,8 @@ class Axes {
   Axes& ylim(double lo, double hi);
   Axes& log_x(bool on = true);
   Axes& log_y(bool on = true);
+  /// Ticks on whole numbers only (counts, row numbers): 1, 2, 3, not 2.5.
+  Axes& integer_x(bool on = true);
   /// Same scale on both axes (maps, meshes).
   Axes& equal_aspect(bool on = true);
   Axes& grid_lines(bool on = true);
