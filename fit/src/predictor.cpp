@@ -28,23 +28,27 @@ struct Predictor::Impl {
   std::vector<Press> presses;
   PredictorOptions options;
   fem::SweepOptions fixed;                                  ///< model and mesh frozen after the reference setup
-  std::map<double, std::unique_ptr<fem::ProbeSweep>> sweeps;  ///< by N0/E_scale (N/m)
+  /// Per worker thread (a sweep is not shared between threads), by N0/E_scale (N/m).
+  std::vector<std::map<double, std::unique_ptr<fem::ProbeSweep>>> sweeps = std::vector<std::map<double, std::unique_ptr<fem::ProbeSweep>>>(1);
   std::vector<fem::SweepState> warm;                        ///< last converged state of each press
   std::vector<double> areas_m2;
   PredictorStats stats;
 
-  /// The sweep at this pre-tension, prepared if new; the one at `keep` (if any) is never evicted.
-  fem::ProbeSweep& sweep(double tension_N_per_m, double keep = std::numeric_limits<double>::quiet_NaN()) {
-    auto it = sweeps.find(tension_N_per_m);
-    if (it != sweeps.end()) return *it->second;
+  /// Worker `worker`'s sweep at this pre-tension, prepared if new; the one at `keep` (if any) is
+  /// never evicted. Called from one thread at a time.
+  fem::ProbeSweep& sweep(std::size_t worker, double tension_N_per_m, double keep = std::numeric_limits<double>::quiet_NaN()) {
+    if (sweeps.size() <= worker) sweeps.resize(worker + 1);
+    auto& cache = sweeps[worker];
+    auto it = cache.find(tension_N_per_m);
+    if (it != cache.end()) return *it->second;
     // Keep a few: the current point, its difference partner and the previous point.
-    while (sweeps.size() >= 4) {
-      auto far = sweeps.end();
-      for (auto j = sweeps.begin(); j != sweeps.end(); ++j) {
+    while (cache.size() >= 4) {
+      auto far = cache.end();
+      for (auto j = cache.begin(); j != cache.end(); ++j) {
         if (j->first == keep) continue;
-        if (far == sweeps.end() || std::abs(j->first - tension_N_per_m) > std::abs(far->first - tension_N_per_m)) far = j;
+        if (far == cache.end() || std::abs(j->first - tension_N_per_m) > std::abs(far->first - tension_N_per_m)) far = j;
       }
-      sweeps.erase(far);
+      cache.erase(far);
     }
     const auto t0 = Clock::now();
     pvdf::Scene s = scene;
@@ -52,22 +56,19 @@ struct Predictor::Impl {
     auto sw = std::make_unique<fem::ProbeSweep>(s, fixed);
     stats.setup_s += seconds_since(t0);
     ++stats.n_sweeps;
-    return *sweeps.emplace(tension_N_per_m, std::move(sw)).first->second;
+    return *cache.emplace(tension_N_per_m, std::move(sw)).first->second;
   }
 
-  /// One probe solve in base units (E_scale = 1): deflection and press-caused mean forces.
-  /// `states`: the warm starts this pass reads and updates; `st`: where its cost is counted (each
-  /// thread has its own of both).
+  /// One probe solve of press i in base units (E_scale = 1): deflection and press-caused mean
+  /// forces, from `start` (empty: the flat film), the converged state into `out`; `st`: where its
+  /// cost is counted (each thread has its own).
   void solve(fem::ProbeSweep& sw, double tension, std::size_t i, double force_N, double& w,
-             std::vector<std::array<double, 2>>& n, std::vector<fem::SweepState>& states, PredictorStats& st) const {
+             std::vector<std::array<double, 2>>& n, const fem::SweepState* start, fem::SweepState& out,
+             PredictorStats& st) const {
     const auto t0 = Clock::now();
     const Press& p = presses[i];
-    fem::SweepState out;
-    // A press never solved before starts from the previous press's state (a neighbour, usually
-    // closer than the flat film), as map generation does.
-    const fem::SweepState* start = &states[i];
-    if (states[i].dofs.empty() && i > 0 && !states[i - 1].dofs.empty()) start = &states[i - 1];
-    const fem::ProbeSolution s = sw.solve(p.x_m, p.y_m, force_N, start, &out);
+    fem::SweepState next;
+    const fem::ProbeSolution s = sw.solve(p.x_m, p.y_m, force_N, start, &next);
     st.solve_s += seconds_since(t0);
     ++st.n_solves;
     if (!fem::usable(s.status)) {
@@ -77,7 +78,7 @@ struct Predictor::Impl {
         << " (" << s.message << ")";
       throw pvdf::NumericalError(m.str());
     }
-    states[i] = std::move(out);
+    out = std::move(next);
     w = s.deflection_at_load_m;
     n.resize(s.mean_membrane_force_material_N_per_m.size());
     for (std::size_t k = 0; k < n.size(); ++k) {
@@ -128,7 +129,7 @@ Predictor::Predictor(const pvdf::Scene& scene, std::vector<Press> presses, const
   im.fixed.region_size_m = first->setup().region_size_m;
   im.fixed.electrode_size_m = first->setup().electrode_size_m;
   im.fixed.n_setup_checks = 0;
-  im.sweeps.emplace(scene.membrane.pretension_N_per_m, std::move(first));
+  im.sweeps[0].emplace(scene.membrane.pretension_N_per_m, std::move(first));
 }
 
 Predictor::~Predictor() = default;
@@ -163,46 +164,52 @@ std::vector<PressResponse> Predictor::predict(const FilmState& state, std::array
   std::vector<PressResponse> out(n);
   std::vector<double> w0(n), wf(n), wt(n);
   std::vector<std::vector<std::array<double, 2>>> n0(n), nf(n), nt(n);
-  // Both sweeps first (the sweep cache is not shared between threads), then the pre-tension pass
-  // on its own sweep and its own copy of the warm states, beside the base and force passes; the
-  // warm states kept are the base point's (the next evaluation is near it).
-  fem::ProbeSweep& base = im.sweep(tau);
-  fem::ProbeSweep* shifted = want_tau ? &im.sweep(tau + h_tau, tau) : nullptr;
-  std::vector<fem::SweepState> tau_states;
-  PredictorStats tau_stats;
-  auto tau_pass = [&] {
-    for (std::size_t i = 0; i < n; ++i) {
-      im.solve(*shifted, tau + h_tau, i, im.presses[i].force_N / E, wt[i], nt[i], tau_states, tau_stats);
-      tick();
-    }
-  };
-  std::future<void> tau_job;
-  if (want_tau) {
-    tau_states = im.warm;
-    if (im.options.parallel && std::thread::hardware_concurrency() > 1) tau_job = std::async(std::launch::async, tau_pass);
+  // The presses are split between (at most) two worker threads, each with its own sweeps at τ and
+  // τ + h_τ (prepared here, one thread at a time). Per press: the base solve from its last state
+  // (kept: the next evaluation is near it), then the force and pre-tension differences, each
+  // warm-started from the base solve just made.
+  const std::size_t workers = im.options.parallel && std::thread::hardware_concurrency() > 1 && n > 1 ? 2 : 1;
+  std::vector<fem::ProbeSweep*> base(workers), shifted(workers, nullptr);
+  for (std::size_t t = 0; t < workers; ++t) {
+    base[t] = &im.sweep(t, tau);
+    if (want_tau) shifted[t] = &im.sweep(t, tau + h_tau, tau);
   }
-  try {
-    for (std::size_t i = 0; i < n; ++i) {
-      im.solve(base, tau, i, im.presses[i].force_N / E, w0[i], n0[i], im.warm, im.stats);
+  std::vector<PredictorStats> stats(workers);
+  auto work = [&](std::size_t t, std::size_t lo, std::size_t hi) {
+    for (std::size_t i = lo; i < hi; ++i) {
+      const double f = im.presses[i].force_N / E;
+      // A press never solved before starts from the previous press of this worker (a neighbour,
+      // usually closer than the flat film), as map generation does.
+      const fem::SweepState* start = &im.warm[i];
+      if (im.warm[i].dofs.empty() && i > lo && !im.warm[i - 1].dofs.empty()) start = &im.warm[i - 1];
+      fem::SweepState solved, scratch;
+      im.solve(*base[t], tau, i, f, w0[i], n0[i], start, solved, stats[t]);
+      im.warm[i] = std::move(solved);
       tick();
-    }
-    // Force difference on the same sweep, warm-started from the point just solved (a copy of the
-    // states, so that the base point's are kept).
-    if (want_f) {
-      std::vector<fem::SweepState> f_states = im.warm;
-      for (std::size_t i = 0; i < n; ++i) {
-        im.solve(base, tau, i, im.presses[i].force_N / E * (1 + h_f), wf[i], nf[i], f_states, im.stats);
+      if (want_f) {
+        im.solve(*base[t], tau, i, f * (1 + h_f), wf[i], nf[i], &im.warm[i], scratch, stats[t]);
+        tick();
+      }
+      if (want_tau) {
+        im.solve(*shifted[t], tau + h_tau, i, f, wt[i], nt[i], &im.warm[i], scratch, stats[t]);
         tick();
       }
     }
+  };
+  const std::size_t split = workers == 2 ? n / 2 : n;
+  std::future<void> second;
+  if (workers == 2) second = std::async(std::launch::async, work, std::size_t(1), split, n);
+  try {
+    work(0, 0, split);
   } catch (...) {
-    if (tau_job.valid()) tau_job.wait();  // never leave the thread running on a sweep we may free
+    if (second.valid()) second.wait();  // never leave the thread running on a sweep we may free
     throw;
   }
-  if (tau_job.valid()) tau_job.get();  // rethrows the pass's exception
-  else if (want_tau) tau_pass();
-  im.stats.n_solves += tau_stats.n_solves;
-  im.stats.solve_s += tau_stats.solve_s;
+  if (second.valid()) second.get();  // rethrows the worker's exception
+  for (const auto& st : stats) {
+    im.stats.n_solves += st.n_solves;
+    im.stats.solve_s += st.solve_s;
+  }
 
   for (std::size_t i = 0; i < n; ++i) {
     PressResponse& r = out[i];

@@ -55,15 +55,15 @@ struct PredictorOptions {
   /// Called after every FEM solve with (solves done, solves planned in this batch); never from
   /// two threads at once.
   std::function<void(std::size_t, std::size_t)> progress;
-  /// Solve the pre-tension difference (its own sweep) on a second thread, beside the base and
-  /// force passes, when the machine has more than one core.
+  /// Split the presses between two worker threads (each with its own sweeps) when the machine
+  /// has more than one core.
   bool parallel = true;
 };
 
 /// What the predictor measured about its own accuracy and cost.
 struct PredictorStats {
   std::size_t n_solves = 0;             ///< probe solves so far (all sweeps)
-  std::size_t n_sweeps = 0;             ///< sweep meshes prepared (one per distinct N0/E_scale ratio)
+  std::size_t n_sweeps = 0;             ///< sweep meshes prepared (one per distinct N0/E_scale ratio and worker thread)
   double setup_s = 0, solve_s = 0;      ///< time in sweep setups and in probe solves (summed over threads)
   fem::SweepSetup reference_setup;      ///< model, mesh and charge-error estimate of the first sweep
 };
