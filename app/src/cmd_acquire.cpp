@@ -14,6 +14,7 @@
 #define PVDF_ACQUIRE_HAVE_MAPPING 1
 #include "pvdf/mapping/locator.hpp"
 #include "pvdf/mapping/map.hpp"
+#include "pvdf/mapping/map_io.hpp"
 #include "pvdf/mapping/stream.hpp"
 #include "pvdf/mapping/tracker.hpp"
 #endif

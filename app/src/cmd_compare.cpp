@@ -10,6 +10,7 @@
 #include "pvdf/mapping/analysis.hpp"
 #include "pvdf/mapping/interpolant.hpp"
 #include "pvdf/mapping/map.hpp"
+#include "pvdf/mapping/map_io.hpp"
 #include "pvdf/mapping/pictures.hpp"
 
 #include <nlohmann/json.hpp>

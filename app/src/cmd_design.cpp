@@ -7,6 +7,7 @@
 #include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
+#include "pvdf/mapping/map_io.hpp"
 #include "pvdf/plot/plot.hpp"
 #include "pvdf/core/progress.hpp"
 #include "pvdf/core/scene.hpp"

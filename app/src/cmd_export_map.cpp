@@ -6,6 +6,7 @@
 #include "pvdf/mapping/flat_map.hpp"
 #include "pvdf/mapping/flat_map_file.hpp"
 #include "pvdf/mapping/map.hpp"
+#include "pvdf/mapping/map_io.hpp"
 
 #include <cstdio>
 #include <filesystem>

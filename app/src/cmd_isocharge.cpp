@@ -7,6 +7,7 @@
 #include "pvdf/core/io.hpp"
 #include "pvdf/mapping/locator.hpp"
 #include "pvdf/mapping/map.hpp"
+#include "pvdf/mapping/map_io.hpp"
 #include "pvdf/mapping/pictures.hpp"
 
 #include <cmath>

@@ -5,6 +5,7 @@
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
 #include "pvdf/mapping/map.hpp"
+#include "pvdf/mapping/map_io.hpp"
 #include "pvdf/mapping/synthetic.hpp"
 
 #include <cstdio>

@@ -413,7 +413,7 @@ int main(int argc, char** argv) {
                    pvdf::plot::cycle_color(colour++), level == "sweep warm" ? pvdf::plot::Marker::triangle
                                                                            : pvdf::plot::Marker::cross);
       }
-    ax.log_x().log_y().grid_lines().legend("upper right");
+    ax.log_x().log_y().grid_lines().legend("best");  // placed where it covers the fewest points
     ax.xlabel("wall time, 1 thread (s)").ylabel("max relative error (w0, electrode forces)");
     ax.title("seed-001 film, 1 N probe: speed against error");
     fig.save_png(out + "/bench_fem.png");

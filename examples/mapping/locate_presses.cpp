@@ -11,6 +11,7 @@
 //           result, and the rate of a stream of noisy presses.
 #include "pvdf/mapping/locator.hpp"
 #include "pvdf/mapping/map.hpp"
+#include "pvdf/mapping/map_io.hpp"
 #include "pvdf/mapping/synthetic.hpp"
 
 #include <chrono>

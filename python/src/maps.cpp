@@ -8,6 +8,7 @@
 #include "pvdf/mapping/design.hpp"
 #include "pvdf/mapping/locator.hpp"
 #include "pvdf/mapping/map.hpp"
+#include "pvdf/mapping/map_io.hpp"
 
 #include <cmath>
 #include <limits>

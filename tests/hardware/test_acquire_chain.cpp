@@ -4,6 +4,7 @@
 // the scene pressed. Built only when the mapping module and the pvdfkit command exist.
 #include "pvdf/core/io.hpp"
 #include "pvdf/mapping/map.hpp"
+#include "pvdf/mapping/map_io.hpp"
 #include "pvdf/mapping/synthetic.hpp"
 
 #include <catch2/catch.hpp>

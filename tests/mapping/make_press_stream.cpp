@@ -6,6 +6,7 @@
 #include "pvdf/core/constants.hpp"
 #include "pvdf/mapping/locator.hpp"
 #include "pvdf/mapping/map.hpp"
+#include "pvdf/mapping/map_io.hpp"
 
 #include <cmath>
 #include <cstdio>

@@ -7,6 +7,7 @@
 #include "pvdf/fem/probe_sweep.hpp"
 #include "pvdf/fem/solver.hpp"
 #include "pvdf/mapping/generate.hpp"
+#include "pvdf/mapping/map_io.hpp"
 
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>

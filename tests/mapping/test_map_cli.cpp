@@ -5,6 +5,7 @@
 
 #include "pvdf/mapping/generate.hpp"
 #include "pvdf/mapping/map.hpp"
+#include "pvdf/mapping/map_io.hpp"
 
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>

@@ -2,6 +2,7 @@
 // message naming the dataset or attribute.
 #include "pvdf/core/error.hpp"
 #include "pvdf/mapping/map.hpp"
+#include "pvdf/mapping/map_io.hpp"
 #include "pvdf/mapping/synthetic.hpp"
 
 #include <catch2/catch.hpp>

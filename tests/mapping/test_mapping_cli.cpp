@@ -4,6 +4,7 @@
 #include "fixture.hpp"
 
 #include "pvdf/mapping/map.hpp"
+#include "pvdf/mapping/map_io.hpp"
 #include "pvdf/mapping/synthetic.hpp"
 
 #include <catch2/catch.hpp>

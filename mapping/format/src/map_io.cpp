@@ -6,6 +6,7 @@
 
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
+#include "pvdf/mapping/map_io.hpp"
 #include "pvdf/version.hpp"
 
 #include <hdf5.h>

@@ -4,6 +4,7 @@
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
 #include "pvdf/mapping/generate.hpp"
+#include "pvdf/mapping/map_io.hpp"
 
 #include <hdf5.h>
 

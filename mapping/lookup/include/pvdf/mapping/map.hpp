@@ -89,16 +89,4 @@ struct ChargeMap {
 /// /forces_N[0] = 1 (ascending)`).
 void validate(const ChargeMap& map, const std::string& source);
 
-/// Reads and validates a map file. Throws pvdf::InputError naming the file and the dataset or
-/// attribute when it is missing, has the wrong type/shape/units, or holds invalid values.
-ChargeMap read_map(const std::string& path);
-
-/// Validates and writes a map atomically (temporary file + rename). Throws pvdf::InputError.
-void write_map(const std::string& path, const ChargeMap& map);
-
-/// Format identification written into the root attributes.
-inline constexpr const char* map_format_name = "pvdfkit-charge-map";
-/// Version written; read_map also reads version 1 (no per-node error estimate).
-inline constexpr int map_format_version = 2;
-
 }  // namespace pvdf::mapping
