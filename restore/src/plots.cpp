@@ -226,7 +226,17 @@ void plot_restored(const std::string& path, const RestoredForces& r, const Scan&
     mu.push_back(r.mu_valid[i] ? r.mu[i] : std::nan(""));
   }
   auto& m = fig.axes(1, 0);
-  m.line(xm, mu, "μ = $f_x$ / $f_z$ where $f_z$ > threshold").title("Friction coefficient").xlabel("surface position x (mm)").ylabel("μ (–)").grid_lines().legend("best");
+  m.line(xm, mu, "μ = $f_x$ / $f_z$ where $f_z$ > threshold");
+  if (rz.size() == x.size() && !rz.empty()) {
+    // The true μ where the true f_z (at the resolution shown above) carries a press: above 10 % of its peak.
+    double peak = 0;
+    for (double v : rz) peak = std::max(peak, v);
+    std::vector<double> true_mu(x.size(), std::nan(""));
+    for (std::size_t i = 0; i < x.size(); ++i)
+      if (peak > 0 && rz[i] > 0.1 * peak) true_mu[i] = rx[i] / rz[i];
+    m.line(x, true_mu, "μ true (where true $f_z$ > 10 % of its peak)", std::nullopt, plot::LineStyle::dashed);
+  }
+  m.title("Friction coefficient").xlabel("surface position x (mm)").ylabel("μ (–)").grid_lines().legend("best");
   if (!x.empty()) m.xlim(x.front(), x.back());
   fig.save_png(path);
 }
