@@ -6,6 +6,7 @@
 // R⁺ is the residual of the same forms in FE_Q(p+1) on the same mesh (quadrature and penalty of
 // degree p, so that R⁺(u_h)[v_h] = R(u_h)[v_h] = 0 for every v_h of the primal space), z⁺ the
 // patch-wise Q(p+1) extrapolation of z_h, B the C0 interior-penalty bending operator.
+#include "electrode_cells.hpp"
 #include "film_solver.hpp"
 
 #include "pvdf/core/material.hpp"
@@ -31,13 +32,6 @@ using namespace dealii;
 // component c being (v_c0 φ_x, v_c1 φ_y, v_c0 φ_y + v_c1 φ_x) as in the residual (assembly.cpp).
 Vector<double> FilmSolver::charge_derivative(const Vector<double>& u, Model model, std::size_t k) const {
   const auto& poly = electrode_polygons_[k];
-  double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
-  for (const auto& v : poly) {
-    xmin = std::min(xmin, v[0]);
-    xmax = std::max(xmax, v[0]);
-    ymin = std::min(ymin, v[1]);
-    ymax = std::max(ymax, v[1]);
-  }
   const Eigen::Matrix3d T = pvdf::stress_to_material(draw_angle_);
   const double d31 = scene_.material.d31_C_per_N, d32 = scene_.material.d32_C_per_N;
   double lam[3] = {0, 0, 0};
@@ -55,10 +49,7 @@ Vector<double> FilmSolver::charge_derivative(const Vector<double>& u, Model mode
   Vector<double> cell_g(n), g(dof_handler_.n_dofs());
   double area = 0;
   for (const auto& cell : dof_handler_.active_cell_iterators()) {
-    const auto box = cell->bounding_box();
-    if (box.get_boundary_points().first[0] > xmax || box.get_boundary_points().second[0] < xmin ||
-        box.get_boundary_points().first[1] > ymax || box.get_boundary_points().second[1] < ymin)
-      continue;
+    if (cell_misses_polygon(cell, poly)) continue;
     fe_values.reinit(cell);
     fe_values[inplane].get_function_gradients(u, grad_u);
     fe_values[w].get_function_gradients(u, grad_w);

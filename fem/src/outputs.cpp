@@ -1,6 +1,7 @@
 // Outputs of a converged state (docs/fem.md §6, §7): membrane forces in the global, material and
 // polar frames, electrode mean forces by exact-outline quadrature and their charges (the charge
 // law of pvdf/core/piezo.hpp), deflections, the rim reaction, the strain energy, sample points.
+#include "electrode_cells.hpp"
 #include "film_solver.hpp"
 
 #include "pvdf/core/error.hpp"
@@ -51,13 +52,6 @@ MembraneForce FilmSolver::membrane_force(const Kinematics& k, const Point<dim>& 
 std::array<double, 3> FilmSolver::electrode_mean_force(const Vector<double>& u, Model model, std::size_t k,
                                                        double* integrated_area) const {
   const auto& poly = electrode_polygons_[k];
-  double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
-  for (const auto& v : poly) {
-    xmin = std::min(xmin, v[0]);
-    xmax = std::max(xmax, v[0]);
-    ymin = std::min(ymin, v[1]);
-    ymax = std::max(ymax, v[1]);
-  }
   const QIterated<dim> quadrature(QGauss<1>(2), 8);
   FEValues<dim> fe_values(*mapping_, *fe_, quadrature, update_gradients | update_JxW_values | update_quadrature_points);
   const FEValuesExtractors::Vector inplane(0);
@@ -67,10 +61,7 @@ std::array<double, 3> FilmSolver::electrode_mean_force(const Vector<double>& u, 
   std::array<double, 3> sum{0, 0, 0};
   double area = 0;
   for (const auto& cell : dof_handler_.active_cell_iterators()) {
-    const auto box = cell->bounding_box();
-    if (box.get_boundary_points().first[0] > xmax || box.get_boundary_points().second[0] < xmin ||
-        box.get_boundary_points().first[1] > ymax || box.get_boundary_points().second[1] < ymin)
-      continue;
+    if (cell_misses_polygon(cell, poly)) continue;
     fe_values.reinit(cell);
     fe_values[inplane].get_function_gradients(u, grad_u);
     fe_values[w].get_function_gradients(u, grad_w);
