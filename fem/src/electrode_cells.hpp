@@ -5,23 +5,29 @@
 #include "pvdf/core/scene.hpp"
 
 #include <algorithm>
+#include <array>
 #include <vector>
 
 namespace pvdf::fem::detail {
 
-/// Whether the cell's bounding box misses the bounding box of polygon v, so that the cell holds
-/// none of v.
-template <class CellIterator>
-bool cell_misses_polygon(const CellIterator& cell, const std::vector<pvdf::Point2>& v) {
-  double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
+/// The bounding box {xmin, xmax, ymin, ymax} of polygon v (computed once per integral).
+inline std::array<double, 4> polygon_box(const std::vector<pvdf::Point2>& v) {
+  std::array<double, 4> b{1e300, -1e300, 1e300, -1e300};
   for (const auto& p : v) {
-    xmin = std::min(xmin, p[0]);
-    xmax = std::max(xmax, p[0]);
-    ymin = std::min(ymin, p[1]);
-    ymax = std::max(ymax, p[1]);
+    b[0] = std::min(b[0], p[0]);
+    b[1] = std::max(b[1], p[0]);
+    b[2] = std::min(b[2], p[1]);
+    b[3] = std::max(b[3], p[1]);
   }
-  const auto box = cell->bounding_box().get_boundary_points();
-  return box.first[0] > xmax || box.second[0] < xmin || box.first[1] > ymax || box.second[1] < ymin;
+  return b;
+}
+
+/// Whether the cell's bounding box misses `box` (from polygon_box), so that the cell holds none of
+/// the polygon.
+template <class CellIterator>
+bool cell_misses_box(const CellIterator& cell, const std::array<double, 4>& box) {
+  const auto c = cell->bounding_box().get_boundary_points();
+  return c.first[0] > box[1] || c.second[0] < box[0] || c.first[1] > box[3] || c.second[1] < box[2];
 }
 
 }  // namespace pvdf::fem::detail

@@ -32,6 +32,7 @@ using namespace dealii;
 // component c being (v_c0 φ_x, v_c1 φ_y, v_c0 φ_y + v_c1 φ_x) as in the residual (assembly.cpp).
 Vector<double> FilmSolver::charge_derivative(const Vector<double>& u, Model model, std::size_t k) const {
   const auto& poly = electrode_polygons_[k];
+  const std::array<double, 4> box = polygon_box(poly);
   const Eigen::Matrix3d T = pvdf::stress_to_material(draw_angle_);
   const double d31 = scene_.material.d31_C_per_N, d32 = scene_.material.d32_C_per_N;
   double lam[3] = {0, 0, 0};
@@ -49,7 +50,7 @@ Vector<double> FilmSolver::charge_derivative(const Vector<double>& u, Model mode
   Vector<double> cell_g(n), g(dof_handler_.n_dofs());
   double area = 0;
   for (const auto& cell : dof_handler_.active_cell_iterators()) {
-    if (cell_misses_polygon(cell, poly)) continue;
+    if (cell_misses_box(cell, box)) continue;
     fe_values.reinit(cell);
     fe_values[inplane].get_function_gradients(u, grad_u);
     fe_values[w].get_function_gradients(u, grad_w);
