@@ -7,8 +7,9 @@
 # identified from those two scans (eq. 6) and inverted with regularization (eq. 4) into four FIR
 # filters (Fig. 13); the filters then restore f_x, f_z and mu from a new scan of a surface with two
 # edges and a ridged texture whose friction rises from 0.2 to 0.8 (Fig. 14). Once with the paper's
-# settings (constant beta = 1e-4, no target, no low cut), once with the defaults (beta chosen by the
-# predicted mu error, a target resolution and a low cut from the strips' effective depth).
+# settings (Tikhonov, constant beta = 1e-4, no target, no low cut), once with the defaults (isotropic
+# regularization, beta chosen by the predicted mu error, a target resolution and a low cut from the
+# strips' effective depth).
 #
 # Run:     examples/restore/run.sh [OUTDIR]
 #          (default ./restore-example). About 2 s. pvdfkit is found by examples/find-pvdfkit.sh:
@@ -32,10 +33,10 @@ echo "== 1. Scan the two raised edges of seed 000 Fig. 6 (edge at x = -12.5 mm)"
 "$PVDFKIT" restore simulate "$HERE/edge_a.json" -o "$OUT/edge_a.csv" --plot "$OUT/fig11_edge_a.png"
 "$PVDFKIT" restore simulate "$HERE/edge_b.json" -o "$OUT/edge_b.csv" --plot "$OUT/fig12_edge_b.png"
 
-echo "== 2. Identify G and design the inverse filters as in the paper (constant beta = 1e-4, no target, no low cut)"
+echo "== 2. Identify G and design the inverse filters as in the paper (Tikhonov, constant beta = 1e-4, no target, no low cut)"
 "$PVDFKIT" restore identify --scan "$OUT/edge_a.csv" --force 0.6,0.9 --edge-x-m -0.0125 \
   --scan "$OUT/edge_b.csv" --force 0.2,1.0 --edge-x-m -0.0125 \
-  --beta 1e-4 --resolution-m 0 --low-cut-m 0 -o "$OUT/filter_paper.json" --plot-dir "$OUT/plots_paper"
+  --beta 1e-4 --resolution-m 0 --low-cut-m 0 --regularization tikhonov -o "$OUT/filter_paper.json" --plot-dir "$OUT/plots_paper"
 
 echo "== 3. The same with the default (recommended) settings: beta, target resolution and low cut chosen from the data"
 "$PVDFKIT" restore identify --scan "$OUT/edge_a.csv" --force 0.6,0.9 --edge-x-m -0.0125 \

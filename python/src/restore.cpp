@@ -87,8 +87,14 @@ r::BetaPolicy parse_policy(const std::string& policy) {
 
 r::InverseFilter identify(const py::list& scans, std::variant<double, std::string> beta, const std::string& beta_policy,
                           std::size_t taps, long delay_samples, std::size_t g_window, double resolution_m,
-                          double low_cut_wavelength_m, double corner_wavelength_m, const std::string& window) {
+                          double low_cut_wavelength_m, double corner_wavelength_m, const std::string& window,
+                          const std::string& regularization) {
   r::DesignOptions d;
+  if (regularization != "isotropic" && regularization != "tikhonov") {
+    throw pvdf::InputError("identify: regularization = '" + regularization + "' must be isotropic (default) or tikhonov (seed 000 eq. 4)");
+  }
+  d.isotropic = regularization == "isotropic";
+  if (!d.isotropic) d.predicted_beta_scale = 0.25;
   d.taps = taps;
   d.delay_samples = delay_samples;
   d.g_window = g_window;
@@ -140,6 +146,9 @@ sample, with the modelling delay ``delay_samples``; g: the identified transfer m
       .def_readonly("delay_samples", &r::InverseFilter::delay_samples)
       .def_readonly("beta_policy", &r::InverseFilter::beta_policy)
       .def_readonly("beta", &r::InverseFilter::beta, "relative regularization (the chosen one for gcv/auto)")
+      .def_readonly("regularization", &r::InverseFilter::regularization, "'isotropic' or 'tikhonov'")
+      .def_readonly("lobe_force_fraction", &r::InverseFilter::lobe_force_fraction,
+                    "force an isolated sharp feature keeps within +-3 resolutions of it (fraction of the true force)")
       .def_readonly("beta_abs", &r::InverseFilter::beta_abs, "beta x max s^2 ((V/N)^2)")
       .def_readonly("resolution_m", &r::InverseFilter::resolution_m)
       .def_readonly("low_cut_wavelength_m", &r::InverseFilter::low_cut_wavelength_m)
@@ -175,13 +184,15 @@ sample, with the modelling delay ``delay_samples``; g: the identified transfer m
   m.def("identify", &identify, py::arg("scans"), py::arg("beta") = 1e-4, py::arg("beta_policy") = "",
         py::arg("taps") = std::size_t(8192), py::arg("delay_samples") = -1L, py::arg("g_window") = std::size_t(0),
         py::arg("resolution_m") = 0.0, py::arg("low_cut_wavelength_m") = 0.0, py::arg("corner_wavelength_m") = 0.0,
-        py::arg("window") = "tukey",
+        py::arg("window") = "tukey", py::arg("regularization") = "isotropic",
         R"doc(Identifies the 2x2 transfer matrix G from >= 2 scans of known forces (seed 000 eq. 6) and designs the
 regularized inverse filters (eq. 4), as ``pvdfkit restore identify`` does.
 
 scans: list of (Scan, fx_N, fz_N, edge_x_m): the forces (N) of a raised edge at world position
 edge_x_m (m). beta: relative regularization (seed 000: 1e-4), 'auto' (noise floor of G) or 'gcv'.
-resolution_m: target Gaussian FWHM (m, 0 = none); low_cut_wavelength_m: damp longer wavelengths (m).)doc");
+resolution_m: target Gaussian FWHM (m, 0 = none); low_cut_wavelength_m: damp longer wavelengths (m).
+regularization: 'isotropic' (default, as the command: f_x and f_z blurred alike, mu unbiased) or
+'tikhonov' (seed 000 eq. 4).)doc");
   m.def("load_filter", &r::load_filter, py::arg("path"), "Reads a filter JSON written by save_filter or `pvdfkit restore identify`.");
   m.def("save_filter", &r::save_filter, py::arg("path"), py::arg("filter"), "Writes a filter as JSON, atomically.");
   m.def("apply", [](const r::InverseFilter& filter, const r::Scan& scan, double mu_threshold_N, std::size_t block_samples) {

@@ -76,7 +76,8 @@ void save_filter(const std::string& path, const InverseFilter& f) {
                        {"band_fraction", f.conditioning.band_fraction},
                        {"force_matrix_cond", f.transfer.force_condition_number},
                        {"truncated_energy_fraction", f.truncated_energy_fraction},
-                       {"peak_fraction", f.peak_fraction}};
+                       {"peak_fraction", f.peak_fraction},
+                       {"lobe_force_fraction", f.lobe_force_fraction}};
   nlohmann::json id = nlohmann::json::array();
   for (std::size_t s = 0; s < f.transfer.forces.size(); ++s) {
     id.push_back({{"fx_N", f.transfer.forces[s][0]}, {"fz_N", f.transfer.forces[s][1]},
@@ -138,6 +139,7 @@ InverseFilter load_filter(const std::string& path) {
     f.transfer.force_condition_number = c->non_negative_or("force_matrix_cond", 0);
     f.truncated_energy_fraction = c->in_range_or("truncated_energy_fraction", 0, 0, 1);
     f.peak_fraction = c->non_negative_or("peak_fraction", 0);
+    f.lobe_force_fraction = c->in_range_or("lobe_force_fraction", 0, -10, 10);
     c->finish();
   }
   // Tap arrays are read here (the reader marks them used through object_if/has checks below).

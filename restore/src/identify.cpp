@@ -305,6 +305,19 @@ double effective_depth(const detail::DesignGrid& g) {
   const double k_peak = 2 * pi * static_cast<double>(kp) / (static_cast<double>(g.L) * g.dx);
   return 1.6180339887498949 / k_peak;
 }
+// The force an isolated sharp feature keeps within +-3 resolutions (no target: 1.5 effective depths) of
+// it: the integral of the f_z resolution kernel, whose spectrum is `kernel` (T Re A_zz, no delay), over
+// that window. The kernel is per sample: a unit force on one sample restores as kernel[l] on sample l.
+double lobe_force_fraction(detail::RealFft& fft, const std::vector<std::complex<double>>& kernel, std::size_t L, double dx,
+                           double resolution_m, double effective_depth_m) {
+  std::vector<double> r(L);
+  fft.inverse(kernel.data(), r.data());
+  const double width = resolution_m > 0 ? resolution_m : 1.5 * effective_depth_m;
+  const auto reach = static_cast<std::size_t>(std::min(3 * width / dx, static_cast<double>(L / 2 - 1)));
+  double sum = r[0];
+  for (std::size_t l = 1; l <= reach; ++l) sum += r[l] + r[L - l];
+  return sum;
+}
 }  // namespace
 
 InverseFilter design_inverse(const TransferMatrix& t, const std::vector<IdentificationScan>& scans,
@@ -370,13 +383,15 @@ InverseFilter design_inverse(const TransferMatrix& t, const std::vector<Identifi
   for (auto& row : H)
     for (auto& v : row) v.resize(fft.bins());
   double peak_sum = 0, target_sum = 0;
+  std::vector<cd> kernel_z(fft.bins());  // T Re A_zz: the f_z resolution kernel's spectrum
   for (std::size_t k = 0; k < fft.bins(); ++k) {
     const double b = f.beta_abs * grid.shape[k];
     double ak[2], dk[2];
     grid.gains(k, b, ak, dk);
     const Eigen::Vector2d d(dk[0], dk[1]);
     const Eigen::Vector2d a(ak[0], ak[1]);
-    peak_sum += grid.weight(k) * grid.target[k] * (grid.V[k] * a.asDiagonal() * grid.V[k].adjoint())(1, 1).real();
+    kernel_z[k] = grid.target[k] * (grid.V[k] * a.asDiagonal() * grid.V[k].adjoint())(1, 1).real();
+    peak_sum += grid.weight(k) * kernel_z[k].real();
     target_sum += grid.weight(k) * grid.target[k];
     const Eigen::Matrix2cd Hk = grid.V[k] * d.asDiagonal() * grid.U[k].adjoint();
     const cd phase = grid.target[k] * std::polar(1.0, -2 * pi * static_cast<double>(k) * static_cast<double>(o.delay_samples) / static_cast<double>(L));
@@ -399,6 +414,7 @@ InverseFilter design_inverse(const TransferMatrix& t, const std::vector<Identifi
   }
   f.truncated_energy_fraction = total > 0 ? outside / total : 0.0;
   f.peak_fraction = target_sum > 0 ? peak_sum / target_sum : 0.0;
+  f.lobe_force_fraction = lobe_force_fraction(fft, kernel_z, L, f.sample_spacing_m, f.resolution_m, f.effective_depth_m);
   return f;
 }
 

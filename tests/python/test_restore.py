@@ -73,3 +73,19 @@ def test_scan_from_arrays_and_bad_input(identified, tmp_path):
         restore.load_scanner_scene({"scan": {"speed_m_per_s": -1}})
     with pytest.raises(pvdfkit.InputError):
         restore.identify([(a, 0.6, 0.9, -0.0125)], beta=1e-4)  # one scan cannot identify a 2x2 G
+    with pytest.raises(pvdfkit.InputError, match="regularization"):
+        restore.identify([(a, 0.6, 0.9, -0.0125), (_, 0.2, 1.0, -0.0125)], regularization="lasso")
+
+
+def test_regularization_choice(identified):
+    """The default is the isotropic regularization (as the command); Tikhonov on request. Isotropic keeps
+    less of an isolated feature's force near it than Tikhonov at the same beta (long wavelengths damped as
+    the weak direction's), and both say how much."""
+    a, b, f = identified
+    assert f.regularization == "isotropic"
+    scans = [(a, 0.6, 0.9, -0.0125), (b, 0.2, 1.0, -0.0125)]
+    iso = restore.identify(scans, beta=1e-4, taps=4096, resolution_m=1.5e-3, low_cut_wavelength_m=0.01)
+    tik = restore.identify(scans, beta=1e-4, taps=4096, resolution_m=1.5e-3, low_cut_wavelength_m=0.01,
+                           regularization="tikhonov")
+    assert tik.regularization == "tikhonov"
+    assert 0 < iso.lobe_force_fraction < tik.lobe_force_fraction <= 1.05

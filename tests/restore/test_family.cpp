@@ -57,11 +57,11 @@ double peak(const std::vector<double>& v) {
 
 }  // namespace
 
-// The target is mu within 0.02 at every edge. Measured on these 12 edges: 10 within 0.02, two at 0.028
-// and 0.030 (identification noise in the f_x column of G; 8 scans per edge leave one at 0.030). The test
-// holds the measured state: every edge within 0.035, at least 10 of 12 within 0.02, positions within 0.2 mm.
+// The targets: with the default settings every edge's mu within 0.02 and its position
+// within 0.2 mm (seeds fixed before the first run; the default regularization is isotropic, chosen by the
+// study on seeds 1000-1047, docs/restore.md section 4).
 TEST_CASE("Default settings on unseen scanners of the family: mu within 0.02, edges within 0.2 mm", "[restore][family]") {
-  int within = 0, edges = 0;
+  int edges = 0;
   for (const auto seed : fresh_seeds) {
     const auto sc = fresh_scene(seed);
     const auto ids = family::identification_scans(sc);
@@ -73,46 +73,73 @@ TEST_CASE("Default settings on unseen scanners of the family: mu within 0.02, ed
       INFO(sc.describe() << ", edge " << e << " at " << sc.edges[e].x_m * 1e3 << " mm, mu " << sc.edges[e].fx_N / sc.edges[e].fz_N
                          << ": mu error " << scores[e].mu_error << ", position error " << scores[e].position_error_m * 1e3
                          << " mm, beta " << f.beta << " (" << f.beta_reason << ")");
-      CHECK(scores[e].mu_error < 0.035);
+      CHECK(scores[e].mu_error < 0.02);
       CHECK(scores[e].position_error_m < 0.2e-3);
-      within += scores[e].mu_error < 0.02;
       ++edges;
     }
   }
-  INFO(within << " of " << edges << " edges have a mu error below 0.02");
-  CHECK(within >= edges - 2);
+  CHECK(edges == 12);
 }
 
+// The default (isotropic) regularization damps the long wavelengths of both forces as much as the weak
+// direction's: an isolated edge keeps a fraction of its force near it (the design predicts it from the
+// identified G, lobe_force_fraction), the rest spreads as shallow side lobes. Tikhonov keeps ~all of it.
 TEST_CASE("Line forces are in N/m: the peak and the integral of an edge do not depend on the sample spacing", "[restore][family]") {
   // One scanner at two speeds (sample spacings differ by 1.6x); the same lone edge of 1 N.
   auto sc = fresh_scene(9105);
   sc.textures.clear();
   sc.edges = {{0.0, 0.4, 1.0, family::EdgeShape::impulse, 0}};
-  double peaks[2], integrals[2], per_sample_peaks[2];
-  const double speeds[2] = {0.03, 0.048};
-  for (int v = 0; v < 2; ++v) {
-    auto s = sc;
-    s.scanner.speed_m_per_s = speeds[v];
-    const auto ids = family::identification_scans(s);
-    const DesignOptions o;
-    const auto f = design_inverse(identify_transfer(ids, o), ids, o);
-    const auto r = restore_scan(f, family::test_scan(s));
-    peaks[v] = peak(r.fz_N_per_m);
-    per_sample_peaks[v] = peak(r.fz_N);
-    integrals[v] = 0;
-    for (std::size_t i = 0; i < r.x_m.size(); ++i) {
-      CHECK(r.fz_N[i] == Approx(r.fz_N_per_m[i] * r.sample_spacing_m).margin(1e-12));
-      if (std::abs(r.x_m[i]) < 3 * f.resolution_m) integrals[v] += r.fz_N_per_m[i] * r.sample_spacing_m;
+  for (const bool isotropic : {true, false}) {
+    double peaks[2], integrals[2], per_sample_peaks[2];
+    const double speeds[2] = {0.03, 0.048};
+    for (int v = 0; v < 2; ++v) {
+      auto s = sc;
+      s.scanner.speed_m_per_s = speeds[v];
+      const auto ids = family::identification_scans(s);
+      DesignOptions o;
+      if (!isotropic) {
+        o.isotropic = false;
+        o.predicted_beta_scale = 0.25;
+      }
+      REQUIRE(DesignOptions().isotropic);  // the default
+      const auto f = design_inverse(identify_transfer(ids, o), ids, o);
+      const auto r = restore_scan(f, family::test_scan(s));
+      RestoreOptions raw_options;
+      raw_options.flat_baseline = false;
+      const auto raw = restore_scan(f, family::test_scan(s), raw_options);
+      double raw_integral = 0;
+      for (std::size_t i = 0; i < raw.x_m.size(); ++i)
+        if (std::abs(raw.x_m[i]) < 3 * f.resolution_m) raw_integral += raw.fz_N[i];
+      peaks[v] = peak(r.fz_N_per_m);
+      per_sample_peaks[v] = peak(r.fz_N);
+      integrals[v] = 0;
+      for (std::size_t i = 0; i < r.x_m.size(); ++i) {
+        CHECK(r.fz_N[i] == Approx(r.fz_N_per_m[i] * r.sample_spacing_m).margin(1e-12));
+        if (std::abs(r.x_m[i]) < 3 * f.resolution_m) integrals[v] += r.fz_N_per_m[i] * r.sample_spacing_m;
+      }
+      // The target Gaussian's peak for 1 N, F / (s sqrt(2 pi)).
+      const double s_m = f.resolution_m / 2.3548200450309493;
+      const double target_peak = 1.0 / (s_m * std::sqrt(2 * pvdf::pi));
+      INFO((isotropic ? "isotropic" : "tikhonov") << ", speed " << speeds[v] << ": peak " << peaks[v] << " N/m (target "
+           << target_peak << ", predicted fraction " << f.peak_fraction << "), integral " << integrals[v]
+           << " N (without the flat-surface level " << raw_integral << " N, predicted " << f.lobe_force_fraction << ")");
+      if (isotropic) {
+        // What the design predicts from the identified G, against the simulated scanner's restoration.
+        CHECK(raw_integral == Approx(f.lobe_force_fraction).epsilon(0.1));
+        CHECK(integrals[v] >= raw_integral);  // the flat-surface level lifts the side lobes near the edge
+        CHECK(peaks[v] == Approx(f.peak_fraction * target_peak).epsilon(0.1));
+        CHECK(peaks[v] > 0.75 * target_peak);  // the resolution target of the beta rule (0.8, less noise)
+      } else {
+        // Tikhonov: the integral over the lobe is the edge's force in N, the peak the target's.
+        CHECK(integrals[v] == Approx(1.0).epsilon(0.1));
+        CHECK(peaks[v] == Approx(target_peak).epsilon(0.1));
+      }
     }
-    // The integral over the lobe is the edge's force in N; the peak that of the target Gaussian, F / (s sqrt(2 pi)).
-    const double s_m = f.resolution_m / 2.3548200450309493;
-    INFO("speed " << speeds[v] << ": peak " << peaks[v] << " N/m, integral " << integrals[v] << " N");
-    CHECK(integrals[v] == Approx(1.0).epsilon(0.1));
-    CHECK(peaks[v] == Approx(1.0 / (s_m * std::sqrt(2 * pvdf::pi))).epsilon(0.1));
+    CHECK(peaks[1] == Approx(peaks[0]).epsilon(0.1));
+    CHECK(integrals[1] == Approx(integrals[0]).epsilon(0.1));
+    // Per sample (N) the same edge is spread over 1.6x fewer samples: its per-sample peak grows with the spacing.
+    CHECK(per_sample_peaks[1] / per_sample_peaks[0] == Approx(speeds[1] / speeds[0]).epsilon(0.1));
   }
-  CHECK(peaks[1] == Approx(peaks[0]).epsilon(0.1));
-  // Per sample (N) the same edge is spread over 1.6x fewer samples: its per-sample peak grows with the spacing.
-  CHECK(per_sample_peaks[1] / per_sample_peaks[0] == Approx(speeds[1] / speeds[0]).epsilon(0.1));
 }
 
 TEST_CASE("The flat-surface level: on flat stretches the restored f_z is within 5 % of the peaks", "[restore][family]") {
@@ -237,3 +264,4 @@ TEST_CASE("The family's scans are its own model: the point-strip kernel agrees w
   INFO("worst difference " << worst << " V against a peak of " << peak_v << " V");
   CHECK(worst < 1e-3 * peak_v);
 }
+

@@ -54,10 +54,11 @@ struct DesignOptions {
   double max_force_condition = 100;   ///< refuse identification force sets with cond(F) above this
   double min_snr = 3;                 ///< refuse scans whose signal rms near the edge is below min_snr x noise rms
   double gcv_beta_min = 1e-9, gcv_beta_max = 1.0;  ///< search range of the selectors (relative)
-  /// BetaPolicy::predicted takes this multiple of the beta that minimizes its prediction: with Tikhonov the
-  /// prediction over-regularizes by about 4x against the best constant beta in hindsight and 0.25 served best
-  /// on the study's tuning seeds 1000-1047; with the isotropic regularization 1 (docs/restore.md section 4).
-  double predicted_beta_scale = 0.25;
+  /// BetaPolicy::predicted takes this multiple of the beta that minimizes its prediction: 1 with the isotropic
+  /// regularization (the default); with Tikhonov the prediction over-regularizes by about 4x against the best
+  /// constant beta in hindsight, and 0.25 served best on the study's tuning seeds 1000-1047 (set it to 0.25
+  /// with isotropic = false; docs/restore.md section 4).
+  double predicted_beta_scale = 1.0;
   /// Resolution target of BetaPolicy::predicted: beta may not blur a sharp edge's restored f_z peak below this
   /// fraction of the target's own peak (the filter must deliver the resolution asked for; without this bound
   /// the isotropic regularization, whose mu is unbiased at any beta, would be driven to ever wider blur).
@@ -67,7 +68,9 @@ struct DesignOptions {
   /// resolution matrix H G = w(k) T(k) I stays diagonal: f_x and f_z are blurred alike and never mixed, and mu
   /// at a peak is unbiased for any beta (beta then only trades resolution against noise). false = Tikhonov
   /// per direction, s_i^2 / (s_i^2 + beta) (seed 000 eq. 4), which damps the weak direction more and mixes them.
-  bool isotropic = false;
+  /// Default true: the lowest mu error of the automatic rules on the randomized scanner study; its price is the
+  /// long-wavelength part of isolated features (InverseFilter::lobe_force_fraction says how much).
+  bool isotropic = true;
 };
 
 /// Identified transfer matrix: g[i][j][l] = response of strip i to unit force j (0 = x, 1 = z) at lag
@@ -113,6 +116,11 @@ struct InverseFilter {
   /// Restored f_z peak of a sharp edge as a fraction of the target's peak: sum_k T Re A_zz / sum_k T (1 = the
   /// target resolution is met; lower = beta blurs beyond it).
   double peak_fraction = 0;
+  /// Force of an isolated sharp feature that the restored f_z holds within +-3 resolutions of it, as a
+  /// fraction of the true force: the integral of the f_z resolution kernel (inverse transform of T Re A_zz)
+  /// over that window. Below 1 because the long wavelengths (|G| -> 0 as k -> 0, the low cut) are damped:
+  /// the rest of the force is spread as shallow negative side lobes over about the low-cut wavelength.
+  double lobe_force_fraction = 0;
   std::vector<std::pair<double, double>> gcv_curve;  ///< (beta, GCV) when beta_policy = gcv
   /// (beta, criterion) of the selector (gcv, lcurve, morozov, predicted), and what the criterion is.
   std::vector<std::pair<double, double>> selection_curve;
