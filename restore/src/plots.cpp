@@ -180,7 +180,10 @@ void plot_transfer(const std::string& path, const InverseFilter& f) {
     }
     const bool positive = *std::min_element(v.begin(), v.end()) > 0;
     auto& sel = fig.axes(0, 2);
-    sel.line(b, v, f.selection_criterion).title("Choice of β: " + f.beta_policy).xlabel("β (relative)").ylabel(f.selection_criterion).log_x().grid_lines();
+    // The criterion is plain ASCII in the filter file ("predicted rms mu error"); the figure writes μ.
+    std::string label = f.selection_criterion;
+    if (const auto at = label.find("mu error"); at != std::string::npos) label.replace(at, 2, "μ");
+    sel.line(b, v, label).title("Choice of β: " + f.beta_policy).xlabel("β (relative)").ylabel(label).log_x().grid_lines();
     if (positive) sel.log_y();
     sel.vline(f.beta, plot::Color{200, 0, 0}, plot::LineStyle::dashed, "chosen β = " + fmt("%.3g", f.beta)).legend("best");
   }
