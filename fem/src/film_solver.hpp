@@ -245,7 +245,7 @@ class FilmSolver {
   // goal_error.cpp
   Vector<double> charge_derivative(const Vector<double>& u, Model model, std::size_t k) const;
   Vector<double> deflection_derivative(const Point<dim>& x) const;
-  void prepare_enriched();
+  void prepare_enriched(bool with_tangent = false);
   unsigned int form_degree() const { return form_degree_ > 0 ? form_degree_ : options_.fe_degree; }
 
   // outputs.cpp

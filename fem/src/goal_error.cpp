@@ -95,9 +95,9 @@ Vector<double> FilmSolver::deflection_derivative(const Point<dim>& x) const {
 
 // The enriched space: FE_Q(p+1) on this very triangulation (same cells, same mapping), built once
 // per mesh (and again when bending is switched on). Only residuals are assembled there.
-void FilmSolver::prepare_enriched() {
+void FilmSolver::prepare_enriched(bool with_tangent) {
   if (enriched_ && enriched_->dof_handler_.get_triangulation().n_active_cells() == triangulation_.n_active_cells() &&
-      enriched_->options_.include_bending == options_.include_bending)
+      enriched_->options_.include_bending == options_.include_bending && (!with_tangent || !enriched_->residual_only_))
     return;
   Options o = options_;
   o.adaptive = false;
@@ -110,7 +110,7 @@ void FilmSolver::prepare_enriched() {
   e.total_force_ = total_force_;
   e.options_.fe_degree = options_.fe_degree + 1;
   e.form_degree_ = options_.fe_degree;
-  e.residual_only_ = true;
+  e.residual_only_ = !with_tangent;
   e.setup_system();
 }
 
@@ -201,28 +201,37 @@ FilmSolver::GoalErrors FilmSolver::estimate_goal_errors(const Vector<double>& u,
   }
 
   // 2. Discretization: adjoint with the model's own tangent, weights from the Q(p+1) extrapolation.
+  // A mesh with unrefined cells (a Gmsh file as read) has no patches to extrapolate on: there the
+  // adjoint is solved in Q(p+1) itself on the same mesh (the higher-order dual of deal.II's step-14),
+  // about (p+1)^2/p^2 the DOFs of the primal problem, once per output.
   assemble(u, model, 0.0, true, r);
   bool patches = true;
   for (const auto& cell : triangulation_.active_cell_iterators()) patches = patches && cell->level() > 0;
-  if (patches) {
-    prepare_enriched();
-    FilmSolver& e = *enriched_;
-    e.loads_ = loads_;
-    e.total_force_ = total_force_;
-    e.assemble_load_vector();
-    Vector<double> ue(e.n_dofs()), re(e.n_dofs()), zplus(e.n_dofs()), zi(e.n_dofs());
-    FETools::interpolate(dof_handler_, u, e.dof_handler_, e.constraints_, ue);
-    e.assemble(ue, model, 0.0, false, re);
-    const auto e_multiplicity = cell_multiplicity(e.dof_handler_);
-    for (std::size_t j = 0; j < n_out; ++j) {
-      if (!solve_linear(dJ[j], z, message, j == 0)) continue;
-      constraints_.distribute(z);
+  prepare_enriched(!patches);
+  FilmSolver& e = *enriched_;
+  e.loads_ = loads_;
+  e.total_force_ = total_force_;
+  e.current_model_ = model;
+  e.assemble_load_vector();
+  Vector<double> ue(e.n_dofs()), re(e.n_dofs()), zplus(e.n_dofs()), zi(e.n_dofs());
+  FETools::interpolate(dof_handler_, u, e.dof_handler_, e.constraints_, ue);
+  e.assemble(ue, model, 0.0, !patches, re);
+  const auto e_multiplicity = cell_multiplicity(e.dof_handler_);
+  for (std::size_t j = 0; j < n_out; ++j) {
+    if (!solve_linear(dJ[j], z, message, j == 0)) continue;
+    constraints_.distribute(z);
+    if (patches) {
       FETools::extrapolate(dof_handler_, z, e.dof_handler_, e.constraints_, zplus);
-      FETools::interpolate(dof_handler_, z, e.dof_handler_, e.constraints_, zi);
-      zplus -= zi;
-      disc_est[j] = -(re * zplus);
-      add_cell_shares(e.dof_handler_, re, zplus, 1.0 / scale[j], e_multiplicity, ge.indicators);
+    } else {
+      Vector<double> dJe = j < ne ? e.charge_derivative(ue, model, j) : e.deflection_derivative(loads_[j - ne].center);
+      e.constraints_.condense(dJe);
+      if (!e.solve_linear(dJe, zplus, message, j == 0)) continue;
+      e.constraints_.distribute(zplus);
     }
+    FETools::interpolate(dof_handler_, z, e.dof_handler_, e.constraints_, zi);
+    zplus -= zi;
+    disc_est[j] = -(re * zplus);
+    add_cell_shares(e.dof_handler_, re, zplus, 1.0 / scale[j], e_multiplicity, ge.indicators);
   }
   ge.charge_discretization_C.assign(disc_est.begin(), disc_est.begin() + static_cast<long>(ne));
   ge.deflection_discretization_m.assign(disc_est.begin() + static_cast<long>(ne), disc_est.end());

@@ -5,11 +5,12 @@ is defined on (docs/fem.md §6): the electrodes' mean membrane forces (material 
 largest) and the deflection under the load; the charges are printed beside them. The first solve of
 the --mesh run is on the file's cells exactly (its cycle-0 VTU has the .msh's cell count).
 
-Measured on seed 001 (docs/mesh.md): the difference is 3.2x the sum of the estimates for the forces
-and 1.06x for the charges, because the estimate after one refinement ("change between the last two
-meshes") is optimistic — the defect docs/fem.md §8 records (up to 4.2x against Timoshenko's plate).
-The test therefore allows OPTIMISM = 4 x the sum of the estimates, prints the ratio, and still fails
-if the two meshes disagree by more than that or if either estimate exceeds 2e-3.
+The two solves use the same model, so their difference is discretization error alone: each output
+(the charges, relative to the largest, and the deflection under the load) must agree within the sum
+of the two solves' estimated discretization errors (`estimated_discretization_error`, the largest
+relative dual-weighted-residual estimate over those outputs). On the file's mesh, whose cells are
+unrefined (no patches for the Q3 extrapolation of the adjoint), the adjoint is solved in Q3 itself.
+The electrodes' mean membrane forces are printed beside them (not an estimated quantity).
 
 Usage: check_solve_msh.py PVDFKIT SCENE OUTDIR"""
 import json
@@ -49,28 +50,26 @@ def main():
     cycle0_cells = int(re.search(r'NumberOfCells="(\d+)"', head).group(1))
     assert cycle0_cells == mesh["n_cells"], (cycle0_cells, mesh["n_cells"])
 
-    e1, e2 = builtin["estimated_relative_error"], onmsh["estimated_relative_error"]
-    assert max(e1, e2) < 2e-3, (e1, e2)
-    optimism = 4.0
-    allowed = optimism * (e1 + e2)
+    e1, e2 = builtin["estimated_discretization_error"], onmsh["estimated_discretization_error"]
+    assert 0 < e1 < 2e-3 and 0 < e2 < 2e-3, ("each solve must carry a discretization estimate", e1, e2)
+    allowed = e1 + e2
     f1 = [x for e in builtin["electrodes"] for x in e["mean_membrane_force_material_N_per_m"]]
     f2 = [x for e in onmsh["electrodes"] for x in e["mean_membrane_force_material_N_per_m"]]
     force_diff = max(abs(a - b) for a, b in zip(f1, f2)) / max(abs(a) for a in f1)
     q1 = [e["charge_C"] for e in builtin["electrodes"]]
     q2 = [e["charge_C"] for e in onmsh["electrodes"]]
-    scale_q = max(abs(q) for q in q1)
-    charge_diff = max(abs(a - b) for a, b in zip(q1, q2)) / scale_q
+    charge_diff = max(abs(a - b) for a, b in zip(q1, q2)) / max(abs(q) for q in q1)
     w1, w2 = builtin["deflection_at_load_m"], onmsh["deflection_at_load_m"]
     w_diff = abs(w1 - w2) / abs(w1)
-    print("mesh %d quads; built-in: %d cells, estimate %.3g; --mesh: %d cells, estimate %.3g"
+    print("mesh %d quads; built-in: %d cells, discretization estimate %.3g; --mesh: %d cells, estimate %.3g"
           % (mesh["n_cells"], builtin["n_cells"], e1, onmsh["n_cells"], e2))
     print("charges (pC) built-in %s, --mesh %s: max difference %.3g of the largest"
           % (["%.4f" % (q * 1e12) for q in q1], ["%.4f" % (q * 1e12) for q in q2], charge_diff))
     print("deflection at the load %.6g mm vs %.6g mm: difference %.3g" % (w1 * 1e3, w2 * 1e3, w_diff))
-    print("electrode mean forces: max difference %.3g of the largest" % force_diff)
-    print("difference / (sum of the estimates %.3g): forces %.2f, charges %.2f, deflection %.2f (allowed %.1f)"
-          % (e1 + e2, force_diff / (e1 + e2), charge_diff / (e1 + e2), w_diff / (e1 + e2), optimism))
-    for what, d in (("forces", force_diff), ("charges", charge_diff), ("deflection", w_diff)):
+    print("electrode mean forces: max difference %.3g of the largest (not estimated)" % force_diff)
+    print("difference / (sum of the discretization estimates %.3g): charges %.2f, deflection %.2f (allowed 1)"
+          % (allowed, charge_diff / allowed, w_diff / allowed))
+    for what, d in (("charges", charge_diff), ("deflection", w_diff)):
         assert d <= allowed, (what, d, allowed)
     return 0
 
