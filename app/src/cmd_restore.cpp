@@ -20,6 +20,19 @@
 
 namespace {
 
+// The library names quantities, not flags: where one of its messages is about a quantity a flag of
+// this command sets, the flag is added here.
+template <class Call>
+auto naming_flag(Call call, const char* phrase, const std::string& flag_hint) {
+  try {
+    return call();
+  } catch (const pvdf::InputError& e) {
+    const std::string what = e.what();
+    if (what.find(phrase) == std::string::npos) throw;
+    throw pvdf::InputError(what + "; " + flag_hint);
+  }
+}
+
 namespace r = pvdf::restore;
 
 struct SimulateOptions {
@@ -157,7 +170,7 @@ int run_identify(const IdentifyOptions& o) {
   std::vector<r::IdentificationScan> scans;
   for (std::size_t i = 0; i < o.scans.size(); ++i) {
     r::IdentificationScan s;
-    s.scan = r::read_scan_csv(o.scans[i], o.speed);
+    s.scan = naming_flag([&] { return r::read_scan_csv(o.scans[i], o.speed); }, "scan speed", "give it with --speed-m-per-s");
     const auto f = pvdf::parse_number_list(o.forces[i], "--force (FX,FZ in N)", 2);
     check_range("--force FX", f[0], -1e6, 1e6, "give the edge's forces in N");
     check_range("--force FZ", f[1], -1e6, 1e6, "give the edge's forces in N");
@@ -168,7 +181,7 @@ int run_identify(const IdentifyOptions& o) {
   }
   const r::TransferMatrix t = r::identify_transfer(scans, d);
   for (const auto& w : t.warnings) pvdf::app::warn(w);
-  const r::InverseFilter f = r::design_inverse(t, scans, d);
+  const r::InverseFilter f = naming_flag([&] { return r::design_inverse(t, scans, d); }, "beta policy", "see --beta");
   r::save_filter(o.output, f);
   std::printf("identified G from %zu scans: cond(F) = %.3g, noise rms = %.3g / %.3g V, SNR =", scans.size(),
               t.force_condition_number, t.noise_rms_V[0], t.noise_rms_V[1]);
@@ -213,7 +226,7 @@ int run_apply(const ApplyOptions& o) {
   if (o.block_flag->count() > 0) check_range("--block", static_cast<double>(o.block), 1, 16777216, "give a block length in samples, or omit it for offline");
   if (o.scale_flag->count() > 0) check_range("--baseline-scale-m", o.baseline_scale, 1e-6, 1, "give a length in m, or omit it for the filter's low cut / 2 pi");
   const r::InverseFilter f = r::load_filter(o.filter);
-  r::Scan scan = r::read_scan_csv(o.scan, o.speed);
+  r::Scan scan = naming_flag([&] { return r::read_scan_csv(o.scan, o.speed); }, "scan speed", "give it with --speed-m-per-s");
   if (o.resample && std::abs(scan.sample_spacing_m() - f.sample_spacing_m) > 1e-6 * f.sample_spacing_m) {
     std::printf("resampled from dx = %.4g m to the filter's %.4g m (amplitude x %.4g: the signal is proportional to the "
                 "speed)\n", scan.sample_spacing_m(), f.sample_spacing_m, f.sample_spacing_m / scan.sample_spacing_m());
@@ -226,7 +239,7 @@ int run_apply(const ApplyOptions& o) {
   r::RestoredForces forces;
   if (o.block > 0) {
     // Streaming path (as a real-time loop would run it), then the flat level and mu as offline.
-    forces = r::restore_scan(f, scan, ro);  // checks the spacing
+    forces = naming_flag([&] { return r::restore_scan(f, scan, ro); }, "sample spacing", "--resample does it");  // checks the spacing
     r::StreamingRestorer s(f, static_cast<std::size_t>(o.block));
     std::vector<double> fx, fz;
     const auto block = static_cast<std::size_t>(o.block);
@@ -241,7 +254,7 @@ int run_apply(const ApplyOptions& o) {
     std::printf("streaming: block %ld samples, latency %zu samples = %.4g mm of scan\n", o.block, s.latency_samples(),
                 static_cast<double>(s.latency_samples()) * f.sample_spacing_m * 1e3);
   } else {
-    forces = r::restore_scan(f, scan, ro);
+    forces = naming_flag([&] { return r::restore_scan(f, scan, ro); }, "sample spacing", "--resample does it");
   }
   r::write_forces_csv(o.output, forces, "pvdfkit restore apply " + o.filter + " " + o.scan +
                                             ": line forces in N/m (fx_N_per_m, fz_N_per_m) and per sample in N (fx_N, fz_N)");

@@ -62,7 +62,7 @@ RestoredForces restore_scan(const InverseFilter& f, const Scan& scan, const Rest
     std::ostringstream msg;
     msg << scan.source << ": sample spacing " << dx << " m differs from the filter's " << f.sample_spacing_m
         << " m by more than 1 %; scan at the identification speed and rate, identify a new filter, or resample the "
-           "scan (restore apply --resample)";
+           "scan onto the filter's grid";
     throw InputError(msg.str());
   }
   RestoredForces r;

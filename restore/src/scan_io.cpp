@@ -19,10 +19,10 @@ Scan read_scan_csv(const std::string& path, double speed_m_per_s) {
   const bool has_x = t.has_column("x_m");
   if (!has_x && !t.has_column("t_s")) {
     throw InputError(path + ": has neither an x_m nor a t_s column; the header must be x_m,m1_V,m2_V (or t_s,m1_V,m2_V "
-                            "with --speed-m-per-s)");
+                            "with the scan speed given)");
   }
   if (!has_x && !(speed_m_per_s > 0)) {
-    throw InputError(path + ": has a t_s column but no scan speed; pass --speed-m-per-s (seed 000: 0.01-0.1 m/s)");
+    throw InputError(path + ": has a t_s column but no scan speed was given (seed 000: 0.01-0.1 m/s)");
   }
   const std::size_t cx = has_x ? t.column("x_m") : t.column("t_s");
   const std::size_t c1 = t.column("m1_V");

@@ -138,7 +138,7 @@ BetaChoice morozov(const RecordPower& r, const TransferMatrix& t, const DesignOp
   // Parseval with an unnormalized DFT: sum_k |E(k)|^2 = L sum_n e_n^2.
   const double noise = static_cast<double>(r.grid.L) * r.n_samples *
                        (t.noise_rms_V[0] * t.noise_rms_V[0] + t.noise_rms_V[1] * t.noise_rms_V[1]);
-  if (!(noise > 0)) throw InputError("--beta morozov needs a noise estimate: the scans must extend beyond taps/4 of the edge");
+  if (!(noise > 0)) throw InputError("beta policy morozov needs a noise estimate: the scans must extend beyond taps/4 of the edge");
   c.beta = o.gcv_beta_min;
   for (double b : candidates(o)) {
     double rho2 = 0, eta2 = 0;
@@ -158,7 +158,7 @@ BetaChoice predicted(const DesignGrid& g, const TransferMatrix& t, const DesignO
   const double L = static_cast<double>(g.L);
   double t0 = 0;
   for (std::size_t k = 0; k < g.s1.size(); ++k) t0 += g.weight(k) * g.target[k] / L;
-  if (t.forces.empty()) throw InputError("--beta predicted needs the identification forces");
+  if (t.forces.empty()) throw InputError("beta policy predicted needs the identification forces");
   double best = std::numeric_limits<double>::infinity(), best_bias = 0, best_sd = 0, best_fraction = 1;
   c.beta = o.gcv_beta_min;
   for (double b_rel : candidates(o)) {
@@ -273,8 +273,8 @@ BetaChoice choose_beta(const DesignGrid& grid, const TransferMatrix& t, const st
     case BetaPolicy::predicted: return predicted(grid, t, o);
     case BetaPolicy::discrepancy: {
       if (!(t.g_noise_power > 0)) {
-        throw InputError("--beta noise-floor needs a noise estimate: the scans must extend beyond taps/4 on a side of "
-                         "the edge (or give a numeric --beta)");
+        throw InputError("beta policy noise-floor needs a noise estimate: the scans must extend beyond taps/4 on a side of "
+                         "the edge (or give a numeric beta)");
       }
       BetaChoice c;
       c.beta = t.g_noise_power / (grid.smax * grid.smax);
