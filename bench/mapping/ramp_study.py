@@ -17,7 +17,7 @@ For each press (random position between the grid nodes, peak force log-uniform i
               (1-D in ln F on the map interpolant); chi2 summed over the ramp,
               dof = n (n_electrodes - 1);
        refit: the position is refined over the whole ramp (one position, one force per
-              sample; Gauss-Newton from the candidate with the forces profiled out),
+              sample; Levenberg-Marquardt from the candidate with the forces profiled out),
               dof = n (n_electrodes - 1) - 2.
      A candidate is rejected when its chi2 exceeds the chi2 quantile 1 - alpha of its dof.
   3. counted: ambiguous at the peak (more than one candidate), ambiguous after the ramp (more
