@@ -56,16 +56,18 @@ struct RampAmbiguity {
 };
 
 /// The design metric: the map's own noise-free ramp (n_samples forces from ramp_start·F to F,
-/// the map interpolant at every usable node off the grid's outer rows) is located at its peak with the force unknown
-/// (default force range); every other solution s is tested against the whole ramp with
-/// fit_ramp, its noise-free χ² being the non-centrality λ_s of the noisy test statistic. A
-/// solution counts as rejected when dof + λ_s exceeds the limit (the noisy test rejects it
-/// more often than not). The same test with the samples held at the peak force is the
-/// baseline: it removes solutions that fit only within noise, not exactly. For an exact
-/// membrane map (Q = F^(2/3)·G(x, y)) the ramp removes no more than the hold (its lower forces
-/// average less): it cannot
-/// separate exact solutions, whatever the noise. Nodes whose own press the lookup does not
-/// find at the peak are counted apart (nodes_truth_missed).
+/// the map interpolant at every usable node off the grid's outer rows) is located at its peak
+/// with the force unknown (default force range; the lookup's noise model, with the map's
+/// error estimates when it stores them); every other solution s is tested against the whole
+/// ramp with fit_ramp (σ = the noise alone), its noise-free χ² being the non-centrality λ_s of
+/// the noisy test statistic. A solution counts as rejected when dof + λ_s exceeds the limit
+/// (the noisy test rejects it more often than not). The same test with the samples held at
+/// the peak force is the baseline: it removes solutions that fit only within noise, not
+/// exactly. For an exact membrane map (Q = F^(2/3)·G(x, y)) the ramp removes no more than the
+/// hold (its lower forces average less): it cannot separate exact solutions, whatever the
+/// noise. Nodes whose own press the lookup does not find at the peak are counted apart
+/// (nodes_truth_missed). The map is taken as exact: its own error counts like a wrong position
+/// (docs/lookup.md §2).
 RampAmbiguity ramp_ambiguity_share(const ChargeMap& map, const RampOptions& options = {});
 
 }  // namespace pvdf::mapping
