@@ -394,7 +394,8 @@ void write_sweep_figure(const std::vector<Candidate>& all, const std::vector<std
 
 // ---------------------------------------------------------------------------------------------
 
-int run_design(const DesignCommandOptions& o) {
+/// The analysis options from the command's flags, each checked against its rule.
+DesignOptions design_options(const DesignCommandOptions& o) {
   if (o.scenes.empty() && o.maps.empty()) {
     throw pvdf::InputError("nothing to compare: give one or more SCENE files (or --map MAP.h5)");
   }
@@ -421,13 +422,14 @@ int run_design(const DesignCommandOptions& o) {
   d.include_map_error = o.include_map_error;
   d.full_scale_C = o.full_scale_C;
   d.ambiguity_min_distance_m = o.ambiguity_min_distance_m;
-  const double spacing = o.spacing_m > 0 ? o.spacing_m : (o.synthetic ? 0.001 : 0.003);
+  return d;
+}
 
-  // Step 1: the candidates.
+/// The candidates: each scene (or each value of the swept key on each scene), then each ready map.
+/// `series_names` gets one name per scene.
+std::vector<Candidate> collect_candidates(const DesignCommandOptions& o, const std::optional<SceneSweep>& sweep,
+                                          std::vector<std::string>& series_names) {
   std::vector<Candidate> all;
-  std::vector<std::string> series_names;
-  std::optional<SceneSweep> sweep;
-  if (!o.vary.empty()) sweep = parse_scene_sweep(o.vary);
   for (const auto& path : o.scenes) {
     const pvdf::Scene scene = pvdf::load_scene(path);
     for (const auto& w : scene.warnings) pvdf::app::warn(w);
@@ -474,17 +476,20 @@ int run_design(const DesignCommandOptions& o) {
     c.series = -1;
     all.push_back(std::move(c));
   }
+  return all;
+}
 
-  // Step 2: maps (coarse previews) and their evaluation.
-  for (auto& c : all) {
-    if (c.scene) c.map = make_map(c, o, spacing, c.map_file, c.map_source);
-    evaluate(c, d);
-  }
-
-  // Step 3: rank; refine the winners at a finer spacing and rank again.
+/// The candidates best first (stable: equal candidates keep their order).
+std::vector<const Candidate*> rank(const std::vector<Candidate>& candidates) {
   std::vector<const Candidate*> ranked;
-  for (const auto& c : all) ranked.push_back(&c);
+  for (const auto& c : candidates) ranked.push_back(&c);
   std::stable_sort(ranked.begin(), ranked.end(), [](const Candidate* a, const Candidate* b) { return better(*a, *b); });
+  return ranked;
+}
+
+/// The best `--refine-best` scene candidates recomputed at the finer spacing and evaluated again.
+std::vector<Candidate> refine_winners(const std::vector<const Candidate*>& ranked, const DesignCommandOptions& o,
+                                      const DesignOptions& d, double spacing) {
   std::vector<Candidate> refined;
   if (o.refine_best > 0) {
     const double fine = o.refine_spacing_m > 0 ? o.refine_spacing_m : spacing / 2;
@@ -498,24 +503,14 @@ int run_design(const DesignCommandOptions& o) {
       refined.push_back(std::move(r));
     }
   }
-  std::vector<const Candidate*> ranked_refined;
-  for (const auto& c : refined) ranked_refined.push_back(&c);
-  std::stable_sort(ranked_refined.begin(), ranked_refined.end(),
-                   [](const Candidate* a, const Candidate* b) { return better(*a, *b); });
+  return refined;
+}
 
-  // Step 4: report.
-  bool any_synthetic = false;
-  for (const auto& c : all) any_synthetic |= c.summary.synthetic;
-  std::string noise_text;
-  for (std::size_t k = 0; k < d.noise_C.size(); ++k) noise_text += (k ? "/" : "") + fmt("%.3g", d.noise_C[k] * 1e12);
-  noise_text = "σ = " + noise_text + " pC" + (o.adc_bits > 0 ? ", " + std::to_string(o.adc_bits) + "-bit ADC" : "");
-  std::vector<std::string> written;
-  if (!o.no_plots) {
-    pvdf::make_directories(o.out_dir);
-    write_map_figures(ranked_refined.empty() ? ranked : ranked_refined, o, noise_text, written);
-    if (sweep) write_sweep_figure(all, series_names, o, sweep->key, written);
-  }
-  const Candidate* best = ranked_refined.empty() ? ranked.front() : ranked_refined.front();
+/// The ranking as JSON (what `--json` prints and design.json holds).
+nlohmann::json design_json(const DesignOptions& d, bool any_synthetic, double spacing,
+                           const std::vector<const Candidate*>& ranked, const std::vector<Candidate>& refined,
+                           const std::vector<const Candidate*>& ranked_refined, const Candidate* best,
+                           const std::optional<SceneSweep>& sweep, const std::vector<std::string>& written) {
   nlohmann::json j;
   j["synthetic"] = any_synthetic;
   j["noise_C"] = d.noise_C;
@@ -536,6 +531,68 @@ int run_design(const DesignCommandOptions& o) {
     j["vary"] = {{"key", sweep->key}, {"values", sweep->values}};
   }
   j["figures"] = written;
+  return j;
+}
+
+/// The ranking as text: settings, tables, details, the best layout and the files written.
+void print_design_text(const DesignCommandOptions& o, const DesignOptions& d, std::size_t n_layouts, bool any_synthetic,
+                       const std::string& noise_text, const std::vector<const Candidate*>& ranked,
+                       const std::vector<const Candidate*>& ranked_refined, const Candidate* best,
+                       const std::vector<std::string>& written) {
+  std::printf("pvdfkit design: %zu layout%s; maps: %s\n", n_layouts, n_layouts == 1 ? "" : "s",
+              any_synthetic ? "SYNTHETIC stand-in (geometry, draw angle, d32/d31, electrode area only; not FEM)"
+                            : "FEM (pvdfkit map engine) or files");
+  std::printf("noise %s, press %.3g N, force range %.3g-%.3g N, force %s, target σpos <= %.3g mm\n",
+              noise_text.c_str(), d.force_N, d.min_force_N, d.max_force_N, d.force_known ? "known" : "unknown",
+              o.target_mm);
+  std::printf("usable = σpos within target, not ambiguous, not dead (figure of merit); σpos = RMS radial error "
+              "√(Cxx+Cyy) of the Cramér–Rao bound; σF = relative force bound\n");
+  print_table(ranked, "Ranking (preview)");
+  for (const Candidate* c : ranked) print_details(*c);
+  if (!ranked_refined.empty()) {
+    print_table(ranked_refined, "Ranking of the refined winners");
+    for (const Candidate* c : ranked_refined) print_details(*c);
+  }
+  std::printf("\nbest: %s\n", best->label.c_str());
+  for (const auto& w : written) std::printf("wrote %s\n", w.c_str());
+  if (!o.no_plots) std::printf("wrote %s/design.json\n", o.out_dir.c_str());
+}
+
+int run_design(const DesignCommandOptions& o) {
+  const DesignOptions d = design_options(o);
+  const double spacing = o.spacing_m > 0 ? o.spacing_m : (o.synthetic ? 0.001 : 0.003);
+
+  // Step 1: the candidates.
+  std::vector<std::string> series_names;
+  std::optional<SceneSweep> sweep;
+  if (!o.vary.empty()) sweep = parse_scene_sweep(o.vary);
+  std::vector<Candidate> all = collect_candidates(o, sweep, series_names);
+
+  // Step 2: maps (coarse previews) and their evaluation.
+  for (auto& c : all) {
+    if (c.scene) c.map = make_map(c, o, spacing, c.map_file, c.map_source);
+    evaluate(c, d);
+  }
+
+  // Step 3: rank; refine the winners at a finer spacing and rank again.
+  const std::vector<const Candidate*> ranked = rank(all);
+  const std::vector<Candidate> refined = refine_winners(ranked, o, d, spacing);
+  const std::vector<const Candidate*> ranked_refined = rank(refined);
+
+  // Step 4: report.
+  bool any_synthetic = false;
+  for (const auto& c : all) any_synthetic |= c.summary.synthetic;
+  std::string noise_text;
+  for (std::size_t k = 0; k < d.noise_C.size(); ++k) noise_text += (k ? "/" : "") + fmt("%.3g", d.noise_C[k] * 1e12);
+  noise_text = "σ = " + noise_text + " pC" + (o.adc_bits > 0 ? ", " + std::to_string(o.adc_bits) + "-bit ADC" : "");
+  std::vector<std::string> written;
+  if (!o.no_plots) {
+    pvdf::make_directories(o.out_dir);
+    write_map_figures(ranked_refined.empty() ? ranked : ranked_refined, o, noise_text, written);
+    if (sweep) write_sweep_figure(all, series_names, o, sweep->key, written);
+  }
+  const Candidate* best = ranked_refined.empty() ? ranked.front() : ranked_refined.front();
+  const nlohmann::json j = design_json(d, any_synthetic, spacing, ranked, refined, ranked_refined, best, sweep, written);
   if (!o.no_plots) {
     pvdf::write_file_atomically(o.out_dir + "/design.json", [&j](std::ostream& out) { out << j.dump(2) << '\n'; });
   }
@@ -543,23 +600,7 @@ int run_design(const DesignCommandOptions& o) {
   if (o.json) {
     std::cout << j.dump(2) << '\n';
   } else {
-    std::printf("pvdfkit design: %zu layout%s; maps: %s\n", all.size(), all.size() == 1 ? "" : "s",
-                any_synthetic ? "SYNTHETIC stand-in (geometry, draw angle, d32/d31, electrode area only; not FEM)"
-                              : "FEM (pvdfkit map engine) or files");
-    std::printf("noise %s, press %.3g N, force range %.3g-%.3g N, force %s, target σpos <= %.3g mm\n",
-                noise_text.c_str(), d.force_N, d.min_force_N, d.max_force_N, d.force_known ? "known" : "unknown",
-                o.target_mm);
-    std::printf("usable = σpos within target, not ambiguous, not dead (figure of merit); σpos = RMS radial error "
-                "√(Cxx+Cyy) of the Cramér–Rao bound; σF = relative force bound\n");
-    print_table(ranked, "Ranking (preview)");
-    for (const Candidate* c : ranked) print_details(*c);
-    if (!ranked_refined.empty()) {
-      print_table(ranked_refined, "Ranking of the refined winners");
-      for (const Candidate* c : ranked_refined) print_details(*c);
-    }
-    std::printf("\nbest: %s\n", best->label.c_str());
-    for (const auto& w : written) std::printf("wrote %s\n", w.c_str());
-    if (!o.no_plots) std::printf("wrote %s/design.json\n", o.out_dir.c_str());
+    print_design_text(o, d, all.size(), any_synthetic, noise_text, ranked, ranked_refined, best, written);
   }
   // Every layout unable to locate is a numerical outcome, not a ranking.
   for (const auto& c : all) {

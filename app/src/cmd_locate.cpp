@@ -56,9 +56,10 @@ nlohmann::json flags_json(std::uint32_t flags) {
   return a;
 }
 
-int run_locate(const LocateOptions& o) {
-  using namespace pvdf::mapping;
-  const ChargeMap map = read_map(o.map_path);
+using namespace pvdf::mapping;
+
+/// The lookup options from the flags, each checked against its rule.
+LocatorOptions locator_options(const LocateOptions& o) {
   LocatorOptions options;
   if (!o.noise.empty()) options.noise_C = pvdf::parse_number_list(o.noise, "--noise-C");
   options.use_calibration = !o.no_calibration;
@@ -77,103 +78,127 @@ int run_locate(const LocateOptions& o) {
     }
   }
   options.known_force_N = o.force_N;
-  const Locator locator(map, options);
+  return options;
+}
 
-  if (!o.pictures_dir.empty()) {
-    pvdf::make_directories(o.pictures_dir);
-    double force = o.force_N;
-    if (!(force > 0)) {  // the level nearest 1 N
-      force = map.forces_N.front();
-      for (double f : map.forces_N) {
-        if (std::abs(std::log(f)) < std::abs(std::log(force))) force = f;
-      }
+/// `--pictures DIR`: the isocharge picture of each electrode and the map as VTK.
+void write_pictures(const LocateOptions& o, const ChargeMap& map, const Locator& locator) {
+  pvdf::make_directories(o.pictures_dir);
+  double force = o.force_N;
+  if (!(force > 0)) {  // the level nearest 1 N
+    force = map.forces_N.front();
+    for (double f : map.forces_N) {
+      if (std::abs(std::log(f)) < std::abs(std::log(force))) force = f;
     }
-    for (std::size_t k = 0; k < map.ne(); ++k) {
-      const std::string path = o.pictures_dir + "/isocharge_" + map.electrode_names[k] + ".png";
-      write_isocharge_png(locator, map, k, force, path);
-      std::printf("wrote %s\n", path.c_str());
-    }
-    const std::string vtk = o.pictures_dir + "/charges.vtk";
-    write_charge_vtk(map, vtk);
-    std::printf("wrote %s\n", vtk.c_str());
-    if (o.charges.empty() && !o.stream && o.input.empty()) return pvdf::exit_code::success;
   }
+  for (std::size_t k = 0; k < map.ne(); ++k) {
+    const std::string path = o.pictures_dir + "/isocharge_" + map.electrode_names[k] + ".png";
+    write_isocharge_png(locator, map, k, force, path);
+    std::printf("wrote %s\n", path.c_str());
+  }
+  const std::string vtk = o.pictures_dir + "/charges.vtk";
+  write_charge_vtk(map, vtk);
+  std::printf("wrote %s\n", vtk.c_str());
+}
 
-  if (!o.charges.empty()) {
-    if (o.stream || !o.input.empty()) throw pvdf::InputError("--charges-C and --stream/--input: choose one press or a stream");
-    const auto q = pvdf::parse_number_list(o.charges, "--charges-C", map.ne());
-    const Location r = locator.locate(q.data());
-    if (o.json) {
-      nlohmann::json j;
-      j["flags"] = flags_json(r.flags);
-      if (r.has_position()) {
-        j["x_m"] = r.x_m;
-        j["y_m"] = r.y_m;
-        j["force_N"] = r.force_N;
-        j["residual"] = r.residual;
-        j["sigma_x_m"] = r.sigma_x_m;
-        j["sigma_y_m"] = r.sigma_y_m;
-        j["sigma_F_N"] = r.sigma_F_N;
-        j["n_solutions"] = r.n_solutions;
-        j["probability"] = r.probability;
-        j["p_best"] = r.probability;
-        j["calibrated"] = locator.calibrated();
-        if (r.flags & flag::ambiguous) {
-          nlohmann::json others = nlohmann::json::array();
-          for (int a = 0; a < r.n_alternatives; ++a) {
-            const auto& alt = r.alternatives[std::size_t(a)];
-            others.push_back({{"x_m", alt.x_m}, {"y_m", alt.y_m}, {"force_N", alt.force_N}, {"residual", alt.residual},
-                              {"sigma_x_m", alt.sigma_x_m}, {"sigma_y_m", alt.sigma_y_m}, {"sigma_F_N", alt.sigma_F_N},
-                              {"probability", alt.probability}});
-          }
-          j["alternatives"] = others;
-        }
-      }
-      std::cout << j.dump(2) << '\n';
-    } else if (r.has_position()) {
-      std::printf("x = %.4f mm +- %.4f mm\ny = %.4f mm +- %.4f mm\nF = %.5g N +- %.3g N%s\n", r.x_m * 1e3,
-                  r.sigma_x_m * 1e3, r.y_m * 1e3, r.sigma_y_m * 1e3, r.force_N, r.sigma_F_N,
-                  o.force_N > 0 ? " (given)" : "");
-      std::printf("residual = %.3g (noise units)\nprobability = %.3g\nflags: %s\n", r.residual, r.probability,
-                  flags_text(r.flags).c_str());
+void print_location_json(const Location& r, const Locator& locator) {
+  nlohmann::json j;
+  j["flags"] = flags_json(r.flags);
+  if (r.has_position()) {
+    j["x_m"] = r.x_m;
+    j["y_m"] = r.y_m;
+    j["force_N"] = r.force_N;
+    j["residual"] = r.residual;
+    j["sigma_x_m"] = r.sigma_x_m;
+    j["sigma_y_m"] = r.sigma_y_m;
+    j["sigma_F_N"] = r.sigma_F_N;
+    j["n_solutions"] = r.n_solutions;
+    j["probability"] = r.probability;
+    j["p_best"] = r.probability;
+    j["calibrated"] = locator.calibrated();
+    if (r.flags & flag::ambiguous) {
+      nlohmann::json others = nlohmann::json::array();
       for (int a = 0; a < r.n_alternatives; ++a) {
         const auto& alt = r.alternatives[std::size_t(a)];
-        std::printf("also fits: x = %.4f mm, y = %.4f mm, F = %.5g N, residual %.3g, probability %.3g\n",
-                    alt.x_m * 1e3, alt.y_m * 1e3, alt.force_N, alt.residual, alt.probability);
+        others.push_back({{"x_m", alt.x_m}, {"y_m", alt.y_m}, {"force_N", alt.force_N}, {"residual", alt.residual},
+                          {"sigma_x_m", alt.sigma_x_m}, {"sigma_y_m", alt.sigma_y_m}, {"sigma_F_N", alt.sigma_F_N},
+                          {"probability", alt.probability}});
       }
-      if (r.flags & flag::ambiguous) std::printf("%d solutions fit within noise in all (all shown)\n", r.n_solutions);
-    } else {
-      std::printf("flags: %s\n", flags_text(r.flags).c_str());
+      j["alternatives"] = others;
     }
-    if (!o.plot_path.empty()) {
-      if (!r.has_position()) {
-        std::cerr << "warning: no picture: the press has no position\n";
-      } else {
-        write_intersection_png(locator, map, q.data(), r, o.plot_path);
-        if (!o.json) std::printf("plot written to %s\n", o.plot_path.c_str());
-      }
-    }
-    // Numerical honesty: a press outside the map or at the noise level is not a result.
-    return r.has_position() ? pvdf::exit_code::success : pvdf::exit_code::numerical;
   }
+  std::cout << j.dump(2) << '\n';
+}
 
-  if (o.stream || !o.input.empty()) {
-    if (!o.plot_path.empty() || o.json) throw pvdf::InputError("--plot and --json apply to a single press (--charges-C), not to a stream");
-    StreamOptions so;
-    so.strict = o.strict;
-    std::ifstream file;
-    std::istream* in = &std::cin;
-    if (!o.input.empty() && o.input != "-") {
-      file.open(o.input);
-      if (!file) throw pvdf::InputError(o.input + ": cannot open; check the path");
-      in = &file;
-      so.source = o.input;
-    }
-    const StreamSummary s = locate_stream(locator, *in, std::cout, std::cerr, so);
-    std::cerr << "located " << s.located << " of " << s.rows << " rows (" << s.flagged << " flagged, " << s.skipped
-              << " malformed rows skipped)\n";
-    return pvdf::exit_code::success;
+void print_location_text(const LocateOptions& o, const Location& r) {
+  if (!r.has_position()) {
+    std::printf("flags: %s\n", flags_text(r.flags).c_str());
+    return;
   }
+  std::printf("x = %.4f mm +- %.4f mm\ny = %.4f mm +- %.4f mm\nF = %.5g N +- %.3g N%s\n", r.x_m * 1e3,
+              r.sigma_x_m * 1e3, r.y_m * 1e3, r.sigma_y_m * 1e3, r.force_N, r.sigma_F_N,
+              o.force_N > 0 ? " (given)" : "");
+  std::printf("residual = %.3g (noise units)\nprobability = %.3g\nflags: %s\n", r.residual, r.probability,
+              flags_text(r.flags).c_str());
+  for (int a = 0; a < r.n_alternatives; ++a) {
+    const auto& alt = r.alternatives[std::size_t(a)];
+    std::printf("also fits: x = %.4f mm, y = %.4f mm, F = %.5g N, residual %.3g, probability %.3g\n",
+                alt.x_m * 1e3, alt.y_m * 1e3, alt.force_N, alt.residual, alt.probability);
+  }
+  if (r.flags & flag::ambiguous) std::printf("%d solutions fit within noise in all (all shown)\n", r.n_solutions);
+}
+
+/// `--charges-C`: one press.
+int locate_one(const LocateOptions& o, const ChargeMap& map, const Locator& locator) {
+  if (o.stream || !o.input.empty()) throw pvdf::InputError("--charges-C and --stream/--input: choose one press or a stream");
+  const auto q = pvdf::parse_number_list(o.charges, "--charges-C", map.ne());
+  const Location r = locator.locate(q.data());
+  if (o.json) {
+    print_location_json(r, locator);
+  } else {
+    print_location_text(o, r);
+  }
+  if (!o.plot_path.empty()) {
+    if (!r.has_position()) {
+      std::cerr << "warning: no picture: the press has no position\n";
+    } else {
+      write_intersection_png(locator, map, q.data(), r, o.plot_path);
+      if (!o.json) std::printf("plot written to %s\n", o.plot_path.c_str());
+    }
+  }
+  // Numerical honesty: a press outside the map or at the noise level is not a result.
+  return r.has_position() ? pvdf::exit_code::success : pvdf::exit_code::numerical;
+}
+
+/// `--stream` / `--input`: one located row per CSV row.
+int locate_rows(const LocateOptions& o, const Locator& locator) {
+  if (!o.plot_path.empty() || o.json) throw pvdf::InputError("--plot and --json apply to a single press (--charges-C), not to a stream");
+  StreamOptions so;
+  so.strict = o.strict;
+  std::ifstream file;
+  std::istream* in = &std::cin;
+  if (!o.input.empty() && o.input != "-") {
+    file.open(o.input);
+    if (!file) throw pvdf::InputError(o.input + ": cannot open; check the path");
+    in = &file;
+    so.source = o.input;
+  }
+  const StreamSummary s = locate_stream(locator, *in, std::cout, std::cerr, so);
+  std::cerr << "located " << s.located << " of " << s.rows << " rows (" << s.flagged << " flagged, " << s.skipped
+            << " malformed rows skipped)\n";
+  return pvdf::exit_code::success;
+}
+
+int run_locate(const LocateOptions& o) {
+  const ChargeMap map = read_map(o.map_path);
+  const Locator locator(map, locator_options(o));
+
+  if (!o.pictures_dir.empty()) {
+    write_pictures(o, map, locator);
+    if (o.charges.empty() && !o.stream && o.input.empty()) return pvdf::exit_code::success;
+  }
+  if (!o.charges.empty()) return locate_one(o, map, locator);
+  if (o.stream || !o.input.empty()) return locate_rows(o, locator);
   if (o.pictures_dir.empty()) {
     throw pvdf::InputError("nothing to do: give --charges-C Q1,Q2,... for one press, --stream (CSV on stdin) or "
                            "--input FILE for many, or --pictures DIR");

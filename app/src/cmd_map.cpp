@@ -24,6 +24,8 @@
 
 namespace {
 
+using namespace pvdf::mapping;
+
 // Set by SIGINT/SIGTERM: the generation stops after the current solves and keeps its checkpoint.
 std::atomic<bool> interrupted{false};
 
@@ -58,17 +60,9 @@ struct MapCommandOptions {
   std::string mesh_path;
 };
 
-int run_map(const MapCommandOptions& o) {
-  using namespace pvdf::mapping;
-  // MPI only when launched by mpirun (or asked for): a plain run needs no MPI runtime.
-  std::optional<MpiSession> mpi;
-  if (o.force_mpi || MpiSession::launched_by_mpirun()) mpi.emplace();
-  const int rank = mpi ? mpi->rank() : 0;
-
-  pvdf::Scene scene = pvdf::load_scene(o.scene_path);
-  if (rank == 0) {
-    for (const auto& w : scene.warnings) pvdf::app::warn(w);
-  }
+/// The generator's options from the command's flags, each flag checked against its rule before any
+/// work starts: forces, region, the size of the map, the checkpoint path, the rim margin and noise.
+MapOptions map_options(const MapCommandOptions& o, const pvdf::Scene& scene) {
   MapOptions options;
   options.spacing_m = o.spacing_m;
   options.forces_N = pvdf::parse_number_list(o.forces, "--forces-N");
@@ -119,6 +113,93 @@ int run_map(const MapCommandOptions& o) {
       }
     }
   }
+  return options;
+}
+
+/// The `--json` summary: counts, model, estimates, timings.
+void print_map_json(const MapCommandOptions& o, const ChargeMap& map, const MapReport& report) {
+  nlohmann::json j;
+  j["output"] = o.output;
+  j["n_positions"] = report.n_positions;
+  j["n_points"] = report.n_points;
+  j["n_solved"] = report.n_solved;
+  j["n_scaled"] = report.n_scaled;
+  j["n_mirrored"] = report.n_mirrored;
+  j["n_resumed"] = report.n_resumed;
+  j["n_failed"] = report.n_failed;
+  j["n_scaling_checks"] = report.n_scaling_checks;
+  j["n_scaling_checks_failed"] = report.n_scaling_checks_failed;
+  j["max_scaling_check_error"] = report.max_scaling_check_error;
+  j["mirror_x"] = report.mirror_x;
+  j["mirror_y"] = report.mirror_y;
+  j["symmetry_reason"] = report.symmetry_reason;
+  j["model"] = report.model;
+  j["model_reason"] = report.model_reason;
+  j["tolerance"] = map.tolerance;
+  j["estimated_relative_error"] = report.estimated_relative_error;
+  // Unknown (NaN) is written as null, never as a number.
+  const double w_error = map.estimated_deflection_relative_error;
+  j["estimated_deflection_relative_error"] = std::isfinite(w_error) ? nlohmann::json(w_error) : nlohmann::json(nullptr);
+  j["n_tolerance_not_met"] = report.n_tolerance_not_met;
+  j["n_rim_model"] = report.n_rim_model;
+  j["rim_solves"] = report.rim_solves;
+  j["rim_s"] = report.rim_s;
+  j["estimate_s"] = report.estimate_s;
+  j["rim_n_dofs"] = report.rim_n_dofs;
+  j["n_dofs"] = report.n_dofs;
+  j["mesh"] = o.mesh_path.empty() ? std::string("built-in") : o.mesh_path;
+  j["ranks"] = report.ranks;
+  j["threads"] = report.threads;
+  j["wall_s"] = report.wall_s;
+  j["per_position_s"] = report.per_position_s;
+  j["nx"] = map.nx();
+  j["ny"] = map.ny();
+  j["forces_N"] = map.forces_N;
+  j["rim_margin_m"] = map.rim_margin_m;
+  j["checkpoint_hash"] = report.checkpoint_hash;
+  if (!report.first_failure.empty()) j["first_failure"] = report.first_failure;
+  std::cout << j.dump(2) << '\n';
+}
+
+/// The text summary; for a three-electrode map without failures also the share of the film three
+/// charges leave ambiguous with the force unknown, and the remedies.
+void print_map_text(const MapCommandOptions& o, const ChargeMap& map, const MapReport& report) {
+  std::printf("%s: %zu x %zu grid, %zu positions x %zu force levels = %zu points\n", o.output.c_str(), map.nx(),
+              map.ny(), report.n_positions, map.nf(), report.n_points);
+  std::printf("solved %zu, scaled %zu (checks %zu, failed %zu, worst %.3g), mirrored %zu, resumed %zu, failed %zu\n",
+              report.n_solved, report.n_scaled, report.n_scaling_checks, report.n_scaling_checks_failed,
+              report.max_scaling_check_error, report.n_mirrored, report.n_resumed, report.n_failed);
+  std::printf("model %s: %s\n", report.model.c_str(), report.model_reason.c_str());
+  std::printf("estimated error (largest per-node estimate): charge %.2g %%, deflection at the load %.2g %%; "
+              "%zu points above the tolerance (tolerance_not_met)\n",
+              100 * map.estimated_relative_error, 100 * map.estimated_deflection_relative_error,
+              report.n_tolerance_not_met);
+  std::printf("rim model (bending, rim-graded mesh, %zu DOFs): %zu points\n", report.rim_n_dofs, report.n_rim_model);
+  std::printf("symmetry: %s\n", report.symmetry_reason.c_str());
+  std::printf("%d rank(s) x %d thread(s), %.1f s, %.3g s per solved position and core\n", report.ranks,
+              report.threads, report.wall_s, report.per_position_s);
+  if (map.ne() == 3 && report.n_failed == 0) {
+    // How much of the film three charges leave ambiguous with the force unknown, and the remedies.
+    const pvdf::mapping::AmbiguityShare a = pvdf::mapping::ambiguity_share(map);
+    std::printf("ambiguity at %g N (%zu nodes): more than one press fits the charges at %.0f %% of the film with the force "
+                "unknown (range %g-%g N); remedies: a force reading (--force-N) %.0f %%, the force known within +-25 %% "
+                "(--force-range-N) %.0f %%, a fourth electrode (pvdfkit design quantifies it; docs/lookup.md section 2)\n",
+                a.force_N, a.nodes, 100 * a.force_unknown, a.min_force_N, a.max_force_N, 100 * a.force_known,
+                100 * a.force_within_25);
+  }
+}
+
+int run_map(const MapCommandOptions& o) {
+  // MPI only when launched by mpirun (or asked for): a plain run needs no MPI runtime.
+  std::optional<MpiSession> mpi;
+  if (o.force_mpi || MpiSession::launched_by_mpirun()) mpi.emplace();
+  const int rank = mpi ? mpi->rank() : 0;
+
+  pvdf::Scene scene = pvdf::load_scene(o.scene_path);
+  if (rank == 0) {
+    for (const auto& w : scene.warnings) pvdf::app::warn(w);
+  }
+  MapOptions options = map_options(o, scene);
   if (!o.no_checkpoint) options.checkpoint_path = o.checkpoint.empty() ? o.output + ".checkpoint" : o.checkpoint;
   options.resume = !o.no_resume;
   options.distributed = mpi.has_value();
@@ -161,71 +242,9 @@ int run_map(const MapCommandOptions& o) {
   remove_checkpoint_files(options.checkpoint_path);
 
   if (o.json) {
-    nlohmann::json j;
-    j["output"] = o.output;
-    j["n_positions"] = report.n_positions;
-    j["n_points"] = report.n_points;
-    j["n_solved"] = report.n_solved;
-    j["n_scaled"] = report.n_scaled;
-    j["n_mirrored"] = report.n_mirrored;
-    j["n_resumed"] = report.n_resumed;
-    j["n_failed"] = report.n_failed;
-    j["n_scaling_checks"] = report.n_scaling_checks;
-    j["n_scaling_checks_failed"] = report.n_scaling_checks_failed;
-    j["max_scaling_check_error"] = report.max_scaling_check_error;
-    j["mirror_x"] = report.mirror_x;
-    j["mirror_y"] = report.mirror_y;
-    j["symmetry_reason"] = report.symmetry_reason;
-    j["model"] = report.model;
-    j["model_reason"] = report.model_reason;
-    j["tolerance"] = map.tolerance;
-    j["estimated_relative_error"] = report.estimated_relative_error;
-    // Unknown (NaN) is written as null, never as a number.
-    const double w_error = map.estimated_deflection_relative_error;
-    j["estimated_deflection_relative_error"] = std::isfinite(w_error) ? nlohmann::json(w_error) : nlohmann::json(nullptr);
-    j["n_tolerance_not_met"] = report.n_tolerance_not_met;
-    j["n_rim_model"] = report.n_rim_model;
-    j["rim_solves"] = report.rim_solves;
-    j["rim_s"] = report.rim_s;
-    j["estimate_s"] = report.estimate_s;
-    j["rim_n_dofs"] = report.rim_n_dofs;
-    j["n_dofs"] = report.n_dofs;
-    j["mesh"] = o.mesh_path.empty() ? std::string("built-in") : o.mesh_path;
-    j["ranks"] = report.ranks;
-    j["threads"] = report.threads;
-    j["wall_s"] = report.wall_s;
-    j["per_position_s"] = report.per_position_s;
-    j["nx"] = map.nx();
-    j["ny"] = map.ny();
-    j["forces_N"] = map.forces_N;
-    j["rim_margin_m"] = map.rim_margin_m;
-    j["checkpoint_hash"] = report.checkpoint_hash;
-    if (!report.first_failure.empty()) j["first_failure"] = report.first_failure;
-    std::cout << j.dump(2) << '\n';
+    print_map_json(o, map, report);
   } else {
-    std::printf("%s: %zu x %zu grid, %zu positions x %zu force levels = %zu points\n", o.output.c_str(), map.nx(),
-                map.ny(), report.n_positions, map.nf(), report.n_points);
-    std::printf("solved %zu, scaled %zu (checks %zu, failed %zu, worst %.3g), mirrored %zu, resumed %zu, failed %zu\n",
-                report.n_solved, report.n_scaled, report.n_scaling_checks, report.n_scaling_checks_failed,
-                report.max_scaling_check_error, report.n_mirrored, report.n_resumed, report.n_failed);
-    std::printf("model %s: %s\n", report.model.c_str(), report.model_reason.c_str());
-    std::printf("estimated error (largest per-node estimate): charge %.2g %%, deflection at the load %.2g %%; "
-                "%zu points above the tolerance (tolerance_not_met)\n",
-                100 * map.estimated_relative_error, 100 * map.estimated_deflection_relative_error,
-                report.n_tolerance_not_met);
-    std::printf("rim model (bending, rim-graded mesh, %zu DOFs): %zu points\n", report.rim_n_dofs, report.n_rim_model);
-    std::printf("symmetry: %s\n", report.symmetry_reason.c_str());
-    std::printf("%d rank(s) x %d thread(s), %.1f s, %.3g s per solved position and core\n", report.ranks,
-                report.threads, report.wall_s, report.per_position_s);
-  }
-  if (!o.json && map.ne() == 3 && report.n_failed == 0) {
-    // How much of the film three charges leave ambiguous with the force unknown, and the remedies.
-    const pvdf::mapping::AmbiguityShare a = pvdf::mapping::ambiguity_share(map);
-    std::printf("ambiguity at %g N (%zu nodes): more than one press fits the charges at %.0f %% of the film with the force "
-                "unknown (range %g-%g N); remedies: a force reading (--force-N) %.0f %%, the force known within +-25 %% "
-                "(--force-range-N) %.0f %%, a fourth electrode (pvdfkit design quantifies it; docs/lookup.md section 2)\n",
-                a.force_N, a.nodes, 100 * a.force_unknown, a.min_force_N, a.max_force_N, 100 * a.force_known,
-                100 * a.force_within_25);
+    print_map_text(o, map, report);
   }
   if (report.n_failed > 0) {
     std::cerr << "error: " << report.n_failed << " map point(s) did not converge and are marked not_converged in "

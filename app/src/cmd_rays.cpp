@@ -38,9 +38,10 @@ struct RaysOptions {
   double angle_tolerance_deg = 2.0;
 };
 
-int run_rays(const RaysOptions& o) {
-  using namespace pvdf::mapping;
-  // Bound the work before reading the map: rays x samples per electrode.
+using namespace pvdf::mapping;
+
+/// Bound the work before reading the map: rays x samples per electrode.
+void check_ray_flags(const RaysOptions& o) {
   if (!(o.d_max_m > o.d_min_m)) {
     throw pvdf::InputError("--d-max-m " + pvdf::format_g(o.d_max_m) + " must exceed --d-min-m " + pvdf::format_g(o.d_min_m));
   }
@@ -54,19 +55,18 @@ int run_rays(const RaysOptions& o) {
                            std::to_string(o.n_samples) + " asks for " + pvdf::format_g(n_rays * o.n_samples) +
                            " samples per electrode, more than the limit 1e7; use a larger step or fewer samples");
   }
-  const ChargeMap map = read_map(o.map_path);
-  const MapInterpolant interpolant(map);
-  RayOptions ro;
-  ro.force_N = o.force_N;
-  ro.angle_step_deg = o.angle_step_deg;
-  ro.d_min_m = o.d_min_m;
-  ro.d_max_m = o.d_max_m;
-  ro.n_samples = o.n_samples;
-  ro.min_points = o.min_points;
-  // Validate the plot choices before the (cheap but not free) analysis.
-  std::size_t plot_electrode = 0;
-  std::vector<double> plot_angles;
+}
+
+/// What `--plot` draws: the electrode, the ray angles and the measured presses (optional).
+struct RayPlotChoice {
+  std::size_t electrode = 0;
+  std::vector<double> angles_deg;
   std::vector<MeasuredPress> measured;
+};
+
+/// The plot choices, validated before the (cheap but not free) analysis.
+RayPlotChoice ray_plot_choice(const RaysOptions& o, const ChargeMap& map) {
+  RayPlotChoice plot;
   if (!o.plot_path.empty()) {
     std::string name = o.electrode;
     if (name.empty()) {  // seed 001 Fig. 7 shows electrode B
@@ -78,7 +78,7 @@ int run_rays(const RaysOptions& o) {
     bool found = false;
     for (std::size_t k = 0; k < map.ne(); ++k) {
       if (map.electrode_names[k] == name) {
-        plot_electrode = k;
+        plot.electrode = k;
         found = true;
       }
     }
@@ -87,103 +87,129 @@ int run_rays(const RaysOptions& o) {
       for (const auto& n : map.electrode_names) names += (names.empty() ? "" : ",") + n;
       throw pvdf::InputError("--electrode " + name + ": not an electrode of " + o.map_path + " (it has " + names + ")");
     }
-    plot_angles = pvdf::parse_number_list(o.plot_angles, "--plot-angles-deg");
+    plot.angles_deg = pvdf::parse_number_list(o.plot_angles, "--plot-angles-deg");
     if (!o.measured_path.empty()) {
-      measured = read_measured_csv(o.measured_path, map.electrode_names);
-      pvdf::app::warn_if_map_too_coarse(map, measured);  // the same rule as `compare MAP`
+      plot.measured = read_measured_csv(o.measured_path, map.electrode_names);
+      pvdf::app::warn_if_map_too_coarse(map, plot.measured);  // the same rule as `compare MAP`
     }
   } else if (!o.measured_path.empty() || !o.electrode.empty()) {
     throw pvdf::InputError("--measured and --electrode choose what --plot draws; give --plot FILE.png (or .svg, .pdf) too");
   }
+  return plot;
+}
+
+/// `--csv`: one row per ray.
+void write_rays_csv(const std::string& path, const ChargeMap& map, const RayAnalysis& a) {
+  pvdf::write_file_atomically(path, [&](std::ostream& out) {
+    out.precision(10);
+    out << "electrode,beta_deg,fitted,C1_C,C2,decay_exponent,r_squared,n_used,n_nonpositive,max_relative_deviation\n";
+    for (const auto& r : a.rays) {
+      out << map.electrode_names[r.electrode] << ',' << r.beta_deg << ',' << int(r.fitted) << ',';
+      if (r.fitted) {
+        out << r.C1_C << ',' << r.C2 << ',' << -r.C2 << ',' << r.r_squared << ',';
+      } else {
+        out << "nan,nan,nan,nan,";
+      }
+      out << r.n_used << ',' << r.n_nonpositive << ',' << (r.fitted ? r.max_relative_deviation : std::nan("")) << '\n';
+    }
+  });
+}
+
+void print_rays_json(const RaysOptions& o, const ChargeMap& map, const RayOptions& ro, const RayAnalysis& a) {
+  nlohmann::json j;
+  j["map"] = o.map_path;
+  j["model"] = map.model;
+  j["force_N"] = ro.force_N;
+  j["d_min_m"] = ro.d_min_m;
+  j["d_max_m"] = ro.d_max_m;
+  j["n_samples"] = ro.n_samples;
+  j["angle_step_deg"] = ro.angle_step_deg;
+  j["draw_angle_deg"] = a.draw_angle_rad * 180.0 / pvdf::pi;
+  j["law"] = "Q = C1 * (d / 1 mm)^C2, least squares in ln Q against ln d";
+  j["paper_decay_exponent_range"] = {paper_exponent_min, paper_exponent_max};
+  j["rays"] = nlohmann::json::array();
+  for (const auto& r : a.rays) {
+    nlohmann::json e = {{"electrode", map.electrode_names[r.electrode]}, {"beta_deg", r.beta_deg}, {"fitted", r.fitted},
+                        {"n_used", r.n_used}, {"n_nonpositive", r.n_nonpositive}};
+    if (r.fitted) {
+      e["C1_C"] = r.C1_C;
+      e["C2"] = r.C2;
+      e["decay_exponent"] = -r.C2;
+      e["r_squared"] = r.r_squared;
+      e["max_relative_deviation"] = r.max_relative_deviation;
+    } else {
+      e["reason"] = r.reason;
+    }
+    j["rays"].push_back(e);
+  }
+  j["electrodes"] = nlohmann::json::array();
+  for (const auto& s : a.electrodes) {
+    nlohmann::json e = {{"name", s.name}, {"n_rays", s.n_rays}, {"n_fitted", s.n_fitted},
+                        {"n_in_paper_range", s.n_in_paper_range}};
+    if (s.n_fitted > 0) {
+      e["min_decay_exponent"] = s.min_decay_exponent;
+      e["median_decay_exponent"] = s.median_decay_exponent;
+      e["max_decay_exponent"] = s.max_decay_exponent;
+      e["min_r_squared"] = s.min_r_squared;
+    }
+    j["electrodes"].push_back(e);
+  }
+  std::cout << j.dump(2) << '\n';
+}
+
+void print_rays_text(const RaysOptions& o, const ChargeMap& map, const RayOptions& ro, const RayAnalysis& a) {
+  std::printf("%s (%s map): Q = C1 (d / 1 mm)^C2 along rays at %.3g N, d = %.3g .. %.3g mm, %d samples per ray "
+              "(log-spaced), beta from the draw direction\n",
+              o.map_path.c_str(), map.model.c_str(), ro.force_N, ro.d_min_m * 1e3, ro.d_max_m * 1e3, ro.n_samples);
+  std::printf("%-9s %8s %12s %9s %9s %4s %10s\n", "electrode", "beta_deg", "C1_pC", "C2", "R2", "n", "max_dev_%");
+  for (const auto& r : a.rays) {
+    if (r.fitted) {
+      std::printf("%-9s %8.1f %12.5g %9.4f %9.5f %4d %10.3g\n", map.electrode_names[r.electrode].c_str(), r.beta_deg,
+                  r.C1_C * 1e12, r.C2, r.r_squared, r.n_used, 100 * r.max_relative_deviation);
+    } else {
+      std::printf("%-9s %8.1f   not fitted: %s\n", map.electrode_names[r.electrode].c_str(), r.beta_deg, r.reason.c_str());
+    }
+  }
+  std::printf("decay exponent -C2 per electrode (seed 001: %.2f .. %.2f):\n", paper_exponent_min, paper_exponent_max);
+  for (const auto& s : a.electrodes) {
+    if (s.n_fitted == 0) {
+      std::printf("  %-8s no ray fitted (of %d)\n", s.name.c_str(), s.n_rays);
+      continue;
+    }
+    std::printf("  %-8s min %.3f  median %.3f  max %.3f; %d of %d fitted rays in the paper's range; min R2 %.4f\n",
+                s.name.c_str(), s.min_decay_exponent, s.median_decay_exponent, s.max_decay_exponent, s.n_in_paper_range,
+                s.n_fitted, s.min_r_squared);
+  }
+}
+
+int run_rays(const RaysOptions& o) {
+  check_ray_flags(o);
+  const ChargeMap map = read_map(o.map_path);
+  const MapInterpolant interpolant(map);
+  RayOptions ro;
+  ro.force_N = o.force_N;
+  ro.angle_step_deg = o.angle_step_deg;
+  ro.d_min_m = o.d_min_m;
+  ro.d_max_m = o.d_max_m;
+  ro.n_samples = o.n_samples;
+  ro.min_points = o.min_points;
+  const RayPlotChoice plot = ray_plot_choice(o, map);
 
   const RayAnalysis a = analyse_rays(map, interpolant, ro);
 
-  if (!o.csv_path.empty()) {
-    pvdf::write_file_atomically(o.csv_path, [&](std::ostream& out) {
-      out.precision(10);
-      out << "electrode,beta_deg,fitted,C1_C,C2,decay_exponent,r_squared,n_used,n_nonpositive,max_relative_deviation\n";
-      for (const auto& r : a.rays) {
-        out << map.electrode_names[r.electrode] << ',' << r.beta_deg << ',' << int(r.fitted) << ',';
-        if (r.fitted) {
-          out << r.C1_C << ',' << r.C2 << ',' << -r.C2 << ',' << r.r_squared << ',';
-        } else {
-          out << "nan,nan,nan,nan,";
-        }
-        out << r.n_used << ',' << r.n_nonpositive << ',' << (r.fitted ? r.max_relative_deviation : std::nan("")) << '\n';
-      }
-    });
-  }
+  if (!o.csv_path.empty()) write_rays_csv(o.csv_path, map, a);
   if (o.json) {
-    nlohmann::json j;
-    j["map"] = o.map_path;
-    j["model"] = map.model;
-    j["force_N"] = ro.force_N;
-    j["d_min_m"] = ro.d_min_m;
-    j["d_max_m"] = ro.d_max_m;
-    j["n_samples"] = ro.n_samples;
-    j["angle_step_deg"] = ro.angle_step_deg;
-    j["draw_angle_deg"] = a.draw_angle_rad * 180.0 / pvdf::pi;
-    j["law"] = "Q = C1 * (d / 1 mm)^C2, least squares in ln Q against ln d";
-    j["paper_decay_exponent_range"] = {paper_exponent_min, paper_exponent_max};
-    j["rays"] = nlohmann::json::array();
-    for (const auto& r : a.rays) {
-      nlohmann::json e = {{"electrode", map.electrode_names[r.electrode]}, {"beta_deg", r.beta_deg}, {"fitted", r.fitted},
-                          {"n_used", r.n_used}, {"n_nonpositive", r.n_nonpositive}};
-      if (r.fitted) {
-        e["C1_C"] = r.C1_C;
-        e["C2"] = r.C2;
-        e["decay_exponent"] = -r.C2;
-        e["r_squared"] = r.r_squared;
-        e["max_relative_deviation"] = r.max_relative_deviation;
-      } else {
-        e["reason"] = r.reason;
-      }
-      j["rays"].push_back(e);
-    }
-    j["electrodes"] = nlohmann::json::array();
-    for (const auto& s : a.electrodes) {
-      nlohmann::json e = {{"name", s.name}, {"n_rays", s.n_rays}, {"n_fitted", s.n_fitted},
-                          {"n_in_paper_range", s.n_in_paper_range}};
-      if (s.n_fitted > 0) {
-        e["min_decay_exponent"] = s.min_decay_exponent;
-        e["median_decay_exponent"] = s.median_decay_exponent;
-        e["max_decay_exponent"] = s.max_decay_exponent;
-        e["min_r_squared"] = s.min_r_squared;
-      }
-      j["electrodes"].push_back(e);
-    }
-    std::cout << j.dump(2) << '\n';
+    print_rays_json(o, map, ro, a);
   } else {
-    std::printf("%s (%s map): Q = C1 (d / 1 mm)^C2 along rays at %.3g N, d = %.3g .. %.3g mm, %d samples per ray "
-                "(log-spaced), beta from the draw direction\n",
-                o.map_path.c_str(), map.model.c_str(), ro.force_N, ro.d_min_m * 1e3, ro.d_max_m * 1e3, ro.n_samples);
-    std::printf("%-9s %8s %12s %9s %9s %4s %10s\n", "electrode", "beta_deg", "C1_pC", "C2", "R2", "n", "max_dev_%");
-    for (const auto& r : a.rays) {
-      if (r.fitted) {
-        std::printf("%-9s %8.1f %12.5g %9.4f %9.5f %4d %10.3g\n", map.electrode_names[r.electrode].c_str(), r.beta_deg,
-                    r.C1_C * 1e12, r.C2, r.r_squared, r.n_used, 100 * r.max_relative_deviation);
-      } else {
-        std::printf("%-9s %8.1f   not fitted: %s\n", map.electrode_names[r.electrode].c_str(), r.beta_deg, r.reason.c_str());
-      }
-    }
-    std::printf("decay exponent -C2 per electrode (seed 001: %.2f .. %.2f):\n", paper_exponent_min, paper_exponent_max);
-    for (const auto& s : a.electrodes) {
-      if (s.n_fitted == 0) {
-        std::printf("  %-8s no ray fitted (of %d)\n", s.name.c_str(), s.n_rays);
-        continue;
-      }
-      std::printf("  %-8s min %.3f  median %.3f  max %.3f; %d of %d fitted rays in the paper's range; min R2 %.4f\n",
-                  s.name.c_str(), s.min_decay_exponent, s.median_decay_exponent, s.max_decay_exponent, s.n_in_paper_range,
-                  s.n_fitted, s.min_r_squared);
-    }
+    print_rays_text(o, map, ro, a);
   }
   if (!o.plot_path.empty()) {
     // The drawn rays need not be on the table's step (Fig. 12 uses 45°, 65°, 85°).
     RayOptions po = ro;
-    po.beta_deg = plot_angles;
+    po.beta_deg = plot.angles_deg;
     const RayAnalysis drawn = analyse_rays(map, interpolant, po);
-    write_rays_png(drawn, map, plot_electrode, plot_angles, measured.empty() ? nullptr : &measured, o.angle_tolerance_deg,
-                   o.plot_path);
+    write_rays_png(drawn, map, plot.electrode, plot.angles_deg, plot.measured.empty() ? nullptr : &plot.measured,
+                   o.angle_tolerance_deg, o.plot_path);
     if (!o.json) std::printf("plot written to %s\n", o.plot_path.c_str());
   }
   if (!o.csv_path.empty() && !o.json) std::printf("table written to %s\n", o.csv_path.c_str());

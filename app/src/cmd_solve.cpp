@@ -34,27 +34,29 @@ struct SolveOptions {
 
 nlohmann::json arr(const std::array<double, 3>& a) { return nlohmann::json::array({a[0], a[1], a[2]}); }
 
-int run_solve(const SolveOptions& o) {
-  pvdf::Scene scene = pvdf::load_scene(o.scene_path);
-  for (const auto& w : scene.warnings) pvdf::app::warn(w);
-  if (!o.loads.empty()) {
-    scene.loads.clear();
-    for (const auto& text : o.loads) {
-      const auto v = pvdf::parse_number_list(text, "--load X_M,Y_M,F_N", 3);
-      // The rules of the scene's loads[]: |force_N| <= 1e4, the footprint clear of the rim.
-      if (!(std::abs(v[2]) <= 1e4)) {
-        throw pvdf::InputError("--load " + pvdf::escape_control_bytes(text) + ": force " + pvdf::format_g(v[2]) +
-                               " N must lie in [-1e4, 1e4] N (the rule of loads[].force_N)");
-      }
-      const std::string problem = pvdf::probe_footprint_problem(scene, {v[0], v[1]}, scene.probe.radius_m);
-      if (!problem.empty()) throw pvdf::InputError("--load " + pvdf::escape_control_bytes(text) + ": " + problem);
-      pvdf::Load l;
-      l.kind = pvdf::Load::Kind::probe;
-      l.position_m = {v[0], v[1]};
-      l.force_N = v[2];
-      scene.loads.push_back(l);
+/// `--load`: the probe loads that replace the scene's, each checked with the rules of loads[].
+void apply_load_flags(const SolveOptions& o, pvdf::Scene& scene) {
+  if (o.loads.empty()) return;
+  scene.loads.clear();
+  for (const auto& text : o.loads) {
+    const auto v = pvdf::parse_number_list(text, "--load X_M,Y_M,F_N", 3);
+    // The rules of the scene's loads[]: |force_N| <= 1e4, the footprint clear of the rim.
+    if (!(std::abs(v[2]) <= 1e4)) {
+      throw pvdf::InputError("--load " + pvdf::escape_control_bytes(text) + ": force " + pvdf::format_g(v[2]) +
+                             " N must lie in [-1e4, 1e4] N (the rule of loads[].force_N)");
     }
+    const std::string problem = pvdf::probe_footprint_problem(scene, {v[0], v[1]}, scene.probe.radius_m);
+    if (!problem.empty()) throw pvdf::InputError("--load " + pvdf::escape_control_bytes(text) + ": " + problem);
+    pvdf::Load l;
+    l.kind = pvdf::Load::Kind::probe;
+    l.position_m = {v[0], v[1]};
+    l.force_N = v[2];
+    scene.loads.push_back(l);
   }
+}
+
+/// The solver options: the scene's, overridden by the flags (each checked where it is parsed).
+pvdf::fem::Options solver_options(const SolveOptions& o, const pvdf::Scene& scene) {
   pvdf::fem::Options options = pvdf::fem::options_from_scene(scene);
   if (!o.model.empty()) options.model = pvdf::fem::parse_model(o.model, "--model");
   if (o.tolerance != 0) options.tolerance = o.tolerance;  // checked where parsed
@@ -72,109 +74,139 @@ int run_solve(const SolveOptions& o) {
   }
   options.vtu_directory = o.vtu_dir;
   options.verbose = o.verbose;
+  return options;
+}
 
-  // --mesh: the first solve on the file's cells exactly as written (what `pvdfkit mesh` previewed),
-  // then the same output-driven refinement as on the built-in mesh (docs/mesh.md, "Solving on a .msh").
-  std::size_t mesh_file_cells = 0;
-  pvdf::fem::Result r;
-  if (!o.mesh_path.empty()) {
-    const pvdf::mesh::FilmMesh mesh = pvdf::mesh::read_msh(o.mesh_path);
-    pvdf::mesh::check_mesh_fits_scene(scene, mesh, o.mesh_path);
-    mesh_file_cells = mesh.n_cells();
-    options.grade_given_mesh = false;
-    r = pvdf::fem::solve(scene, mesh, options);
-  } else {
-    r = pvdf::fem::solve(scene, options);
+/// The solve, on the built-in mesh or on `--mesh`: the first solve on the file's cells exactly as
+/// written (what `pvdfkit mesh` previewed), then the same output-driven refinement as on the
+/// built-in mesh (docs/mesh.md, "Solving on a .msh"). A sample point the library cannot place is
+/// reported against the flag that gave it.
+pvdf::fem::Result solve_scene(const SolveOptions& o, const pvdf::Scene& scene, pvdf::fem::Options options,
+                              std::size_t& mesh_file_cells) {
+  try {
+    if (!o.mesh_path.empty()) {
+      const pvdf::mesh::FilmMesh mesh = pvdf::mesh::read_msh(o.mesh_path);
+      pvdf::mesh::check_mesh_fits_scene(scene, mesh, o.mesh_path);
+      mesh_file_cells = mesh.n_cells();
+      options.grade_given_mesh = false;
+      return pvdf::fem::solve(scene, mesh, options);
+    }
+    return pvdf::fem::solve(scene, options);
+  } catch (const pvdf::InputError& e) {
+    const std::string what = e.what();
+    if (what.rfind("sample point ", 0) == 0) throw pvdf::InputError("--sample: " + what);
+    throw;
   }
+}
+
+void print_solve_json(const SolveOptions& o, const pvdf::fem::Result& r, std::size_t mesh_file_cells) {
+  const auto& s = r.summary;
+  const bool ok = pvdf::fem::usable(s.status);
+  nlohmann::json j;
+  j["status"] = pvdf::fem::status_name(s.status);
+  j["message"] = s.message;
+  j["model"] = pvdf::fem::model_name(s.model);
+  j["model_reason"] = s.model_reason;
+  j["n_dofs"] = s.n_dofs;
+  j["n_cells"] = s.n_cells;
+  j["mesh"] = o.mesh_path.empty() ? nlohmann::json("built-in") : nlohmann::json(o.mesh_path);
+  if (!o.mesh_path.empty()) j["mesh_file_cells"] = mesh_file_cells;
+  j["newton_iterations"] = s.newton_iterations;
+  j["load_steps"] = s.load_steps;
+  j["refinement_cycles"] = s.refinement_cycles;
+  j["wall_s"] = s.wall_s;
+  j["time_breakdown_s"] = {{"setup", s.setup_s}, {"assembly", s.assembly_s}, {"linear_solve", s.linear_solve_s}};
+  j["estimated_relative_error"] = s.estimated_relative_error;
+  j["estimated_discretization_error"] = s.estimated_discretization_error;
+  j["estimated_model_error"] = s.estimated_model_error;
+  j["error_estimator"] = s.error_estimator;
+  j["stress_measure"] = "second Piola-Kirchhoff membrane resultant (N/m), undeformed axes";
+  if (ok) {
+    j["max_deflection_m"] = r.max_deflection_m;
+    j["deflection_at_load_m"] = r.deflection_at_load_m;
+    j["rim_reaction_N"] = r.rim_reaction_N;
+    j["strain_energy_J"] = r.strain_energy_J;
+    j["wrinkled_area_fraction"] = r.wrinkled_area_fraction;  // tension-field membrane (slack films)
+    j["slack_area_fraction"] = r.slack_area_fraction;
+    j["loads"] = nlohmann::json::array();
+    for (const auto& l : r.loads) {
+      j["loads"].push_back({{"x_m", l.x_m},
+                            {"y_m", l.y_m},
+                            {"force_N", l.force_N},
+                            {"deflection_m", l.deflection_m}});
+    }
+    j["electrodes"] = nlohmann::json::array();
+    for (const auto& e : r.electrodes) {
+      j["electrodes"].push_back({{"name", e.name},
+                                 {"area_m2", e.area_m2},
+                                 {"mean_membrane_force_material_N_per_m", arr(e.mean_membrane_force_material_N_per_m)},
+                                 {"mean_membrane_force_global_N_per_m", arr(e.mean_membrane_force_global_N_per_m)},
+                                 {"charge_C", e.charge_C},
+                                 {"charge_error_C", e.charge_error_C}});
+    }
+    j["samples"] = nlohmann::json::array();
+    for (const auto& p : r.samples) {
+      j["samples"].push_back({{"x_m", p.x_m},
+                              {"y_m", p.y_m},
+                              {"w_m", p.w_m},
+                              {"ux_m", p.ux_m},
+                              {"uy_m", p.uy_m},
+                              {"membrane_force_global_N_per_m", arr(p.membrane_force.global)},
+                              {"membrane_force_material_N_per_m", arr(p.membrane_force.material)},
+                              {"membrane_force_polar_N_per_m", arr(p.membrane_force.polar)},
+                              {"charge_density_C_per_m2", p.charge_density_C_per_m2}});
+    }
+    if (!r.vtu_files.empty()) j["vtu_files"] = r.vtu_files;
+  }
+  std::cout << j.dump(2) << '\n';
+}
+
+void print_solve_text(const SolveOptions& o, const pvdf::Scene& scene, const pvdf::fem::Result& r,
+                      std::size_t mesh_file_cells) {
+  const auto& s = r.summary;
+  const bool ok = pvdf::fem::usable(s.status);
+  std::printf("%s: %s (%s)\n", scene.source.c_str(), pvdf::fem::status_name(s.status).c_str(), s.message.c_str());
+  std::printf("model %s: %s\n", pvdf::fem::model_name(s.model).c_str(), s.model_reason.c_str());
+  if (!o.mesh_path.empty()) std::printf("mesh %s: %zu cells as read, refined from there\n", o.mesh_path.c_str(), mesh_file_cells);
+  std::printf("%zu DOFs, %zu cells, %d Newton iterations, %d load steps, %d refinements, %.3f s "
+              "(assembly %.3f s, linear solves %.3f s, setup %.3f s)\n",
+              s.n_dofs, s.n_cells, s.newton_iterations, s.load_steps, s.refinement_cycles, s.wall_s, s.assembly_s,
+              s.linear_solve_s, s.setup_s);
+  std::printf("estimated relative error %.3g = discretization %.3g + model %.3g (%s)\n", s.estimated_relative_error,
+              s.estimated_discretization_error, s.estimated_model_error, s.error_estimator.c_str());
+  if (!ok) return;
+  std::printf("max deflection %.4f mm, deflection at load %.4f mm, rim reaction %.6g N\n",
+              r.max_deflection_m * 1e3, r.deflection_at_load_m * 1e3, r.rim_reaction_N);
+  if (r.wrinkled_area_fraction > 0 || r.slack_area_fraction > 0)
+    std::printf("wrinkled %.1f %% of the film, slack %.1f %% (tension-field membrane)\n",
+                100 * r.wrinkled_area_fraction, 100 * r.slack_area_fraction);
+  for (const auto& e : r.electrodes) {
+    const auto& n = e.mean_membrane_force_material_N_per_m;
+    std::printf("electrode %-8s N11 %10.4f  N22 %10.4f  N12 %10.4f N/m  charge %.4g pC\n", e.name.c_str(), n[0],
+                n[1], n[2], e.charge_C * 1e12);
+  }
+  for (const auto& p : r.samples) {
+    const auto& n = p.membrane_force.global;
+    std::printf("sample (%.4g, %.4g) mm: w %.5f mm  Nxx %.4f  Nyy %.4f  Nxy %.4f N/m\n", p.x_m * 1e3, p.y_m * 1e3,
+                p.w_m * 1e3, n[0], n[1], n[2]);
+  }
+  for (const auto& f : r.vtu_files) std::printf("wrote %s\n", f.c_str());
+}
+
+int run_solve(const SolveOptions& o) {
+  pvdf::Scene scene = pvdf::load_scene(o.scene_path);
+  for (const auto& w : scene.warnings) pvdf::app::warn(w);
+  apply_load_flags(o, scene);
+  const pvdf::fem::Options options = solver_options(o, scene);
+  std::size_t mesh_file_cells = 0;
+  const pvdf::fem::Result r = solve_scene(o, scene, options, mesh_file_cells);
   const auto& s = r.summary;
   const bool ok = pvdf::fem::usable(s.status);
 
   if (o.json) {
-    nlohmann::json j;
-    j["status"] = pvdf::fem::status_name(s.status);
-    j["message"] = s.message;
-    j["model"] = pvdf::fem::model_name(s.model);
-    j["model_reason"] = s.model_reason;
-    j["n_dofs"] = s.n_dofs;
-    j["n_cells"] = s.n_cells;
-    j["mesh"] = o.mesh_path.empty() ? nlohmann::json("built-in") : nlohmann::json(o.mesh_path);
-    if (!o.mesh_path.empty()) j["mesh_file_cells"] = mesh_file_cells;
-    j["newton_iterations"] = s.newton_iterations;
-    j["load_steps"] = s.load_steps;
-    j["refinement_cycles"] = s.refinement_cycles;
-    j["wall_s"] = s.wall_s;
-    j["time_breakdown_s"] = {{"setup", s.setup_s}, {"assembly", s.assembly_s}, {"linear_solve", s.linear_solve_s}};
-    j["estimated_relative_error"] = s.estimated_relative_error;
-    j["estimated_discretization_error"] = s.estimated_discretization_error;
-    j["estimated_model_error"] = s.estimated_model_error;
-    j["error_estimator"] = s.error_estimator;
-    j["stress_measure"] = "second Piola-Kirchhoff membrane resultant (N/m), undeformed axes";
-    if (ok) {
-      j["max_deflection_m"] = r.max_deflection_m;
-      j["deflection_at_load_m"] = r.deflection_at_load_m;
-      j["rim_reaction_N"] = r.rim_reaction_N;
-      j["strain_energy_J"] = r.strain_energy_J;
-      j["wrinkled_area_fraction"] = r.wrinkled_area_fraction;  // tension-field membrane (slack films)
-      j["slack_area_fraction"] = r.slack_area_fraction;
-      j["loads"] = nlohmann::json::array();
-      for (const auto& l : r.loads) {
-        j["loads"].push_back({{"x_m", l.x_m},
-                              {"y_m", l.y_m},
-                              {"force_N", l.force_N},
-                              {"deflection_m", l.deflection_m}});
-      }
-      j["electrodes"] = nlohmann::json::array();
-      for (const auto& e : r.electrodes) {
-        j["electrodes"].push_back({{"name", e.name},
-                                   {"area_m2", e.area_m2},
-                                   {"mean_membrane_force_material_N_per_m", arr(e.mean_membrane_force_material_N_per_m)},
-                                   {"mean_membrane_force_global_N_per_m", arr(e.mean_membrane_force_global_N_per_m)},
-                                   {"charge_C", e.charge_C},
-                                   {"charge_error_C", e.charge_error_C}});
-      }
-      j["samples"] = nlohmann::json::array();
-      for (const auto& p : r.samples) {
-        j["samples"].push_back({{"x_m", p.x_m},
-                                {"y_m", p.y_m},
-                                {"w_m", p.w_m},
-                                {"ux_m", p.ux_m},
-                                {"uy_m", p.uy_m},
-                                {"membrane_force_global_N_per_m", arr(p.membrane_force.global)},
-                                {"membrane_force_material_N_per_m", arr(p.membrane_force.material)},
-                                {"membrane_force_polar_N_per_m", arr(p.membrane_force.polar)},
-                                {"charge_density_C_per_m2", p.charge_density_C_per_m2}});
-      }
-      if (!r.vtu_files.empty()) j["vtu_files"] = r.vtu_files;
-    }
-    std::cout << j.dump(2) << '\n';
+    print_solve_json(o, r, mesh_file_cells);
   } else {
-    std::printf("%s: %s (%s)\n", scene.source.c_str(), pvdf::fem::status_name(s.status).c_str(), s.message.c_str());
-    std::printf("model %s: %s\n", pvdf::fem::model_name(s.model).c_str(), s.model_reason.c_str());
-    if (!o.mesh_path.empty()) std::printf("mesh %s: %zu cells as read, refined from there\n", o.mesh_path.c_str(), mesh_file_cells);
-    std::printf("%zu DOFs, %zu cells, %d Newton iterations, %d load steps, %d refinements, %.3f s "
-                "(assembly %.3f s, linear solves %.3f s, setup %.3f s)\n",
-                s.n_dofs, s.n_cells, s.newton_iterations, s.load_steps, s.refinement_cycles, s.wall_s, s.assembly_s,
-                s.linear_solve_s, s.setup_s);
-    std::printf("estimated relative error %.3g = discretization %.3g + model %.3g (%s)\n", s.estimated_relative_error,
-                s.estimated_discretization_error, s.estimated_model_error, s.error_estimator.c_str());
-    if (ok) {
-      std::printf("max deflection %.4f mm, deflection at load %.4f mm, rim reaction %.6g N\n",
-                  r.max_deflection_m * 1e3, r.deflection_at_load_m * 1e3, r.rim_reaction_N);
-      if (r.wrinkled_area_fraction > 0 || r.slack_area_fraction > 0)
-        std::printf("wrinkled %.1f %% of the film, slack %.1f %% (tension-field membrane)\n",
-                    100 * r.wrinkled_area_fraction, 100 * r.slack_area_fraction);
-      for (const auto& e : r.electrodes) {
-        const auto& n = e.mean_membrane_force_material_N_per_m;
-        std::printf("electrode %-8s N11 %10.4f  N22 %10.4f  N12 %10.4f N/m  charge %.4g pC\n", e.name.c_str(), n[0],
-                    n[1], n[2], e.charge_C * 1e12);
-      }
-      for (const auto& p : r.samples) {
-        const auto& n = p.membrane_force.global;
-        std::printf("sample (%.4g, %.4g) mm: w %.5f mm  Nxx %.4f  Nyy %.4f  Nxy %.4f N/m\n", p.x_m * 1e3, p.y_m * 1e3,
-                    p.w_m * 1e3, n[0], n[1], n[2]);
-      }
-      for (const auto& f : r.vtu_files) std::printf("wrote %s\n", f.c_str());
-    }
+    print_solve_text(o, scene, r, mesh_file_cells);
   }
   if (!ok) {
     std::cerr << "error: " << scene.source << ": the film solve did not converge (" << pvdf::fem::status_name(s.status)

@@ -63,10 +63,20 @@ int warn_if_map_too_coarse(const pvdf::mapping::ChargeMap& map, const std::vecto
   return n;
 }
 
-int run_compare_scene(const std::string& scene_path, const std::string& measured_path, bool json,
-                      const std::string& plot_path, const std::string& report_path) {
-  const pvdf::Scene scene = pvdf::load_scene(scene_path);
+namespace {
+
+/// The measured table against the FEM solves at its presses, in the record of `compare MAP`, with
+/// the measured and computed deflections beside it (NaN where the table has no deflection).
+struct SceneComparison {
   std::vector<std::string> names;
+  pvdf::mapping::Comparison c;
+  std::vector<double> w_meas, w_fem;
+  pvdf::fem::SweepSetup setup;
+};
+
+SceneComparison compare_with_fem(const pvdf::Scene& scene, const std::string& measured_path) {
+  SceneComparison out;
+  std::vector<std::string>& names = out.names;
   for (const auto& e : scene.electrodes) names.push_back(e.name);
   const fit::MeasuredTable m = fit::read_measured(measured_path, names);
   const std::size_t ne = names.size(), n = m.n_rows();
@@ -83,12 +93,13 @@ int run_compare_scene(const std::string& scene_path, const std::string& measured
   const std::vector<double> gains(ne, 1.0);
 
   // The same record as `compare MAP`, so the same summary, plot and report follow.
-  pvdf::mapping::Comparison c;
-  std::vector<double> w_meas(n, nan_value), w_fem(n, nan_value);
+  pvdf::mapping::Comparison& c = out.c;
+  out.w_meas.assign(n, nan_value);
+  out.w_fem.assign(n, nan_value);
   std::vector<std::vector<double>> measured_q(n, std::vector<double>(ne, nan_value));
   for (const auto& col : m.observed) {
     for (std::size_t i = 0; i < n; ++i) {
-      if (col.electrode < 0) w_meas[i] = col.value[i];
+      if (col.electrode < 0) out.w_meas[i] = col.value[i];
       else measured_q[i][col.electrode] = col.value[i];
     }
   }
@@ -120,7 +131,7 @@ int run_compare_scene(const std::string& scene_path, const std::string& measured
       sum += d;
       ++c.n_compared_values;
     }
-    w_fem[i] = responses[i].deflection_m;
+    out.w_fem[i] = responses[i].deflection_m;
     c.presses.push_back(p);
   }
   for (auto& s : c.electrodes) {
@@ -134,94 +145,123 @@ int run_compare_scene(const std::string& scene_path, const std::string& measured
     c.mean_abs_difference_pct = sum_abs / c.n_compared_values;
     c.mean_difference_pct = sum / c.n_compared_values;
   }
-  const auto& setup = predictor.stats().reference_setup;
+  out.setup = predictor.stats().reference_setup;
+  return out;
+}
 
-  if (!report_path.empty()) {
-    pvdf::write_file_atomically(report_path, [&](std::ostream& out) {
-      out.precision(10);
-      out << "line,x_m,y_m,force_N,deflection_measured_m,deflection_fem_m";
-      for (const auto& nm : names) out << ",charge_" << nm << "_measured_C,charge_" << nm << "_fem_C,difference_" << nm << "_pct";
+/// `--report`: one CSV row per press, measured and FEM values side by side.
+void write_comparison_csv(const SceneComparison& r, const std::string& report_path) {
+  const auto& names = r.names;
+  const std::size_t ne = names.size(), n = r.c.presses.size();
+  pvdf::write_file_atomically(report_path, [&](std::ostream& out) {
+    out.precision(10);
+    out << "line,x_m,y_m,force_N,deflection_measured_m,deflection_fem_m";
+    for (const auto& nm : names) out << ",charge_" << nm << "_measured_C,charge_" << nm << "_fem_C,difference_" << nm << "_pct";
+    out << '\n';
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto& p = r.c.presses[i];
+      out << p.measured.line << ',' << p.measured.x_m << ',' << p.measured.y_m << ',' << p.measured.force_N << ','
+          << r.w_meas[i] << ',' << r.w_fem[i];
+      for (std::size_t k = 0; k < ne; ++k)
+        out << ',' << p.measured.charge_C[k] << ',' << p.map_charge_C[k] << ',' << p.difference_pct[k];
       out << '\n';
-      for (std::size_t i = 0; i < n; ++i) {
-        const auto& p = c.presses[i];
-        out << p.measured.line << ',' << p.measured.x_m << ',' << p.measured.y_m << ',' << p.measured.force_N << ','
-            << w_meas[i] << ',' << w_fem[i];
-        for (std::size_t k = 0; k < ne; ++k)
-          out << ',' << p.measured.charge_C[k] << ',' << p.map_charge_C[k] << ',' << p.difference_pct[k];
-        out << '\n';
-      }
-    });
+    }
+  });
+}
+
+void print_comparison_json(const SceneComparison& r, const std::string& scene_path, const std::string& measured_path) {
+  const auto& names = r.names;
+  const auto& c = r.c;
+  const auto& setup = r.setup;
+  const std::size_t ne = names.size(), n = c.presses.size();
+  nlohmann::json j;
+  j["scene"] = scene_path;
+  j["measured"] = measured_path;
+  j["model"] = pvdf::fem::model_name(setup.model);
+  j["estimated_charge_relative_error"] = setup.estimated_relative_error;
+  j["estimated_deflection_relative_error"] = setup.estimated_deflection_relative_error;
+  j["difference_definition"] = "100 * (Q_measured - Q_fem) / Q_fem, per press and electrode";
+  j["n_presses"] = c.n_presses;
+  j["n_compared_values"] = c.n_compared_values;
+  j["mean_abs_difference_pct"] = c.mean_abs_difference_pct;
+  j["mean_difference_pct"] = c.mean_difference_pct;
+  j["paper_mean_difference_pct"] = pvdf::mapping::paper_mean_difference_pct;
+  j["electrodes"] = nlohmann::json::array();
+  for (const auto& s : c.electrodes) {
+    j["electrodes"].push_back({{"name", s.name}, {"n_compared", s.n_compared},
+                               {"mean_abs_difference_pct", s.mean_abs_difference_pct},
+                               {"mean_difference_pct", s.mean_difference_pct},
+                               {"rms_difference_pct", s.rms_difference_pct},
+                               {"max_abs_difference_pct", s.max_abs_difference_pct}});
   }
-  if (json) {
-    nlohmann::json j;
-    j["scene"] = scene_path;
-    j["measured"] = measured_path;
-    j["model"] = pvdf::fem::model_name(setup.model);
-    j["estimated_charge_relative_error"] = setup.estimated_relative_error;
-    j["estimated_deflection_relative_error"] = setup.estimated_deflection_relative_error;
-    j["difference_definition"] = "100 * (Q_measured - Q_fem) / Q_fem, per press and electrode";
-    j["n_presses"] = c.n_presses;
-    j["n_compared_values"] = c.n_compared_values;
-    j["mean_abs_difference_pct"] = c.mean_abs_difference_pct;
-    j["mean_difference_pct"] = c.mean_difference_pct;
-    j["paper_mean_difference_pct"] = pvdf::mapping::paper_mean_difference_pct;
-    j["electrodes"] = nlohmann::json::array();
-    for (const auto& s : c.electrodes) {
-      j["electrodes"].push_back({{"name", s.name}, {"n_compared", s.n_compared},
-                                 {"mean_abs_difference_pct", s.mean_abs_difference_pct},
-                                 {"mean_difference_pct", s.mean_difference_pct},
-                                 {"rms_difference_pct", s.rms_difference_pct},
-                                 {"max_abs_difference_pct", s.max_abs_difference_pct}});
+  j["presses"] = nlohmann::json::array();
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto& p = c.presses[i];
+    nlohmann::json e = {{"line", p.measured.line}, {"x_m", p.measured.x_m}, {"y_m", p.measured.y_m},
+                        {"force_N", p.measured.force_N}, {"deflection_measured_m", number_or_null(r.w_meas[i])},
+                        {"deflection_fem_m", r.w_fem[i]}};
+    for (std::size_t k = 0; k < ne; ++k) {
+      e["charge_" + names[k] + "_measured_C"] = number_or_null(p.measured.charge_C[k]);
+      e["charge_" + names[k] + "_fem_C"] = p.map_charge_C[k];
+      e["difference_" + names[k] + "_pct"] = number_or_null(p.difference_pct[k]);
     }
-    j["presses"] = nlohmann::json::array();
-    for (std::size_t i = 0; i < n; ++i) {
-      const auto& p = c.presses[i];
-      nlohmann::json e = {{"line", p.measured.line}, {"x_m", p.measured.x_m}, {"y_m", p.measured.y_m},
-                          {"force_N", p.measured.force_N}, {"deflection_measured_m", number_or_null(w_meas[i])},
-                          {"deflection_fem_m", w_fem[i]}};
-      for (std::size_t k = 0; k < ne; ++k) {
-        e["charge_" + names[k] + "_measured_C"] = number_or_null(p.measured.charge_C[k]);
-        e["charge_" + names[k] + "_fem_C"] = p.map_charge_C[k];
-        e["difference_" + names[k] + "_pct"] = number_or_null(p.difference_pct[k]);
-      }
-      j["presses"].push_back(e);
+    j["presses"].push_back(e);
+  }
+  std::cout << j.dump(2) << '\n';
+}
+
+void print_comparison_text(const SceneComparison& r, const std::string& scene_path, const std::string& measured_path) {
+  const auto& names = r.names;
+  const auto& c = r.c;
+  const auto& setup = r.setup;
+  const std::size_t ne = names.size(), n = c.presses.size();
+  std::printf("%s against FEM solves of %s at the measured presses (%s, estimated charge error %.2g %%); "
+              "difference = 100 (Q_measured - Q_fem) / Q_fem\n",
+              measured_path.c_str(), scene_path.c_str(), pvdf::fem::model_name(setup.model).c_str(),
+              100 * setup.estimated_relative_error);
+  std::printf("%5s %9s %9s %7s %9s %9s", "line", "x_mm", "y_mm", "F_N", "w_meas_mm", "w_fem_mm");
+  for (const auto& nm : names) std::printf(" %10s %10s %8s", (nm + "_meas_pC").c_str(), (nm + "_fem_pC").c_str(), (nm + "_%").c_str());
+  std::printf("\n");
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto& p = c.presses[i];
+    std::printf("%5zu %9.3f %9.3f %7.3g %9.4g %9.4g", p.measured.line, p.measured.x_m * 1e3, p.measured.y_m * 1e3,
+                p.measured.force_N, r.w_meas[i] * 1e3, r.w_fem[i] * 1e3);
+    for (std::size_t k = 0; k < ne; ++k) {
+      std::printf(" %10.4g %10.4g", p.measured.charge_C[k] * 1e12, p.map_charge_C[k] * 1e12);
+      if (std::isfinite(p.difference_pct[k])) std::printf(" %8.2f", p.difference_pct[k]);
+      else std::printf(" %8s", "-");
     }
-    std::cout << j.dump(2) << '\n';
-  } else {
-    std::printf("%s against FEM solves of %s at the measured presses (%s, estimated charge error %.2g %%); "
-                "difference = 100 (Q_measured - Q_fem) / Q_fem\n",
-                measured_path.c_str(), scene_path.c_str(), pvdf::fem::model_name(setup.model).c_str(),
-                100 * setup.estimated_relative_error);
-    std::printf("%5s %9s %9s %7s %9s %9s", "line", "x_mm", "y_mm", "F_N", "w_meas_mm", "w_fem_mm");
-    for (const auto& nm : names) std::printf(" %10s %10s %8s", (nm + "_meas_pC").c_str(), (nm + "_fem_pC").c_str(), (nm + "_%").c_str());
     std::printf("\n");
-    for (std::size_t i = 0; i < n; ++i) {
-      const auto& p = c.presses[i];
-      std::printf("%5zu %9.3f %9.3f %7.3g %9.4g %9.4g", p.measured.line, p.measured.x_m * 1e3, p.measured.y_m * 1e3,
-                  p.measured.force_N, w_meas[i] * 1e3, w_fem[i] * 1e3);
-      for (std::size_t k = 0; k < ne; ++k) {
-        std::printf(" %10.4g %10.4g", p.measured.charge_C[k] * 1e12, p.map_charge_C[k] * 1e12);
-        if (std::isfinite(p.difference_pct[k])) std::printf(" %8.2f", p.difference_pct[k]);
-        else std::printf(" %8s", "-");
-      }
-      std::printf("\n");
-    }
-    std::printf("per electrode: mean |difference|, mean signed difference, rms, max |difference| (%%)\n");
-    for (const auto& s : c.electrodes) {
-      std::printf("  %-8s n %3d  mean|d| %7.2f  mean %+7.2f  rms %7.2f  max %7.2f\n", s.name.c_str(), s.n_compared,
-                  s.mean_abs_difference_pct, s.mean_difference_pct, s.rms_difference_pct, s.max_abs_difference_pct);
-    }
-    std::printf("all: mean |difference| %.2f %% over %d values (seed 001: %.0f %%)\n", c.mean_abs_difference_pct,
-                c.n_compared_values, pvdf::mapping::paper_mean_difference_pct);
   }
-  if (!plot_path.empty() && c.n_compared_values > 0) {
-    pvdf::mapping::write_comparison_png(c, plot_path);
+  std::printf("per electrode: mean |difference|, mean signed difference, rms, max |difference| (%%)\n");
+  for (const auto& s : c.electrodes) {
+    std::printf("  %-8s n %3d  mean|d| %7.2f  mean %+7.2f  rms %7.2f  max %7.2f\n", s.name.c_str(), s.n_compared,
+                s.mean_abs_difference_pct, s.mean_difference_pct, s.rms_difference_pct, s.max_abs_difference_pct);
+  }
+  std::printf("all: mean |difference| %.2f %% over %d values (seed 001: %.0f %%)\n", c.mean_abs_difference_pct,
+              c.n_compared_values, pvdf::mapping::paper_mean_difference_pct);
+}
+
+}  // namespace
+
+int run_compare_scene(const std::string& scene_path, const std::string& measured_path, bool json,
+                      const std::string& plot_path, const std::string& report_path) {
+  const pvdf::Scene scene = pvdf::load_scene(scene_path);
+  const SceneComparison r = compare_with_fem(scene, measured_path);
+  if (!report_path.empty()) write_comparison_csv(r, report_path);
+  if (json) {
+    print_comparison_json(r, scene_path, measured_path);
+  } else {
+    print_comparison_text(r, scene_path, measured_path);
+  }
+  if (!plot_path.empty() && r.c.n_compared_values > 0) {
+    pvdf::mapping::write_comparison_png(r.c, plot_path);
     if (!json) std::printf("plot written to %s\n", plot_path.c_str());
   }
   if (!report_path.empty() && !json) std::printf("report written to %s\n", report_path.c_str());
   bool any_deflection = false;
-  for (double w : w_meas) any_deflection = any_deflection || std::isfinite(w);
-  if (c.n_compared_values == 0 && !any_deflection) {
+  for (double w : r.w_meas) any_deflection = any_deflection || std::isfinite(w);
+  if (r.c.n_compared_values == 0 && !any_deflection) {
     std::cerr << "error: " << measured_path << ": nothing to compare (no charge or deflection column)\n";
     return pvdf::exit_code::numerical;
   }

@@ -241,113 +241,207 @@ std::string fmt(const char* f, double v) {
   return buf;
 }
 
+struct BenchArgs {
+  bool quick = false, use_ccx = true, use_pvdf = true, bending = false, use_sweep = true;
+  std::string out = "bench_fem_out";
+};
+
+// The command line; returns an exit code when the run should stop here (help, bad argument, no
+// work folder), -1 to go on.
+int parse_args(int argc, char** argv, BenchArgs& args) {
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "--quick") args.quick = true;
+    else if (a == "--no-ccx") args.use_ccx = false;
+    else if (a == "--no-pvdf") args.use_pvdf = false;
+    else if (a == "--bending") args.bending = true;
+    else if (a == "--no-sweep") args.use_sweep = false;
+    else if (a == "--out" && i + 1 < argc) args.out = argv[++i];
+    else if (a == "--help" || a == "-h") {
+      std::cout << "usage: bench_fem [--quick] [--out DIR] [--no-ccx] [--no-pvdf] [--no-sweep] [--bending]\n";
+      return 0;
+    } else {
+      std::cerr << "error: bench_fem: unknown argument '" << a << "'; see --help\n";
+      return 2;
+    }
+  }
+  if (std::system(("mkdir -p '" + args.out + "'").c_str()) != 0) {
+    std::cerr << "error: cannot create " << args.out << "\n";
+    return 2;
+  }
+  if (args.use_ccx && std::system("command -v ccx > /dev/null 2>&1") != 0) {
+    std::cerr << "note: ccx not found (apt-get install calculix-ccx); CalculiX rows skipped\n";
+    args.use_ccx = false;
+  }
+  return -1;
+}
+
+// The rows of one case: CalculiX levels, pvdfkit levels and (optionally) the sweep rows.
+void run_levels(const pvdf::Scene& scene, bool iso, const BenchArgs& args, std::vector<Row>& rows) {
+  const std::vector<int> ccx_levels = args.quick ? std::vector<int>{4, 8} : std::vector<int>{4, 8, 16, 24};
+  if (args.use_ccx)
+    for (int n : ccx_levels) {
+      rows.push_back(run_ccx_level(scene, iso, n, args.out));
+      std::cerr << "  ccx " << rows.back().variant << " " << rows.back().level << " " << rows.back().wall_s << " s\n";
+    }
+#ifdef PVDF_BENCH_HAVE_FEM
+  const std::vector<int> pvdf_levels = args.quick ? std::vector<int>{-1, 0} : std::vector<int>{-1, 0, 1};
+  if (args.use_pvdf) {
+    for (int l : pvdf_levels) {
+      rows.push_back(run_pvdf_level(scene, iso, l, args.bending));
+      std::cerr << "  pvdfkit " << rows.back().variant << " " << rows.back().level << " " << rows.back().wall_s
+                << " s " << rows.back().note << "\n";
+    }
+    if (args.use_sweep)
+      for (const Row& r : run_pvdf_sweep(scene, iso, args.bending)) {
+        rows.push_back(r);
+        std::cerr << "  pvdfkit " << r.variant << " " << r.level << " " << r.wall_s << " s " << r.note << "\n";
+      }
+  }
+#else
+  if (args.use_pvdf) {
+    Row r;
+    r.tool = "pvdfkit";
+    r.variant = iso ? "iso" : "ortho";
+    r.level = "—";
+    r.note = "not available (pvdf::fem not built)";
+    rows.push_back(r);
+  }
+#endif
+}
+
+// The iso reference: the axisymmetric oracle.
+void oracle_reference(const pvdf::Scene& scene, bool bending, double& w_ref, std::array<Force3, 3>& e_ref,
+                      std::ostringstream& notes) {
+  pvdf::fem::oracles::AxisymmetricProblem p;
+  p.radius_m = scene.membrane.outline.radius_m;
+  p.thickness_m = scene.membrane.thickness_m;
+  p.youngs_modulus_Pa = 2e9;
+  p.poisson_ratio = 0.3;
+  p.force_N = scene.loads.at(0).force_N;
+  p.load_radius_m = scene.probe.radius_m;
+  p.kinematics = pvdf::fem::oracles::Kinematics::green_lagrange;
+  p.bending = bending;
+  const auto s = pvdf::fem::oracles::solve_axisymmetric(p, {bending ? 300 : 400});
+  if (!s.converged) throw std::runtime_error("oracle did not converge");
+  w_ref = s.centre_deflection_m();
+  for (int k = 0; k < 3; ++k) e_ref[k] = oracle_square_mean(s, scene.electrodes[k].center_m, scene.electrodes[k].size_m[0]);
+  notes << "iso reference: axisymmetric oracle (Green–Lagrange " << (bending ? "membrane + bending" : "membrane")
+        << ", 400 Hermite elements): w0 = " << fmt("%.6f", 1e3 * w_ref) << " mm, electrode A mean [N11, N22, N12] = ["
+        << fmt("%.3f", e_ref[0][0]) << ", " << fmt("%.3f", e_ref[0][1]) << ", " << fmt("%.3f", e_ref[0][2]) << "] N/m\n";
+}
+
+// The ortho reference: the finest pvdfkit mesh level of the case (rows from `first` on), else the
+// finest CalculiX level; the two finest levels are cross-checked.
+void finest_level_reference(std::vector<Row>& rows, std::size_t first, double& w_ref, std::array<Force3, 3>& e_ref,
+                            std::ostringstream& notes) {
+  Row* best = nullptr;
+  for (std::size_t i = first; i < rows.size(); ++i)  // the finest mesh level, not a sweep row
+    if (rows[i].ok && rows[i].tool == "pvdfkit" && rows[i].level.rfind("sweep", 0) != 0) best = &rows[i];
+  Row* best_ccx = nullptr;
+  for (std::size_t i = first; i < rows.size(); ++i)
+    if (rows[i].ok && rows[i].tool != "pvdfkit") best_ccx = &rows[i];
+  Row* ref = best ? best : best_ccx;
+  if (!ref) return;
+  ref->reference = true;
+  w_ref = ref->deflection_m;
+  e_ref = ref->electrode;
+  notes << "ortho reference: " << ref->tool << " " << ref->level << " (the finest " << ref->tool
+        << " level): w0 = " << fmt("%.6f", 1e3 * w_ref) << " mm\n";
+  if (best && best_ccx)
+    notes << "ortho cross-check, finest CalculiX (" << best_ccx->level << ") vs finest pvdfkit: w0 differs by "
+          << fmt("%.2e", std::abs(best_ccx->deflection_m - w_ref) / w_ref) << ", electrodes A/B/C by "
+          << fmt("%.2e", rel_err(best_ccx->electrode[0], e_ref[0])) << " / "
+          << fmt("%.2e", rel_err(best_ccx->electrode[1], e_ref[1])) << " / "
+          << fmt("%.2e", rel_err(best_ccx->electrode[2], e_ref[2])) << "\n";
+}
+
+// The markdown table: every row with its errors and, for pvdfkit, its time ratio against
+// CalculiX at equal error.
+std::string markdown_table(const std::vector<Row>& rows) {
+  std::ostringstream md;
+  md << "| tool | case | level | DOFs | wall_s | rim F (N) | err w0 | err A | err B | err C | t_pvdf / t_ccx at equal error |\n"
+     << "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+  for (const Row& r : rows) {
+    std::string ratio = "—";
+    if (r.ok && r.tool == "pvdfkit") {
+      std::vector<const Row*> peers;
+      for (const Row& q : rows)
+        if (q.tool != "pvdfkit" && q.variant == r.variant) peers.push_back(&q);
+      bool extrapolated = false;
+      const double t = time_at_error(peers, r.err_max(), extrapolated);
+      if (std::isfinite(t) && r.err_max() > 0)
+        ratio = fmt("%.3g", r.wall_s / t) + (extrapolated ? " (ccx extrapolated)" : "");
+    }
+    md << "| " << r.tool << " | " << r.variant << " | " << r.level << " | " << (r.ok ? std::to_string(r.dofs) : "—")
+       << " | " << (r.ok || r.wall_s > 0 ? fmt("%.2f", r.wall_s) : "—") << " | " << (r.ok ? fmt("%.5f", r.rim_N) : "—") << " | ";
+    if (r.reference)
+      md << "(reference) | | | | — |\n";
+    else
+      md << fmt("%.2e", r.err_w) << " | " << fmt("%.2e", r.err_e[0]) << " | " << fmt("%.2e", r.err_e[1]) << " | "
+         << fmt("%.2e", r.err_e[2]) << " | " << (r.ok ? ratio : r.note) << " |\n";
+  }
+  return md.str();
+}
+
+// Speed against error: one line per tool and case, the sweep rows as points.
+void speed_error_figure(const std::vector<Row>& rows, const std::string& path) {
+  pvdf::plot::Figure fig(1000, 700);
+  auto& ax = fig.axes();
+  std::size_t colour = 0;
+  for (const std::string tool : {"CalculiX M3D4", "pvdfkit"})
+    for (const std::string variant : {"iso", "ortho"}) {
+      std::vector<double> x, y;
+      for (const Row& r : rows)
+        if (r.ok && r.tool == tool && r.variant == variant && r.err_max() > 0 && r.level.rfind("sweep", 0) != 0) {
+          x.push_back(r.wall_s);
+          y.push_back(r.err_max());
+        }
+      if (x.empty()) continue;
+      ax.line(x, y, tool + " (" + variant + ")", pvdf::plot::cycle_color(colour++),
+              variant == "iso" ? pvdf::plot::LineStyle::solid : pvdf::plot::LineStyle::dashed,
+              tool == "pvdfkit" ? pvdf::plot::Marker::circle : pvdf::plot::Marker::square);
+    }
+  for (const std::string level : {"sweep cold", "sweep warm"})
+    for (const std::string variant : {"iso", "ortho"}) {
+      std::vector<double> x, y;
+      for (const Row& r : rows)
+        if (r.ok && r.level == level && r.variant == variant && r.err_max() > 0) {
+          x.push_back(r.wall_s);
+          y.push_back(r.err_max());
+        }
+      if (x.empty()) continue;
+      ax.scatter(x, y, "pvdfkit ProbeSweep, " + level.substr(6) + " load case (" + variant + ")",
+                 pvdf::plot::cycle_color(colour++), level == "sweep warm" ? pvdf::plot::Marker::triangle
+                                                                         : pvdf::plot::Marker::cross);
+    }
+  ax.log_x().log_y().grid_lines().legend("best");  // placed where it covers the fewest points
+  ax.xlabel("wall time, 1 thread (s)").ylabel("max relative error (w0, electrode forces)");
+  ax.title("seed-001 film, 1 N probe: speed against error");
+  fig.save_png(path);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   try {
-    bool quick = false, use_ccx = true, use_pvdf = true, bending = false, use_sweep = true;
-    std::string out = "bench_fem_out";
-    for (int i = 1; i < argc; ++i) {
-      const std::string a = argv[i];
-      if (a == "--quick") quick = true;
-      else if (a == "--no-ccx") use_ccx = false;
-      else if (a == "--no-pvdf") use_pvdf = false;
-      else if (a == "--bending") bending = true;
-      else if (a == "--no-sweep") use_sweep = false;
-      else if (a == "--out" && i + 1 < argc) out = argv[++i];
-      else if (a == "--help" || a == "-h") {
-        std::cout << "usage: bench_fem [--quick] [--out DIR] [--no-ccx] [--no-pvdf] [--no-sweep] [--bending]\n";
-        return 0;
-      } else {
-        std::cerr << "error: bench_fem: unknown argument '" << a << "'; see --help\n";
-        return 2;
-      }
-    }
-    if (std::system(("mkdir -p '" + out + "'").c_str()) != 0) {
-      std::cerr << "error: cannot create " << out << "\n";
-      return 2;
-    }
-    if (use_ccx && std::system("command -v ccx > /dev/null 2>&1") != 0) {
-      std::cerr << "note: ccx not found (apt-get install calculix-ccx); CalculiX rows skipped\n";
-      use_ccx = false;
-    }
-    const std::vector<int> ccx_levels = quick ? std::vector<int>{4, 8} : std::vector<int>{4, 8, 16, 24};
-    const std::vector<int> pvdf_levels = quick ? std::vector<int>{-1, 0} : std::vector<int>{-1, 0, 1};
+    BenchArgs args;
+    const int stop = parse_args(argc, argv, args);
+    if (stop >= 0) return stop;
     std::vector<Row> rows;
     std::ostringstream notes;
 
     for (const bool iso : {true, false}) {
       const pvdf::Scene scene = make_scene(iso);
       const std::size_t first = rows.size();
-      if (use_ccx)
-        for (int n : ccx_levels) {
-          rows.push_back(run_ccx_level(scene, iso, n, out));
-          std::cerr << "  ccx " << rows.back().variant << " " << rows.back().level << " " << rows.back().wall_s << " s\n";
-        }
-#ifdef PVDF_BENCH_HAVE_FEM
-      if (use_pvdf) {
-        for (int l : pvdf_levels) {
-          rows.push_back(run_pvdf_level(scene, iso, l, bending));
-          std::cerr << "  pvdfkit " << rows.back().variant << " " << rows.back().level << " " << rows.back().wall_s
-                    << " s " << rows.back().note << "\n";
-        }
-        if (use_sweep)
-          for (const Row& r : run_pvdf_sweep(scene, iso, bending)) {
-            rows.push_back(r);
-            std::cerr << "  pvdfkit " << r.variant << " " << r.level << " " << r.wall_s << " s " << r.note << "\n";
-          }
-      }
-#else
-      if (use_pvdf) {
-        Row r;
-        r.tool = "pvdfkit";
-        r.variant = iso ? "iso" : "ortho";
-        r.level = "—";
-        r.note = "not available (pvdf::fem not built)";
-        rows.push_back(r);
-      }
-#endif
+      run_levels(scene, iso, args, rows);
       // Reference.
       double w_ref = NAN;
       std::array<Force3, 3> e_ref{};
       if (iso) {
-        pvdf::fem::oracles::AxisymmetricProblem p;
-        p.radius_m = scene.membrane.outline.radius_m;
-        p.thickness_m = scene.membrane.thickness_m;
-        p.youngs_modulus_Pa = 2e9;
-        p.poisson_ratio = 0.3;
-        p.force_N = scene.loads.at(0).force_N;
-        p.load_radius_m = scene.probe.radius_m;
-        p.kinematics = pvdf::fem::oracles::Kinematics::green_lagrange;
-        p.bending = bending;
-        const auto s = pvdf::fem::oracles::solve_axisymmetric(p, {bending ? 300 : 400});
-        if (!s.converged) throw std::runtime_error("oracle did not converge");
-        w_ref = s.centre_deflection_m();
-        for (int k = 0; k < 3; ++k) e_ref[k] = oracle_square_mean(s, scene.electrodes[k].center_m, scene.electrodes[k].size_m[0]);
-        notes << "iso reference: axisymmetric oracle (Green–Lagrange " << (bending ? "membrane + bending" : "membrane")
-              << ", 400 Hermite elements): w0 = " << fmt("%.6f", 1e3 * w_ref) << " mm, electrode A mean [N11, N22, N12] = ["
-              << fmt("%.3f", e_ref[0][0]) << ", " << fmt("%.3f", e_ref[0][1]) << ", " << fmt("%.3f", e_ref[0][2]) << "] N/m\n";
+        oracle_reference(scene, args.bending, w_ref, e_ref, notes);
       } else {
-        Row* best = nullptr;
-        for (std::size_t i = first; i < rows.size(); ++i)  // the finest mesh level, not a sweep row
-          if (rows[i].ok && rows[i].tool == "pvdfkit" && rows[i].level.rfind("sweep", 0) != 0) best = &rows[i];
-        Row* best_ccx = nullptr;
-        for (std::size_t i = first; i < rows.size(); ++i)
-          if (rows[i].ok && rows[i].tool != "pvdfkit") best_ccx = &rows[i];
-        Row* ref = best ? best : best_ccx;
-        if (ref) {
-          ref->reference = true;
-          w_ref = ref->deflection_m;
-          e_ref = ref->electrode;
-          notes << "ortho reference: " << ref->tool << " " << ref->level << " (the finest " << ref->tool
-                << " level): w0 = " << fmt("%.6f", 1e3 * w_ref) << " mm\n";
-          if (best && best_ccx)
-            notes << "ortho cross-check, finest CalculiX (" << best_ccx->level << ") vs finest pvdfkit: w0 differs by "
-                  << fmt("%.2e", std::abs(best_ccx->deflection_m - w_ref) / w_ref) << ", electrodes A/B/C by "
-                  << fmt("%.2e", rel_err(best_ccx->electrode[0], e_ref[0])) << " / "
-                  << fmt("%.2e", rel_err(best_ccx->electrode[1], e_ref[1])) << " / "
-                  << fmt("%.2e", rel_err(best_ccx->electrode[2], e_ref[2])) << "\n";
-        }
+        finest_level_reference(rows, first, w_ref, e_ref, notes);
       }
       for (std::size_t i = first; i < rows.size(); ++i) {
         Row& r = rows[i];
@@ -358,66 +452,12 @@ int main(int argc, char** argv) {
     }
 
     // The table.
-    std::ostringstream md;
-    md << "| tool | case | level | DOFs | wall_s | rim F (N) | err w0 | err A | err B | err C | t_pvdf / t_ccx at equal error |\n"
-       << "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
-    for (const Row& r : rows) {
-      std::string ratio = "—";
-      if (r.ok && r.tool == "pvdfkit") {
-        std::vector<const Row*> peers;
-        for (const Row& q : rows)
-          if (q.tool != "pvdfkit" && q.variant == r.variant) peers.push_back(&q);
-        bool extrapolated = false;
-        const double t = time_at_error(peers, r.err_max(), extrapolated);
-        if (std::isfinite(t) && r.err_max() > 0)
-          ratio = fmt("%.3g", r.wall_s / t) + (extrapolated ? " (ccx extrapolated)" : "");
-      }
-      md << "| " << r.tool << " | " << r.variant << " | " << r.level << " | " << (r.ok ? std::to_string(r.dofs) : "—")
-         << " | " << (r.ok || r.wall_s > 0 ? fmt("%.2f", r.wall_s) : "—") << " | " << (r.ok ? fmt("%.5f", r.rim_N) : "—") << " | ";
-      if (r.reference)
-        md << "(reference) | | | | — |\n";
-      else
-        md << fmt("%.2e", r.err_w) << " | " << fmt("%.2e", r.err_e[0]) << " | " << fmt("%.2e", r.err_e[1]) << " | "
-           << fmt("%.2e", r.err_e[2]) << " | " << (r.ok ? ratio : r.note) << " |\n";
-    }
-    std::cout << md.str() << "\n" << notes.str();
-    pvdf::write_file_atomically(out + "/bench_fem_table.md", [&](std::ostream& os) { os << md.str() << "\n" << notes.str(); });
+    const std::string md = markdown_table(rows);
+    std::cout << md << "\n" << notes.str();
+    pvdf::write_file_atomically(args.out + "/bench_fem_table.md", [&](std::ostream& os) { os << md << "\n" << notes.str(); });
 
-    // Speed against error.
-    pvdf::plot::Figure fig(1000, 700);
-    auto& ax = fig.axes();
-    std::size_t colour = 0;
-    for (const std::string tool : {"CalculiX M3D4", "pvdfkit"})
-      for (const std::string variant : {"iso", "ortho"}) {
-        std::vector<double> x, y;
-        for (const Row& r : rows)
-          if (r.ok && r.tool == tool && r.variant == variant && r.err_max() > 0 && r.level.rfind("sweep", 0) != 0) {
-            x.push_back(r.wall_s);
-            y.push_back(r.err_max());
-          }
-        if (x.empty()) continue;
-        ax.line(x, y, tool + " (" + variant + ")", pvdf::plot::cycle_color(colour++),
-                variant == "iso" ? pvdf::plot::LineStyle::solid : pvdf::plot::LineStyle::dashed,
-                tool == "pvdfkit" ? pvdf::plot::Marker::circle : pvdf::plot::Marker::square);
-      }
-    for (const std::string level : {"sweep cold", "sweep warm"})
-      for (const std::string variant : {"iso", "ortho"}) {
-        std::vector<double> x, y;
-        for (const Row& r : rows)
-          if (r.ok && r.level == level && r.variant == variant && r.err_max() > 0) {
-            x.push_back(r.wall_s);
-            y.push_back(r.err_max());
-          }
-        if (x.empty()) continue;
-        ax.scatter(x, y, "pvdfkit ProbeSweep, " + level.substr(6) + " load case (" + variant + ")",
-                   pvdf::plot::cycle_color(colour++), level == "sweep warm" ? pvdf::plot::Marker::triangle
-                                                                           : pvdf::plot::Marker::cross);
-      }
-    ax.log_x().log_y().grid_lines().legend("best");  // placed where it covers the fewest points
-    ax.xlabel("wall time, 1 thread (s)").ylabel("max relative error (w0, electrode forces)");
-    ax.title("seed-001 film, 1 N probe: speed against error");
-    fig.save_png(out + "/bench_fem.png");
-    std::cout << "\nwrote " << out << "/bench_fem_table.md and " << out << "/bench_fem.png\n";
+    speed_error_figure(rows, args.out + "/bench_fem.png");
+    std::cout << "\nwrote " << args.out << "/bench_fem_table.md and " << args.out << "/bench_fem.png\n";
     return 0;
   } catch (const std::exception& e) {
     std::cerr << "error: " << e.what() << "\n";

@@ -42,6 +42,127 @@ struct Line {
   double wall = 0, cpu = 0, its = 0, facts = 0, err = NAN;
 };
 
+// 2. Naive: an adaptive direct solve per position, and a direct solve on a mesh graded to the
+// probe (no adaptivity); the latter's charges are the references of the charge differences.
+void naive_lines(const pvdf::Scene& scene, const std::vector<std::array<double, 2>>& probes, double F,
+                 std::vector<Line>& lines, std::vector<std::vector<double>>& ref_charges) {
+  for (const bool adaptive : {true, false}) {
+    Line l;
+    l.path = adaptive ? "naive: adaptive solve() per position" : "direct solve() on a mesh graded to the probe";
+    for (const auto& p : probes) {
+      pvdf::fem::Options o = pvdf::fem::options_from_scene(scene);
+      o.adaptive = adaptive;
+      const double c0 = cpu_s();
+      const auto t0 = Clock::now();
+      const auto r = pvdf::fem::solve(pvdf::with_probe_load(scene, p[0], p[1], F), o);
+      l.wall += wall_since(t0);
+      l.cpu += cpu_s() - c0;
+      l.its += r.summary.newton_iterations;
+      ++l.n;
+      if (!adaptive) {
+        std::vector<double> q;
+        for (const auto& e : r.electrodes) q.push_back(e.charge_C);
+        ref_charges.push_back(q);
+      }
+    }
+    lines.push_back(l);
+  }
+}
+
+// 3. Sweep, cold (continuation from the flat film) at the same positions.
+Line sweep_cold_line(pvdf::fem::ProbeSweep& sweep, const std::vector<std::array<double, 2>>& probes, double F,
+                     const std::vector<std::vector<double>>& ref_charges) {
+  Line l;
+  l.path = "ProbeSweep cold (from flat)";
+  l.err = 0;
+  for (std::size_t i = 0; i < probes.size(); ++i) {
+    const auto before = sweep.timing();
+    const double c0 = cpu_s();
+    const auto s = sweep.solve(probes[i][0], probes[i][1], F);
+    l.cpu += cpu_s() - c0;
+    l.wall += s.wall_s;
+    l.its += s.newton_iterations;
+    l.facts += sweep.timing().factorizations - before.factorizations;
+    l.err = std::max(l.err, charge_difference(s.charge_C, ref_charges[i]));
+    ++l.n;
+  }
+  return l;
+}
+
+// 4. Sweep, warm: serpentine raster, each position from its neighbour; `states` gets every usable state.
+Line sweep_warm_line(pvdf::fem::ProbeSweep& sweep, int patch, double spacing, double F,
+                     std::vector<pvdf::fem::SweepState>& states) {
+  Line l;
+  l.path = "ProbeSweep warm (neighbour 1 grid step away)";
+  pvdf::fem::SweepState state;
+  bool first = true;
+  for (int j = 0; j < patch; ++j)
+    for (int k = 0; k < patch; ++k) {
+      const int i = j % 2 == 0 ? k : patch - 1 - k;
+      const double x = -0.5 * (patch - 1) * spacing + i * spacing, y = -0.5 * (patch - 1) * spacing + j * spacing;
+      const auto before = sweep.timing();
+      const double c0 = cpu_s();
+      pvdf::fem::SweepState out;
+      const auto s = sweep.solve(x, y, F, first ? nullptr : &state, &out);
+      const double c = cpu_s() - c0;
+      if (!pvdf::fem::usable(s.status)) {
+        std::printf("  position (%g, %g): %s\n", x, y, s.message.c_str());
+        first = true;
+        continue;
+      }
+      states.push_back(out);
+      state = out;
+      if (first) {  // the raster's first position is a cold solve
+        first = false;
+        continue;
+      }
+      l.cpu += c;
+      l.wall += s.wall_s;
+      l.its += s.newton_iterations;
+      l.facts += sweep.timing().factorizations - before.factorizations;
+      ++l.n;
+    }
+  return l;
+}
+
+// The same raster at 0.5 N, each warm-started from its own 1 N state scaled by the membrane law.
+Line force_scaled_line(pvdf::fem::ProbeSweep& sweep, std::vector<pvdf::fem::SweepState>& states) {
+  Line l;
+  l.path = "ProbeSweep 0.5 N from its 1 N state (force scaling)";
+  for (std::size_t i = 0; i < states.size() && i < 16; ++i) {
+    const auto before = sweep.timing();
+    const double c0 = cpu_s();
+    const auto s = sweep.solve(states[i].x_m, states[i].y_m, 0.5, &states[i]);
+    l.cpu += cpu_s() - c0;
+    l.wall += s.wall_s;
+    l.its += s.newton_iterations;
+    l.facts += sweep.timing().factorizations - before.factorizations;
+    ++l.n;
+  }
+  return l;
+}
+
+// The table, the projected map time and the time split of the sweep.
+void print_results(const std::vector<Line>& lines, const pvdf::fem::ProbeSweep& sweep) {
+  std::printf("\n| path | positions | wall s / position | CPU s / position | Newton its / position | "
+              "factorizations / position | charge diff. vs direct |\n|---|---:|---:|---:|---:|---:|---:|\n");
+  for (const Line& l : lines) {
+    const double n = std::max(1, l.n);
+    std::printf("| %s | %d | %.3f | %.3f | %.1f | %s | %s |\n", l.path.c_str(), l.n, l.wall / n, l.cpu / n, l.its / n,
+                l.facts > 0 ? std::to_string(l.facts / n).substr(0, 4).c_str() : "—",
+                std::isfinite(l.err) ? (std::to_string(l.err).substr(0, 8)).c_str() : "—");
+  }
+  const Line& warm = lines[3];
+  const double per = warm.cpu / std::max(1, warm.n);
+  std::printf("\nprojected map (seed 001, 1 mm spacing, ~5000 positions, 1 force, 2 cores): %.0f s of CPU "
+              "per core, %.0f s with the mirror symmetry (plus setup %.0f s)\n",
+              5000 * per / 2, 2500 * per / 2, sweep.setup().setup_s);
+  const auto t = sweep.timing();
+  std::printf("time split over all sweep solves: assembly %.2f s, linear solves %.2f s, load vectors %.2f s, "
+              "outputs %.2f s; %d Newton iterations, %d factorizations\n",
+              t.assembly_s, t.linear_solve_s, t.load_vector_s, t.outputs_s, t.newton_iterations, t.factorizations);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -67,8 +188,8 @@ int main(int argc, char** argv) {
     std::vector<Line> lines;
 
     // 1. Setup.
-    double c0 = cpu_s();
-    auto t0 = Clock::now();
+    const double c0 = cpu_s();
+    const auto t0 = Clock::now();
     pvdf::fem::ProbeSweep sweep(scene, pvdf::fem::SweepOptions{});
     const auto& st = sweep.setup();
     std::printf("setup: %.2f s wall, %.2f s CPU; %zu DOFs, %zu cells; model %s (%s)\n  estimated charge error %.2e, "
@@ -77,120 +198,14 @@ int main(int argc, char** argv) {
                 st.model_reason.c_str(), st.estimated_relative_error, st.estimated_deflection_relative_error,
                 st.error_estimator.c_str());
 
-    // 2. Naive: an adaptive direct solve per position, and a direct solve on a mesh graded to the
-    // probe (no adaptivity); these are also the references of the charge differences below.
     const std::vector<std::array<double, 2>> probes{{0.003, 0.004}, {-0.012, -0.009}};
     std::vector<std::vector<double>> ref_charges;
-    for (const bool adaptive : {true, false}) {
-      Line l;
-      l.path = adaptive ? "naive: adaptive solve() per position" : "direct solve() on a mesh graded to the probe";
-      for (const auto& p : probes) {
-        pvdf::fem::Options o = pvdf::fem::options_from_scene(scene);
-        o.adaptive = adaptive;
-        c0 = cpu_s();
-        t0 = Clock::now();
-        const auto r = pvdf::fem::solve(pvdf::with_probe_load(scene, p[0], p[1], F), o);
-        l.wall += wall_since(t0);
-        l.cpu += cpu_s() - c0;
-        l.its += r.summary.newton_iterations;
-        ++l.n;
-        if (!adaptive) {
-          std::vector<double> q;
-          for (const auto& e : r.electrodes) q.push_back(e.charge_C);
-          ref_charges.push_back(q);
-        }
-      }
-      lines.push_back(l);
-    }
-
-    // 3. Sweep, cold (continuation from the flat film) at the same positions.
-    {
-      Line l;
-      l.path = "ProbeSweep cold (from flat)";
-      l.err = 0;
-      for (std::size_t i = 0; i < probes.size(); ++i) {
-        const auto before = sweep.timing();
-        c0 = cpu_s();
-        const auto s = sweep.solve(probes[i][0], probes[i][1], F);
-        l.cpu += cpu_s() - c0;
-        l.wall += s.wall_s;
-        l.its += s.newton_iterations;
-        l.facts += sweep.timing().factorizations - before.factorizations;
-        l.err = std::max(l.err, charge_difference(s.charge_C, ref_charges[i]));
-        ++l.n;
-      }
-      lines.push_back(l);
-    }
-
-    // 4. Sweep, warm: serpentine raster, each position from its neighbour; then the same raster
-    // at 0.5 N, each warm-started from its own 1 N state scaled by the membrane law.
+    naive_lines(scene, probes, F, lines, ref_charges);
+    lines.push_back(sweep_cold_line(sweep, probes, F, ref_charges));
     std::vector<pvdf::fem::SweepState> states;
-    {
-      Line l;
-      l.path = "ProbeSweep warm (neighbour 1 grid step away)";
-      pvdf::fem::SweepState state;
-      bool first = true;
-      for (int j = 0; j < patch; ++j)
-        for (int k = 0; k < patch; ++k) {
-          const int i = j % 2 == 0 ? k : patch - 1 - k;
-          const double x = -0.5 * (patch - 1) * spacing + i * spacing, y = -0.5 * (patch - 1) * spacing + j * spacing;
-          const auto before = sweep.timing();
-          c0 = cpu_s();
-          pvdf::fem::SweepState out;
-          const auto s = sweep.solve(x, y, F, first ? nullptr : &state, &out);
-          const double c = cpu_s() - c0;
-          if (!pvdf::fem::usable(s.status)) {
-            std::printf("  position (%g, %g): %s\n", x, y, s.message.c_str());
-            first = true;
-            continue;
-          }
-          states.push_back(out);
-          state = out;
-          if (first) {  // the raster's first position is a cold solve
-            first = false;
-            continue;
-          }
-          l.cpu += c;
-          l.wall += s.wall_s;
-          l.its += s.newton_iterations;
-          l.facts += sweep.timing().factorizations - before.factorizations;
-          ++l.n;
-        }
-      lines.push_back(l);
-    }
-    {
-      Line l;
-      l.path = "ProbeSweep 0.5 N from its 1 N state (force scaling)";
-      for (std::size_t i = 0; i < states.size() && i < 16; ++i) {
-        const auto before = sweep.timing();
-        c0 = cpu_s();
-        const auto s = sweep.solve(states[i].x_m, states[i].y_m, 0.5, &states[i]);
-        l.cpu += cpu_s() - c0;
-        l.wall += s.wall_s;
-        l.its += s.newton_iterations;
-        l.facts += sweep.timing().factorizations - before.factorizations;
-        ++l.n;
-      }
-      lines.push_back(l);
-    }
-
-    std::printf("\n| path | positions | wall s / position | CPU s / position | Newton its / position | "
-                "factorizations / position | charge diff. vs direct |\n|---|---:|---:|---:|---:|---:|---:|\n");
-    for (const Line& l : lines) {
-      const double n = std::max(1, l.n);
-      std::printf("| %s | %d | %.3f | %.3f | %.1f | %s | %s |\n", l.path.c_str(), l.n, l.wall / n, l.cpu / n, l.its / n,
-                  l.facts > 0 ? std::to_string(l.facts / n).substr(0, 4).c_str() : "—",
-                  std::isfinite(l.err) ? (std::to_string(l.err).substr(0, 8)).c_str() : "—");
-    }
-    const Line& warm = lines[3];
-    const double per = warm.cpu / std::max(1, warm.n);
-    std::printf("\nprojected map (seed 001, 1 mm spacing, ~5000 positions, 1 force, 2 cores): %.0f s of CPU "
-                "per core, %.0f s with the mirror symmetry (plus setup %.0f s)\n",
-                5000 * per / 2, 2500 * per / 2, st.setup_s);
-    const auto t = sweep.timing();
-    std::printf("time split over all sweep solves: assembly %.2f s, linear solves %.2f s, load vectors %.2f s, "
-                "outputs %.2f s; %d Newton iterations, %d factorizations\n",
-                t.assembly_s, t.linear_solve_s, t.load_vector_s, t.outputs_s, t.newton_iterations, t.factorizations);
+    lines.push_back(sweep_warm_line(sweep, patch, spacing, F, states));
+    lines.push_back(force_scaled_line(sweep, states));
+    print_results(lines, sweep);
     return 0;
   } catch (const std::exception& e) {
     std::cerr << "error: " << e.what() << "\n";

@@ -49,23 +49,50 @@ void edge_errors(const RestoredForces& r, const ScannerScene& s, double& mu_err,
     shift = std::max(shift, std::abs((c1 / c0 - e.x_m) / dx));
   }
 }
-}  // namespace
-
-int main() {
-  std::vector<IdentificationScan> ids(2);
-  const char* names[2] = {"edge_a.json", "edge_b.json"};
-  for (int i = 0; i < 2; ++i) {
-    const auto s = scene(names[i]);
-    ids[i].scan = simulate_scan(s);
-    ids[i].fx_N = s.edges[0].fx_N;
-    ids[i].fz_N = s.edges[0].fz_N;
-    ids[i].edge_x_m = s.edges[0].x_m;
+// Relative L2 error of the restored texture `r` against the truth of `tscan` blurred by the filter's
+// target (none: the truth itself) over the texture, means removed: the sensor cannot see the mean load.
+double texture_error(const InverseFilter& f, const RestoredForces& r, const Scan& tscan) {
+  std::vector<double> tx = tscan.fx_N, tz = tscan.fz_N;
+  if (f.resolution_m > 0) {
+    const double s = f.resolution_m / 2.3548200450309493, dx = tscan.sample_spacing_m();
+    const long half = static_cast<long>(5 * s / dx);
+    std::vector<double> w(2 * half + 1);
+    double sum = 0;
+    for (long k = -half; k <= half; ++k) sum += w[k + half] = std::exp(-0.5 * std::pow(k * dx / s, 2));
+    for (auto& v : w) v /= sum;
+    auto blur = [&](const std::vector<double>& f) {
+      std::vector<double> out(f.size(), 0.0);
+      for (std::size_t i = 0; i < f.size(); ++i) {
+        if (f[i] == 0) continue;
+        for (long k = -half; k <= half; ++k) {
+          const long j = static_cast<long>(i) + k;
+          if (j >= 0 && j < static_cast<long>(f.size())) out[j] += f[i] * w[k + half];
+        }
+      }
+      return out;
+    };
+    tx = blur(tx);
+    tz = blur(tz);
   }
-  ScannerScene test = scene("edge_a.json");
-  test.seed = 99;
-  test.edges = {{-0.03, 0.45, 0.9}, {0.015, 0.15, 1.0}};
-  const Scan scan = simulate_scan(test);
+  double mx = 0, mz = 0, ax = 0, az = 0;
+  int n = 0;
+  for (std::size_t i = 0; i < r.x_m.size(); ++i)
+    if (r.x_m[i] > -0.012 && r.x_m[i] < 0.022) {
+      mx += r.fx_N[i], mz += r.fz_N[i], ax += tx[i], az += tz[i];
+      ++n;
+    }
+  mx /= n, mz /= n, ax /= n, az /= n;
+  double e = 0, nn = 0;
+  for (std::size_t i = 0; i < r.x_m.size(); ++i)
+    if (r.x_m[i] > -0.012 && r.x_m[i] < 0.022) {
+      e += std::pow(r.fx_N[i] - mx - tx[i] + ax, 2) + std::pow(r.fz_N[i] - mz - tz[i] + az, 2);
+      nn += std::pow(tx[i] - ax, 2) + std::pow(tz[i] - az, 2);
+    }
+  return std::sqrt(e / nn);
+}
 
+// (1) identification + inverse design time against the FIR length; returns the N = 8192 filter.
+InverseFilter time_against_length(const std::vector<IdentificationScan>& ids, const Scan& scan, const ScannerScene& test) {
   std::printf("(1) identification + design (CPU time), 2 scans of %zu samples, noise-floor beta, 1.5 mm target, 10 mm low cut\n", ids[0].scan.size());
   std::printf("%8s %12s %12s %12s %14s %14s\n", "N", "identify_ms", "design_ms", "beta_rel", "max|mu err|", "max|shift|smp");
   InverseFilter kept;
@@ -89,7 +116,11 @@ int main() {
     std::printf("%8zu %12.2f %12.2f %12.3g %14.4f %14.2f\n", N, 1e3 * t_id, 1e3 * t_design, f.beta, mu_err, shift);
     if (N == 8192) kept = f;
   }
+  return kept;
+}
 
+// (2) streaming throughput against block size, and the difference to the offline result.
+void streaming_throughput(const InverseFilter& kept, const Scan& scan) {
   std::vector<double> ox, oz;
   auto t0 = clock_type::now();
   restore_offline(kept, scan.m1_V, scan.m2_V, ox, oz);
@@ -121,9 +152,10 @@ int main() {
     std::printf("%10zu %14.3g %14.0f %14.1f %16.2e\n", block, rate, rate / 1e4, 1e3 * s.latency_samples() / 1e4, diff);
   }
   std::printf("\nlatency = (delay D + block - 1) samples at 10 kHz; target: >= 1000x real time (1e7 samples/s)\n");
+}
 
-  // (3) beta policies: edges (mu at the f_z peak, lobe shift) and a texture (relative L2 error against the
-  // target-blurred truth over the texture, means removed: the sensor cannot see the mean load).
+// (3) beta policies: edges (mu at the f_z peak, lobe shift) and a texture (texture_error).
+void beta_policies(const std::vector<IdentificationScan>& ids, const Scan& scan, const ScannerScene& test) {
   ScannerScene tex = scene("edge_a.json");
   tex.seed = 77;
   tex.edges.clear();
@@ -155,45 +187,30 @@ int main() {
     const auto f = design_inverse(identify_transfer(ids, o), ids, o);
     double mu_err = 0, shift = 0;
     edge_errors(restore_scan(f, scan), test, mu_err, shift);
-    // Texture error against the truth blurred by the same target (none: the truth itself).
-    const auto r = restore_scan(f, tscan);
-    std::vector<double> tx = tscan.fx_N, tz = tscan.fz_N;
-    if (f.resolution_m > 0) {
-      const double s = f.resolution_m / 2.3548200450309493, dx = tscan.sample_spacing_m();
-      const long half = static_cast<long>(5 * s / dx);
-      std::vector<double> w(2 * half + 1);
-      double sum = 0;
-      for (long k = -half; k <= half; ++k) sum += w[k + half] = std::exp(-0.5 * std::pow(k * dx / s, 2));
-      for (auto& v : w) v /= sum;
-      auto blur = [&](const std::vector<double>& f) {
-        std::vector<double> out(f.size(), 0.0);
-        for (std::size_t i = 0; i < f.size(); ++i) {
-          if (f[i] == 0) continue;
-          for (long k = -half; k <= half; ++k) {
-            const long j = static_cast<long>(i) + k;
-            if (j >= 0 && j < static_cast<long>(f.size())) out[j] += f[i] * w[k + half];
-          }
-        }
-        return out;
-      };
-      tx = blur(tx);
-      tz = blur(tz);
-    }
-    double mx = 0, mz = 0, ax = 0, az = 0;
-    int n = 0;
-    for (std::size_t i = 0; i < r.x_m.size(); ++i)
-      if (r.x_m[i] > -0.012 && r.x_m[i] < 0.022) {
-        mx += r.fx_N[i], mz += r.fz_N[i], ax += tx[i], az += tz[i];
-        ++n;
-      }
-    mx /= n, mz /= n, ax /= n, az /= n;
-    double e = 0, nn = 0;
-    for (std::size_t i = 0; i < r.x_m.size(); ++i)
-      if (r.x_m[i] > -0.012 && r.x_m[i] < 0.022) {
-        e += std::pow(r.fx_N[i] - mx - tx[i] + ax, 2) + std::pow(r.fz_N[i] - mz - tz[i] + az, 2);
-        nn += std::pow(tx[i] - ax, 2) + std::pow(tz[i] - az, 2);
-      }
-    std::printf("%-34s %10.3g %12.4f %14.2f %12.3f\n", c.name, f.beta, mu_err, shift, std::sqrt(e / nn));
+    const double texture = texture_error(f, restore_scan(f, tscan), tscan);
+    std::printf("%-34s %10.3g %12.4f %14.2f %12.3f\n", c.name, f.beta, mu_err, shift, texture);
   }
+}
+
+}  // namespace
+
+int main() {
+  std::vector<IdentificationScan> ids(2);
+  const char* names[2] = {"edge_a.json", "edge_b.json"};
+  for (int i = 0; i < 2; ++i) {
+    const auto s = scene(names[i]);
+    ids[i].scan = simulate_scan(s);
+    ids[i].fx_N = s.edges[0].fx_N;
+    ids[i].fz_N = s.edges[0].fz_N;
+    ids[i].edge_x_m = s.edges[0].x_m;
+  }
+  ScannerScene test = scene("edge_a.json");
+  test.seed = 99;
+  test.edges = {{-0.03, 0.45, 0.9}, {0.015, 0.15, 1.0}};
+  const Scan scan = simulate_scan(test);
+
+  const InverseFilter kept = time_against_length(ids, scan, test);
+  streaming_throughput(kept, scan);
+  beta_policies(ids, scan, test);
   return 0;
 }

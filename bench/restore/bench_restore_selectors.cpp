@@ -123,48 +123,10 @@ void mismatch_study(int n_scenes, unsigned long first_seed) {
   }
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  int n_scenes = 48;
-  unsigned long first_seed = 1000;
-  double min_peak_fraction = DesignOptions().min_peak_fraction;
-  bool mismatch_only = false;
-  for (int a = 1; a < argc; ++a) {
-    if (!std::strcmp(argv[a], "--quick")) n_scenes = 6;
-    else if (!std::strcmp(argv[a], "--scenes") && a + 1 < argc) n_scenes = std::atoi(argv[++a]);
-    else if (!std::strcmp(argv[a], "--first-seed") && a + 1 < argc) first_seed = std::strtoul(argv[++a], nullptr, 10);
-    else if (!std::strcmp(argv[a], "--min-peak-fraction") && a + 1 < argc) min_peak_fraction = std::atof(argv[++a]);
-    else if (!std::strcmp(argv[a], "--mismatch-only")) mismatch_only = true;
-    else {
-      std::fprintf(stderr, "usage: bench_restore_selectors [--quick] [--scenes N] [--first-seed S] [--min-peak-fraction P] [--mismatch-only]\n");
-      return 2;
-    }
-  }
-  if (n_scenes < 1 || n_scenes > 10000) {
-    std::fprintf(stderr, "error: --scenes = %d must be in [1, 10000]\n", n_scenes);
-    return 2;
-  }
-  const std::clock_t t0 = std::clock();
-  if (mismatch_only) {
-    mismatch_study(n_scenes, first_seed);
-    std::printf("\nCPU time %.1f s\n", static_cast<double>(std::clock() - t0) / CLOCKS_PER_SEC);
-    return 0;
-  }
-  const std::vector<Selector> selectors = {
-      {"Tikhonov constant 1e-4, no target, no low cut (seed 000)", BetaPolicy::constant, 1e-4, true, false, false},
-      {"Tikhonov constant 1e-4", BetaPolicy::constant, 1e-4, false, false, false},
-      {"Tikhonov noise floor of G", BetaPolicy::discrepancy, 0, false, false, false},
-      {"Tikhonov GCV", BetaPolicy::gcv, 0, false, false, false},
-      {"Tikhonov L-curve", BetaPolicy::lcurve, 0, false, false, false},
-      {"Tikhonov discrepancy principle (Morozov)", BetaPolicy::morozov, 0, false, false, false},
-      {"Tikhonov frequency-dependent 1e-4, corner = res.", BetaPolicy::frequency, 1e-4, false, true, false},
-      {"Tikhonov predicted mu error x 0.25 (old default)", BetaPolicy::predicted, 0, false, false, false, 0.25},
-      {"isotropic constant 1e-4", BetaPolicy::constant, 1e-4, false, false, true},
-      {"isotropic constant 1e-2", BetaPolicy::constant, 1e-2, false, false, true},
-      {"isotropic GCV", BetaPolicy::gcv, 0, false, false, true},
-      {"isotropic predicted mu error (default)", BetaPolicy::predicted, 0, false, false, true},
-  };
+// (1) Every selector on each scene of the family against the hindsight-best constant beta, then the
+// table of ratios and errors over the scenes.
+void selector_study(const std::vector<Selector>& selectors, int n_scenes, unsigned long first_seed,
+                    double min_peak_fraction) {
   const std::size_t S = selectors.size();
   // Ratios to the hindsight-best constant beta of the selector's own regularization ("own") and to that of
   // Tikhonov, the seed-000 design ("Tikhonov").
@@ -231,6 +193,52 @@ int main(int argc, char** argv) {
     std::printf("  spread of its beta over the scenes: 10th-90th percentile %.2g .. %.2g\n", quantile(best_beta[iso], 0.1),
                 quantile(best_beta[iso], 0.9));
   }
+
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  int n_scenes = 48;
+  unsigned long first_seed = 1000;
+  double min_peak_fraction = DesignOptions().min_peak_fraction;
+  bool mismatch_only = false;
+  for (int a = 1; a < argc; ++a) {
+    if (!std::strcmp(argv[a], "--quick")) n_scenes = 6;
+    else if (!std::strcmp(argv[a], "--scenes") && a + 1 < argc) n_scenes = std::atoi(argv[++a]);
+    else if (!std::strcmp(argv[a], "--first-seed") && a + 1 < argc) first_seed = std::strtoul(argv[++a], nullptr, 10);
+    else if (!std::strcmp(argv[a], "--min-peak-fraction") && a + 1 < argc) min_peak_fraction = std::atof(argv[++a]);
+    else if (!std::strcmp(argv[a], "--mismatch-only")) mismatch_only = true;
+    else {
+      std::fprintf(stderr, "usage: bench_restore_selectors [--quick] [--scenes N] [--first-seed S] [--min-peak-fraction P] [--mismatch-only]\n");
+      return 2;
+    }
+  }
+  if (n_scenes < 1 || n_scenes > 10000) {
+    std::fprintf(stderr, "error: --scenes = %d must be in [1, 10000]\n", n_scenes);
+    return 2;
+  }
+  const std::clock_t t0 = std::clock();
+  if (mismatch_only) {
+    mismatch_study(n_scenes, first_seed);
+    std::printf("\nCPU time %.1f s\n", static_cast<double>(std::clock() - t0) / CLOCKS_PER_SEC);
+    return 0;
+  }
+  const std::vector<Selector> selectors = {
+      {"Tikhonov constant 1e-4, no target, no low cut (seed 000)", BetaPolicy::constant, 1e-4, true, false, false},
+      {"Tikhonov constant 1e-4", BetaPolicy::constant, 1e-4, false, false, false},
+      {"Tikhonov noise floor of G", BetaPolicy::discrepancy, 0, false, false, false},
+      {"Tikhonov GCV", BetaPolicy::gcv, 0, false, false, false},
+      {"Tikhonov L-curve", BetaPolicy::lcurve, 0, false, false, false},
+      {"Tikhonov discrepancy principle (Morozov)", BetaPolicy::morozov, 0, false, false, false},
+      {"Tikhonov frequency-dependent 1e-4, corner = res.", BetaPolicy::frequency, 1e-4, false, true, false},
+      {"Tikhonov predicted mu error x 0.25 (old default)", BetaPolicy::predicted, 0, false, false, false, 0.25},
+      {"isotropic constant 1e-4", BetaPolicy::constant, 1e-4, false, false, true},
+      {"isotropic constant 1e-2", BetaPolicy::constant, 1e-2, false, false, true},
+      {"isotropic GCV", BetaPolicy::gcv, 0, false, false, true},
+      {"isotropic predicted mu error (default)", BetaPolicy::predicted, 0, false, false, true},
+  };
+  selector_study(selectors, n_scenes, first_seed, min_peak_fraction);
 
   mismatch_study(n_scenes, first_seed);
   std::printf("\nCPU time %.1f s\n", static_cast<double>(std::clock() - t0) / CLOCKS_PER_SEC);

@@ -200,8 +200,8 @@ void FilmSolver::fill_result(Result& result, Model model) {
       const Kinematics k = kinematics_at(u, x);
       s.membrane_force = membrane_force(k, x);
     } catch (const std::exception&) {
-      throw InputError("--sample " + fmt(p[0]) + "," + fmt(p[1]) +
-                       " could not be located in the mesh (too close to the rim?); move it inside the film");
+      throw InputError("sample point (x, y) = (" + fmt(p[0]) + ", " + fmt(p[1]) +
+                       ") m could not be located in the mesh (too close to the rim?); move it inside the film");
     }
     s.ux_m = value[0];
     s.uy_m = value[1];

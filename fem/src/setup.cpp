@@ -132,8 +132,8 @@ FilmSolver::FilmSolver(const pvdf::Scene& scene, const Options& options)
   for (const auto& e : scene.electrodes) electrode_polygons_.push_back(e.outline(64));
   for (const auto& p : options.sample_points_m) {
     if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !m.outline.contains(p, 0.0)) {
-      throw InputError("--sample " + fmt(p[0]) + "," + fmt(p[1]) + " lies outside the film (" + scene.source +
-                       "); give a point inside the outline, in metres");
+      throw InputError("sample point (x, y) = (" + fmt(p[0]) + ", " + fmt(p[1]) + ") m lies outside the film (" +
+                       scene.source + "); give a point inside the outline, in metres");
     }
   }
 }

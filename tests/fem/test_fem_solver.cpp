@@ -446,4 +446,18 @@ TEST_CASE("bad input is refused with a message naming the value", "[fem][input]"
   s.membrane.thickness_m = -1;
   CHECK_THROWS_AS(pvdf::fem::solve(s), pvdf::InputError);
   CHECK_THROWS_AS(pvdf::fem::parse_model("plate", "--model"), pvdf::InputError);
+  // A sample point outside the film: the library names the quantity and the value, not a flag
+  // (flag names belong to the command line, which reports its own --sample).
+  s = pvdf::default_scene();
+  pvdf::fem::Options o = pvdf::fem::options_from_scene(s);
+  o.sample_points_m = {{0.06, 0.0}};
+  try {
+    pvdf::fem::solve(s, o);
+    FAIL("a sample point outside the film was accepted");
+  } catch (const pvdf::InputError& e) {
+    const std::string what = e.what();
+    INFO(what);
+    CHECK(what.rfind("sample point (x, y) = (0.06, 0) m lies outside the film", 0) == 0);
+    CHECK(what.find("--") == std::string::npos);
+  }
 }

@@ -4,6 +4,7 @@
 
 #include "pvdf/core/error.hpp"
 #include "pvdf/mapping/calibration.hpp"
+#include "pvdf/mapping/lookup_accuracy.hpp"
 #include "pvdf/mapping/pictures.hpp"
 #include "pvdf/mapping/triangulation.hpp"
 
@@ -189,4 +190,43 @@ TEST_CASE("isocharge pictures and VTK export", "[mapping][pictures]") {
     f.read(sig, 8);
     CHECK(std::string(sig + 1, 3) == "PNG");
   }
+}
+
+TEST_CASE("the lookup-accuracy study: errors grow with noise, the lookup beats the triangulation, reproducible by seed",
+          "[mapping][triangulation]") {
+  // On a power-law map eq. 6 holds exactly, so the triangulation's error is its circle
+  // intersection and the lookup's is noise: 1 pC of noise must cost far more than 0.01 pC.
+  const ChargeMap map = build_synthetic_map(power_law_model(), 0.5e-3, 3e-3, {0.5, 1.0, 2.0}, 0.05e-12);
+  LookupAccuracyOptions o;
+  o.n_presses = 60;
+  o.radius_m = 0.012;
+  o.noise_C = {0.01e-12, 1e-12};
+  o.seed = 7;
+  int rows_seen = 0;
+  const LookupAccuracy a = lookup_accuracy(map, o, [&rows_seen](const LookupAccuracy& so_far) {
+    CHECK(so_far.rows.size() == std::size_t(++rows_seen));
+  });
+  CHECK(rows_seen == 2);
+  REQUIRE(a.n_presses == 60);
+  REQUIRE(a.rows.size() == 2);
+  CHECK(a.min_force_N == 0.5);
+  CHECK(a.max_force_N == 2.0);
+  const auto& quiet = a.rows[0];
+  const auto& noisy = a.rows[1];
+  CHECK(noisy.median_error_force_known_m > 10 * quiet.median_error_force_known_m);
+  CHECK(quiet.median_error_force_known_m < 0.1e-3);
+  CHECK(noisy.median_sigma_force_known_m > 10 * quiet.median_sigma_force_known_m);
+  CHECK(quiet.lookup_per_cpu_s > 0);
+  // The same seed draws the same presses and noise.
+  const LookupAccuracy b = lookup_accuracy(map, o);
+  CHECK(b.rows[1].median_error_force_known_m == noisy.median_error_force_known_m);
+  CHECK(b.rows[1].median_error_triangulation_m == noisy.median_error_triangulation_m);
+  CHECK(b.rows[1].n_ambiguous == noisy.n_ambiguous);
+  // A radius far beyond the map finds too few presses: no rows, the count says why.
+  o.radius_m = 5.0;
+  const LookupAccuracy off = lookup_accuracy(map, o);
+  CHECK(off.n_presses < o.min_presses);
+  CHECK(off.rows.empty());
+  o.noise_C = {0.0};
+  CHECK_THROWS_AS(lookup_accuracy(map, o), pvdf::InputError);
 }

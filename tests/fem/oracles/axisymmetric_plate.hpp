@@ -368,6 +368,225 @@ inline std::vector<std::pair<double, double>> AxisymmetricSolution::wrinkled_int
   return out;
 }
 
+namespace detail {
+
+// Newton with energy line search and Levenberg-type shift when the Hessian is not positive, on
+// the dofs `x` of model `m` (loaded by q), fixed dofs held at their values. Counts its iterations
+// in `newton_iterations`; true when converged.
+struct Newton {
+  Model& m;
+  Eigen::VectorXd& x;
+  const std::vector<bool>& fixed;
+  const AxisymmetricOptions& o;
+  int& newton_iterations;
+  int n_nodes, n_dof;
+
+  // The shifted, diagonally scaled Newton direction for gradient g and Hessian triplets `trip`;
+  // empty when no shift up to 30 attempts gives a descent direction.
+  Eigen::VectorXd direction(const Eigen::VectorXd& g, std::vector<Eigen::Triplet<double>>& trip) const {
+    Eigen::SparseMatrix<double> K(n_dof, n_dof);
+    std::vector<Eigen::Triplet<double>> kept;
+    kept.reserve(trip.size());
+    for (const auto& t : trip)
+      if ((!fixed[t.row()] && !fixed[t.col()]) || t.row() == t.col()) kept.push_back(t);
+    K.setFromTriplets(kept.begin(), kept.end());
+    // Symmetric diagonal scaling: the dofs mix values and slopes, membrane and bending stiffness.
+    Eigen::VectorXd scale(n_dof);
+    for (int i = 0; i < n_dof; ++i) {
+      const double d = std::abs(K.coeff(i, i));
+      scale[i] = d > 0 ? 1.0 / std::sqrt(d) : 1.0;
+    }
+    Eigen::SparseMatrix<double> Kscaled = scale.asDiagonal() * K * scale.asDiagonal();
+    double shift = 0;
+    Eigen::VectorXd dx;
+    for (int attempt = 0; attempt < 30; ++attempt) {
+      Eigen::SparseMatrix<double> Ks = Kscaled;
+      if (shift > 0)
+        for (int i = 0; i < n_dof; ++i) Ks.coeffRef(i, i) += shift;
+      Eigen::SparseLU<Eigen::SparseMatrix<double>> lu;
+      lu.compute(Ks);
+      if (lu.info() == Eigen::Success) {
+        const Eigen::VectorXd rhs = -(scale.array() * g.array()).matrix();
+        dx = (scale.array() * lu.solve(rhs).array()).matrix();
+        if (lu.info() == Eigen::Success && dx.allFinite() && g.dot(dx) < 0) break;
+      }
+      dx.resize(0);
+      shift = shift == 0 ? 1e-10 : shift * 10;
+    }
+    return dx;
+  }
+
+  // Step length: full step when it lowers the energy (or the gradient, once energies agree to
+  // rounding), else halved; at most 1e-12 means no acceptable step.
+  double step_length(double E0, const Eigen::VectorXd& g, const Eigen::VectorXd& dx) const {
+    double alpha = 1;
+    for (; alpha > 1e-12; alpha *= 0.5) {
+      const Eigen::VectorXd xt = x + alpha * dx;
+      Eigen::VectorXd gt;
+      const double E1 = detail::energy(m, xt, &gt, nullptr);
+      for (int i = 0; i < n_dof; ++i)
+        if (fixed[i]) gt[i] = 0;
+      if (!std::isfinite(E1)) continue;
+      if (E1 <= E0 + 1e-4 * alpha * g.dot(dx)) break;
+      if (std::abs(E1 - E0) <= 1e-13 * std::abs(E0) + 1e-300 && gt.norm() < g.norm()) break;
+    }
+    return alpha;
+  }
+
+  bool operator()(double q) {
+    m.q = q;
+    Eigen::VectorXd g;
+    std::vector<Eigen::Triplet<double>> trip;
+    for (int it = 0; it < o.max_newton_iterations; ++it) {
+      const double E0 = detail::energy(m, x, &g, &trip);
+      ++newton_iterations;
+      for (int i = 0; i < n_dof; ++i)
+        if (fixed[i]) {
+          g[i] = 0;
+          trip.emplace_back(i, i, 1.0);
+        }
+      Eigen::VectorXd dx = direction(g, trip);
+      if (dx.size() == 0) return false;
+      for (int i = 0; i < n_dof; ++i)
+        if (fixed[i]) dx[i] = 0;
+      // Newton decrement −g·dx ≈ dxᵀK dx below 1e-20 of the energy: relative error ~1e-10 in energy norm.
+      const double decrement = -g.dot(dx);
+      if (decrement <= 1e-20 * std::abs(E0)) return true;
+      const double alpha = step_length(E0, g, dx);
+      if (alpha <= 1e-12) return false;
+      x += alpha * dx;
+      // Converged: a full step, small against the solution in the u and the w components.
+      double du = 0, dw = 0, umax = 0, wmax = 0;
+      for (int i = 0; i < n_nodes; ++i) {
+        du = std::max({du, std::abs(dx[4 * i]), std::abs(dx[4 * i + 1])});
+        umax = std::max({umax, std::abs(x[4 * i]), std::abs(x[4 * i + 1])});
+        dw = std::max({dw, std::abs(dx[4 * i + 2]), std::abs(dx[4 * i + 3])});
+        wmax = std::max({wmax, std::abs(x[4 * i + 2]), std::abs(x[4 * i + 3])});
+      }
+      // (u ~ w² in a membrane: below 1e-12·w it is rounding, e.g. in the linear first load step of a
+      // thick plate, where the bending stiffness makes the tangent ill-conditioned.)
+      if (alpha == 1 && dw <= o.step_tolerance * wmax && du <= o.step_tolerance * umax + 1e-12 * wmax) return true;
+    }
+    return false;
+  }
+};
+
+// Start of the membrane solves: a paraboloid with Hencky's amplitude (K ≈ 0.65) for the same
+// total force spread over the whole film.
+inline void hencky_start(const Model& m, double q_full, int n_nodes, Eigen::VectorXd& x) {
+  const double w0 = 0.65 * std::cbrt(q_full * m.c * m.c);
+  for (int i = 0; i < n_nodes; ++i) {
+    const double r = m.nodes[i];
+    x[4 * i + 2] = w0 * (1 - r * r);
+    x[4 * i + 3] = -2 * w0 * r;
+  }
+}
+
+// Relaxed membrane, slack or taut. A slack film has no stiffness at small load and its flat
+// state is all wrinkled, so no load continuation: solve the taut film first (N0 ≥ 0, from
+// Hencky's paraboloid, where the relaxation is rarely active), then lower N0 to its slack
+// value in steps, each Newton solve started from the last (halving a step that fails).
+inline bool solve_tension_field(Newton& newton, const AxisymmetricProblem& p, double q_full, AxisymmetricSolution& sol) {
+  Model& m = newton.m;
+  Eigen::VectorXd& x = newton.x;
+  m.tf = true;
+  m.gl = false;
+  const double n0_target = m.n0;
+  m.n0 = std::max(0.0, n0_target);
+  hencky_start(m, q_full, newton.n_nodes, x);
+  sol.load_steps = 1;
+  bool ok = newton(q_full);
+  double step = n0_target / 4;
+  while (ok && m.n0 > n0_target) {
+    const Eigen::VectorXd x_save = x;
+    const double n0_save = m.n0;
+    m.n0 = std::max(n0_target, m.n0 + step);
+    ++sol.load_steps;
+    if (newton(q_full)) {
+      step *= 1.5;
+    } else {
+      x = x_save;
+      m.n0 = n0_save;
+      step *= 0.5;
+      if (std::abs(step) < 1e-6 * std::abs(n0_target)) ok = false;
+    }
+  }
+  if (ok && p.kinematics == Kinematics::green_lagrange) {
+    m.gl = true;
+    ok = newton(q_full);
+    ++sol.load_steps;
+  }
+  return ok;
+}
+
+// The pure von Kármán membrane has no stiffness at w = 0: start from Hencky's paraboloid, then
+// (Green–Lagrange) solve again with the full kinematics.
+inline bool solve_pure_membrane(Newton& newton, const AxisymmetricProblem& p, double q_full, AxisymmetricSolution& sol) {
+  Model& m = newton.m;
+  m.gl = false;
+  hencky_start(m, q_full, newton.n_nodes, newton.x);
+  sol.load_steps = 1;
+  bool ok = newton(q_full);
+  if (ok && p.kinematics == Kinematics::green_lagrange) {
+    m.gl = true;
+    ok = newton(q_full);
+    sol.load_steps = 2;
+  }
+  return ok;
+}
+
+// Load continuation from a load small enough for the linear response, doubling, with a
+// power-law predictor w ∝ λ^e, u ∝ λ^(2e) fitted to the last two converged steps.
+inline bool solve_load_continuation(Newton& newton, const AxisymmetricProblem& p, double q_full,
+                                    AxisymmetricSolution& sol) {
+  Model& m = newton.m;
+  Eigen::VectorXd& x = newton.x;
+  const int n_nodes = newton.n_nodes;
+  const double a = p.radius_m, Eh = p.youngs_modulus_Pa * p.thickness_m, nu = p.poisson_ratio;
+  m.gl = p.kinematics == Kinematics::green_lagrange;
+  // First load factor: the linear estimate of the centre deflection (plate and/or tensioned
+  // membrane, whichever is stiffer) at 1e-3 h.
+  const double F = p.force_N, c_m = p.load_radius_m, h_m = p.thickness_m;
+  double w_linear = std::numeric_limits<double>::infinity();
+  if (p.bending)
+    w_linear = F * a * a / (16 * M_PI * Eh * h_m * h_m / (12 * (1 - nu * nu)));
+  if (m.n0 > 0)
+    w_linear = std::min(w_linear, F / (2 * M_PI * p.pretension_N_per_m) * (std::log(a / c_m) + 0.5));
+  double lambda = std::min(1.0, 1e-3 * h_m / w_linear);
+  double exponent = 1.0, w_prev = 0, lambda_prev = 0;
+  bool ok = newton(q_full * lambda);
+  sol.load_steps = 1;
+  double step = 2.0;
+  while (ok && lambda < 1) {
+    const double w_now = x[2];
+    if (lambda_prev > 0 && w_prev > 0 && w_now > 0)
+      exponent = std::clamp(std::log(w_now / w_prev) / std::log(lambda / lambda_prev), 0.3, 1.0);
+    const double next = std::min(1.0, lambda * step);
+    const double s = next / lambda;
+    const Eigen::VectorXd x_save = x;
+    for (int i = 0; i < n_nodes; ++i) {
+      x[4 * i] *= std::pow(s, 2 * exponent);
+      x[4 * i + 1] *= std::pow(s, 2 * exponent);
+      x[4 * i + 2] *= std::pow(s, exponent);
+      x[4 * i + 3] *= std::pow(s, exponent);
+    }
+    ++sol.load_steps;
+    if (newton(q_full * next)) {
+      lambda_prev = lambda;
+      w_prev = w_now;
+      lambda = next;
+      step = std::min(4.0, step * 1.5);
+    } else {
+      x = x_save;
+      step = std::sqrt(step);
+      if (step < 1.0001) ok = false;
+    }
+  }
+  return ok;
+}
+
+}  // namespace detail
+
 /// Solves the axisymmetric problem. Throws std::invalid_argument on unusable input; a failed
 /// Newton iteration is reported in `converged`/`message`, never as a wrong number.
 inline AxisymmetricSolution solve_axisymmetric(const AxisymmetricProblem& p, const AxisymmetricOptions& o = {}) {
@@ -410,184 +629,15 @@ inline AxisymmetricSolution solve_axisymmetric(const AxisymmetricProblem& p, con
   sol.D_ = p.bending ? m.D : 0.0;
   sol.nodes_ = m.nodes;
   Eigen::VectorXd x = Eigen::VectorXd::Zero(n_dof);
-
-  // Newton with energy line search and Levenberg-type shift when the Hessian is not positive.
-  auto newton = [&](double q) -> bool {
-    m.q = q;
-    Eigen::VectorXd g;
-    std::vector<Eigen::Triplet<double>> trip;
-    for (int it = 0; it < o.max_newton_iterations; ++it) {
-      const double E0 = detail::energy(m, x, &g, &trip);
-      ++sol.newton_iterations;
-      for (int i = 0; i < n_dof; ++i)
-        if (fixed[i]) {
-          g[i] = 0;
-          trip.emplace_back(i, i, 1.0);
-        }
-      Eigen::SparseMatrix<double> K(n_dof, n_dof);
-      std::vector<Eigen::Triplet<double>> kept;
-      kept.reserve(trip.size());
-      for (const auto& t : trip)
-        if ((!fixed[t.row()] && !fixed[t.col()]) || t.row() == t.col()) kept.push_back(t);
-      K.setFromTriplets(kept.begin(), kept.end());
-      // Symmetric diagonal scaling: the dofs mix values and slopes, membrane and bending stiffness.
-      Eigen::VectorXd scale(n_dof);
-      for (int i = 0; i < n_dof; ++i) {
-        const double d = std::abs(K.coeff(i, i));
-        scale[i] = d > 0 ? 1.0 / std::sqrt(d) : 1.0;
-      }
-      Eigen::SparseMatrix<double> Kscaled = scale.asDiagonal() * K * scale.asDiagonal();
-      double shift = 0;
-      Eigen::VectorXd dx;
-      for (int attempt = 0; attempt < 30; ++attempt) {
-        Eigen::SparseMatrix<double> Ks = Kscaled;
-        if (shift > 0)
-          for (int i = 0; i < n_dof; ++i) Ks.coeffRef(i, i) += shift;
-        Eigen::SparseLU<Eigen::SparseMatrix<double>> lu;
-        lu.compute(Ks);
-        if (lu.info() == Eigen::Success) {
-          const Eigen::VectorXd rhs = -(scale.array() * g.array()).matrix();
-          dx = (scale.array() * lu.solve(rhs).array()).matrix();
-          if (lu.info() == Eigen::Success && dx.allFinite() && g.dot(dx) < 0) break;
-        }
-        dx.resize(0);
-        shift = shift == 0 ? 1e-10 : shift * 10;
-      }
-      if (dx.size() == 0) return false;
-      for (int i = 0; i < n_dof; ++i)
-        if (fixed[i]) dx[i] = 0;
-      // Newton decrement −g·dx ≈ dxᵀK dx below 1e-20 of the energy: relative error ~1e-10 in energy norm.
-      const double decrement = -g.dot(dx);
-      if (decrement <= 1e-20 * std::abs(E0)) return true;
-      // Full step when it lowers the energy (or the gradient, once energies agree to rounding).
-      double alpha = 1;
-      for (; alpha > 1e-12; alpha *= 0.5) {
-        const Eigen::VectorXd xt = x + alpha * dx;
-        Eigen::VectorXd gt;
-        const double E1 = detail::energy(m, xt, &gt, nullptr);
-        for (int i = 0; i < n_dof; ++i)
-          if (fixed[i]) gt[i] = 0;
-        if (!std::isfinite(E1)) continue;
-        if (E1 <= E0 + 1e-4 * alpha * g.dot(dx)) break;
-        if (std::abs(E1 - E0) <= 1e-13 * std::abs(E0) + 1e-300 && gt.norm() < g.norm()) break;
-      }
-      if (alpha <= 1e-12) return false;
-      x += alpha * dx;
-      // Converged: a full step, small against the solution in the u and the w components.
-      double du = 0, dw = 0, umax = 0, wmax = 0;
-      for (int i = 0; i < n_nodes; ++i) {
-        du = std::max({du, std::abs(dx[4 * i]), std::abs(dx[4 * i + 1])});
-        umax = std::max({umax, std::abs(x[4 * i]), std::abs(x[4 * i + 1])});
-        dw = std::max({dw, std::abs(dx[4 * i + 2]), std::abs(dx[4 * i + 3])});
-        wmax = std::max({wmax, std::abs(x[4 * i + 2]), std::abs(x[4 * i + 3])});
-      }
-      // (u ~ w² in a membrane: below 1e-12·w it is rounding, e.g. in the linear first load step of a
-      // thick plate, where the bending stiffness makes the tangent ill-conditioned.)
-      if (alpha == 1 && dw <= o.step_tolerance * wmax && du <= o.step_tolerance * umax + 1e-12 * wmax) return true;
-    }
-    return false;
-  };
+  detail::Newton newton{m, x, fixed, o, sol.newton_iterations, n_nodes, n_dof};
 
   const bool pure_membrane = !p.bending && m.n0 == 0;
   if (p.tension_field) {
-    // Relaxed membrane, slack or taut. A slack film has no stiffness at small load and its flat
-    // state is all wrinkled, so no load continuation: solve the taut film first (N0 ≥ 0, from
-    // Hencky's paraboloid, where the relaxation is rarely active), then lower N0 to its slack
-    // value in steps, each Newton solve started from the last (halving a step that fails).
-    m.tf = true;
-    m.gl = false;
-    const double n0_target = m.n0;
-    m.n0 = std::max(0.0, n0_target);
-    const double w0 = 0.65 * std::cbrt(q_full * m.c * m.c);
-    for (int i = 0; i < n_nodes; ++i) {
-      const double r = m.nodes[i];
-      x[4 * i + 2] = w0 * (1 - r * r);
-      x[4 * i + 3] = -2 * w0 * r;
-    }
-    sol.load_steps = 1;
-    bool ok = newton(q_full);
-    double step = n0_target / 4;
-    while (ok && m.n0 > n0_target) {
-      const Eigen::VectorXd x_save = x;
-      const double n0_save = m.n0;
-      m.n0 = std::max(n0_target, m.n0 + step);
-      ++sol.load_steps;
-      if (newton(q_full)) {
-        step *= 1.5;
-      } else {
-        x = x_save;
-        m.n0 = n0_save;
-        step *= 0.5;
-        if (std::abs(step) < 1e-6 * std::abs(n0_target)) ok = false;
-      }
-    }
-    if (ok && p.kinematics == Kinematics::green_lagrange) {
-      m.gl = true;
-      ok = newton(q_full);
-      ++sol.load_steps;
-    }
-    sol.converged = ok;
+    sol.converged = detail::solve_tension_field(newton, p, q_full, sol);
   } else if (pure_membrane) {
-    // The pure von Kármán membrane has no stiffness at w = 0: start from a paraboloid with
-    // Hencky's amplitude (K ≈ 0.65) for the same total force spread over the whole film.
-    m.gl = false;
-    const double w0 = 0.65 * std::cbrt(q_full * m.c * m.c);
-    for (int i = 0; i < n_nodes; ++i) {
-      const double r = m.nodes[i];
-      x[4 * i + 2] = w0 * (1 - r * r);
-      x[4 * i + 3] = -2 * w0 * r;
-    }
-    sol.load_steps = 1;
-    bool ok = newton(q_full);
-    if (ok && p.kinematics == Kinematics::green_lagrange) {
-      m.gl = true;
-      ok = newton(q_full);
-      sol.load_steps = 2;
-    }
-    sol.converged = ok;
+    sol.converged = detail::solve_pure_membrane(newton, p, q_full, sol);
   } else {
-    // Load continuation from a load small enough for the linear response, doubling, with a
-    // power-law predictor w ∝ λ^e, u ∝ λ^(2e) fitted to the last two converged steps.
-    m.gl = p.kinematics == Kinematics::green_lagrange;
-    // First load factor: the linear estimate of the centre deflection (plate and/or tensioned
-    // membrane, whichever is stiffer) at 1e-3 h.
-    const double F = p.force_N, c_m = p.load_radius_m, h_m = p.thickness_m;
-    double w_linear = std::numeric_limits<double>::infinity();
-    if (p.bending)
-      w_linear = F * a * a / (16 * M_PI * Eh * h_m * h_m / (12 * (1 - nu * nu)));
-    if (m.n0 > 0)
-      w_linear = std::min(w_linear, F / (2 * M_PI * p.pretension_N_per_m) * (std::log(a / c_m) + 0.5));
-    double lambda = std::min(1.0, 1e-3 * h_m / w_linear);
-    double exponent = 1.0, w_prev = 0, lambda_prev = 0;
-    bool ok = newton(q_full * lambda);
-    sol.load_steps = 1;
-    double step = 2.0;
-    while (ok && lambda < 1) {
-      const double w_now = x[2];
-      if (lambda_prev > 0 && w_prev > 0 && w_now > 0)
-        exponent = std::clamp(std::log(w_now / w_prev) / std::log(lambda / lambda_prev), 0.3, 1.0);
-      const double next = std::min(1.0, lambda * step);
-      const double s = next / lambda;
-      const Eigen::VectorXd x_save = x;
-      for (int i = 0; i < n_nodes; ++i) {
-        x[4 * i] *= std::pow(s, 2 * exponent);
-        x[4 * i + 1] *= std::pow(s, 2 * exponent);
-        x[4 * i + 2] *= std::pow(s, exponent);
-        x[4 * i + 3] *= std::pow(s, exponent);
-      }
-      ++sol.load_steps;
-      if (newton(q_full * next)) {
-        lambda_prev = lambda;
-        w_prev = w_now;
-        lambda = next;
-        step = std::min(4.0, step * 1.5);
-      } else {
-        x = x_save;
-        step = std::sqrt(step);
-        if (step < 1.0001) ok = false;
-      }
-    }
-    sol.converged = ok;
+    sol.converged = detail::solve_load_continuation(newton, p, q_full, sol);
   }
   sol.gl_ = m.gl;
   sol.tf_ = m.tf;
