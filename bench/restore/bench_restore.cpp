@@ -99,6 +99,7 @@ InverseFilter time_against_length(const std::vector<IdentificationScan>& ids, co
   for (std::size_t N : {2048u, 4096u, 8192u, 16384u}) {
     DesignOptions o;
     o.taps = N;
+    o.isotropic = false;  // Tikhonov, as the table in docs/restore.md section 6
     o.beta_policy = BetaPolicy::discrepancy;
     o.resolution_m = 1.5e-3;
     o.low_cut_wavelength_m = 0.01;
@@ -161,12 +162,13 @@ void beta_policies(const std::vector<IdentificationScan>& ids, const Scan& scan,
   tex.edges.clear();
   tex.textures.push_back({-0.01, 0.02, 0.005, 0.0025, 0.5, 0.2, 0.7});
   const Scan tscan = simulate_scan(tex);
-  std::printf("\n(3) beta policies (N = 8192); forces with the flat-surface level fixed\n%-34s %10s %12s %14s %12s\n", "policy", "beta_rel", "max|mu err|",
+  std::printf("\n(3) beta policies (N = 8192; Tikhonov unless stated); forces with the flat-surface level fixed\n%-38s %10s %12s %14s %12s\n", "policy", "beta_rel", "max|mu err|",
               "max|shift|smp", "texture L2");
   struct Case {
     const char* name;
     BetaPolicy policy;
     double beta, resolution, low_cut;
+    bool isotropic = false;  // Tikhonov (seed 000 eq. 4) unless stated
   };
   for (const Case& c : {Case{"constant 1e-4, no target (paper)", BetaPolicy::constant, 1e-4, 0.0, 0.0},
                         Case{"constant 1e-8, target, low cut", BetaPolicy::constant, 1e-8, 1.5e-3, 0.01},
@@ -178,8 +180,12 @@ void beta_policies(const std::vector<IdentificationScan>& ids, const Scan& scan,
                         Case{"noise floor, target, no low cut", BetaPolicy::discrepancy, 0.0, 1.5e-3, 0.0},
                         Case{"noise floor, target, low cut", BetaPolicy::discrepancy, 0.0, 1.5e-3, 0.01},
                         Case{"predicted, target, low cut", BetaPolicy::predicted, 0.0, 1.5e-3, 0.01},
-                        Case{"defaults (predicted, auto, auto)", BetaPolicy::predicted, 0.0, -1.0, -1.0}}) {
+                        Case{"Tikhonov predicted, auto, auto", BetaPolicy::predicted, 0.0, -1.0, -1.0},
+                        Case{"isotropic predicted, target, low cut", BetaPolicy::predicted, 0.0, 1.5e-3, 0.01, true},
+                        Case{"defaults (isotropic, predicted, auto)", BetaPolicy::predicted, 0.0, -1.0, -1.0, true}}) {
     DesignOptions o;
+    o.isotropic = c.isotropic;
+    o.predicted_beta_scale = c.isotropic ? 1.0 : 0.25;
     o.beta_policy = c.policy;
     o.beta = c.beta;
     o.resolution_m = c.resolution;
@@ -188,7 +194,7 @@ void beta_policies(const std::vector<IdentificationScan>& ids, const Scan& scan,
     double mu_err = 0, shift = 0;
     edge_errors(restore_scan(f, scan), test, mu_err, shift);
     const double texture = texture_error(f, restore_scan(f, tscan), tscan);
-    std::printf("%-34s %10.3g %12.4f %14.2f %12.3f\n", c.name, f.beta, mu_err, shift, texture);
+    std::printf("%-38s %10.3g %12.4f %14.2f %12.3f\n", c.name, f.beta, mu_err, shift, texture);
   }
 }
 
