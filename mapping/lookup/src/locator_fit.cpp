@@ -30,7 +30,7 @@ using detail::LmPoint;
 
 namespace {
 
-double chi2_of(const Vec& m, const double* q, const double* w, std::size_t ne) {
+PVDF_INLINE double chi2_of(const Vec& m, const double* q, const double* w, std::size_t ne) {
   double s = 0;
   for (std::size_t k = 0; k < ne; ++k) {
     const double r = (m[k] - q[k]) * w[k];
@@ -39,7 +39,7 @@ double chi2_of(const Vec& m, const double* q, const double* w, std::size_t ne) {
   return s;
 }
 
-void normal_equations(LmPoint& p, const double* q, const double* w, std::size_t ne) {
+PVDF_INLINE void normal_equations(LmPoint& p, const double* q, const double* w, std::size_t ne) {
   p.JtJ = {0, 0, 0, 0, 0, 0};
   p.Jtr = {0, 0, 0};
   for (std::size_t k = 0; k < ne; ++k) {
@@ -58,7 +58,7 @@ void normal_equations(LmPoint& p, const double* q, const double* w, std::size_t 
 }
 
 /// vᵀ JᵀJ v.
-double quad_form(const std::array<double, 6>& JtJ, const std::array<double, 3>& v) {
+PVDF_INLINE double quad_form(const std::array<double, 6>& JtJ, const std::array<double, 3>& v) {
   return JtJ[0] * v[0] * v[0] + JtJ[3] * v[1] * v[1] + JtJ[5] * v[2] * v[2] +
          2.0 * (JtJ[1] * v[0] * v[1] + JtJ[2] * v[0] * v[2] + JtJ[4] * v[1] * v[2]);
 }
@@ -67,7 +67,7 @@ double quad_form(const std::array<double, 6>& JtJ, const std::array<double, 3>& 
 /// one that leaves the plausible force range is projected: ln F goes to the bound and (x, y)
 /// are solved with it held there (it keeps the fit from spinning against the bound). False when
 /// the damped system is not positive definite.
-bool damped_step(const LmPoint& p, double lambda, bool fixed_force, double l, double log_lo, double log_hi,
+PVDF_INLINE bool damped_step(const LmPoint& p, double lambda, bool fixed_force, double l, double log_lo, double log_hi,
                  std::array<double, 3>& step) {
   std::array<double, 6> A = p.JtJ;
   A[0] += lambda * p.JtJ[0] + 1e-300;
@@ -87,7 +87,7 @@ bool damped_step(const LmPoint& p, double lambda, bool fixed_force, double l, do
 
 /// Keeps steps within a few cells (the interpolant is only trusted where it is defined) and
 /// within 1 in ln F: the factor ≤ 1 to apply.
-double step_limit(const std::array<double, 3>& step, double hx, double hy) {
+PVDF_INLINE double step_limit(const std::array<double, 3>& step, double hx, double hy) {
   double limit = 1.0;
   if (std::abs(step[0]) > 4.0 * hx) limit = std::min(limit, 4.0 * hx / std::abs(step[0]));
   if (std::abs(step[1]) > 4.0 * hy) limit = std::min(limit, 4.0 * hy / std::abs(step[1]));
