@@ -491,13 +491,16 @@ PVDF_CLONES Location Locator::finish(const Query& Q, std::array<Fit, 8>& fits, i
 }
 
 bool Locator::without_position(const Fit& f, const Query& Q) const {
-  if (f.singular) return false;  // σ unknown (ill_conditioned): reported as such
+  // Only fits of the angular fallback are asked: it runs when no coarse-search start fits within
+  // noise, i.e. no cell's direction model reaches the charges (a press weaker than the force
+  // range, or off the map); a fit it then finds within noise with a vague position is the weak
+  // signal fitting anything, not a located press.
+  if (!f.fallback || f.singular) return false;  // singular: σ unknown, reported ill_conditioned
   const double sigma = std::max(f.sigma[0], f.sigma[1]);
   const double cell = std::max(interp_.hx(), interp_.hy());
-  const bool on_bound = !Q.fixed_force && (f.l <= Q.log_lo + 1e-9 || f.l >= Q.log_hi - 1e-9);
-  if (on_bound && sigma > cell) return true;
   const double half_map = 0.5 * std::min(double(interp_.nx() - 1) * interp_.hx(), double(interp_.ny() - 1) * interp_.hy());
-  return f.fallback && sigma > half_map;
+  const bool on_bound = !Q.fixed_force && (f.l <= Q.log_lo + 1e-9 || f.l >= Q.log_hi - 1e-9);
+  return (on_bound && sigma > cell) || sigma > half_map;
 }
 
 void Locator::fill_main(const Fit& b, Location& out) const {

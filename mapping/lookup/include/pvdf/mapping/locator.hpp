@@ -211,10 +211,10 @@ class Locator {
   int add_fold_twins(const Query& query, std::array<Fit, 8>& fits, int n_fits) const;
   /// Choice, flags, covariance and alternatives from the fits.
   Location finish(const Query& query, std::array<Fit, 8>& fits, int n_fits) const;
-  /// A fit within noise that still carries no usable position (docs/lookup.md §1.7): its force
-  /// sits on the plausible range's bound and its 1-σ position uncertainty exceeds one grid
-  /// cell, or it comes from the angular fallback and the uncertainty exceeds half the map's
-  /// extent. Needs fit.sigma (covariance).
+  /// A fit of the angular fallback within noise that still carries no usable position
+  /// (docs/lookup.md §1.7): its force sits on the plausible range's bound and its 1-σ position
+  /// uncertainty exceeds one grid cell, or the uncertainty exceeds half the map's extent.
+  /// Needs fit.sigma (covariance).
   bool without_position(const Fit& fit, const Query& query) const;
   /// Position, force, σ's and flags of the main answer from its fit (σ's computed).
   void fill_main(const Fit& fit, Location& out) const;
