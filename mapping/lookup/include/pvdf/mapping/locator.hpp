@@ -19,7 +19,7 @@ struct LmPoint;  // Levenberg–Marquardt's working point (locator_fit.cpp)
 
 /// Flags of a Location (bit mask). A result with outside_map, no_press or saturated carries no position.
 namespace flag {
-inline constexpr std::uint32_t outside_map = 1u << 0;        ///< best fit is held by the map's edge or force range and does not fit within noise
+inline constexpr std::uint32_t outside_map = 1u << 0;        ///< best fit is held by the map's edge or force range and does not fit within noise (or only a vague fallback fit does, docs/lookup.md §1.7)
 inline constexpr std::uint32_t ambiguous = 1u << 1;          ///< two distinct positions fit within noise (alternative reported)
 inline constexpr std::uint32_t no_press = 1u << 2;           ///< charges are at the noise level: nothing pressed
 inline constexpr std::uint32_t poor_fit = 1u << 3;           ///< inside the map but χ² above the limit (model/calibration mismatch?)
