@@ -193,7 +193,7 @@ TEST_CASE("the tracker answers as the full search does on a noisy stream of pres
             "(of " << q.size() << "); " << s.full_searches << " full searches, " << s.tracked << " tracked");
   CHECK(both > 20000);
   CHECK(double(same) >= 0.999 * double(both));
-  // The issue's agreement target, 99.9 % of all samples (before the fallback rule of
+  // The agreement target, 99.9 % of all samples (before the fallback rule of
   // docs/lookup.md §1.7 the presence differed at 126 samples, 0.4 %).
   CHECK(double(presence + both - same) <= 0.001 * double(q.size()));
   CHECK(s.tracked > s.full_searches);  // most samples are tracked
