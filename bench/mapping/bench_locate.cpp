@@ -5,6 +5,7 @@
 //   bench_locate [--presses N] [--plot docs/img/lookup_error_vs_noise.png]
 //   bench_locate --profile   (only the 6-start lookup, 50 passes: for perf record)
 //   bench_locate --tracking  (only the stream tracker against the full search)
+//   bench_locate --profile-tracking  (only the tracker on the realistic stream, 20 passes: for perf record)
 #include "pvdf/core/constants.hpp"
 #include "pvdf/plot/plot.hpp"
 #include "pvdf/mapping/locator.hpp"
@@ -134,6 +135,24 @@ std::vector<std::array<double, 3>> realistic_stream(const SyntheticModel& model,
   return q;
 }
 
+/// The tracker's time by kind of answer (per-sample timings, each capped at 20× the median so
+/// that a preempted sample does not count): no press, no position, one, two, more solutions.
+void time_by_kind(const std::vector<double>& latency, const std::vector<Location>& answers) {
+  const double cap = 20 * median(latency);
+  double sum[5] = {0, 0, 0, 0, 0}, total = 0;
+  std::size_t count[5] = {0, 0, 0, 0, 0};
+  for (std::size_t i = 0; i < latency.size(); ++i) {
+    const Location& r = answers[i];
+    const int kind = (r.flags & flag::no_press) ? 0 : !r.has_position() ? 1 : r.n_solutions == 1 ? 2 : r.n_solutions == 2 ? 3 : 4;
+    sum[kind] += std::min(latency[i], cap);
+    total += std::min(latency[i], cap);
+    ++count[kind];
+  }
+  const char* names[5] = {"no press", "no position", "1 solution", "2 solutions", "> 2 solutions"};
+  std::printf("  tracker's time by answer:");
+  for (int k = 0; k < 5; ++k) std::printf(" %s %.0f %% (%zu samples)%s", names[k], 100 * sum[k] / total, count[k], k < 4 ? "," : "\n\n");
+}
+
 /// The tracker against the full search on a realistic stream: samples/s of each (CPU time of
 /// one thread, best of 3), how often the tracker's answer equals the full search's, and the
 /// tracker's latency per sample. Agreement: both without a position, or both with one and the
@@ -197,143 +216,109 @@ void tracking_rows(const Locator& locator, const SyntheticModel& model, const Tr
   std::printf("  tracker: %llu full searches (onset %llu, interval %llu), %llu tracked\n",
               (unsigned long long)s.full_searches, (unsigned long long)s.onsets, (unsigned long long)s.intervals,
               (unsigned long long)s.tracked);
-  std::printf("  latency per sample: median %.2f us, p99 %.2f us, max %.2f us\n\n", median(latency) * 1e6,
+  std::printf("  latency per sample: median %.2f us, p99 %.2f us, max %.2f us\n", median(latency) * 1e6,
               percentile(latency, 0.99) * 1e6, *std::max_element(latency.begin(), latency.end()) * 1e6);
+  time_by_kind(latency, tracked);
 }
-}  // namespace
 
-int main(int argc, char** argv) {
+/// Command line of the benchmark.
+struct Args {
   std::size_t n = 2000;
   std::string plot_path;
-  bool tracking_only = false;
-  bool profile = false;  // --profile: only the first lookup row, repeated (for perf record)
-  for (int a = 1; a < argc; ++a) {
-    if (!std::strcmp(argv[a], "--presses") && a + 1 < argc) n = std::size_t(std::atol(argv[++a]));
-    if (!std::strcmp(argv[a], "--plot") && a + 1 < argc) plot_path = argv[++a];
-    if (!std::strcmp(argv[a], "--profile")) profile = true;
-    if (!std::strcmp(argv[a], "--tracking")) tracking_only = true;
-  }
-  SyntheticModel model;  // seed-001 triangle, d31/d32 direction factor, anisotropy, core, rim
-  model.force_skew = 0.05;
-  const std::vector<double> levels{0.25, 0.5, 1.0, 2.0, 4.0};
-  const double spacing = 1e-3;
-  const auto t_build = std::chrono::steady_clock::now();
-  const ChargeMap map = build_synthetic_map(model, spacing, 3e-3, levels, 0.05e-12);
-  LocatorOptions options;
-  options.min_force_N = levels.front();
-  options.max_force_N = levels.back();
-  const Locator locator(map, options);
-  LocatorOptions fast_options = options;
-  fast_options.max_starts = 1;
-  const Locator fast(map, fast_options);
-  const Triangulation tri(locator, map);
-  const double build_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_build).count();
+  bool tracking_only = false;   ///< --tracking: only the tracker against the full search
+  bool profile = false;         ///< --profile: only the first lookup row, repeated (for perf record)
+  bool profile_tracking = false;  ///< --profile-tracking: only the tracker on the stream, repeated
+};
 
-  std::mt19937 rng(1);
+Args parse_args(int argc, char** argv) {
+  Args a;
+  for (int i = 1; i < argc; ++i) {
+    if (!std::strcmp(argv[i], "--presses") && i + 1 < argc) a.n = std::size_t(std::atol(argv[++i]));
+    if (!std::strcmp(argv[i], "--plot") && i + 1 < argc) a.plot_path = argv[++i];
+    if (!std::strcmp(argv[i], "--profile")) a.profile = true;
+    if (!std::strcmp(argv[i], "--tracking")) a.tracking_only = true;
+    if (!std::strcmp(argv[i], "--profile-tracking")) a.profile_tracking = true;
+  }
+  return a;
+}
+
+/// Random presses within 15 mm of the centre at 0.5-2 N and their noise-free charges.
+void random_presses(const SyntheticModel& model, std::size_t n, std::mt19937& rng, std::vector<Press>& presses,
+                    std::vector<std::array<double, 3>>& q) {
   std::uniform_real_distribution<double> u(0, 1);
-  std::vector<Press> presses;
+  presses.clear();
   while (presses.size() < n) {
     const double x = (2 * u(rng) - 1) * 0.015, y = (2 * u(rng) - 1) * 0.015;
     if (std::hypot(x, y) <= 0.015) presses.push_back({x, y, 0.5 * std::pow(4.0, u(rng))});
   }
-  std::vector<std::array<double, 3>> q(n);
+  q.assign(n, {});
   for (std::size_t i = 0; i < n; ++i) {
     for (std::size_t k = 0; k < 3; ++k) q[i][k] = model.charge_C(presses[i].x, presses[i].y, presses[i].F, k);
   }
-  if (tracking_only) {  // only the tracker against the full search
-    for (int interval : {200, 20, 2000}) {
-      TrackerOptions o;
-      o.search_interval = interval;
-      tracking_rows(locator, model, o);
-    }
-    return 0;
-  }
-  if (profile) {
-    double sink = 0;
-    for (int pass = 0; pass < 50; ++pass) {
-      for (std::size_t i = 0; i < n; ++i) sink += locator.locate(q[i].data()).x_m;
-    }
-    std::printf("profile: 50 x %zu locates (checksum %g)\n", n, sink);
-    return 0;
-  }
-  std::printf("pvdfkit lookup benchmark: synthetic seed-001 map, %zu x %zu nodes (%.1f mm), %zu force levels, "
-              "%zu presses within 15 mm, 0.5-2 N, noise-free; map + tables built in %.2f s; locates/s = presses per "
-              "CPU second of one thread\n\n",
-              map.nx(), map.ny(), spacing * 1e3, map.nf(), n, build_s);
+}
+
+void print_row(const Row& r) {
+  std::printf("%-46s %12.0f %12.5f %12.4f %12.4f %9.1f%% %7.1f%%\n", r.method.c_str(), r.rate, r.med * 1e3,
+              r.p95 * 1e3, r.force * 100, r.ambiguous * 100, r.flagged * 100);
+}
+
+/// The lookup's variants and the triangulation baseline on noise-free presses, then the fits
+/// alone started at the full lookup's solutions (what a perfect coarse search would leave).
+void method_rows(const Locator& locator, const Locator& fast, const Triangulation& tri, const std::vector<Press>& presses,
+                 const std::vector<std::array<double, 3>>& q) {
+  const std::size_t n = presses.size();
   std::printf("%-46s %12s %12s %12s %12s %10s %8s\n", "method", "locates/s", "median_mm", "p95_mm", "force_med_%",
               "ambiguous", "flagged");
-  const std::vector<Row> rows{
-      run("lookup, force unknown (6 starts, ambiguity)", presses, q,
-          [&](const double* c, double) { return locator.locate(c); }),
-      run("lookup, force unknown (1 start, no ambiguity)", presses, q,
-          [&](const double* c, double) { return fast.locate(c); }),
-      run("lookup, force known", presses, q, [&](const double* c, double F) { return locator.locate(c, F); }),
-      run("triangulation (seed 001 eq. 6), force known", presses, q,
-          [&](const double* c, double F) { return tri.locate(c, F); }),
-      run("triangulation (seed 001 eq. 6), force unknown", presses, q,
-          [&](const double* c, double) { return tri.locate(c); }),
-  };
-  for (const auto& r : rows) {
-    std::printf("%-46s %12.0f %12.5f %12.4f %12.4f %9.1f%% %7.1f%%\n", r.method.c_str(), r.rate, r.med * 1e3,
-                r.p95 * 1e3, r.force * 100, r.ambiguous * 100, r.flagged * 100);
-  }
-  // The search's share: the same fits, choice, flags and σ's started at every solution the full
-  // lookup reported (Locator::locate_from) — what a perfect coarse search would leave.
-  {
-    std::vector<std::array<std::array<double, 3>, 4>> seeds(n);
-    std::vector<int> n_seeds(n, 0);
-    for (std::size_t i = 0; i < n; ++i) {
-      const Location r = locator.locate(q[i].data());
-      if (!r.has_position()) continue;
-      seeds[i][0] = {r.x_m, r.y_m, r.force_N};
-      for (int a = 0; a < r.n_alternatives && a < 3; ++a) {
-        const auto& alt = r.alternatives[std::size_t(a)];
-        seeds[i][std::size_t(a + 1)] = {alt.x_m, alt.y_m, alt.force_N};
-      }
-      n_seeds[i] = 1 + std::min(r.n_alternatives, 3);
+  print_row(run("lookup, force unknown (6 starts, ambiguity)", presses, q,
+                [&](const double* c, double) { return locator.locate(c); }));
+  print_row(run("lookup, force unknown (1 start, no ambiguity)", presses, q,
+                [&](const double* c, double) { return fast.locate(c); }));
+  print_row(run("lookup, force known", presses, q, [&](const double* c, double F) { return locator.locate(c, F); }));
+  print_row(run("triangulation (seed 001 eq. 6), force known", presses, q,
+                [&](const double* c, double F) { return tri.locate(c, F); }));
+  print_row(run("triangulation (seed 001 eq. 6), force unknown", presses, q,
+                [&](const double* c, double) { return tri.locate(c); }));
+  std::vector<std::array<std::array<double, 3>, 4>> seeds(n);
+  std::vector<int> n_seeds(n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    const Location r = locator.locate(q[i].data());
+    if (!r.has_position()) continue;
+    seeds[i][0] = {r.x_m, r.y_m, r.force_N};
+    for (int a = 0; a < r.n_alternatives && a < 3; ++a) {
+      const auto& alt = r.alternatives[std::size_t(a)];
+      seeds[i][std::size_t(a + 1)] = {alt.x_m, alt.y_m, alt.force_N};
     }
-    const Row r = run("fits only, started at the solutions (floor)", presses, q, [&](const double* c, double) {
-      const std::size_t i = std::size_t(c - q[0].data()) / 3;
-      return locator.locate_from(c, seeds[i].data(), n_seeds[i]);
-    });
-    std::printf("%-46s %12.0f %12.5f %12.4f %12.4f %9.1f%% %7.1f%%\n", r.method.c_str(), r.rate, r.med * 1e3,
-                r.p95 * 1e3, r.force * 100, r.ambiguous * 100, r.flagged * 100);
+    n_seeds[i] = 1 + std::min(r.n_alternatives, 3);
   }
-  // A deployed sensor's stream: one press moving over the film, sampled at 10 kHz (the paper's
-  // front end) — same lookup, no warm start, but consecutive samples touch the same cells.
-  {
-    const std::size_t m = 20000;  // 2 s of samples
-    std::vector<Press> path;
-    for (std::size_t i = 0; i < m; ++i) {
-      const double t = double(i) * 1e-4;  // s
-      const double r = 0.012 * std::abs(std::sin(2.0 * pvdf::pi * 0.7 * t)), a = 2.0 * pvdf::pi * 0.9 * t;
-      path.push_back({r * std::cos(a), r * std::sin(a), 1.0 + 0.5 * std::sin(2.0 * pvdf::pi * 2.3 * t)});
-    }
-    std::vector<std::array<double, 3>> qp(m);
-    for (std::size_t i = 0; i < m; ++i) {
-      for (std::size_t k = 0; k < 3; ++k) qp[i][k] = model.charge_C(path[i].x, path[i].y, path[i].F, k);
-    }
-    const std::vector<Row> stream_rows{
-        run("stream 10 kHz, force unknown (6 starts, amb.)", path, qp,
-            [&](const double* c, double) { return locator.locate(c); }),
-        run("stream 10 kHz, force known", path, qp, [&](const double* c, double F) { return locator.locate(c, F); }),
-    };
-    for (const auto& r : stream_rows) {
-      std::printf("%-46s %12.0f %12.5f %12.4f %12.4f %9.1f%% %7.1f%%\n", r.method.c_str(), r.rate, r.med * 1e3,
-                  r.p95 * 1e3, r.force * 100, r.ambiguous * 100, r.flagged * 100);
-    }
-  }
-  for (int interval : {200, 20, 2000}) {
-    TrackerOptions o;
-    o.search_interval = interval;
-    tracking_rows(locator, model, o);
-  }
-  std::printf("\n(median/p95: error of the reported answer nearest the truth; 'ambiguous': another solution fits "
-              "within noise and is reported too; 'stream': one press moving along a rose curve within 12 mm at "
-              "up to 90 mm/s, 0.5-1.5 N, sampled at 10 kHz for 2 s)\n\n");
+  print_row(run("fits only, started at the solutions (floor)", presses, q, [&](const double* c, double) {
+    const std::size_t i = std::size_t(c - q[0].data()) / 3;
+    return locator.locate_from(c, seeds[i].data(), n_seeds[i]);
+  }));
+}
 
-  // Threads: one Locator shared by T threads, each locating its share of the presses (wall
-  // time, best of 3; on a loaded machine the other users' load shows here).
+/// A deployed sensor's stream: one press moving over the film, sampled at 10 kHz (the paper's
+/// front end) — same lookup, no warm start, but consecutive samples touch the same cells.
+void rose_stream_rows(const Locator& locator, const SyntheticModel& model) {
+  const std::size_t m = 20000;  // 2 s of samples
+  std::vector<Press> path;
+  for (std::size_t i = 0; i < m; ++i) {
+    const double t = double(i) * 1e-4;  // s
+    const double r = 0.012 * std::abs(std::sin(2.0 * pvdf::pi * 0.7 * t)), a = 2.0 * pvdf::pi * 0.9 * t;
+    path.push_back({r * std::cos(a), r * std::sin(a), 1.0 + 0.5 * std::sin(2.0 * pvdf::pi * 2.3 * t)});
+  }
+  std::vector<std::array<double, 3>> qp(m);
+  for (std::size_t i = 0; i < m; ++i) {
+    for (std::size_t k = 0; k < 3; ++k) qp[i][k] = model.charge_C(path[i].x, path[i].y, path[i].F, k);
+  }
+  print_row(run("stream 10 kHz, force unknown (6 starts, amb.)", path, qp,
+                [&](const double* c, double) { return locator.locate(c); }));
+  print_row(run("stream 10 kHz, force known", path, qp, [&](const double* c, double F) { return locator.locate(c, F); }));
+}
+
+/// One Locator shared by T threads, each locating its share of the presses (wall time, best of
+/// 3; on a loaded machine the other users' load shows here).
+void thread_rows(const Locator& locator, const std::vector<std::array<double, 3>>& q) {
+  const std::size_t n = q.size();
   const unsigned n_threads = std::max(2u, std::thread::hardware_concurrency());
   for (unsigned T : {1u, n_threads}) {
     double best = 1e30;
@@ -353,19 +338,27 @@ int main(int argc, char** argv) {
                 double(n) / best);
   }
   std::printf("\n");
+}
 
-  // Position error against charge noise.
-  const std::vector<double> noise_pC{0.01, 0.03, 0.1, 0.3, 1.0, 3.0};
-  std::vector<double> lm_known, lm_free, tri_known, sigma_known, sigma_free;
-  const std::size_t m = std::min<std::size_t>(n, 600);
+/// Median position errors against charge noise (one curve each for the lookup with the force
+/// known and unknown, the reported σ, and the triangulation).
+struct NoiseCurves {
+  std::vector<double> noise_pC{0.01, 0.03, 0.1, 0.3, 1.0, 3.0};
+  std::vector<double> lm_known, lm_free, tri_known, sigma_known;
+};
+
+NoiseCurves noise_rows(const ChargeMap& map, const LocatorOptions& options, const Triangulation& tri,
+                       const std::vector<Press>& presses, const std::vector<std::array<double, 3>>& q, std::mt19937& rng) {
+  NoiseCurves out;
+  const std::size_t m = std::min<std::size_t>(presses.size(), 600);
   std::printf("%10s %18s %18s %18s %18s\n", "noise_pC", "lookup_F_known_mm", "reported_sigma_mm", "lookup_F_free_mm",
               "triangulation_mm");
-  for (double s_pC : noise_pC) {
+  for (double s_pC : out.noise_pC) {
     LocatorOptions o = options;
     o.noise_C = {s_pC * 1e-12};
     const Locator noisy(map, o);
     std::normal_distribution<double> noise(0.0, s_pC * 1e-12);
-    std::vector<double> a, b, c, sk, sf;
+    std::vector<double> a, b, c, sk;
     for (std::size_t i = 0; i < m; ++i) {
       std::array<double, 3> qn = q[i];
       for (auto& v : qn) v += noise(rng);
@@ -386,34 +379,109 @@ int main(int argc, char** argv) {
       const Location r3 = tri.locate(qn.data(), presses[i].F);
       if (r3.has_position()) c.push_back(std::hypot(r3.x_m - presses[i].x, r3.y_m - presses[i].y));
     }
-    lm_known.push_back(median(a) * 1e3);
-    sigma_known.push_back(median(sk) * 1e3);
-    lm_free.push_back(median(b) * 1e3);
-    tri_known.push_back(median(c) * 1e3);
-    std::printf("%10.2f %18.5f %18.5f %18.5f %18.5f\n", s_pC, lm_known.back(), sigma_known.back(), lm_free.back(),
-                tri_known.back());
+    out.lm_known.push_back(median(a) * 1e3);
+    out.sigma_known.push_back(median(sk) * 1e3);
+    out.lm_free.push_back(median(b) * 1e3);
+    out.tri_known.push_back(median(c) * 1e3);
+    std::printf("%10.2f %18.5f %18.5f %18.5f %18.5f\n", s_pC, out.lm_known.back(), out.sigma_known.back(),
+                out.lm_free.back(), out.tri_known.back());
   }
-  if (!plot_path.empty()) {
-    pvdf::plot::Figure fig(1000, 700);
-    fig.axes()
-        .line(noise_pC, lm_known, "lookup, force known (median error)", std::nullopt, pvdf::plot::LineStyle::solid,
-              pvdf::plot::Marker::circle)
-        .line(noise_pC, sigma_known, "lookup, force known (median reported 1-sigma)", std::nullopt,
-              pvdf::plot::LineStyle::dashed, pvdf::plot::Marker::none)
-        .line(noise_pC, lm_free, "lookup, force unknown (nearest reported answer)", std::nullopt,
-              pvdf::plot::LineStyle::solid, pvdf::plot::Marker::square)
-        .line(noise_pC, tri_known, "triangulation (seed 001 eq. 6), force known", std::nullopt,
-              pvdf::plot::LineStyle::solid, pvdf::plot::Marker::triangle)
-        .hline(spacing * 1e3, pvdf::plot::Color{120, 120, 120}, pvdf::plot::LineStyle::dotted, "map grid spacing")
-        .log_x()
-        .log_y()
-        .title("Position error against charge noise (synthetic seed-001 map, presses within 15 mm)")
-        .xlabel("1-sigma charge noise per electrode (pC)")
-        .ylabel("median position error (mm)")
-        .grid_lines()
-        .legend("upper left");
-    fig.save_png(plot_path);
-    std::printf("\nplot written to %s\n", plot_path.c_str());
+  return out;
+}
+
+void plot_noise(const NoiseCurves& c, double spacing_m, const std::string& path) {
+  pvdf::plot::Figure fig(1000, 700);
+  fig.axes()
+      .line(c.noise_pC, c.lm_known, "lookup, force known (median error)", std::nullopt, pvdf::plot::LineStyle::solid,
+            pvdf::plot::Marker::circle)
+      .line(c.noise_pC, c.sigma_known, "lookup, force known (median reported 1-sigma)", std::nullopt,
+            pvdf::plot::LineStyle::dashed, pvdf::plot::Marker::none)
+      .line(c.noise_pC, c.lm_free, "lookup, force unknown (nearest reported answer)", std::nullopt,
+            pvdf::plot::LineStyle::solid, pvdf::plot::Marker::square)
+      .line(c.noise_pC, c.tri_known, "triangulation (seed 001 eq. 6), force known", std::nullopt,
+            pvdf::plot::LineStyle::solid, pvdf::plot::Marker::triangle)
+      .hline(spacing_m * 1e3, pvdf::plot::Color{120, 120, 120}, pvdf::plot::LineStyle::dotted, "map grid spacing")
+      .log_x()
+      .log_y()
+      .title("Position error against charge noise (synthetic seed-001 map, presses within 15 mm)")
+      .xlabel("1-sigma charge noise per electrode (pC)")
+      .ylabel("median position error (mm)")
+      .grid_lines()
+      .legend("upper left");
+  fig.save_png(path);
+  std::printf("\nplot written to %s\n", path.c_str());
+}
+
+/// Only the tracker on the realistic stream, 20 passes (for perf record).
+void profile_tracking(const Locator& locator, const SyntheticModel& model) {
+  const auto q = realistic_stream(model, 10.0, 0.05e-12, 7);
+  double sink = 0;
+  for (int pass = 0; pass < 20; ++pass) {
+    Tracker tracker(locator);
+    for (const auto& c : q) sink += tracker.next(c.data()).x_m;
   }
+  std::printf("profile: 20 x %zu tracked samples (checksum %g)\n", q.size(), sink);
+}
+
+void tracking_table(const Locator& locator, const SyntheticModel& model) {
+  for (int interval : {200, 20, 2000}) {
+    TrackerOptions o;
+    o.search_interval = interval;
+    tracking_rows(locator, model, o);
+  }
+}
+}  // namespace
+
+int main(int argc, char** argv) {
+  const Args args = parse_args(argc, argv);
+  SyntheticModel model;  // seed-001 triangle, d31/d32 direction factor, anisotropy, core, rim
+  model.force_skew = 0.05;
+  const std::vector<double> levels{0.25, 0.5, 1.0, 2.0, 4.0};
+  const double spacing = 1e-3;
+  const auto t_build = std::chrono::steady_clock::now();
+  const ChargeMap map = build_synthetic_map(model, spacing, 3e-3, levels, 0.05e-12);
+  LocatorOptions options;
+  options.min_force_N = levels.front();
+  options.max_force_N = levels.back();
+  const Locator locator(map, options);
+  LocatorOptions fast_options = options;
+  fast_options.max_starts = 1;
+  const Locator fast(map, fast_options);
+  const Triangulation tri(locator, map);
+  const double build_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_build).count();
+
+  std::mt19937 rng(1);
+  std::vector<Press> presses;
+  std::vector<std::array<double, 3>> q;
+  random_presses(model, args.n, rng, presses, q);
+  if (args.tracking_only) {
+    tracking_table(locator, model);
+    return 0;
+  }
+  if (args.profile_tracking) {
+    profile_tracking(locator, model);
+    return 0;
+  }
+  if (args.profile) {
+    double sink = 0;
+    for (int pass = 0; pass < 50; ++pass) {
+      for (std::size_t i = 0; i < args.n; ++i) sink += locator.locate(q[i].data()).x_m;
+    }
+    std::printf("profile: 50 x %zu locates (checksum %g)\n", args.n, sink);
+    return 0;
+  }
+  std::printf("pvdfkit lookup benchmark: synthetic seed-001 map, %zu x %zu nodes (%.1f mm), %zu force levels, "
+              "%zu presses within 15 mm, 0.5-2 N, noise-free; map + tables built in %.2f s; locates/s = presses per "
+              "CPU second of one thread\n\n",
+              map.nx(), map.ny(), spacing * 1e3, map.nf(), args.n, build_s);
+  method_rows(locator, fast, tri, presses, q);
+  rose_stream_rows(locator, model);
+  tracking_table(locator, model);
+  std::printf("\n(median/p95: error of the reported answer nearest the truth; 'ambiguous': another solution fits "
+              "within noise and is reported too; 'stream': one press moving along a rose curve within 12 mm at "
+              "up to 90 mm/s, 0.5-1.5 N, sampled at 10 kHz for 2 s)\n\n");
+  thread_rows(locator, q);
+  const NoiseCurves curves = noise_rows(map, options, tri, presses, q, rng);
+  if (!args.plot_path.empty()) plot_noise(curves, spacing, args.plot_path);
   return 0;
 }

@@ -189,11 +189,13 @@ TEST_CASE("the tracker answers as the full search does on a noisy stream of pres
             std::abs(a.force_N - b.force_N) <= 0.1 * a.sigma_F_N + 1e-12 && a.n_solutions == b.n_solutions;
   }
   const TrackerSummary& s = tracker.summary();
-  INFO(both << " samples with a position in both, " << same << " the same, " << presence << " with/without a position; "
-            << s.full_searches << " full searches, " << s.tracked << " tracked");
+  WARN(both << " samples with a position in both, " << same << " the same, " << presence << " with/without a position "
+            "(of " << q.size() << "); " << s.full_searches << " full searches, " << s.tracked << " tracked");
   CHECK(both > 20000);
   CHECK(double(same) >= 0.999 * double(both));
-  CHECK(double(presence) <= 0.01 * double(q.size()));
+  // The agreement target, 99.9 % of all samples (before the fallback rule of
+  // docs/lookup.md §1.7 the presence differed at 126 samples, 0.4 %).
+  CHECK(double(presence + both - same) <= 0.001 * double(q.size()));
   CHECK(s.tracked > s.full_searches);  // most samples are tracked
   // After reset() the next sample is a full search.
   const auto before = s.full_searches;

@@ -194,6 +194,7 @@ PVDF_CLONES Location Locator::locate_impl(const double* charges_C, bool fixed_fo
       const double l0 = std::clamp(std::log(amplitude) / p_exp, log_lo, log_hi);
       fits[std::size_t(n_starts)] = levenberg_marquardt(q.data(), w.data(), cell_xy_[c][0], cell_xy_[c][1], l0, fixed_force,
                                                         log_lo, log_hi, fits.data(), n_starts);
+      fits[std::size_t(n_starts)].fallback = true;
       ++n_starts;
     }
   }

@@ -20,6 +20,14 @@
 #define PVDF_CLONES
 #endif
 
+// Small helpers of the hot paths are inlined into their (cloned) callers: a helper compiled
+// for the default target is otherwise called out of line from the x86-64-v3 clone.
+#if defined(__GNUC__)
+#define PVDF_INLINE inline __attribute__((always_inline))
+#else
+#define PVDF_INLINE inline
+#endif
+
 // No fused multiply-add contraction in the lookup's sources: with it the compiler's choice of
 // where to fuse depends on how the code is cut into functions (a helper compiled for the default
 // target is not inlined into a clone), and the answers would change in the last bits with
@@ -44,24 +52,23 @@ inline void direction_key(const double* n, double& phi, double& theta) {
   theta = n[2] / (l1 + std::abs(n[2]));
 }
 
-/// Solves the symmetric positive definite 3×3 system A x = b by a closed-form LDLᵀ (no
-/// pivoting, no square roots: the damped normal equations are SPD; three reciprocals instead
-/// of Cholesky's three square roots and nine divisions, which sat on the critical path).
-/// Returns a non-finite x if A is not SPD (a pivot ≤ 0 or NaN).
+/// Solves the symmetric positive definite 3×3 system A x = b by cofactors (Cramer's rule): the
+/// six cofactors and the determinant are independent products and one reciprocal follows, where
+/// an LDLᵀ chains three reciprocals on the critical path (measured: the solve sat on the fit's
+/// critical path). Positive definite ⇔ the leading minors A00, A00·A11 − A01² and det are > 0.
+/// Returns a non-finite x if A is not SPD (a minor ≤ 0 or NaN).
 inline std::array<double, 3> solve_spd3(const std::array<double, 6>& A, const std::array<double, 3>& b) {
   // A: upper triangle 00 01 02 11 12 22.
-  const double d0 = A[0], i0 = 1.0 / d0;
-  const double l10 = A[1] * i0, l20 = A[2] * i0;
-  const double d1 = A[3] - l10 * A[1], i1 = 1.0 / d1;
-  const double l21 = (A[4] - l20 * A[1]) * i1;
-  const double d2 = A[5] - l20 * A[2] - l21 * l21 * d1, i2 = 1.0 / d2;
-  if (!(d0 > 0 && d1 > 0 && d2 > 0)) {
+  const double c00 = A[3] * A[5] - A[4] * A[4], c01 = A[2] * A[4] - A[1] * A[5], c02 = A[1] * A[4] - A[2] * A[3];
+  const double c11 = A[0] * A[5] - A[2] * A[2], c12 = A[1] * A[2] - A[0] * A[4], c22 = A[0] * A[3] - A[1] * A[1];
+  const double det = A[0] * c00 + A[1] * c01 + A[2] * c02;
+  if (!(A[0] > 0 && c22 > 0 && det > 0)) {
     const double nan = std::numeric_limits<double>::quiet_NaN();
     return {nan, nan, nan};
   }
-  const double y0 = b[0], y1 = b[1] - l10 * y0, y2 = b[2] - l20 * y0 - l21 * y1;
-  const double x2 = y2 * i2, x1 = y1 * i1 - l21 * x2, x0 = y0 * i0 - l10 * x1 - l20 * x2;
-  return {x0, x1, x2};
+  const double inv = 1.0 / det;
+  return {(c00 * b[0] + c01 * b[1] + c02 * b[2]) * inv, (c01 * b[0] + c11 * b[1] + c12 * b[2]) * inv,
+          (c02 * b[0] + c12 * b[1] + c22 * b[2]) * inv};
 }
 
 /// The coarse search's test of one candidate cell against the query direction (compact float

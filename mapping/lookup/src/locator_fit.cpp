@@ -30,7 +30,7 @@ using detail::LmPoint;
 
 namespace {
 
-double chi2_of(const Vec& m, const double* q, const double* w, std::size_t ne) {
+PVDF_INLINE double chi2_of(const Vec& m, const double* q, const double* w, std::size_t ne) {
   double s = 0;
   for (std::size_t k = 0; k < ne; ++k) {
     const double r = (m[k] - q[k]) * w[k];
@@ -39,7 +39,7 @@ double chi2_of(const Vec& m, const double* q, const double* w, std::size_t ne) {
   return s;
 }
 
-void normal_equations(LmPoint& p, const double* q, const double* w, std::size_t ne) {
+PVDF_INLINE void normal_equations(LmPoint& p, const double* q, const double* w, std::size_t ne) {
   p.JtJ = {0, 0, 0, 0, 0, 0};
   p.Jtr = {0, 0, 0};
   for (std::size_t k = 0; k < ne; ++k) {
@@ -58,7 +58,7 @@ void normal_equations(LmPoint& p, const double* q, const double* w, std::size_t 
 }
 
 /// vᵀ JᵀJ v.
-double quad_form(const std::array<double, 6>& JtJ, const std::array<double, 3>& v) {
+PVDF_INLINE double quad_form(const std::array<double, 6>& JtJ, const std::array<double, 3>& v) {
   return JtJ[0] * v[0] * v[0] + JtJ[3] * v[1] * v[1] + JtJ[5] * v[2] * v[2] +
          2.0 * (JtJ[1] * v[0] * v[1] + JtJ[2] * v[0] * v[2] + JtJ[4] * v[1] * v[2]);
 }
@@ -67,7 +67,7 @@ double quad_form(const std::array<double, 6>& JtJ, const std::array<double, 3>& 
 /// one that leaves the plausible force range is projected: ln F goes to the bound and (x, y)
 /// are solved with it held there (it keeps the fit from spinning against the bound). False when
 /// the damped system is not positive definite.
-bool damped_step(const LmPoint& p, double lambda, bool fixed_force, double l, double log_lo, double log_hi,
+PVDF_INLINE bool damped_step(const LmPoint& p, double lambda, bool fixed_force, double l, double log_lo, double log_hi,
                  std::array<double, 3>& step) {
   std::array<double, 6> A = p.JtJ;
   A[0] += lambda * p.JtJ[0] + 1e-300;
@@ -87,7 +87,7 @@ bool damped_step(const LmPoint& p, double lambda, bool fixed_force, double l, do
 
 /// Keeps steps within a few cells (the interpolant is only trusted where it is defined) and
 /// within 1 in ln F: the factor ≤ 1 to apply.
-double step_limit(const std::array<double, 3>& step, double hx, double hy) {
+PVDF_INLINE double step_limit(const std::array<double, 3>& step, double hx, double hy) {
   double limit = 1.0;
   if (std::abs(step[0]) > 4.0 * hx) limit = std::min(limit, 4.0 * hx / std::abs(step[0]));
   if (std::abs(step[1]) > 4.0 * hy) limit = std::min(limit, 4.0 * hy / std::abs(step[1]));
@@ -400,16 +400,33 @@ PVDF_CLONES Location Locator::finish(const Query& Q, std::array<Fit, 8>& fits, i
     if (wa && extrapolated(a) != extrapolated(b)) return !extrapolated(a);
     return a.chi2 < b.chi2;
   };
-  int best = -1;
-  for (int s = 0; s < n_starts; ++s) {
-    if (fits[std::size_t(s)].ok && (best < 0 || better(fits[std::size_t(s)], fits[std::size_t(best)]))) best = s;
+  int best = -1, first_vague = -1;
+  for (;;) {
+    best = -1;
+    for (int s = 0; s < n_starts; ++s) {
+      const Fit& f = fits[std::size_t(s)];
+      if (f.ok && !f.vague && (best < 0 || better(f, fits[std::size_t(best)]))) best = s;
+    }
+    if (best < 0) break;
+    Fit& f = fits[std::size_t(best)];
+    covariance(f, Q);
+    if (f.chi2 > limit || !without_position(f, Q)) break;
+    // Within noise but without a usable position: not a solution (§1.7); the next one is asked.
+    f.vague = true;
+    if (first_vague < 0) first_vague = best;
+  }
+  if (first_vague >= 0 && (best < 0 || fits[std::size_t(best)].chi2 > limit)) {
+    // Only such fits were within noise: where the press is, the charges do not say.
+    const Fit& v = fits[std::size_t(first_vague)];
+    out.flags = flag::outside_map;
+    out.held = {v.x, v.y, std::exp(v.l)};
+    return out;
   }
   if (best < 0) {
     out.flags = flag::outside_map;
     return out;
   }
   Fit& b = fits[std::size_t(best)];
-  covariance(b, Q);
   fill_main(b, out);
   if (b.chi2 > limit) {
     if (b.blocked) {
@@ -424,8 +441,18 @@ PVDF_CLONES Location Locator::finish(const Query& Q, std::array<Fit, 8>& fits, i
   }
   // Other minima that also fit within noise and lie elsewhere: ambiguous.
   std::array<int, 8> group{};
-  const int n_group = distinct_solutions(Q, fits, n_starts, best, group);
+  int n_group = distinct_solutions(Q, fits, n_starts, best, group);
   if (n_group == 1) return out;
+  {  // other solutions without a usable position are not reported (§1.7)
+    int kept = 1;
+    for (int g = 1; g < n_group; ++g) {
+      Fit& f = fits[std::size_t(group[std::size_t(g)])];
+      covariance(f, Q);
+      if (!without_position(f, Q)) group[std::size_t(kept++)] = group[std::size_t(g)];
+    }
+    n_group = kept;
+    if (n_group == 1) return out;
+  }
   // Every solution with its posterior probability; the most probable one is the main answer,
   // the others follow most probable first.
   std::array<double, 8> p{};
@@ -445,8 +472,7 @@ PVDF_CLONES Location Locator::finish(const Query& Q, std::array<Fit, 8>& fits, i
   }
   const int n_starts_made = out.n_starts;
   Fit& main = fits[std::size_t(group[0])];
-  if (group[0] != best) {
-    covariance(main, Q);
+  if (group[0] != best) {  // its σ's are known (above)
     out = Location{};
     out.n_starts = n_starts_made;
     fill_main(main, out);
@@ -456,13 +482,25 @@ PVDF_CLONES Location Locator::finish(const Query& Q, std::array<Fit, 8>& fits, i
   out.probability = p[0];
   out.n_alternatives = n_group - 1;
   for (int a = 1; a < n_group; ++a) {
-    Fit& f = fits[std::size_t(group[std::size_t(a)])];
-    if (group[std::size_t(a)] != best) covariance(f, Q);
+    const Fit& f = fits[std::size_t(group[std::size_t(a)])];
     out.alternatives[std::size_t(a - 1)] = {f.x, f.y, std::exp(f.l), std::sqrt(f.chi2), f.sigma[0], f.sigma[1],
                                             std::exp(f.l) * f.sigma[2], p[std::size_t(a)]};
   }
   out.alternative = out.alternatives[0];
   return out;
+}
+
+bool Locator::without_position(const Fit& f, const Query& Q) const {
+  // Only fits of the angular fallback are asked: it runs when no coarse-search start fits within
+  // noise, i.e. no cell's direction model reaches the charges (a press weaker than the force
+  // range, or off the map); a fit it then finds within noise with a vague position is the weak
+  // signal fitting anything, not a located press.
+  if (!f.fallback || f.singular) return false;  // singular: σ unknown, reported ill_conditioned
+  const double sigma = std::max(f.sigma[0], f.sigma[1]);
+  const double cell = std::max(interp_.hx(), interp_.hy());
+  const double half_map = 0.5 * std::min(double(interp_.nx() - 1) * interp_.hx(), double(interp_.ny() - 1) * interp_.hy());
+  const bool on_bound = !Q.fixed_force && (f.l <= Q.log_lo + 1e-9 || f.l >= Q.log_hi - 1e-9);
+  return (on_bound && sigma > cell) || sigma > half_map;
 }
 
 void Locator::fill_main(const Fit& b, Location& out) const {
@@ -542,7 +580,7 @@ int Locator::distinct_solutions(const Query& Q, const std::array<Fit, 8>& fits, 
   int n = 1;
   for (int s = 0; s < n_starts; ++s) {
     const Fit& f = fits[std::size_t(s)];
-    if (s == best || !f.ok || f.chi2 > limit) continue;
+    if (s == best || !f.ok || f.vague || f.chi2 > limit) continue;
     bool is_new = true;
     for (int d = 0; d < n && is_new; ++d) is_new = distinct_from(fits[std::size_t(group[std::size_t(d)])], f);
     if (is_new) group[std::size_t(n++)] = s;

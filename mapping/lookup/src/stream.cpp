@@ -89,7 +89,9 @@ StreamSummary locate_stream(const Locator& locator, std::istream& in, std::ostre
   Tracker tracker(locator, tracker_options);
   auto skip = [&](const std::string& reason) {
     const std::string where = options.source + ":" + std::to_string(line_no) + ": " + reason;
-    if (options.strict) throw InputError(where + " (--strict refuses malformed rows; drop --strict to skip them)");
+    if (options.strict) {
+      throw InputError(where + " (strict reading refuses malformed rows; without it they are skipped and counted)");
+    }
     ++summary.skipped;
     if (int(summary.skipped) <= options.max_warnings) warnings << "warning: " << where << "; row skipped\n";
     if (int(summary.skipped) == options.max_warnings + 1) warnings << "warning: further skipped rows are only counted\n";

@@ -19,7 +19,7 @@ struct LmPoint;  // Levenberg–Marquardt's working point (locator_fit.cpp)
 
 /// Flags of a Location (bit mask). A result with outside_map, no_press or saturated carries no position.
 namespace flag {
-inline constexpr std::uint32_t outside_map = 1u << 0;        ///< best fit is held by the map's edge or force range and does not fit within noise
+inline constexpr std::uint32_t outside_map = 1u << 0;        ///< best fit is held by the map's edge or force range and does not fit within noise (or only a vague fallback fit does, docs/lookup.md §1.7)
 inline constexpr std::uint32_t ambiguous = 1u << 1;          ///< two distinct positions fit within noise (alternative reported)
 inline constexpr std::uint32_t no_press = 1u << 2;           ///< charges are at the noise level: nothing pressed
 inline constexpr std::uint32_t poor_fit = 1u << 3;           ///< inside the map but χ² above the limit (model/calibration mismatch?)
@@ -173,6 +173,8 @@ class Locator {
     std::array<double, 6> jtj{};  ///< weighted JᵀJ at the end point (upper triangle: 00 01 02 11 12 22)
     int iterations = 0;
     bool converged = false, blocked = false, ok = false, singular = false, duplicate = false;
+    bool vague = false;     ///< within noise, but the charges do not place it (without_position)
+    bool fallback = false;  ///< started by the angular fallback (no coarse-search start fitted within noise)
   };
   Fit levenberg_marquardt(const double* q, const double* inv_sigma, double x, double y, double l, bool fixed_force,
                           double log_lo, double log_hi, const Fit* found, int n_found) const;
@@ -209,6 +211,11 @@ class Locator {
   int add_fold_twins(const Query& query, std::array<Fit, 8>& fits, int n_fits) const;
   /// Choice, flags, covariance and alternatives from the fits.
   Location finish(const Query& query, std::array<Fit, 8>& fits, int n_fits) const;
+  /// A fit of the angular fallback within noise that still carries no usable position
+  /// (docs/lookup.md §1.7): its force sits on the plausible range's bound and its 1-σ position
+  /// uncertainty exceeds one grid cell, or the uncertainty exceeds half the map's extent.
+  /// Needs fit.sigma (covariance).
+  bool without_position(const Fit& fit, const Query& query) const;
   /// Position, force, σ's and flags of the main answer from its fit (σ's computed).
   void fill_main(const Fit& fit, Location& out) const;
   /// The best fit (index `best`, within noise) and every other fit within noise that is a
