@@ -1,6 +1,7 @@
 // `pvdfkit compare MAP measured.csv`: FEM charge map against measured charges — per-press and
 // mean % difference per electrode, like seed 001 Fig. 12 ("an average difference of 18 %").
 #include "command.hpp"
+#include "map_checks.hpp"
 #ifdef PVDF_HAVE_FIT
 #include "compare_scene.hpp"
 #endif

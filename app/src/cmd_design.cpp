@@ -77,7 +77,7 @@ std::string stem(const std::string& path) {
   return dot == std::string::npos || dot == 0 ? s : s.substr(0, dot);
 }
 
-std::string slug(const std::string& text) {
+[[maybe_unused]] std::string slug(const std::string& text) {  // used with map generation
   std::string s;
   for (char c : text) s += (std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '-' || c == '=') ? c : '_';
   return s;

@@ -1,7 +1,7 @@
 // `pvdfkit rays`: charge against distance along rays from each electrode of a charge map, with
 // the power-law fit Q = C1(β)·d^C2 of seed 001 eq. 6 per ray (Fig. 7); docs/seed001-reproduction.md.
 #include "command.hpp"
-#include "compare_scene.hpp"
+#include "map_checks.hpp"
 
 #include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"

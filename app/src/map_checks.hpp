@@ -1,0 +1,20 @@
+// Checks shared by `compare` and `rays`, built with or without the FEM modules.
+#pragma once
+
+#include "pvdf/mapping/analysis.hpp"
+#include "pvdf/mapping/map.hpp"
+
+#include <string>
+#include <vector>
+
+namespace pvdf::app {
+
+/// True when `path` holds a JSON scene (first non-blank byte '{') rather than an HDF5 map.
+bool is_scene_file(const std::string& path);
+
+/// Warns (stderr) about every compared press closer to an electrode centre than twice the map's
+/// spacing, where the map's interpolation error alone reaches tens of % (docs/fem-vs-experiment.md §4).
+/// Returns the number of such presses.
+int warn_if_map_too_coarse(const pvdf::mapping::ChargeMap& map, const std::vector<pvdf::mapping::MeasuredPress>& presses);
+
+}  // namespace pvdf::app
