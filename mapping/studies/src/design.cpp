@@ -91,8 +91,11 @@ std::string design_status_name(DesignStatus status) {
 // ---------------------------------------------------------------------------------------------
 // Layout evaluation
 
-DesignSummary evaluate_design(const ChargeMap& map, const DesignOptions& o) {
-  const std::size_t ne = map.ne(), nx = map.nx(), ny = map.ny();
+namespace {
+
+/// The layout options' checks; returns the per-electrode charge noise (C) to use.
+std::vector<double> checked_noise(const ChargeMap& map, const DesignOptions& o) {
+  const std::size_t ne = map.ne();
   if (ne < 3) {
     throw InputError("design: the layout has " + std::to_string(ne) +
                      " electrodes; locating a press with unknown force needs at least 3");
@@ -118,9 +121,40 @@ DesignSummary evaluate_design(const ChargeMap& map, const DesignOptions& o) {
   for (double s : noise) {
     if (!(s > 0) || !std::isfinite(s)) throw InputError("design: charge noise " + num(s) + " C must be > 0 (--noise-C)");
   }
+  return noise;
+}
 
-  const MapInterpolant interp(map);
+/// What the steps of evaluate_design share: the map, its interpolant, the summary being
+/// filled, and the per-node values (index p of DesignMaps, p * ne + k per electrode).
+struct DesignEvaluation {
+  DesignEvaluation(const ChargeMap& map_in, const DesignOptions& options, std::vector<double> noise_C)
+      : map(map_in), o(options), ne(map_in.ne()), nx(map_in.nx()), ny(map_in.ny()), np(nx * ny),
+        noise(std::move(noise_C)), interp(map_in) {}
+  void allocate();
+  void sample_nodes();
+  void front_end();
+  void bounds();
+  void ambiguity();
+  void area_figures();
+  void electrode_reports();
+
+  const ChargeMap& map;
+  const DesignOptions& o;
+  const std::size_t ne, nx, ny, np;
+  const std::vector<double> noise;  // per electrode, before quantization (C)
+  const MapInterpolant interp;
   DesignSummary out;
+  double log_f = 0;                          // ln of the design force
+  std::vector<std::array<double, 2>> where;  // [np] evaluation point of the node (m)
+  std::vector<double> q_hi, q_lo;            // [np][ne] charges at the ends of the force range (C)
+  std::vector<std::array<double, 3>> jac;    // [np][ne] dQ/d(x, y, ln F) at the design force
+  std::vector<double> sigma;                 // [ne] channel noise with quantization (C)
+  std::vector<std::size_t> below_k;          // [ne] evaluated points below one LSB at the range's bottom
+  std::size_t n_singular = 0, n_dead = 0, n_saturated = 0, n_below = 0;
+  std::size_t n_ambiguous = 0, n_silent = 0, n_failed = 0;
+};
+
+void DesignEvaluation::allocate() {
   out.model = map.model;
   out.tolerance = map.tolerance;
   out.spacing_m = nx > 1 ? (map.x_m.back() - map.x_m.front()) / double(nx - 1) : 0.0;
@@ -135,7 +169,6 @@ DesignSummary evaluate_design(const ChargeMap& map, const DesignOptions& o) {
   DesignMaps& m = out.maps;
   m.x_m = map.x_m;
   m.y_m = map.y_m;
-  const std::size_t np = nx * ny;
   m.evaluated.assign(np, 0);
   for (auto* v : {&m.sigma_pos_m, &m.sigma_pos_unknown_force_m, &m.sigma_pos_known_force_m, &m.sigma_major_m,
                   &m.sigma_force_rel, &m.ambiguity_distance_m}) {
@@ -146,14 +179,19 @@ DesignSummary evaluate_design(const ChargeMap& map, const DesignOptions& o) {
   m.singular.assign(np, 0);
   m.lookup_failed.assign(np, 0);
   m.charge_C.assign(np * ne, nan);
+}
 
+void DesignEvaluation::sample_nodes() {
+  DesignMaps& m = out.maps;
   // Step 1: the evaluation points are the mapped nodes. A node on the edge of the usable region
   // is evaluated from any adjacent usable cell (the interpolant is C¹, so the side does not matter).
-  const double log_f = std::log(o.force_N), log_lo = std::log(o.min_force_N), log_hi = std::log(o.max_force_N);
+  log_f = std::log(o.force_N);
+  const double log_lo = std::log(o.min_force_N), log_hi = std::log(o.max_force_N);
   const double nudge = 1e-9 * out.spacing_m;
-  std::vector<std::array<double, 2>> where(np);
-  std::vector<double> q_hi(np * ne, nan), q_lo(np * ne, nan);
-  std::vector<std::array<double, 3>> jac(np * ne);
+  where.assign(np, {});
+  q_hi.assign(np * ne, nan);
+  q_lo.assign(np * ne, nan);
+  jac.assign(np * ne, {});
   std::vector<double> q(ne);
   std::vector<std::array<double, 3>> dq(ne);
   for (std::size_t j = 0; j < ny; ++j) {
@@ -185,7 +223,10 @@ DesignSummary evaluate_design(const ChargeMap& map, const DesignOptions& o) {
   if (out.n_evaluated == 0) {
     throw InputError("design: the map has no usable interpolation cell (all mapped nodes isolated); use a finer --spacing-m");
   }
+}
 
+void DesignEvaluation::front_end() {
+  const DesignMaps& m = out.maps;
   // Step 2: the front end. One full scale for all channels (the same amplifier on each), bipolar
   // ADC: LSB = FS / 2^(bits−1); quantization adds LSB²/12 to each channel's noise variance.
   double q_max = 0;
@@ -195,16 +236,18 @@ DesignSummary evaluate_design(const ChargeMap& map, const DesignOptions& o) {
   }
   out.full_scale_C = o.full_scale_C > 0 ? o.full_scale_C : o.full_scale_margin * q_max;
   out.lsb_C = o.adc_bits > 0 ? out.full_scale_C / std::ldexp(1.0, o.adc_bits - 1) : 0.0;
-  std::vector<double> sigma(ne);
+  sigma.assign(ne, 0.0);
   for (std::size_t k = 0; k < ne; ++k) sigma[k] = std::sqrt(noise[k] * noise[k] + out.lsb_C * out.lsb_C / 12.0);
   out.lsb_over_noise = out.lsb_C / *std::min_element(noise.begin(), noise.end());
+}
 
+void DesignEvaluation::bounds() {
+  DesignMaps& m = out.maps;
   // Step 3: bounds and dead zones at every evaluated point. With include_map_error, a map with
   // per-node error estimates (format 2) adds each node's estimated charge error, as a further
   // independent 1-σ term, to the channel noise there (at the force level nearest to the design
   // force, scaled to it by F^(2/3)): the bound of a lookup that uses this very map.
-  std::size_t n_singular = 0, n_dead = 0, n_saturated = 0, n_below = 0;
-  std::vector<std::size_t> below_k(ne, 0);
+  below_k.assign(ne, 0);
   std::vector<std::array<double, 3>> jp(ne);
   std::size_t f_near = 0;
   for (std::size_t f = 0; f < map.nf(); ++f) {
@@ -246,14 +289,16 @@ DesignSummary evaluate_design(const ChargeMap& map, const DesignOptions& o) {
     n_saturated += saturated;
     n_below += below;
   }
+}
 
+void DesignEvaluation::ambiguity() {
+  DesignMaps& m = out.maps;
   // Step 4: ambiguity, judged by the deployed lookup itself: noise-free charges of the press are
   // located with the same noise model and force range. Every accepted solution (the reported
   // one and the alternatives) farther than max(min distance, 3σ_pos) from the press is a
   // distinct press giving the same charges within noise. The Locator merges solutions closer
   // than one grid cell, so a fold next to an electrode can make it report only the wrong one:
   // that counts as ambiguous too, and as "silent" when the Locator raised no flag.
-  std::size_t n_ambiguous = 0, n_silent = 0, n_failed = 0;
   if (o.check_ambiguity) {
     LocatorOptions lo;
     lo.noise_C = sigma;
@@ -297,9 +342,12 @@ DesignSummary evaluate_design(const ChargeMap& map, const DesignOptions& o) {
       }
     }
   }
+}
 
+void DesignEvaluation::area_figures() {
+  DesignMaps& m = out.maps;
   // Step 5: area figures over the mapped nodes (a mapped node that cannot be evaluated counts
-  // as unbounded), and the per-electrode figures.
+  // as unbounded); the per-electrode figures follow (electrode_reports).
   std::vector<double> pos, pos_known, force;
   std::size_t n_cover = 0, n_usable = 0;
   for (std::size_t p = 0; p < np; ++p) {
@@ -344,7 +392,13 @@ DesignSummary evaluate_design(const ChargeMap& map, const DesignOptions& o) {
                         ") is singular at every evaluated point: the electrodes' charges do not determine the press "
                         "(coincident or redundant electrodes?)";
   }
+}
 
+void DesignEvaluation::electrode_reports() {
+  const DesignMaps& m = out.maps;
+  const double n_eval = double(out.n_evaluated);
+  std::vector<double> q(ne);
+  std::vector<std::array<double, 3>> dq(ne);
   for (std::size_t k = 0; k < ne; ++k) {
     ElectrodeReport e;
     e.name = map.electrode_names[k];
@@ -366,7 +420,20 @@ DesignSummary evaluate_design(const ChargeMap& map, const DesignOptions& o) {
     e.below_lsb_fraction = double(below_k[k]) / n_eval;
     out.electrodes.push_back(e);
   }
-  return out;
+}
+
+}  // namespace
+
+DesignSummary evaluate_design(const ChargeMap& map, const DesignOptions& o) {
+  DesignEvaluation e(map, o, checked_noise(map, o));
+  e.allocate();
+  e.sample_nodes();
+  e.front_end();
+  e.bounds();
+  e.ambiguity();
+  e.area_figures();
+  e.electrode_reports();
+  return std::move(e.out);
 }
 
 nlohmann::json design_summary_json(const DesignSummary& s) {
