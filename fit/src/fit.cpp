@@ -313,10 +313,10 @@ Prepared prepare(const pvdf::Scene& scene, const MeasuredTable& measured, const 
   // 1. Parameters and starting values.
   for (const auto& n : names) {
     if (std::find(known.begin(), known.end(), n) == known.end()) {
-      throw pvdf::InputError("--params: '" + n + "' is not a parameter of this scene; choose from " + join(known));
+      throw pvdf::InputError("fit: parameter '" + n + "' (FitOptions::parameters) is not a parameter of this scene; choose from " + join(known));
     }
     for (const auto& s : specs)
-      if (s.name == n) throw pvdf::InputError("--params: '" + n + "' is listed twice; list each parameter once");
+      if (s.name == n) throw pvdf::InputError("fit: parameter '" + n + "' is listed twice (FitOptions::parameters); list each parameter once");
     ParamSpec s{n, Kind::gain, -1};
     if (n == "pretension_N_per_m") s.kind = Kind::pretension;
     else if (n == "E_scale") s.kind = Kind::log_E;
@@ -331,17 +331,17 @@ Prepared prepare(const pvdf::Scene& scene, const MeasuredTable& measured, const 
   start.gains.assign(scene.electrodes.size(), 1.0);
   for (const auto& [n, value] : options.start) {
     if (std::find(known.begin(), known.end(), n) == known.end()) {
-      throw pvdf::InputError("--start: '" + n + "' is not a parameter of this scene; choose from " + join(known));
+      throw pvdf::InputError("fit: starting value of '" + n + "' (FitOptions::start): not a parameter of this scene; choose from " + join(known));
     }
-    if (!std::isfinite(value)) throw pvdf::InputError("--start: " + n + " = " + fmt(value) + " must be finite");
+    if (!std::isfinite(value)) throw pvdf::InputError("fit: starting value " + n + " = " + fmt(value) + " must be finite (FitOptions::start)");
     if (n == "pretension_N_per_m") {
       if (value < slack_bound_N_per_m(scene)) {
-        throw pvdf::InputError("--start: pretension_N_per_m = " + fmt(value) + " is slacker than the fit allows (" +
+        throw pvdf::InputError("fit: starting value pretension_N_per_m = " + fmt(value) + " is slacker than the fit allows (" +
                                fmt(slack_bound_N_per_m(scene)) + " N/m, a slack strain of about 7 %); give a larger value");
       }
       start.T = value;
     } else if (n == "E_scale") {
-      if (!(value > 0)) throw pvdf::InputError("--start: E_scale = " + fmt(value) + " must be > 0");
+      if (!(value > 0)) throw pvdf::InputError("fit: starting value E_scale = " + fmt(value) + " must be > 0 (FitOptions::start)");
       start.E = value;
     } else if (n == "d31_C_per_N") start.d31 = value;
     else if (n == "d32_C_per_N") start.d32 = value;
@@ -352,7 +352,7 @@ Prepared prepare(const pvdf::Scene& scene, const MeasuredTable& measured, const 
     for (double x : c.value) m += std::isnan(x) ? 0 : 1;
   const std::size_t n = specs.size();
   res.sigmas_given = measured.sigmas_given();
-  if (n == 0) throw pvdf::InputError("--params: no parameter to fit; name at least one of " + join(known));
+  if (n == 0) throw pvdf::InputError("fit: no parameter to fit (FitOptions::parameters); name at least one of " + join(known));
   if (m < n + (res.sigmas_given ? 0 : 1)) {
     throw pvdf::InputError(measured.source + ": " + std::to_string(m) + " observed values cannot determine " +
                            std::to_string(n) + " parameters" + (res.sigmas_given ? "" : " and their scatter") +
@@ -571,7 +571,7 @@ void set_status(const ceres::Solver::Summary& summary, const Problem& problem, b
   } else if (!converged) {
     res.status = FitStatus::no_convergence;
     res.message = "no convergence after " + std::to_string(res.iterations) + " iterations (" + summary.message +
-                  "); raise --max-iterations or start nearer (--start)";
+                  "); allow more iterations or start nearer the solution";
   } else if (ill) {
     res.status = FitStatus::ill_conditioned;
     std::string which;
@@ -676,7 +676,7 @@ FitResult fit_film(Predictor& predictor, const MeasuredTable& measured, const Fi
   res.fem = predictor.stats();
   if (fem_err >= 0.01) {
     res.warnings.push_back("the FEM charges carry an estimated relative error of " + fmt(100 * fem_err, 3) +
-                           " %, not included in the intervals; tighten --tolerance if the data are that precise");
+                           " %, not included in the intervals; tighten the FEM tolerance if the data are that precise");
   }
 
   // 7. Observations.

@@ -54,13 +54,13 @@ std::vector<double> read_checkpoint(const std::string& path, const std::string& 
   std::getline(in, magic);
   if (magic != checkpoint_magic) {
     throw InputError(path + ": not a pvdfkit map checkpoint (first line '" + magic.substr(0, 40) +
-                     "'); delete it or choose another --checkpoint");
+                     "'); delete it or choose another checkpoint file");
   }
   in >> key >> file_hash;
   if (key != "hash") throw InputError(path + ": damaged checkpoint header; delete it");
   if (file_hash != hash) {
     throw InputError(path + ": checkpoint hash " + file_hash + " was written for a different scene or map options (this run: " +
-                     hash + "); delete it, pass --no-resume, or choose another --checkpoint");
+                     hash + "); delete it, start afresh without resuming, or choose another checkpoint file");
   }
   in >> key >> record_doubles;
   if (key != "record_doubles" || record_doubles != layout.size()) {

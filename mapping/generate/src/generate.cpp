@@ -116,7 +116,7 @@ void Generator::init_map() {
 // Solver setup (one sweep per thread; the first here, so bad input fails before the threads).
 void Generator::setup_sweeps() {
   sweep_options_.solver = fem::options_from_scene(scene_);
-  if (!o_.model.empty()) sweep_options_.solver.model = fem::parse_model(o_.model, "--model");
+  if (!o_.model.empty()) sweep_options_.solver.model = fem::parse_model(o_.model, "MapOptions::model");
   sweep_options_.solver.tolerance = tolerance_;
   sweep_options_.rim_margin_m = margin_;
   sweep_options_.forces_N = o_.forces_N;
@@ -124,7 +124,7 @@ void Generator::setup_sweeps() {
   if (o_.rim_model == "never") sweep_options_.rim_model = fem::SweepOptions::RimModel::never;
   else if (o_.rim_model == "always") sweep_options_.rim_model = fem::SweepOptions::RimModel::always;
   else if (o_.rim_model != "by-estimate") {
-    throw InputError("--rim-model " + o_.rim_model + ": use by-estimate, never or always");
+    throw InputError("map: rim model '" + o_.rim_model + "' is not one of by-estimate, never, always (MapOptions::rim_model)");
   }
   sweep_options_.mesh = o_.mesh;
   sweeps_.resize(std::size_t(threads_));
@@ -335,7 +335,7 @@ MpiSession::MpiSession() {
   if (!initialized) {
     int provided = 0;
     if (MPI_Init_thread(nullptr, nullptr, MPI_THREAD_FUNNELED, &provided) != MPI_SUCCESS) {
-      throw InputError("MPI_Init failed; run under mpirun or without MPI (--no-mpi)");
+      throw InputError("MPI_Init failed; run under mpirun or without MPI");
     }
     owns_ = true;
   }

@@ -71,7 +71,7 @@ std::string check_mirror(const pvdf::Scene& scene, bool about_x, std::vector<std
 Symmetry detect_symmetry(const pvdf::Scene& scene, bool wanted) {
   Symmetry s;
   if (!wanted) {
-    s.reason = "symmetry not used (--no-symmetry)";
+    s.reason = "symmetry not used (MapOptions::use_symmetry off)";
     return s;
   }
   const std::string why_x = check_mirror(scene, true, s.perm_about_x);
@@ -105,32 +105,32 @@ std::array<double, 4> outline_box(const FilmOutline& o) {
 
 void Generator::validate_options() {
   if (!(o_.spacing_m > 0) || !std::isfinite(o_.spacing_m)) {
-    throw InputError("--spacing-m " + num(o_.spacing_m) + ": the grid spacing must be > 0 (m), e.g. 0.001");
+    throw InputError("map: grid spacing " + num(o_.spacing_m) + " m must be > 0, e.g. 0.001 (MapOptions::spacing_m)");
   }
-  if (o_.forces_N.empty()) throw InputError("--forces-N: give at least one force level (N), e.g. 1");
+  if (o_.forces_N.empty()) throw InputError("map: give at least one force level (N), e.g. 1 (MapOptions::forces_N)");
   for (double f : o_.forces_N) {
-    if (!(f > 0) || !std::isfinite(f)) throw InputError("--forces-N " + num(f) + ": every force level must be > 0 (N)");
+    if (!(f > 0) || !std::isfinite(f)) throw InputError("map: force level " + num(f) + " N must be > 0 (MapOptions::forces_N)");
   }
   std::sort(o_.forces_N.begin(), o_.forces_N.end());
   o_.forces_N.erase(std::unique(o_.forces_N.begin(), o_.forces_N.end()), o_.forces_N.end());
   tolerance_ = o_.tolerance > 0 ? o_.tolerance : scene_.model.tolerance;
-  if (!(tolerance_ > 0 && tolerance_ < 1)) throw InputError("--tolerance " + num(tolerance_) + " must be in (0, 1), e.g. 0.01");
+  if (!(tolerance_ > 0 && tolerance_ < 1)) throw InputError("map: tolerance " + num(tolerance_) + " must be in (0, 1), e.g. 0.01 (MapOptions::tolerance, or the scene's model.tolerance)");
   if (!(o_.rim_margin_m >= 0) || !std::isfinite(o_.rim_margin_m)) {
-    throw InputError("--rim-margin-m " + num(o_.rim_margin_m) + " must be >= 0 (m); 0 = twice the probe radius");
+    throw InputError("map: rim margin " + num(o_.rim_margin_m) + " m must be >= 0; 0 = twice the probe radius (MapOptions::rim_margin_m)");
   }
   margin_ = o_.rim_margin_m > 0 ? o_.rim_margin_m : 2 * scene_.probe.radius_m;
   if (o_.scaling_check_stride < 1) {
     throw InputError("scaling check stride " + std::to_string(o_.scaling_check_stride) + " must be >= 1");
   }
-  if (o_.threads < 0) throw InputError("--threads " + std::to_string(o_.threads) + " must be >= 0 (0 = all cores)");
+  if (o_.threads < 0) throw InputError("map: " + std::to_string(o_.threads) + " threads must be >= 0 (0 = all cores; MapOptions::threads)");
   if (o_.region_m) {
     const auto& r = *o_.region_m;
     for (double v : r) {
-      if (!std::isfinite(v)) throw InputError("--region: values must be finite (m): XMIN,XMAX,YMIN,YMAX");
+      if (!std::isfinite(v)) throw InputError("map: region values must be finite (m): XMIN,XMAX,YMIN,YMAX (MapOptions::region_m)");
     }
     if (!(r[1] > r[0]) || !(r[3] > r[2])) {
-      throw InputError("--region " + num(r[0]) + "," + num(r[1]) + "," + num(r[2]) + "," + num(r[3]) +
-                       ": need XMIN < XMAX and YMIN < YMAX (m)");
+      throw InputError("map: region " + num(r[0]) + "," + num(r[1]) + "," + num(r[2]) + "," + num(r[3]) +
+                       ": need XMIN < XMAX and YMIN < YMAX (m; MapOptions::region_m)");
     }
   }
   if (scene_.electrodes.empty()) throw InputError(scene_.source + ": the scene has no electrodes; a map needs at least one");
@@ -149,17 +149,17 @@ void Generator::build_grid() {
   const long i1 = long(std::floor(box[1] / s + 1e-9));
   const long j1 = long(std::floor(box[3] / s + 1e-9));
   if (i1 < grid_.i0 || j1 < grid_.j0) {
-    throw InputError("--region/--spacing-m: no grid node (multiples of " + num(s) + " m) lies in the region; widen it");
+    throw InputError("map: no grid node (multiples of the spacing " + num(s) + " m) lies in the region; widen the region");
   }
   grid_.nx = std::size_t(i1 - grid_.i0 + 1);
   grid_.ny = std::size_t(j1 - grid_.j0 + 1);
   if (grid_.nx < 2 || grid_.ny < 2) {
-    throw InputError("--region/--spacing-m: the grid has " + std::to_string(grid_.nx) + " x " + std::to_string(grid_.ny) +
+    throw InputError("map: the grid has " + std::to_string(grid_.nx) + " x " + std::to_string(grid_.ny) +
                      " nodes (multiples of " + num(s) + " m); a map needs at least 2 along x and y: widen the region or reduce the spacing");
   }
   if (grid_.nx * grid_.ny > 50'000'000) {
-    throw InputError("--spacing-m " + num(s) + ": " + std::to_string(grid_.nx * grid_.ny) +
-                     " grid nodes is too many; use a larger spacing or a --region");
+    throw InputError("map: grid spacing " + num(s) + " m gives " + std::to_string(grid_.nx * grid_.ny) +
+                     " grid nodes, too many; use a larger spacing or a smaller region");
   }
   map_.x_m.resize(grid_.nx);
   map_.y_m.resize(grid_.ny);
@@ -176,7 +176,7 @@ void Generator::build_grid() {
     }
   }
   if (n_in == 0) {
-    throw InputError("--region/--rim-margin-m: no grid position lies inside the film at least " + num(margin_) +
+    throw InputError("map: no grid position lies inside the film at least " + num(margin_) +
                      " m from the rim; reduce the margin or the spacing, or move the region");
   }
 }

@@ -100,14 +100,14 @@ std::vector<double> checked_noise(const ChargeMap& map, const DesignOptions& o) 
     throw InputError("design: the layout has " + std::to_string(ne) +
                      " electrodes; locating a press with unknown force needs at least 3");
   }
-  if (!(o.force_N > 0) || !std::isfinite(o.force_N)) throw InputError("design: --force-N " + num(o.force_N) + " must be > 0 (N)");
+  if (!(o.force_N > 0) || !std::isfinite(o.force_N)) throw InputError("design: force " + num(o.force_N) + " N must be > 0 (DesignOptions::force_N)");
   if (!(o.min_force_N > 0) || !(o.max_force_N > o.min_force_N) || !std::isfinite(o.max_force_N)) {
     throw InputError("design: force range " + num(o.min_force_N) + ".." + num(o.max_force_N) +
-                     " N must satisfy 0 < MIN < MAX; fix --force-range-N");
+                     " N must satisfy 0 < MIN < MAX (DesignOptions::min_force_N, max_force_N)");
   }
-  if (!(o.target_m > 0)) throw InputError("design: --target-mm must be > 0");
+  if (!(o.target_m > 0)) throw InputError("design: coverage target " + num(o.target_m) + " m must be > 0 (DesignOptions::target_m)");
   if (o.adc_bits != 0 && (o.adc_bits < 2 || o.adc_bits > 32)) {
-    throw InputError("design: --adc-bits " + std::to_string(o.adc_bits) + " must be 0 (ideal) or 2..32");
+    throw InputError("design: ADC resolution " + std::to_string(o.adc_bits) + " bits must be 0 (ideal) or 2..32 (DesignOptions::adc_bits)");
   }
   if (!(o.full_scale_C >= 0) || !(o.full_scale_margin >= 1)) {
     throw InputError("design: full scale must be >= 0 C and its margin >= 1");
@@ -116,10 +116,10 @@ std::vector<double> checked_noise(const ChargeMap& map, const DesignOptions& o) 
   if (noise.size() == 1) noise.assign(ne, noise[0]);
   if (noise.size() != ne) {
     throw InputError("design: " + std::to_string(noise.size()) + " noise values for " + std::to_string(ne) +
-                     " electrodes; give one value or one per electrode (--noise-C)");
+                     " electrodes; give one value or one per electrode (DesignOptions::noise_C)");
   }
   for (double s : noise) {
-    if (!(s > 0) || !std::isfinite(s)) throw InputError("design: charge noise " + num(s) + " C must be > 0 (--noise-C)");
+    if (!(s > 0) || !std::isfinite(s)) throw InputError("design: charge noise " + num(s) + " C must be > 0 (DesignOptions::noise_C)");
   }
   return noise;
 }
@@ -221,7 +221,7 @@ void DesignEvaluation::sample_nodes() {
     }
   }
   if (out.n_evaluated == 0) {
-    throw InputError("design: the map has no usable interpolation cell (all mapped nodes isolated); use a finer --spacing-m");
+    throw InputError("design: the map has no usable interpolation cell (all mapped nodes isolated); use a finer map spacing");
   }
 }
 
@@ -544,12 +544,12 @@ ChargeMap synthetic_map_for_scene(const pvdf::Scene& scene, double spacing_m, do
 SceneSweep parse_scene_sweep(const std::string& text) {
   const std::size_t eq = text.find('=');
   if (eq == std::string::npos || eq == 0 || eq + 1 == text.size()) {
-    throw InputError("--vary " + text + ": expected KEY=START:STEP:STOP, e.g. material.draw_angle_deg=0:15:90");
+    throw InputError("scene sweep '" + text + "': expected KEY=START:STEP:STOP, e.g. material.draw_angle_deg=0:15:90");
   }
   SceneSweep s;
   s.key = text.substr(0, eq);
-  s.values = pvdf::parse_range(text.substr(eq + 1), "--vary " + s.key, 1000);
-  if (s.values.empty()) throw InputError("--vary " + text + ": the range holds no value");
+  s.values = pvdf::parse_range(text.substr(eq + 1), "scene sweep of " + s.key, 1000);
+  if (s.values.empty()) throw InputError("scene sweep '" + text + "': the range holds no value");
   return s;
 }
 
@@ -579,14 +579,14 @@ void set_path(nlohmann::json& node, const std::vector<std::string>& segments, st
     } else if (node.is_array() && !node.empty() && std::all_of(node.begin(), node.end(), [](const nlohmann::json& v) { return v.is_number(); })) {
       for (auto& v : node) v = value;
     } else {
-      throw InputError(source + ": --vary " + key + ": the key holds " + std::string(node.type_name()) +
+      throw InputError(source + ": scene key " + key + ": the key holds " + std::string(node.type_name()) +
                        ", not a number; name a numeric key (docs/design.md §5)");
     }
     return;
   }
   const std::string& seg = segments[at];
   if (seg.front() == '[') {
-    if (!node.is_array()) throw InputError(source + ": --vary " + key + ": " + seg + " indexes a non-array");
+    if (!node.is_array()) throw InputError(source + ": scene key " + key + ": " + seg + " indexes a non-array");
     if (seg == "[*]") {
       for (auto& v : node) set_path(v, segments, at + 1, value, key, source);
       return;
@@ -595,10 +595,10 @@ void set_path(nlohmann::json& node, const std::vector<std::string>& segments, st
     try {
       idx = std::stoul(seg.substr(1, seg.size() - 2));
     } catch (const std::exception&) {
-      throw InputError(source + ": --vary " + key + ": bad index " + seg + "; use [0], [1], ... or [*]");
+      throw InputError(source + ": scene key " + key + ": bad index " + seg + "; use [0], [1], ... or [*]");
     }
     if (idx >= node.size()) {
-      throw InputError(source + ": --vary " + key + ": index " + seg + " out of range (the array has " +
+      throw InputError(source + ": scene key " + key + ": index " + seg + " out of range (the array has " +
                        std::to_string(node.size()) + " elements)");
     }
     set_path(node[idx], segments, at + 1, value, key, source);
@@ -609,7 +609,7 @@ void set_path(nlohmann::json& node, const std::vector<std::string>& segments, st
     if (node.is_object()) {
       for (auto it = node.begin(); it != node.end(); ++it) known += (known.empty() ? "" : ", ") + it.key();
     }
-    throw InputError(source + ": --vary " + key + ": no key '" + seg + "' here" +
+    throw InputError(source + ": scene key " + key + ": no key '" + seg + "' here" +
                      (known.empty() ? "" : " (keys: " + known + ")") + "; see docs/design.md §5");
   }
   set_path(node[seg], segments, at + 1, value, key, source);
@@ -626,7 +626,7 @@ std::vector<std::string> split_path(const std::string& key) {
     } else if (c == '[') {
       if (!cur.empty()) out.push_back(cur);
       const std::size_t close = key.find(']', i);
-      if (close == std::string::npos) throw InputError("--vary " + key + ": unclosed '['");
+      if (close == std::string::npos) throw InputError("scene key " + key + ": unclosed '['");
       out.push_back(key.substr(i, close - i + 1));
       cur.clear();
       i = close;
@@ -635,7 +635,7 @@ std::vector<std::string> split_path(const std::string& key) {
     }
   }
   if (!cur.empty()) out.push_back(cur);
-  if (out.empty()) throw InputError("--vary: empty key");
+  if (out.empty()) throw InputError("scene key: empty");
   return out;
 }
 
@@ -724,13 +724,13 @@ nlohmann::json rotate_scene(const nlohmann::json& scene, double angle_rad, const
 
 nlohmann::json set_scene_key(const nlohmann::json& scene, const std::string& key, double value,
                              const std::string& source) {
-  if (!std::isfinite(value)) throw InputError(source + ": --vary " + key + " = " + num(value) + " must be finite");
+  if (!std::isfinite(value)) throw InputError(source + ": scene key " + key + " = " + num(value) + " must be finite");
   const std::string what = source + " with " + key + " = " + num(value);
   if (key == "@rotation_deg") return rotate_scene(scene, value * pi / 180.0, source);
   nlohmann::json n = normalized(scene, source);
   if (key == "@layout_scale" || key == "@layout_radius_m") {
     const Scene s = parse_scene(n, source);
-    if (s.electrodes.empty()) throw InputError(source + ": --vary " + key + ": the scene has no electrodes");
+    if (s.electrodes.empty()) throw InputError(source + ": scene key " + key + ": the scene has no electrodes");
     double factor = value;
     if (key == "@layout_radius_m") {
       double cx = 0, cy = 0, mean = 0;
@@ -740,7 +740,7 @@ nlohmann::json set_scene_key(const nlohmann::json& scene, const std::string& key
       }
       for (const auto& e : s.electrodes) mean += std::hypot(e.centroid_m()[0] - cx, e.centroid_m()[1] - cy);
       mean /= double(s.electrodes.size());
-      if (!(mean > 0)) throw InputError(source + ": --vary @layout_radius_m: all electrodes share one centre");
+      if (!(mean > 0)) throw InputError(source + ": scene key @layout_radius_m: all electrodes share one centre");
       factor = value / mean;
     }
     if (!(factor > 0)) throw InputError(what + ": the scale factor must be > 0");
@@ -764,7 +764,7 @@ nlohmann::json set_scene_key(const nlohmann::json& scene, const std::string& key
       }
     }
   } else if (!key.empty() && key.front() == '@') {
-    throw InputError(source + ": --vary " + key +
+    throw InputError(source + ": scene key " + key +
                      ": unknown derived key; known: @layout_scale, @layout_radius_m, @rotation_deg, @electrode_size_m");
   } else {
     set_path(n, split_path(key), 0, value, key, source);
