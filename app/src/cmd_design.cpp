@@ -413,11 +413,15 @@ DesignOptions design_options(const DesignCommandOptions& o) {
     }
   }
   const auto range = pvdf::parse_number_list(o.force_range, "--force-range-N", 2);
+  if (!(range[0] > 0) || !(range[1] > range[0]) || !std::isfinite(range[1])) {
+    throw pvdf::InputError("--force-range-N " + pvdf::escape_control_bytes(o.force_range) + ": need 0 < MIN < MAX (N)");
+  }
   d.min_force_N = range[0];
   d.max_force_N = range[1];
   d.force_N = o.force_N;
   d.force_known = o.force_known;
   d.target_m = o.target_mm * 1e-3;
+  if (o.adc_bits == 1) throw pvdf::InputError("--adc-bits 1: use 0 (ideal) or 2..32 bits");
   d.adc_bits = o.adc_bits;
   d.include_map_error = o.include_map_error;
   d.full_scale_C = o.full_scale_C;
@@ -448,7 +452,11 @@ std::vector<Candidate> collect_candidates(const DesignCommandOptions& o, const s
       Candidate c;
       c.label = stem(path) + " " + sweep->key + "=" + fmt("%.4g", v);
       c.source = path;
-      c.scene = set_scene_key(scene.original, sweep->key, v, path);
+      try {
+        c.scene = set_scene_key(scene.original, sweep->key, v, path);
+      } catch (const pvdf::InputError& e) {
+        throw pvdf::InputError(std::string("--vary: ") + e.what());
+      }
       c.sweep_key = sweep->key;
       c.sweep_value = v;
       c.series = series;
@@ -565,7 +573,11 @@ int run_design(const DesignCommandOptions& o) {
   // Step 1: the candidates.
   std::vector<std::string> series_names;
   std::optional<SceneSweep> sweep;
-  if (!o.vary.empty()) sweep = parse_scene_sweep(o.vary);
+  try {
+    if (!o.vary.empty()) sweep = parse_scene_sweep(o.vary);
+  } catch (const pvdf::InputError& e) {
+    throw pvdf::InputError(std::string("--vary: ") + e.what());
+  }
   std::vector<Candidate> all = collect_candidates(o, sweep, series_names);
 
   // Step 2: maps (coarse previews) and their evaluation.

@@ -13,6 +13,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -88,6 +89,18 @@ int run_fit(const FitCliOptions& o) {
   pvdf::fit::FitOptions fo;
   fo.parameters = split(o.params);
   fo.start = parse_start(o.start);
+  {  // names refused here, naming the flag (the library checks the values)
+    const std::vector<std::string> known = pvdf::fit::parameter_names(scene);
+    std::string list;
+    for (const auto& k : known) list += (list.empty() ? "" : ",") + k;
+    const auto check = [&](const std::string& flag, const std::string& n) {
+      if (std::find(known.begin(), known.end(), n) == known.end()) {
+        throw pvdf::InputError(flag + ": '" + pvdf::escape_control_bytes(n) + "' is not a parameter of this scene; choose from " + list);
+      }
+    };
+    for (const auto& n : fo.parameters) check("--params", n);
+    for (const auto& kv : fo.start) check("--start", kv.first);
+  }
   if (o.max_iterations < 1) throw pvdf::InputError("--max-iterations " + std::to_string(o.max_iterations) + " must be >= 1");
   fo.max_iterations = o.max_iterations;
   if (o.tolerance != 0) {

@@ -7,6 +7,7 @@
 #include "pvdf/core/io.hpp"
 #include "pvdf/core/progress.hpp"
 #include "pvdf/core/scene.hpp"
+#include "pvdf/fem/solver.hpp"
 #include "pvdf/mapping/ambiguity.hpp"
 #include "pvdf/mapping/generate.hpp"
 #include "pvdf/mesh/mesher.hpp"
@@ -96,6 +97,7 @@ MapOptions map_options(const MapCommandOptions& o, const pvdf::Scene& scene) {
                            " m, two probe radii: a footprint must stay one probe radius clear of the rim (docs/scene.md)");
   }
   options.rim_margin_m = o.rim_margin_m;
+  if (!o.model.empty()) pvdf::fem::parse_model(o.model, "--model");  // refused here, naming the flag
   options.model = o.model;
   options.tolerance = o.tolerance;
   options.threads = o.threads;
@@ -103,6 +105,9 @@ MapOptions map_options(const MapCommandOptions& o, const pvdf::Scene& scene) {
   options.use_force_scaling = !o.no_force_scaling;
   options.scaling_check_stride = o.scaling_check_stride;
   options.n_setup_checks = o.setup_checks;
+  if (o.rim_model != "by-estimate" && o.rim_model != "never" && o.rim_model != "always") {
+    throw pvdf::InputError("--rim-model " + pvdf::escape_control_bytes(o.rim_model) + ": use by-estimate, never or always");
+  }
   options.rim_model = o.rim_model;
   if (!o.noise.empty()) {
     options.noise_C = pvdf::parse_number_list(o.noise, "--noise-C", scene.electrodes.size());

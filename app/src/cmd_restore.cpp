@@ -122,6 +122,8 @@ int run_identify(const IdentifyOptions& o) {
   }
   check_range("--taps", static_cast<double>(o.taps), 64, 4194304, "give an even FIR length such as 8192");
   if (o.g_window != 0) check_range("--g-window", static_cast<double>(o.g_window), 64, 4194304, "give an even number of lags or omit it");
+  if (o.taps % 2 != 0) throw pvdf::InputError("--taps = " + std::to_string(o.taps) + " must be even; give an even FIR length such as 8192");
+  if (o.g_window % 2 != 0) throw pvdf::InputError("--g-window = " + std::to_string(o.g_window) + " must be even; give an even number of lags or omit it");
   if (o.delay_flag->count() > 0) check_range("--delay-samples", static_cast<double>(o.delay), 0, static_cast<double>(o.taps - 1), "omit it for taps/2");
   check_range("--speed-m-per-s", o.speed, 0, 10, "give the scan speed in m/s (seed 000: 0.01-0.1)");
   check_range("--beta-corner-m", o.corner, 0, 1, "give a wavelength in m, or 0 for none");

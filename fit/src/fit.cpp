@@ -313,10 +313,10 @@ Prepared prepare(const pvdf::Scene& scene, const MeasuredTable& measured, const 
   // 1. Parameters and starting values.
   for (const auto& n : names) {
     if (std::find(known.begin(), known.end(), n) == known.end()) {
-      throw pvdf::InputError("--params: '" + n + "' is not a parameter of this scene; choose from " + join(known));
+      throw pvdf::InputError("fit: parameter '" + n + "' (FitOptions::parameters) is not a parameter of this scene; choose from " + join(known));
     }
     for (const auto& s : specs)
-      if (s.name == n) throw pvdf::InputError("--params: '" + n + "' is listed twice; list each parameter once");
+      if (s.name == n) throw pvdf::InputError("fit: parameter '" + n + "' is listed twice (FitOptions::parameters); list each parameter once");
     ParamSpec s{n, Kind::gain, -1};
     if (n == "pretension_N_per_m") s.kind = Kind::pretension;
     else if (n == "E_scale") s.kind = Kind::log_E;
@@ -331,17 +331,17 @@ Prepared prepare(const pvdf::Scene& scene, const MeasuredTable& measured, const 
   start.gains.assign(scene.electrodes.size(), 1.0);
   for (const auto& [n, value] : options.start) {
     if (std::find(known.begin(), known.end(), n) == known.end()) {
-      throw pvdf::InputError("--start: '" + n + "' is not a parameter of this scene; choose from " + join(known));
+      throw pvdf::InputError("fit: starting value of '" + n + "' (FitOptions::start): not a parameter of this scene; choose from " + join(known));
     }
-    if (!std::isfinite(value)) throw pvdf::InputError("--start: " + n + " = " + fmt(value) + " must be finite");
+    if (!std::isfinite(value)) throw pvdf::InputError("fit: starting value " + n + " = " + fmt(value) + " must be finite (FitOptions::start)");
     if (n == "pretension_N_per_m") {
       if (value < slack_bound_N_per_m(scene)) {
-        throw pvdf::InputError("--start: pretension_N_per_m = " + fmt(value) + " is slacker than the fit allows (" +
+        throw pvdf::InputError("fit: starting value pretension_N_per_m = " + fmt(value) + " is slacker than the fit allows (" +
                                fmt(slack_bound_N_per_m(scene)) + " N/m, a slack strain of about 7 %); give a larger value");
       }
       start.T = value;
     } else if (n == "E_scale") {
-      if (!(value > 0)) throw pvdf::InputError("--start: E_scale = " + fmt(value) + " must be > 0");
+      if (!(value > 0)) throw pvdf::InputError("fit: starting value E_scale = " + fmt(value) + " must be > 0 (FitOptions::start)");
       start.E = value;
     } else if (n == "d31_C_per_N") start.d31 = value;
     else if (n == "d32_C_per_N") start.d32 = value;
@@ -352,7 +352,7 @@ Prepared prepare(const pvdf::Scene& scene, const MeasuredTable& measured, const 
     for (double x : c.value) m += std::isnan(x) ? 0 : 1;
   const std::size_t n = specs.size();
   res.sigmas_given = measured.sigmas_given();
-  if (n == 0) throw pvdf::InputError("--params: no parameter to fit; name at least one of " + join(known));
+  if (n == 0) throw pvdf::InputError("fit: no parameter to fit (FitOptions::parameters); name at least one of " + join(known));
   if (m < n + (res.sigmas_given ? 0 : 1)) {
     throw pvdf::InputError(measured.source + ": " + std::to_string(m) + " observed values cannot determine " +
                            std::to_string(n) + " parameters" + (res.sigmas_given ? "" : " and their scatter") +
@@ -456,21 +456,11 @@ FitResult fit_film(const pvdf::Scene& scene, const MeasuredTable& measured, cons
   return fit_film(predictor, measured, options);
 }
 
-FitResult fit_film(Predictor& predictor, const MeasuredTable& measured, const FitOptions& options) {
-  const auto t0 = Clock::now();
-  FitResult res;
-  const pvdf::Scene& scene = predictor.scene();
-  if (predictor.presses().size() != measured.n_rows()) {
-    throw pvdf::InputError("fit: the predictor serves " + std::to_string(predictor.presses().size()) +
-                           " presses, the measured table has " + std::to_string(measured.n_rows()));
-  }
-  Prepared prep = prepare(scene, measured, options);
-  const std::vector<ParamSpec>& specs = prep.specs;
-  const Values& start = prep.start;
-  const std::size_t m = prep.m, n = specs.size();
-  res.sigmas_given = prep.sigmas_given;
-  Problem problem(predictor, measured, specs, start, prep.sigma);
+namespace {
 
+/// The internal parameter vector at the starting values (ln E, d in pC/N).
+std::vector<double> initial_parameters(const std::vector<ParamSpec>& specs, const Values& start) {
+  const std::size_t n = specs.size();
   std::vector<double> p(n);
   for (std::size_t j = 0; j < n; ++j) {
     switch (specs[j].kind) {
@@ -481,18 +471,15 @@ FitResult fit_film(Predictor& predictor, const MeasuredTable& measured, const Fi
       case Kind::gain: p[j] = start.gains[specs[j].electrode]; break;
     }
   }
-  const std::vector<double> p_start = p;
-  std::vector<double> pred_start;
-  try {
-    pred_start = problem.predict(p.data(), nullptr);
-  } catch (const pvdf::NumericalError& e) {
-    res.status = FitStatus::failed;
-    res.message = std::string("the FEM failed at the starting values: ") + e.what();
-    res.fem = predictor.stats();
-    return res;
-  }
+  return p;
+}
 
-  // 4. Levenberg–Marquardt.
+/// Step 4: Levenberg–Marquardt from `p` (updated in place), with the pretension above the slack
+/// bound and E within 1e-4..1e4 of the scene's.
+ceres::Solver::Summary minimize(Problem& problem, std::vector<double>& p, const std::vector<ParamSpec>& specs,
+                                const pvdf::Scene& scene, const FitOptions& options, Predictor& predictor,
+                                Clock::time_point t0) {
+  const std::size_t n = specs.size();
   ceres::Problem cp;
   cp.AddResidualBlock(new Cost(problem), nullptr, p.data());
   for (std::size_t j = 0; j < n; ++j) {
@@ -518,6 +505,117 @@ FitResult fit_film(Predictor& predictor, const MeasuredTable& measured, const Fi
   so.callbacks.push_back(&log);
   ceres::Solver::Summary summary;
   ceres::Solve(so, &cp, &summary);
+  return summary;
+}
+
+/// Step 6: the estimates in external units, with a warning for each undetermined, bounded or
+/// weakly determined one.
+void add_estimates(const std::vector<ParamSpec>& specs, const std::vector<bool>& at_bound, const Identifiability& id,
+                   const Values& v, const Values& v0, FitResult& res) {
+  const std::size_t n = specs.size();
+  const std::vector<double>& sigma_internal = id.sigma_internal;
+  const std::vector<bool>& determined = id.determined;
+  const std::vector<std::string>& why = id.why;
+  for (std::size_t j = 0; j < n; ++j) {
+    ParameterEstimate e;
+    e.name = specs[j].name;
+    e.at_bound = at_bound[j];
+    e.determined = determined[j];
+    const double si = sigma_internal[j];
+    switch (specs[j].kind) {
+      case Kind::pretension: e.start = v0.T; e.value = v.T; e.sigma = si; break;
+      case Kind::log_E: e.start = v0.E; e.value = v.E; e.sigma = v.E * si; break;
+      case Kind::d31: e.start = v0.d31; e.value = v.d31; e.sigma = si * pC; break;
+      case Kind::d32: e.start = v0.d32; e.value = v.d32; e.sigma = si * pC; break;
+      case Kind::gain: e.start = v0.gains[specs[j].electrode]; e.value = v.gains[specs[j].electrode]; e.sigma = si; break;
+    }
+    if (!determined[j]) {
+      e.warning = e.name + " is not determined by these data: " + why[j];
+      e.sigma = std::numeric_limits<double>::quiet_NaN();
+    } else if (e.at_bound) {
+      e.warning = e.name + " ended on its bound (" + fmt(e.value) +
+                  "): the data push it beyond what the model allows; held there for the other intervals" +
+                  (specs[j].kind == Kind::pretension ? " (a slack strain of about 7 %: check the film, or fit E_scale too)" : "");
+    } else if (e.value != 0 && e.sigma > 0.5 * std::abs(e.value)) {
+      e.warning = e.name + " is weakly determined: 1-sigma " + fmt(e.sigma, 3) + " is " +
+                  fmt(100 * e.sigma / std::abs(e.value), 3) + " % of its value";
+    }
+    if (!e.warning.empty()) res.warnings.push_back(e.warning);
+    res.parameters.push_back(e);
+  }
+}
+
+/// Step 7: every observation with its starting and fitted prediction and normalized residual.
+void add_observations(const Problem& problem, const MeasuredTable& measured, const std::vector<double>& pred_start,
+                      const std::vector<double>& pred, FitResult& res) {
+  for (std::size_t r = 0; r < pred.size(); ++r) {    ObservationResult o;
+    o.row = problem.where(r).first;
+    o.line = measured.line[o.row];
+    o.column = measured.observed[problem.where(r).second].name;
+    o.electrode = measured.observed[problem.where(r).second].electrode;
+    o.measured = problem.measured(r);
+    o.sigma = problem.sigma(r) * (res.sigmas_given ? 1.0 : res.relative_sigma_estimated);
+    o.predicted_start = pred_start[r];
+    o.predicted = pred[r];
+    o.normalized_residual = (pred[r] - o.measured) / o.sigma;
+    res.observations.push_back(o);
+  }
+}
+
+/// Step 8: the status from the minimizer's termination and the identifiability.
+void set_status(const ceres::Solver::Summary& summary, const Problem& problem, bool ill, FitResult& res) {
+  const bool converged = summary.termination_type == ceres::CONVERGENCE;
+  if (summary.termination_type == ceres::FAILURE || !summary.IsSolutionUsable()) {
+    res.status = FitStatus::failed;
+    res.message = "the minimizer failed: " + summary.message + (problem.last_error.empty() ? "" : "; last FEM error: " + problem.last_error);
+  } else if (!converged) {
+    res.status = FitStatus::no_convergence;
+    res.message = "no convergence after " + std::to_string(res.iterations) + " iterations (" + summary.message +
+                  "); allow more iterations or start nearer the solution";
+  } else if (ill) {
+    res.status = FitStatus::ill_conditioned;
+    std::string which;
+    for (const auto& e : res.parameters)
+      if (!e.determined) which += (which.empty() ? "" : ", ") + e.name;
+    res.message = "the data do not determine " + which + " (column-scaled condition number " +
+                  fmt(res.condition_number, 3) + "); fit fewer parameters or add data that separate them";
+  } else {
+    res.status = FitStatus::converged;
+    res.message = "converged after " + std::to_string(res.iterations) + " iterations: " + summary.message;
+  }
+}
+
+}  // namespace
+
+FitResult fit_film(Predictor& predictor, const MeasuredTable& measured, const FitOptions& options) {
+  const auto t0 = Clock::now();
+  FitResult res;
+  const pvdf::Scene& scene = predictor.scene();
+  if (predictor.presses().size() != measured.n_rows()) {
+    throw pvdf::InputError("fit: the predictor serves " + std::to_string(predictor.presses().size()) +
+                           " presses, the measured table has " + std::to_string(measured.n_rows()));
+  }
+  Prepared prep = prepare(scene, measured, options);
+  const std::vector<ParamSpec>& specs = prep.specs;
+  const Values& start = prep.start;
+  const std::size_t m = prep.m, n = specs.size();
+  res.sigmas_given = prep.sigmas_given;
+  Problem problem(predictor, measured, specs, start, prep.sigma);
+
+  std::vector<double> p = initial_parameters(specs, start);
+  const std::vector<double> p_start = p;
+  std::vector<double> pred_start;
+  try {
+    pred_start = problem.predict(p.data(), nullptr);
+  } catch (const pvdf::NumericalError& e) {
+    res.status = FitStatus::failed;
+    res.message = std::string("the FEM failed at the starting values: ") + e.what();
+    res.fem = predictor.stats();
+    return res;
+  }
+
+  // 4. Levenberg–Marquardt.
+  const ceres::Solver::Summary summary = minimize(problem, p, specs, scene, options, predictor, t0);
   res.iterations = static_cast<int>(summary.iterations.size()) - 1;
 
   // 5. Jacobian at the fit, covariance, identifiability.
@@ -562,39 +660,10 @@ FitResult fit_film(Predictor& predictor, const MeasuredTable& measured, const Fi
   const Values v0 = problem.decode(p_start.data());
 
   Identifiability id = identify(J, free, cov_scale, specs, options, res);
-  const std::vector<double>& sigma_internal = id.sigma_internal;
-  const std::vector<bool>& determined = id.determined;
-  const std::vector<std::string>& why = id.why;
   const bool ill = id.ill;
 
   // 6. Estimates in external units.
-  for (std::size_t j = 0; j < n; ++j) {
-    ParameterEstimate e;
-    e.name = specs[j].name;
-    e.at_bound = at_bound[j];
-    e.determined = determined[j];
-    const double si = sigma_internal[j];
-    switch (specs[j].kind) {
-      case Kind::pretension: e.start = v0.T; e.value = v.T; e.sigma = si; break;
-      case Kind::log_E: e.start = v0.E; e.value = v.E; e.sigma = v.E * si; break;
-      case Kind::d31: e.start = v0.d31; e.value = v.d31; e.sigma = si * pC; break;
-      case Kind::d32: e.start = v0.d32; e.value = v.d32; e.sigma = si * pC; break;
-      case Kind::gain: e.start = v0.gains[specs[j].electrode]; e.value = v.gains[specs[j].electrode]; e.sigma = si; break;
-    }
-    if (!determined[j]) {
-      e.warning = e.name + " is not determined by these data: " + why[j];
-      e.sigma = std::numeric_limits<double>::quiet_NaN();
-    } else if (e.at_bound) {
-      e.warning = e.name + " ended on its bound (" + fmt(e.value) +
-                  "): the data push it beyond what the model allows; held there for the other intervals" +
-                  (specs[j].kind == Kind::pretension ? " (a slack strain of about 7 %: check the film, or fit E_scale too)" : "");
-    } else if (e.value != 0 && e.sigma > 0.5 * std::abs(e.value)) {
-      e.warning = e.name + " is weakly determined: 1-sigma " + fmt(e.sigma, 3) + " is " +
-                  fmt(100 * e.sigma / std::abs(e.value), 3) + " % of its value";
-    }
-    if (!e.warning.empty()) res.warnings.push_back(e.warning);
-    res.parameters.push_back(e);
-  }
+  add_estimates(specs, at_bound, id, v, v0, res);
   if (!res.sigmas_given) {
     res.warnings.push_back("no sigma columns: every value was given the same relative uncertainty, estimated from the "
                            "scatter as " + fmt(100 * res.relative_sigma_estimated, 3) +
@@ -607,44 +676,14 @@ FitResult fit_film(Predictor& predictor, const MeasuredTable& measured, const Fi
   res.fem = predictor.stats();
   if (fem_err >= 0.01) {
     res.warnings.push_back("the FEM charges carry an estimated relative error of " + fmt(100 * fem_err, 3) +
-                           " %, not included in the intervals; tighten --tolerance if the data are that precise");
+                           " %, not included in the intervals; tighten the FEM tolerance if the data are that precise");
   }
 
   // 7. Observations.
-  for (std::size_t r = 0; r < m; ++r) {
-    ObservationResult o;
-    o.row = problem.where(r).first;
-    o.line = measured.line[o.row];
-    o.column = measured.observed[problem.where(r).second].name;
-    o.electrode = measured.observed[problem.where(r).second].electrode;
-    o.measured = problem.measured(r);
-    o.sigma = problem.sigma(r) * (res.sigmas_given ? 1.0 : res.relative_sigma_estimated);
-    o.predicted_start = pred_start[r];
-    o.predicted = pred[r];
-    o.normalized_residual = (pred[r] - o.measured) / o.sigma;
-    res.observations.push_back(o);
-  }
+  add_observations(problem, measured, pred_start, pred, res);
 
   // 8. Status.
-  const bool converged = summary.termination_type == ceres::CONVERGENCE;
-  if (summary.termination_type == ceres::FAILURE || !summary.IsSolutionUsable()) {
-    res.status = FitStatus::failed;
-    res.message = "the minimizer failed: " + summary.message + (problem.last_error.empty() ? "" : "; last FEM error: " + problem.last_error);
-  } else if (!converged) {
-    res.status = FitStatus::no_convergence;
-    res.message = "no convergence after " + std::to_string(res.iterations) + " iterations (" + summary.message +
-                  "); raise --max-iterations or start nearer (--start)";
-  } else if (ill) {
-    res.status = FitStatus::ill_conditioned;
-    std::string which;
-    for (const auto& e : res.parameters)
-      if (!e.determined) which += (which.empty() ? "" : ", ") + e.name;
-    res.message = "the data do not determine " + which + " (column-scaled condition number " +
-                  fmt(res.condition_number, 3) + "); fit fewer parameters or add data that separate them";
-  } else {
-    res.status = FitStatus::converged;
-    res.message = "converged after " + std::to_string(res.iterations) + " iterations: " + summary.message;
-  }
+  set_status(summary, problem, ill, res);
   res.wall_s = std::chrono::duration<double>(Clock::now() - t0).count();
   return res;
 }

@@ -71,6 +71,37 @@ RawCsv read_raw(const std::string& path) {
   return raw;
 }
 
+/// Every column other than x_m, y_m, force_N and deflection_m must be a sigma_ column of a value
+/// column or the charge column of one of the scene's electrodes; `where` = "path:header line: ".
+void check_other_columns(const RawCsv& t, const std::map<std::string, std::size_t>& index,
+                         const std::vector<std::string>& allowed_charges, const std::vector<std::string>& electrode_names,
+                         const std::string& where, const std::string& expected) {
+  for (const auto& c : t.columns) {
+    if (c == "x_m" || c == "y_m" || c == "force_N" || c == "deflection_m") continue;
+    if (c.rfind("sigma_", 0) == 0) {
+      const std::string of = c.substr(6);
+      if (of == "x_m" || of == "y_m" || of == "force_N") {
+        throw InputError(where + "column '" + c + "': uncertainties of the press position and force are not modelled; "
+                         "convert them into sigma_ of the deflection and charges (docs/fem-vs-experiment.md §1)");
+      }
+      if (!index.count(of)) {
+        throw InputError(where + "column '" + c + "' has no value column '" + of + "'; add it or remove the sigma column");
+      }
+      continue;
+    }
+    if (c.rfind("charge_", 0) == 0 && c.size() > 9 && c.compare(c.size() - 2, 2, "_C") == 0) {
+      bool known = false;
+      for (const auto& a : allowed_charges) known = known || a == c;
+      if (!known) {
+        throw InputError(where + "column '" + c + "' names an electrode the scene does not have; the scene's are " +
+                         join(electrode_names) + " (columns " + join(allowed_charges) + ")");
+      }
+      continue;
+    }
+    throw InputError(where + "unknown column '" + c + "'; a measured CSV has " + expected);
+  }
+}
+
 }  // namespace
 
 MeasuredTable read_measured(const std::string& path, const std::vector<std::string>& electrode_names) {
@@ -101,30 +132,7 @@ MeasuredTable read_measured(const std::string& path, const std::vector<std::stri
   if (index.count("deflection_m")) value_columns.push_back("deflection_m");
   for (const auto& c : allowed_charges)
     if (index.count(c)) value_columns.push_back(c);
-  for (const auto& c : t.columns) {
-    if (c == "x_m" || c == "y_m" || c == "force_N" || c == "deflection_m") continue;
-    if (c.rfind("sigma_", 0) == 0) {
-      const std::string of = c.substr(6);
-      if (of == "x_m" || of == "y_m" || of == "force_N") {
-        throw InputError(where + "column '" + c + "': uncertainties of the press position and force are not modelled; "
-                         "convert them into sigma_ of the deflection and charges (docs/fem-vs-experiment.md §1)");
-      }
-      if (!index.count(of)) {
-        throw InputError(where + "column '" + c + "' has no value column '" + of + "'; add it or remove the sigma column");
-      }
-      continue;
-    }
-    if (c.rfind("charge_", 0) == 0 && c.size() > 9 && c.compare(c.size() - 2, 2, "_C") == 0) {
-      bool known = false;
-      for (const auto& a : allowed_charges) known = known || a == c;
-      if (!known) {
-        throw InputError(where + "column '" + c + "' names an electrode the scene does not have; the scene's are " +
-                         join(electrode_names) + " (columns " + join(allowed_charges) + ")");
-      }
-      continue;
-    }
-    throw InputError(where + "unknown column '" + c + "'; a measured CSV has " + expected);
-  }
+  check_other_columns(t, index, allowed_charges, electrode_names, where, expected);
   if (value_columns.empty()) {
     throw InputError(where + "no observed column (the header has " + join(t.columns) + "); give deflection_m and/or " +
                      join(allowed_charges));

@@ -26,6 +26,62 @@ constexpr unsigned int control_timeout_ms = 1000;
 constexpr unsigned int bulk_timeout_ms = 1000;
 constexpr int max_consecutive_errors = 8;
 
+/// Steps 1 and 2 of opening: finds the device VID:PID (the first of `n_found` matches, at `bus` and
+/// `address`) and opens it; every failure is an InputError naming the device and the fix.
+libusb_device_handle* open_device(libusb_context* context, std::uint16_t vendor_id, std::uint16_t product_id,
+                                  const std::string& name, int& bus, int& address, int& n_found) {
+  // 1. Find the device.
+  libusb_device** list = nullptr;
+  const ssize_t n = libusb_get_device_list(context, &list);
+  if (n < 0) throw InputError(name + ": cannot list USB devices (libusb: " + usb_error(static_cast<int>(n)) + ")");
+  libusb_device* found = nullptr;
+  n_found = 0;
+  for (ssize_t i = 0; i < n; ++i) {
+    libusb_device_descriptor d{};
+    if (libusb_get_device_descriptor(list[i], &d) == 0 && d.idVendor == vendor_id && d.idProduct == product_id) {
+      if (found == nullptr) found = list[i];
+      ++n_found;
+    }
+  }
+  if (found == nullptr) {
+    libusb_free_device_list(list, 1);
+    throw InputError(name + ": no device with VID:PID " + hex4(vendor_id) + ":" + hex4(product_id) + " among " +
+                     std::to_string(n) + " USB devices; plug the front end in, check 'lsusb', or name the device as usb:VID:PID");
+  }
+  bus = libusb_get_bus_number(found);
+  address = libusb_get_device_address(found);
+  // 2. Open and claim.
+  libusb_device_handle* handle = nullptr;
+  const int r = libusb_open(found, &handle);
+  libusb_free_device_list(list, 1);
+  if (r != 0) {
+    const std::string where = " (bus " + std::to_string(bus) + " address " + std::to_string(address) + ")";
+    if (r == LIBUSB_ERROR_ACCESS)
+      throw InputError(name + where + ": permission denied opening the device; install the udev rule from "
+                                       "docs/hardware.md (/etc/udev/rules.d/70-pvdfkit.rules) and replug it, or run as root");
+    if (r == LIBUSB_ERROR_NO_DEVICE)
+      throw InputError(name + where + ": the device disappeared while opening it; replug it and retry");
+    if (r == LIBUSB_ERROR_BUSY)
+      throw InputError(name + where + ": device busy; close the other program using it and retry");
+    throw InputError(name + where + ": cannot open the device (libusb: " + usb_error(r) + ")");
+  }
+  return handle;
+}
+
+/// Claims interface 0; a busy, forbidden or vanished device is an InputError saying what to do.
+void claim_interface(libusb_device_handle* handle, const std::string& name) {
+  const int r = libusb_claim_interface(handle, protocol::interface_number);
+  if (r != 0) {
+    if (r == LIBUSB_ERROR_BUSY)
+      throw InputError(name + ": device busy: interface 0 is claimed by another program (another 'pvdfkit acquire'?); "
+                               "close it and retry");
+    if (r == LIBUSB_ERROR_ACCESS)
+      throw InputError(name + ": permission denied claiming interface 0; install the udev rule from docs/hardware.md");
+    if (r == LIBUSB_ERROR_NO_DEVICE) throw InputError(name + ": the device disappeared while opening it; replug it and retry");
+    throw InputError(name + ": cannot claim interface 0 (libusb: " + usb_error(r) + ")");
+  }
+}
+
 }  // namespace
 
 void parse_usb_spec(const std::string& spec, std::uint16_t& vid, std::uint16_t& pid) {
@@ -72,51 +128,10 @@ UsbSource::UsbSource(std::uint16_t vendor_id, std::uint16_t product_id, const Op
     throw InputError(name_ + ": no USB access on this machine (libusb: " + usb_error(r) +
                      "); is /dev/bus/usb present (in a container, pass the USB bus through)?");
   }
-  // 1. Find the device.
-  libusb_device** list = nullptr;
-  const ssize_t n = libusb_get_device_list(context_, &list);
-  if (n < 0) throw InputError(name_ + ": cannot list USB devices (libusb: " + usb_error(static_cast<int>(n)) + ")");
-  libusb_device* found = nullptr;
-  int n_found = 0;
-  for (ssize_t i = 0; i < n; ++i) {
-    libusb_device_descriptor d{};
-    if (libusb_get_device_descriptor(list[i], &d) == 0 && d.idVendor == vendor_id && d.idProduct == product_id) {
-      if (found == nullptr) found = list[i];
-      ++n_found;
-    }
-  }
-  if (found == nullptr) {
-    libusb_free_device_list(list, 1);
-    throw InputError(name_ + ": no device with VID:PID " + hex4(vendor_id) + ":" + hex4(product_id) + " among " +
-                     std::to_string(n) + " USB devices; plug the front end in, check 'lsusb', or name the device as usb:VID:PID");
-  }
-  const int bus = libusb_get_bus_number(found), address = libusb_get_device_address(found);
-  // 2. Open and claim.
-  r = libusb_open(found, &handle_);
-  libusb_free_device_list(list, 1);
-  if (r != 0) {
-    handle_ = nullptr;
-    const std::string where = " (bus " + std::to_string(bus) + " address " + std::to_string(address) + ")";
-    if (r == LIBUSB_ERROR_ACCESS)
-      throw InputError(name_ + where + ": permission denied opening the device; install the udev rule from "
-                                       "docs/hardware.md (/etc/udev/rules.d/70-pvdfkit.rules) and replug it, or run as root");
-    if (r == LIBUSB_ERROR_NO_DEVICE)
-      throw InputError(name_ + where + ": the device disappeared while opening it; replug it and retry");
-    if (r == LIBUSB_ERROR_BUSY)
-      throw InputError(name_ + where + ": device busy; close the other program using it and retry");
-    throw InputError(name_ + where + ": cannot open the device (libusb: " + usb_error(r) + ")");
-  }
+  int bus = 0, address = 0, n_found = 0;
+  handle_ = open_device(context_, vendor_id, product_id, name_, bus, address, n_found);  // 1. find, 2. open
   libusb_set_auto_detach_kernel_driver(handle_, 1);  // not supported everywhere; harmless then
-  r = libusb_claim_interface(handle_, protocol::interface_number);
-  if (r != 0) {
-    if (r == LIBUSB_ERROR_BUSY)
-      throw InputError(name_ + ": device busy: interface 0 is claimed by another program (another 'pvdfkit acquire'?); "
-                               "close it and retry");
-    if (r == LIBUSB_ERROR_ACCESS)
-      throw InputError(name_ + ": permission denied claiming interface 0; install the udev rule from docs/hardware.md");
-    if (r == LIBUSB_ERROR_NO_DEVICE) throw InputError(name_ + ": the device disappeared while opening it; replug it and retry");
-    throw InputError(name_ + ": cannot claim interface 0 (libusb: " + usb_error(r) + ")");
-  }
+  claim_interface(handle_, name_);
   claimed_ = true;
   if (n_found > 1) std::fprintf(stderr, "warning: %d devices match %s; using bus %d address %d\n", n_found, name_.c_str(), bus, address);
 

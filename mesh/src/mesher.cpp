@@ -179,20 +179,9 @@ struct Model {
   double scale_m = 1;  ///< metres per model unit
 };
 
-/// Builds and meshes the scene in the current Gmsh session (lock held by the caller), and
-/// extracts the FilmMesh. Leaves the meshed model loaded for the caller (e.g. to write it).
-Model mesh_scene(const pvdf::Scene& scene, const MeshParameters& params,
-                 const std::vector<std::array<double, 2>>& extras, const std::array<double, 2>& sizes_m,
-                 double min_scaled_jacobian) {
-  Model model;
-  const double length_m = scene.membrane.outline.characteristic_radius_m();
-  model.scale_m = length_m;
-  const double s = 1.0 / length_m;
-  const double size_min = sizes_m[0] * s, size_max = sizes_m[1] * s;
-  const auto footprints = detail::probe_footprints(scene, extras, sizes_m[0]);
-
-  gmsh::clear();
-  gmsh::model::add("pvdf_film");
+/// Gmsh options of every attempt: quiet, one thread, all-quad by recombination, sizes from the
+/// field set by set_size_field (at most `size_max`, model units).
+void set_gmsh_options(const MeshParameters& params, double size_max) {
   gmsh::option::setNumber("General.Terminal", params.verbose ? 1 : 0);
   gmsh::option::setNumber("General.Verbosity", params.verbose ? 5 : 0);
   gmsh::option::setNumber("General.NumThreads", 1);
@@ -211,10 +200,24 @@ Model mesh_scene(const pvdf::Scene& scene, const MeshParameters& params,
   gmsh::option::setNumber("Mesh.MeshSizeMax", size_max);
   gmsh::option::setNumber("Mesh.ScalingFactor", 1);
   gmsh::option::setNumber("Mesh.SaveAll", 0);
+}
 
-  const std::size_t n_el = scene.electrodes.size();
+/// The model's faces and curves after the boolean fragment of the film with the electrodes and
+/// the embedded probe disks.
+struct Geometry {
   std::vector<int> rim_curves, inner_curves;
-  std::map<int, int> face_material;
+  std::map<int, int> face_material;  ///< face tag -> material id
+};
+
+/// Builds the film, electrodes and probe disks (model units: metres × s), fragments them and
+/// adds the physical groups (docs/mesh.md).
+Geometry build_geometry(const pvdf::Scene& scene, const std::vector<detail::Footprint>& footprints, double s,
+                        Model& model) {
+  Geometry geometry;
+  const std::size_t n_el = scene.electrodes.size();
+  std::vector<int>& rim_curves = geometry.rim_curves;
+  std::vector<int>& inner_curves = geometry.inner_curves;
+  std::map<int, int>& face_material = geometry.face_material;
   guarded("building the geometry", [&] {
     const int film = named(scene, "membrane (the film outline)", [&] { return add_film(scene.membrane.outline, s); });
     gmsh::vectorpair tools;
@@ -293,10 +296,14 @@ Model mesh_scene(const pvdf::Scene& scene, const MeshParameters& params,
       gmsh::model::setPhysicalName(1, tag, "probe_" + std::to_string(j));
     }
   });
+  return geometry;
+}
 
-  // Size field: fine (size_min) on electrode outlines and probe circles, growing linearly at
-  // rate (growth - 1) with distance up to size_max — each element about `growth` times its
-  // neighbour nearer the feature.
+// Size field: fine (size_min) on electrode outlines and probe circles, growing linearly at
+// rate (growth - 1) with distance up to size_max — each element about `growth` times its
+// neighbour nearer the feature.
+void set_size_field(const pvdf::Scene& scene, const std::vector<detail::Footprint>& footprints,
+                    const std::vector<int>& inner_curves, double s, double size_min, double size_max) {
   guarded("setting the mesh size field", [&] {
     if (inner_curves.empty()) {
       gmsh::option::setNumber("Mesh.MeshSizeMax", size_max);
@@ -320,66 +327,71 @@ Model mesh_scene(const pvdf::Scene& scene, const MeshParameters& params,
     gmsh::model::mesh::field::setNumber(threshold, "DistMax", (size_max - size_min) / (scene.mesh.growth - 1));
     gmsh::model::mesh::field::setAsBackgroundMesh(threshold);
   });
+}
 
-  // Extraction: vertices (metres), quads counter-clockwise, material ids, rim edges.
-  auto extract = [&]() {
-    FilmMesh mesh;
-    guarded("reading the mesh back", [&] {
-      std::vector<std::size_t> node_tags;
-      std::vector<double> coords, parametric;
-      gmsh::model::mesh::getNodes(node_tags, coords, parametric, -1, -1, false, false);
-      std::unordered_map<std::size_t, unsigned int> index;
-      index.reserve(node_tags.size());
-      std::vector<std::size_t> order(node_tags.size());
-      for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
-      std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return node_tags[a] < node_tags[b]; });
-      for (std::size_t i : order) {
-        index[node_tags[i]] = static_cast<unsigned int>(mesh.vertices.size());
-        mesh.vertices.push_back({coords[3 * i] * length_m, coords[3 * i + 1] * length_m});
-      }
-      std::size_t n_other = 0;
-      for (const auto& fm : face_material) {
-        std::vector<int> types;
-        std::vector<std::vector<std::size_t>> element_tags, element_nodes;
-        gmsh::model::mesh::getElements(types, element_tags, element_nodes, 2, fm.first);
-        for (std::size_t t = 0; t < types.size(); ++t) {
-          if (types[t] != 3) {  // 3 = 4-node quadrangle
-            n_other += element_tags[t].size();
-            continue;
-          }
-          const auto& nodes = element_nodes[t];
-          for (std::size_t q = 0; q + 3 < nodes.size(); q += 4) {
-            std::array<unsigned int, 4> quad{index.at(nodes[q]), index.at(nodes[q + 1]), index.at(nodes[q + 2]),
-                                             index.at(nodes[q + 3])};
-            make_counter_clockwise(quad, mesh.vertices);
-            mesh.quads.push_back(quad);
-            mesh.material_ids.push_back(static_cast<std::uint8_t>(fm.second));
-          }
+/// Extraction: vertices (metres), quads counter-clockwise, material ids, rim edges.
+FilmMesh extract_mesh(const Geometry& geometry, double length_m) {
+  const std::vector<int>& rim_curves = geometry.rim_curves;
+  const std::map<int, int>& face_material = geometry.face_material;
+  FilmMesh mesh;
+  guarded("reading the mesh back", [&] {
+    std::vector<std::size_t> node_tags;
+    std::vector<double> coords, parametric;
+    gmsh::model::mesh::getNodes(node_tags, coords, parametric, -1, -1, false, false);
+    std::unordered_map<std::size_t, unsigned int> index;
+    index.reserve(node_tags.size());
+    std::vector<std::size_t> order(node_tags.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return node_tags[a] < node_tags[b]; });
+    for (std::size_t i : order) {
+      index[node_tags[i]] = static_cast<unsigned int>(mesh.vertices.size());
+      mesh.vertices.push_back({coords[3 * i] * length_m, coords[3 * i + 1] * length_m});
+    }
+    std::size_t n_other = 0;
+    for (const auto& fm : face_material) {
+      std::vector<int> types;
+      std::vector<std::vector<std::size_t>> element_tags, element_nodes;
+      gmsh::model::mesh::getElements(types, element_tags, element_nodes, 2, fm.first);
+      for (std::size_t t = 0; t < types.size(); ++t) {
+        if (types[t] != 3) {  // 3 = 4-node quadrangle
+          n_other += element_tags[t].size();
+          continue;
+        }
+        const auto& nodes = element_nodes[t];
+        for (std::size_t q = 0; q + 3 < nodes.size(); q += 4) {
+          std::array<unsigned int, 4> quad{index.at(nodes[q]), index.at(nodes[q + 1]), index.at(nodes[q + 2]),
+                                           index.at(nodes[q + 3])};
+          make_counter_clockwise(quad, mesh.vertices);
+          mesh.quads.push_back(quad);
+          mesh.material_ids.push_back(static_cast<std::uint8_t>(fm.second));
         }
       }
-      if (n_other > 0) {
-        throw pvdf::NumericalError("Gmsh left " + std::to_string(n_other) +
-                                   " non-quadrilateral elements after recombination; the fem needs quads only");
-      }
-      for (int curve : rim_curves) {
-        std::vector<int> types;
-        std::vector<std::vector<std::size_t>> element_tags, element_nodes;
-        gmsh::model::mesh::getElements(types, element_tags, element_nodes, 1, curve);
-        for (std::size_t t = 0; t < types.size(); ++t) {
-          if (types[t] != 1) continue;  // 1 = 2-node line
-          const auto& nodes = element_nodes[t];
-          for (std::size_t q = 0; q + 1 < nodes.size(); q += 2) {
-            mesh.rim_edges.push_back({index.at(nodes[q]), index.at(nodes[q + 1])});
-          }
+    }
+    if (n_other > 0) {
+      throw pvdf::NumericalError("Gmsh left " + std::to_string(n_other) +
+                                 " non-quadrilateral elements after recombination; the fem needs quads only");
+    }
+    for (int curve : rim_curves) {
+      std::vector<int> types;
+      std::vector<std::vector<std::size_t>> element_tags, element_nodes;
+      gmsh::model::mesh::getElements(types, element_tags, element_nodes, 1, curve);
+      for (std::size_t t = 0; t < types.size(); ++t) {
+        if (types[t] != 1) continue;  // 1 = 2-node line
+        const auto& nodes = element_nodes[t];
+        for (std::size_t q = 0; q + 1 < nodes.size(); q += 2) {
+          mesh.rim_edges.push_back({index.at(nodes[q]), index.at(nodes[q + 1])});
         }
       }
-    });
-    return mesh;
-  };
+    }
+  });
+  return mesh;
+}
 
-  // Meshing: the first configuration that gives an all-quad mesh above the quality threshold
-  // wins; the others are fall-backs for geometries where it fails (a fixed order, so the
-  // result stays deterministic).
+// Meshing: the first configuration that gives an all-quad mesh above the quality threshold
+// wins; the others are fall-backs for geometries where it fails (a fixed order, so the
+// result stays deterministic).
+void mesh_with_fallbacks(const pvdf::Scene& scene, const Geometry& geometry, double length_m,
+                         double min_scaled_jacobian, Model& model) {
   struct Configuration {
     int algorithm, recombination;
     const char* name;
@@ -402,7 +414,7 @@ Model mesh_scene(const pvdf::Scene& scene, const MeshParameters& params,
         gmsh::model::mesh::clear();
         gmsh::model::mesh::generate(2);
       });
-      FilmMesh candidate = extract();
+      FilmMesh candidate = extract_mesh(geometry, length_m);
       MeshReport quality;
       measure_quality(candidate, quality);
       if (!have_best || quality.min_scaled_jacobian > model.min_scaled_jacobian) {
@@ -425,6 +437,26 @@ Model mesh_scene(const pvdf::Scene& scene, const MeshParameters& params,
   }
   model.failures = failures;
   if (!have_best) throw pvdf::NumericalError("Gmsh could not make an all-quad mesh of " + scene.source + " (" + failures + ")");
+}
+
+/// Builds and meshes the scene in the current Gmsh session (lock held by the caller), and
+/// extracts the FilmMesh. Leaves the meshed model loaded for the caller (e.g. to write it).
+Model mesh_scene(const pvdf::Scene& scene, const MeshParameters& params,
+                 const std::vector<std::array<double, 2>>& extras, const std::array<double, 2>& sizes_m,
+                 double min_scaled_jacobian) {
+  Model model;
+  const double length_m = scene.membrane.outline.characteristic_radius_m();
+  model.scale_m = length_m;
+  const double s = 1.0 / length_m;
+  const double size_min = sizes_m[0] * s, size_max = sizes_m[1] * s;
+  const auto footprints = detail::probe_footprints(scene, extras, sizes_m[0]);
+
+  gmsh::clear();
+  gmsh::model::add("pvdf_film");
+  set_gmsh_options(params, size_max);
+  const Geometry geometry = build_geometry(scene, footprints, s, model);
+  set_size_field(scene, footprints, geometry.inner_curves, s, size_min, size_max);
+  mesh_with_fallbacks(scene, geometry, length_m, min_scaled_jacobian, model);
   FilmMesh& mesh = model.mesh;
   for (const auto& e : scene.electrodes) mesh.electrode_names.push_back(e.name);
   const auto& o = scene.membrane.outline;
@@ -480,7 +512,7 @@ FilmMesh run(const pvdf::Scene& scene, const MeshParameters& params, MeshReport*
                                detail::fmt(scene.mesh.min_scaled_jacobian) +
                                " (best of " + std::to_string(model.n_attempts) + " Gmsh configurations: " +
                                model.failures + "); the mesh is refused. Move outlines that nearly touch apart, "
-                               "or change mesh.size_min_m / mesh.growth (pvdfkit mesh --size-factor)");
+                               "or change mesh.size_min_m / mesh.growth (or the mesh size factor)");
   }
   if (after) after(model);
   r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -534,24 +566,47 @@ FilmMesh write_msh(const pvdf::Scene& scene, const std::string& path, MeshReport
   return write_msh(scene, path, MeshParameters{}, report);
 }
 
-FilmMesh read_msh(const std::string& path) {
-  {
-    // Gmsh picks its reader by extension and would run any other text as a .geo script (which can
-    // call the shell): only files named .msh that start like one are handed to it.
-    const std::string shown = pvdf::escape_control_bytes(path);
-    const auto dot = path.find_last_of("./");
-    std::string extension = dot == std::string::npos || path[dot] != '.' ? "" : path.substr(dot);
-    for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    if (extension != ".msh") throw pvdf::InputError(shown + ": a mesh file must be a Gmsh .msh file (name ending in .msh)");
-    std::ifstream probe(path, std::ios::binary);
-    std::string first;
-    if (!probe || !std::getline(probe, first)) throw pvdf::InputError(shown + ": cannot read the mesh file; check the path");
-    if (!first.empty() && first.back() == '\r') first.pop_back();
-    if (first != "$MeshFormat") {
-      throw pvdf::InputError(shown + ": is not a Gmsh mesh file (its first line is not $MeshFormat); write it with "
-                             "pvdfkit mesh or Gmsh");
+namespace {
+
+/// Refuses anything but a readable file named .msh whose first line is $MeshFormat.
+void check_msh_file(const std::string& path) {
+  // Gmsh picks its reader by extension and would run any other text as a .geo script (which can
+  // call the shell): only files named .msh that start like one are handed to it.
+  const std::string shown = pvdf::escape_control_bytes(path);
+  const auto dot = path.find_last_of("./");
+  std::string extension = dot == std::string::npos || path[dot] != '.' ? "" : path.substr(dot);
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (extension != ".msh") throw pvdf::InputError(shown + ": a mesh file must be a Gmsh .msh file (name ending in .msh)");
+  std::ifstream probe(path, std::ios::binary);
+  std::string first;
+  if (!probe || !std::getline(probe, first)) throw pvdf::InputError(shown + ": cannot read the mesh file; check the path");
+  if (!first.empty() && first.back() == '\r') first.pop_back();
+  if (first != "$MeshFormat") {
+    throw pvdf::InputError(shown + ": is not a Gmsh mesh file (its first line is not $MeshFormat); write it with "
+                           "pvdfkit mesh or Gmsh");
+  }
+}
+
+/// A rim whose vertices all lie at one distance from the origin is a circle of that radius.
+void detect_circular_rim(FilmMesh& mesh) {
+  double r_min = 1e300, r_max = 0;
+  for (const auto& e : mesh.rim_edges) {
+    for (unsigned int v : e) {
+      const double r = std::hypot(mesh.vertices[v][0], mesh.vertices[v][1]);
+      r_min = std::min(r_min, r);
+      r_max = std::max(r_max, r);
     }
   }
+  if (!mesh.rim_edges.empty() && r_max > 0 && (r_max - r_min) < 1e-9 * r_max) {
+    mesh.rim_shape = FilmMesh::RimShape::circle;
+    mesh.rim_radius_m = 0.5 * (r_min + r_max);
+  }
+}
+
+}  // namespace
+
+FilmMesh read_msh(const std::string& path) {
+  check_msh_file(path);
   GmshSession& session = GmshSession::instance();
   std::lock_guard<std::mutex> lock(session.mutex());
   FilmMesh mesh;
@@ -650,18 +705,7 @@ FilmMesh read_msh(const std::string& path) {
       if (a == index.end() || b == index.end()) throw pvdf::InputError(path + ": a rim edge is not on a quadrilateral");
       mesh.rim_edges.push_back({a->second, b->second});
     }
-    double r_min = 1e300, r_max = 0;
-    for (const auto& e : mesh.rim_edges) {
-      for (unsigned int v : e) {
-        const double r = std::hypot(mesh.vertices[v][0], mesh.vertices[v][1]);
-        r_min = std::min(r_min, r);
-        r_max = std::max(r_max, r);
-      }
-    }
-    if (!mesh.rim_edges.empty() && r_max > 0 && (r_max - r_min) < 1e-9 * r_max) {
-      mesh.rim_shape = FilmMesh::RimShape::circle;
-      mesh.rim_radius_m = 0.5 * (r_min + r_max);
-    }
+    detect_circular_rim(mesh);
   });
   gmsh::clear();
   return mesh;

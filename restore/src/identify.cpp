@@ -118,13 +118,18 @@ std::string to_string(BetaPolicy policy) {
   return "constant";
 }
 
-TransferMatrix identify_transfer(const std::vector<IdentificationScan>& scans, const DesignOptions& o) {
+namespace {
+
+/// The checks of the scans and of the tap count, the sample spacing and the force matrix's
+/// conditioning (into `t`); returns the pseudo-inverse F^+ (S x 2) of the 2 x S force matrix F.
+Eigen::MatrixXd force_pseudo_inverse(const std::vector<IdentificationScan>& scans, const DesignOptions& o,
+                                     TransferMatrix& t) {
   if (scans.size() < 2) {
     throw InputError("identification needs at least 2 scans with independent force vectors (seed 000 eq. 6); got " +
-                     std::to_string(scans.size()) + "; pass --scan A.csv --force FX,FZ twice or more");
+                     std::to_string(scans.size()) + "; give two scans or more, each with its force vector");
   }
   if (o.taps < 64 || o.taps > (1u << 22) || o.taps % 2 != 0) {
-    throw InputError("--taps = " + std::to_string(o.taps) + " must be even and in [64, 4194304]");
+    throw InputError("identification: " + std::to_string(o.taps) + " taps must be even and in [64, 4194304] (DesignOptions::taps)");
   }
   const double dx = scans[0].scan.sample_spacing_m();
   for (const auto& s : scans) {
@@ -147,7 +152,6 @@ TransferMatrix identify_transfer(const std::vector<IdentificationScan>& scans, c
   }
   Eigen::JacobiSVD<Eigen::MatrixXd> svd(F);
   const auto sv = svd.singularValues();
-  TransferMatrix t;
   t.sample_spacing_m = dx;
   t.force_condition_number = sv(1) > 0 ? sv(0) / sv(1) : std::numeric_limits<double>::infinity();
   if (!(t.force_condition_number <= o.max_force_condition)) {
@@ -159,11 +163,47 @@ TransferMatrix identify_transfer(const std::vector<IdentificationScan>& scans, c
            "[0.6, 0.9] and [0.2, 1.0] (cond 5.1)";
     throw InputError(msg.str());
   }
-  const Eigen::MatrixXd Fpinv = F.transpose() * (F * F.transpose()).inverse();  // S x 2
+  return F.transpose() * (F * F.transpose()).inverse();
+}
+
+/// Energy of a scan's two channels near the edge at sample `ne` (|lag| < N/8) and far from it
+/// (|lag| >= N/4, the noise; also per channel).
+struct EdgeEnergy {
+  double sig = 0, noise = 0;
+  std::size_t n_sig = 0, n_noise = 0;
+  double ch_noise[2] = {0, 0};
+};
+
+EdgeEnergy edge_energy(const Scan& scan, long ne, long N) {
+  EdgeEnergy r;
+  const long n = static_cast<long>(scan.size());
+  for (long k = 0; k < n; ++k) {
+    const long lag = k - ne;
+    const double e = scan.m1_V[k] * scan.m1_V[k] + scan.m2_V[k] * scan.m2_V[k];
+    if (std::labs(lag) < N / 8) {
+      r.sig += e;
+      ++r.n_sig;
+    } else if (std::labs(lag) >= N / 4) {
+      r.noise += e;
+      r.ch_noise[0] += scan.m1_V[k] * scan.m1_V[k];
+      r.ch_noise[1] += scan.m2_V[k] * scan.m2_V[k];
+      ++r.n_noise;
+    }
+  }
+  return r;
+}
+
+}  // namespace
+
+TransferMatrix identify_transfer(const std::vector<IdentificationScan>& scans, const DesignOptions& o) {
+  TransferMatrix t;
+  const Eigen::MatrixXd Fpinv = force_pseudo_inverse(scans, o, t);  // S x 2
+  const double dx = t.sample_spacing_m;
+  const Eigen::Index S = static_cast<Eigen::Index>(scans.size());
 
   const std::size_t n_window = o.g_window > 0 ? o.g_window : o.taps;
   if (n_window < 64 || n_window % 2 != 0) {
-    throw InputError("--g-window = " + std::to_string(n_window) + " must be even and >= 64");
+    throw InputError("identification: a window of " + std::to_string(n_window) + " lags of G must be even and >= 64 (DesignOptions::g_window)");
   }
   const long N = static_cast<long>(n_window);
   t.lag_min = -N / 2;
@@ -179,28 +219,12 @@ TransferMatrix identify_transfer(const std::vector<IdentificationScan>& scans, c
     const double pos = (scans[s].edge_x_m - scan.x_m.front()) / dx;
     if (pos < -0.5 || pos > static_cast<double>(n) - 0.5) {
       throw InputError(scan.source + ": edge position " + num(scans[s].edge_x_m) + " m lies outside the scan [" +
-                       num(scan.x_m.front()) + ", " + num(scan.x_m.back()) + "] m; pass its position with --edge-x-m");
+                       num(scan.x_m.front()) + ", " + num(scan.x_m.back()) + "] m; give the edge position on the scan's x_m axis");
     }
     const long ne = std::lround(pos);
-    // Signal near the edge (|lag| < N/8) against the noise far from it (|lag| >= N/4).
-    double sig = 0, noise = 0;
-    std::size_t n_sig = 0, n_noise = 0;
-    double ch_noise[2] = {0, 0};
-    for (long k = 0; k < n; ++k) {
-      const long lag = k - ne;
-      const double e = scan.m1_V[k] * scan.m1_V[k] + scan.m2_V[k] * scan.m2_V[k];
-      if (std::labs(lag) < N / 8) {
-        sig += e;
-        ++n_sig;
-      } else if (std::labs(lag) >= N / 4) {
-        noise += e;
-        ch_noise[0] += scan.m1_V[k] * scan.m1_V[k];
-        ch_noise[1] += scan.m2_V[k] * scan.m2_V[k];
-        ++n_noise;
-      }
-    }
-    const double sig_rms = n_sig ? std::sqrt(sig / n_sig) : 0.0;
-    const double noise_rms = n_noise ? std::sqrt(noise / n_noise) : 0.0;
+    const EdgeEnergy en = edge_energy(scan, ne, N);
+    const double sig_rms = en.n_sig ? std::sqrt(en.sig / en.n_sig) : 0.0;
+    const double noise_rms = en.n_noise ? std::sqrt(en.noise / en.n_noise) : 0.0;
     const double snr = noise_rms > 0 ? sig_rms / noise_rms : (sig_rms > 0 ? 1e300 : 0.0);
     t.scan_snr.push_back(std::min(snr, 1e300));
     if (!(sig_rms > 0) || snr < o.min_snr) {
@@ -210,9 +234,9 @@ TransferMatrix identify_transfer(const std::vector<IdentificationScan>& scans, c
     }
     // Low-frequency noise power (the band of G lies below the moving average's first null), per channel.
     for (int c = 0; c < 2; ++c) far_field_block_power(c == 0 ? scan.m1_V : scan.m2_V, ne, N, psd_sum[c], psd_count[c]);
-    noise_sum[0] += ch_noise[0];
-    noise_sum[1] += ch_noise[1];
-    noise_count += n_noise;
+    noise_sum[0] += en.ch_noise[0];
+    noise_sum[1] += en.ch_noise[1];
+    noise_count += en.n_noise;
     if (ne + t.lag_min < 0 || ne + t.lag_min + N > n) {
       t.warnings.push_back(scan.source + ": the scan does not cover the whole identification window of " +
                            std::to_string(N) + " samples around the edge; missing lags are taken as 0");
@@ -274,16 +298,16 @@ void check_design_options(const DesignOptions& o, std::size_t n_g) {
   const std::size_t N = o.taps;
   if (N < 64 || n_g < 64) throw InputError("design: need >= 64 taps and >= 64 lags of G");
   if (o.delay_samples >= static_cast<long>(N)) {
-    throw InputError("--delay-samples = " + std::to_string(o.delay_samples) + " must be < --taps = " + std::to_string(N));
+    throw InputError("design: delay of " + std::to_string(o.delay_samples) + " samples must be < the " + std::to_string(N) + " taps (DesignOptions::delay_samples)");
   }
   if (o.beta_policy == BetaPolicy::frequency && !(o.corner_wavelength_m > 0)) {
-    throw InputError("--beta-policy frequency needs --beta-corner-m > 0 (the wavelength where beta has doubled)");
+    throw InputError("design: the frequency beta policy needs a corner wavelength > 0 (DesignOptions::corner_wavelength_m, the wavelength where beta has doubled)");
   }
   if ((o.beta_policy == BetaPolicy::constant || o.beta_policy == BetaPolicy::frequency) && !(o.beta > 0 && o.beta < 1e6)) {
-    throw InputError("--beta = " + num(o.beta) + " must be in (0, 1e6)");
+    throw InputError("design: beta " + num(o.beta) + " must be in (0, 1e6) (DesignOptions::beta)");
   }
   if (o.window != "tukey" && o.window != "hann" && o.window != "none") {
-    throw InputError("--window = " + o.window + " must be tukey, hann or none");
+    throw InputError("design: window '" + o.window + "' must be tukey, hann or none (DesignOptions::window)");
   }
   if (!(o.predicted_beta_scale > 0 && o.predicted_beta_scale <= 1) || !(o.gcv_beta_min > 0 && o.gcv_beta_min < o.gcv_beta_max) ||
       o.gcv_points < 3 || o.gcv_points > 10000) {
@@ -291,8 +315,8 @@ void check_design_options(const DesignOptions& o, std::size_t n_g) {
                      num(o.gcv_beta_min) + ", " + num(o.gcv_beta_max) + ") increasing and positive, its points in [3, 10000]");
   }
   if (!(o.resolution_m <= 1.0) || !(o.low_cut_wavelength_m <= 100.0) || !(o.corner_wavelength_m >= 0 && o.corner_wavelength_m <= 1.0)) {
-    throw InputError("--resolution-m = " + num(o.resolution_m) + ", --low-cut-m = " + num(o.low_cut_wavelength_m) +
-                     ", --beta-corner-m = " + num(o.corner_wavelength_m) + ": lengths must be <= 1, 100 and 1 m");
+    throw InputError("design: resolution " + num(o.resolution_m) + " m, low cut " + num(o.low_cut_wavelength_m) +
+                     " m, corner wavelength " + num(o.corner_wavelength_m) + " m: lengths must be <= 1, 100 and 1 m");
   }
 }
 

@@ -91,20 +91,23 @@ std::string design_status_name(DesignStatus status) {
 // ---------------------------------------------------------------------------------------------
 // Layout evaluation
 
-DesignSummary evaluate_design(const ChargeMap& map, const DesignOptions& o) {
-  const std::size_t ne = map.ne(), nx = map.nx(), ny = map.ny();
+namespace {
+
+/// The layout options' checks; returns the per-electrode charge noise (C) to use.
+std::vector<double> checked_noise(const ChargeMap& map, const DesignOptions& o) {
+  const std::size_t ne = map.ne();
   if (ne < 3) {
     throw InputError("design: the layout has " + std::to_string(ne) +
                      " electrodes; locating a press with unknown force needs at least 3");
   }
-  if (!(o.force_N > 0) || !std::isfinite(o.force_N)) throw InputError("design: --force-N " + num(o.force_N) + " must be > 0 (N)");
+  if (!(o.force_N > 0) || !std::isfinite(o.force_N)) throw InputError("design: force " + num(o.force_N) + " N must be > 0 (DesignOptions::force_N)");
   if (!(o.min_force_N > 0) || !(o.max_force_N > o.min_force_N) || !std::isfinite(o.max_force_N)) {
     throw InputError("design: force range " + num(o.min_force_N) + ".." + num(o.max_force_N) +
-                     " N must satisfy 0 < MIN < MAX; fix --force-range-N");
+                     " N must satisfy 0 < MIN < MAX (DesignOptions::min_force_N, max_force_N)");
   }
-  if (!(o.target_m > 0)) throw InputError("design: --target-mm must be > 0");
+  if (!(o.target_m > 0)) throw InputError("design: coverage target " + num(o.target_m) + " m must be > 0 (DesignOptions::target_m)");
   if (o.adc_bits != 0 && (o.adc_bits < 2 || o.adc_bits > 32)) {
-    throw InputError("design: --adc-bits " + std::to_string(o.adc_bits) + " must be 0 (ideal) or 2..32");
+    throw InputError("design: ADC resolution " + std::to_string(o.adc_bits) + " bits must be 0 (ideal) or 2..32 (DesignOptions::adc_bits)");
   }
   if (!(o.full_scale_C >= 0) || !(o.full_scale_margin >= 1)) {
     throw InputError("design: full scale must be >= 0 C and its margin >= 1");
@@ -113,14 +116,45 @@ DesignSummary evaluate_design(const ChargeMap& map, const DesignOptions& o) {
   if (noise.size() == 1) noise.assign(ne, noise[0]);
   if (noise.size() != ne) {
     throw InputError("design: " + std::to_string(noise.size()) + " noise values for " + std::to_string(ne) +
-                     " electrodes; give one value or one per electrode (--noise-C)");
+                     " electrodes; give one value or one per electrode (DesignOptions::noise_C)");
   }
   for (double s : noise) {
-    if (!(s > 0) || !std::isfinite(s)) throw InputError("design: charge noise " + num(s) + " C must be > 0 (--noise-C)");
+    if (!(s > 0) || !std::isfinite(s)) throw InputError("design: charge noise " + num(s) + " C must be > 0 (DesignOptions::noise_C)");
   }
+  return noise;
+}
 
-  const MapInterpolant interp(map);
+/// What the steps of evaluate_design share: the map, its interpolant, the summary being
+/// filled, and the per-node values (index p of DesignMaps, p * ne + k per electrode).
+struct DesignEvaluation {
+  DesignEvaluation(const ChargeMap& map_in, const DesignOptions& options, std::vector<double> noise_C)
+      : map(map_in), o(options), ne(map_in.ne()), nx(map_in.nx()), ny(map_in.ny()), np(nx * ny),
+        noise(std::move(noise_C)), interp(map_in) {}
+  void allocate();
+  void sample_nodes();
+  void front_end();
+  void bounds();
+  void ambiguity();
+  void area_figures();
+  void electrode_reports();
+
+  const ChargeMap& map;
+  const DesignOptions& o;
+  const std::size_t ne, nx, ny, np;
+  const std::vector<double> noise;  // per electrode, before quantization (C)
+  const MapInterpolant interp;
   DesignSummary out;
+  double log_f = 0;                          // ln of the design force
+  std::vector<std::array<double, 2>> where;  // [np] evaluation point of the node (m)
+  std::vector<double> q_hi, q_lo;            // [np][ne] charges at the ends of the force range (C)
+  std::vector<std::array<double, 3>> jac;    // [np][ne] dQ/d(x, y, ln F) at the design force
+  std::vector<double> sigma;                 // [ne] channel noise with quantization (C)
+  std::vector<std::size_t> below_k;          // [ne] evaluated points below one LSB at the range's bottom
+  std::size_t n_singular = 0, n_dead = 0, n_saturated = 0, n_below = 0;
+  std::size_t n_ambiguous = 0, n_silent = 0, n_failed = 0;
+};
+
+void DesignEvaluation::allocate() {
   out.model = map.model;
   out.tolerance = map.tolerance;
   out.spacing_m = nx > 1 ? (map.x_m.back() - map.x_m.front()) / double(nx - 1) : 0.0;
@@ -135,7 +169,6 @@ DesignSummary evaluate_design(const ChargeMap& map, const DesignOptions& o) {
   DesignMaps& m = out.maps;
   m.x_m = map.x_m;
   m.y_m = map.y_m;
-  const std::size_t np = nx * ny;
   m.evaluated.assign(np, 0);
   for (auto* v : {&m.sigma_pos_m, &m.sigma_pos_unknown_force_m, &m.sigma_pos_known_force_m, &m.sigma_major_m,
                   &m.sigma_force_rel, &m.ambiguity_distance_m}) {
@@ -146,14 +179,19 @@ DesignSummary evaluate_design(const ChargeMap& map, const DesignOptions& o) {
   m.singular.assign(np, 0);
   m.lookup_failed.assign(np, 0);
   m.charge_C.assign(np * ne, nan);
+}
 
+void DesignEvaluation::sample_nodes() {
+  DesignMaps& m = out.maps;
   // Step 1: the evaluation points are the mapped nodes. A node on the edge of the usable region
   // is evaluated from any adjacent usable cell (the interpolant is C¹, so the side does not matter).
-  const double log_f = std::log(o.force_N), log_lo = std::log(o.min_force_N), log_hi = std::log(o.max_force_N);
+  log_f = std::log(o.force_N);
+  const double log_lo = std::log(o.min_force_N), log_hi = std::log(o.max_force_N);
   const double nudge = 1e-9 * out.spacing_m;
-  std::vector<std::array<double, 2>> where(np);
-  std::vector<double> q_hi(np * ne, nan), q_lo(np * ne, nan);
-  std::vector<std::array<double, 3>> jac(np * ne);
+  where.assign(np, {});
+  q_hi.assign(np * ne, nan);
+  q_lo.assign(np * ne, nan);
+  jac.assign(np * ne, {});
   std::vector<double> q(ne);
   std::vector<std::array<double, 3>> dq(ne);
   for (std::size_t j = 0; j < ny; ++j) {
@@ -183,9 +221,12 @@ DesignSummary evaluate_design(const ChargeMap& map, const DesignOptions& o) {
     }
   }
   if (out.n_evaluated == 0) {
-    throw InputError("design: the map has no usable interpolation cell (all mapped nodes isolated); use a finer --spacing-m");
+    throw InputError("design: the map has no usable interpolation cell (all mapped nodes isolated); use a finer map spacing");
   }
+}
 
+void DesignEvaluation::front_end() {
+  const DesignMaps& m = out.maps;
   // Step 2: the front end. One full scale for all channels (the same amplifier on each), bipolar
   // ADC: LSB = FS / 2^(bits−1); quantization adds LSB²/12 to each channel's noise variance.
   double q_max = 0;
@@ -195,16 +236,18 @@ DesignSummary evaluate_design(const ChargeMap& map, const DesignOptions& o) {
   }
   out.full_scale_C = o.full_scale_C > 0 ? o.full_scale_C : o.full_scale_margin * q_max;
   out.lsb_C = o.adc_bits > 0 ? out.full_scale_C / std::ldexp(1.0, o.adc_bits - 1) : 0.0;
-  std::vector<double> sigma(ne);
+  sigma.assign(ne, 0.0);
   for (std::size_t k = 0; k < ne; ++k) sigma[k] = std::sqrt(noise[k] * noise[k] + out.lsb_C * out.lsb_C / 12.0);
   out.lsb_over_noise = out.lsb_C / *std::min_element(noise.begin(), noise.end());
+}
 
+void DesignEvaluation::bounds() {
+  DesignMaps& m = out.maps;
   // Step 3: bounds and dead zones at every evaluated point. With include_map_error, a map with
   // per-node error estimates (format 2) adds each node's estimated charge error, as a further
   // independent 1-σ term, to the channel noise there (at the force level nearest to the design
   // force, scaled to it by F^(2/3)): the bound of a lookup that uses this very map.
-  std::size_t n_singular = 0, n_dead = 0, n_saturated = 0, n_below = 0;
-  std::vector<std::size_t> below_k(ne, 0);
+  below_k.assign(ne, 0);
   std::vector<std::array<double, 3>> jp(ne);
   std::size_t f_near = 0;
   for (std::size_t f = 0; f < map.nf(); ++f) {
@@ -246,14 +289,16 @@ DesignSummary evaluate_design(const ChargeMap& map, const DesignOptions& o) {
     n_saturated += saturated;
     n_below += below;
   }
+}
 
+void DesignEvaluation::ambiguity() {
+  DesignMaps& m = out.maps;
   // Step 4: ambiguity, judged by the deployed lookup itself: noise-free charges of the press are
   // located with the same noise model and force range. Every accepted solution (the reported
   // one and the alternatives) farther than max(min distance, 3σ_pos) from the press is a
   // distinct press giving the same charges within noise. The Locator merges solutions closer
   // than one grid cell, so a fold next to an electrode can make it report only the wrong one:
   // that counts as ambiguous too, and as "silent" when the Locator raised no flag.
-  std::size_t n_ambiguous = 0, n_silent = 0, n_failed = 0;
   if (o.check_ambiguity) {
     LocatorOptions lo;
     lo.noise_C = sigma;
@@ -297,9 +342,12 @@ DesignSummary evaluate_design(const ChargeMap& map, const DesignOptions& o) {
       }
     }
   }
+}
 
+void DesignEvaluation::area_figures() {
+  DesignMaps& m = out.maps;
   // Step 5: area figures over the mapped nodes (a mapped node that cannot be evaluated counts
-  // as unbounded), and the per-electrode figures.
+  // as unbounded); the per-electrode figures follow (electrode_reports).
   std::vector<double> pos, pos_known, force;
   std::size_t n_cover = 0, n_usable = 0;
   for (std::size_t p = 0; p < np; ++p) {
@@ -344,7 +392,13 @@ DesignSummary evaluate_design(const ChargeMap& map, const DesignOptions& o) {
                         ") is singular at every evaluated point: the electrodes' charges do not determine the press "
                         "(coincident or redundant electrodes?)";
   }
+}
 
+void DesignEvaluation::electrode_reports() {
+  const DesignMaps& m = out.maps;
+  const double n_eval = double(out.n_evaluated);
+  std::vector<double> q(ne);
+  std::vector<std::array<double, 3>> dq(ne);
   for (std::size_t k = 0; k < ne; ++k) {
     ElectrodeReport e;
     e.name = map.electrode_names[k];
@@ -366,7 +420,20 @@ DesignSummary evaluate_design(const ChargeMap& map, const DesignOptions& o) {
     e.below_lsb_fraction = double(below_k[k]) / n_eval;
     out.electrodes.push_back(e);
   }
-  return out;
+}
+
+}  // namespace
+
+DesignSummary evaluate_design(const ChargeMap& map, const DesignOptions& o) {
+  DesignEvaluation e(map, o, checked_noise(map, o));
+  e.allocate();
+  e.sample_nodes();
+  e.front_end();
+  e.bounds();
+  e.ambiguity();
+  e.area_figures();
+  e.electrode_reports();
+  return std::move(e.out);
 }
 
 nlohmann::json design_summary_json(const DesignSummary& s) {
@@ -477,12 +544,12 @@ ChargeMap synthetic_map_for_scene(const pvdf::Scene& scene, double spacing_m, do
 SceneSweep parse_scene_sweep(const std::string& text) {
   const std::size_t eq = text.find('=');
   if (eq == std::string::npos || eq == 0 || eq + 1 == text.size()) {
-    throw InputError("--vary " + text + ": expected KEY=START:STEP:STOP, e.g. material.draw_angle_deg=0:15:90");
+    throw InputError("scene sweep '" + text + "': expected KEY=START:STEP:STOP, e.g. material.draw_angle_deg=0:15:90");
   }
   SceneSweep s;
   s.key = text.substr(0, eq);
-  s.values = pvdf::parse_range(text.substr(eq + 1), "--vary " + s.key, 1000);
-  if (s.values.empty()) throw InputError("--vary " + text + ": the range holds no value");
+  s.values = pvdf::parse_range(text.substr(eq + 1), "scene sweep of " + s.key, 1000);
+  if (s.values.empty()) throw InputError("scene sweep '" + text + "': the range holds no value");
   return s;
 }
 
@@ -512,14 +579,14 @@ void set_path(nlohmann::json& node, const std::vector<std::string>& segments, st
     } else if (node.is_array() && !node.empty() && std::all_of(node.begin(), node.end(), [](const nlohmann::json& v) { return v.is_number(); })) {
       for (auto& v : node) v = value;
     } else {
-      throw InputError(source + ": --vary " + key + ": the key holds " + std::string(node.type_name()) +
+      throw InputError(source + ": scene key " + key + ": the key holds " + std::string(node.type_name()) +
                        ", not a number; name a numeric key (docs/design.md §5)");
     }
     return;
   }
   const std::string& seg = segments[at];
   if (seg.front() == '[') {
-    if (!node.is_array()) throw InputError(source + ": --vary " + key + ": " + seg + " indexes a non-array");
+    if (!node.is_array()) throw InputError(source + ": scene key " + key + ": " + seg + " indexes a non-array");
     if (seg == "[*]") {
       for (auto& v : node) set_path(v, segments, at + 1, value, key, source);
       return;
@@ -528,10 +595,10 @@ void set_path(nlohmann::json& node, const std::vector<std::string>& segments, st
     try {
       idx = std::stoul(seg.substr(1, seg.size() - 2));
     } catch (const std::exception&) {
-      throw InputError(source + ": --vary " + key + ": bad index " + seg + "; use [0], [1], ... or [*]");
+      throw InputError(source + ": scene key " + key + ": bad index " + seg + "; use [0], [1], ... or [*]");
     }
     if (idx >= node.size()) {
-      throw InputError(source + ": --vary " + key + ": index " + seg + " out of range (the array has " +
+      throw InputError(source + ": scene key " + key + ": index " + seg + " out of range (the array has " +
                        std::to_string(node.size()) + " elements)");
     }
     set_path(node[idx], segments, at + 1, value, key, source);
@@ -542,7 +609,7 @@ void set_path(nlohmann::json& node, const std::vector<std::string>& segments, st
     if (node.is_object()) {
       for (auto it = node.begin(); it != node.end(); ++it) known += (known.empty() ? "" : ", ") + it.key();
     }
-    throw InputError(source + ": --vary " + key + ": no key '" + seg + "' here" +
+    throw InputError(source + ": scene key " + key + ": no key '" + seg + "' here" +
                      (known.empty() ? "" : " (keys: " + known + ")") + "; see docs/design.md §5");
   }
   set_path(node[seg], segments, at + 1, value, key, source);
@@ -559,7 +626,7 @@ std::vector<std::string> split_path(const std::string& key) {
     } else if (c == '[') {
       if (!cur.empty()) out.push_back(cur);
       const std::size_t close = key.find(']', i);
-      if (close == std::string::npos) throw InputError("--vary " + key + ": unclosed '['");
+      if (close == std::string::npos) throw InputError("scene key " + key + ": unclosed '['");
       out.push_back(key.substr(i, close - i + 1));
       cur.clear();
       i = close;
@@ -568,7 +635,7 @@ std::vector<std::string> split_path(const std::string& key) {
     }
   }
   if (!cur.empty()) out.push_back(cur);
-  if (out.empty()) throw InputError("--vary: empty key");
+  if (out.empty()) throw InputError("scene key: empty");
   return out;
 }
 
@@ -657,13 +724,13 @@ nlohmann::json rotate_scene(const nlohmann::json& scene, double angle_rad, const
 
 nlohmann::json set_scene_key(const nlohmann::json& scene, const std::string& key, double value,
                              const std::string& source) {
-  if (!std::isfinite(value)) throw InputError(source + ": --vary " + key + " = " + num(value) + " must be finite");
+  if (!std::isfinite(value)) throw InputError(source + ": scene key " + key + " = " + num(value) + " must be finite");
   const std::string what = source + " with " + key + " = " + num(value);
   if (key == "@rotation_deg") return rotate_scene(scene, value * pi / 180.0, source);
   nlohmann::json n = normalized(scene, source);
   if (key == "@layout_scale" || key == "@layout_radius_m") {
     const Scene s = parse_scene(n, source);
-    if (s.electrodes.empty()) throw InputError(source + ": --vary " + key + ": the scene has no electrodes");
+    if (s.electrodes.empty()) throw InputError(source + ": scene key " + key + ": the scene has no electrodes");
     double factor = value;
     if (key == "@layout_radius_m") {
       double cx = 0, cy = 0, mean = 0;
@@ -673,7 +740,7 @@ nlohmann::json set_scene_key(const nlohmann::json& scene, const std::string& key
       }
       for (const auto& e : s.electrodes) mean += std::hypot(e.centroid_m()[0] - cx, e.centroid_m()[1] - cy);
       mean /= double(s.electrodes.size());
-      if (!(mean > 0)) throw InputError(source + ": --vary @layout_radius_m: all electrodes share one centre");
+      if (!(mean > 0)) throw InputError(source + ": scene key @layout_radius_m: all electrodes share one centre");
       factor = value / mean;
     }
     if (!(factor > 0)) throw InputError(what + ": the scale factor must be > 0");
@@ -697,7 +764,7 @@ nlohmann::json set_scene_key(const nlohmann::json& scene, const std::string& key
       }
     }
   } else if (!key.empty() && key.front() == '@') {
-    throw InputError(source + ": --vary " + key +
+    throw InputError(source + ": scene key " + key +
                      ": unknown derived key; known: @layout_scale, @layout_radius_m, @rotation_deg, @electrode_size_m");
   } else {
     set_path(n, split_path(key), 0, value, key, source);

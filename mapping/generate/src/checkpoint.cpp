@@ -1,0 +1,205 @@
+// Map generation, checkpoints: the hash that ties a checkpoint to the scene and options, the
+// checkpoint files (a text header, then records of float64), the records that go in and out of
+// the map, and the resume from the files of an interrupted run.
+#include "generator.hpp"
+
+#include "pvdf/core/error.hpp"
+#include "pvdf/core/io.hpp"
+#include "pvdf/mesh/film_mesh.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+namespace pvdf::mapping::detail {
+
+std::uint64_t fnv1a(const std::string& text) {
+  std::uint64_t h = 1469598103934665603ull;
+  for (unsigned char c : text) {
+    h ^= c;
+    h *= 1099511628211ull;
+  }
+  return h;
+}
+
+std::string hex(std::uint64_t v) {
+  char buf[20];
+  std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(v));
+  return buf;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Checkpoint files: a text header, then `records` × `record_doubles` float64 (native order).
+
+constexpr const char* checkpoint_magic = "pvdfkit-map-checkpoint 2";
+
+void write_checkpoint(const std::string& path, const std::string& hash, const Layout& layout,
+                      const std::vector<double>& records) {
+  write_file_atomically(path, [&](std::ostream& out) {
+    out << checkpoint_magic << "\nhash " << hash << "\nrecord_doubles " << layout.size() << "\nrecords "
+        << records.size() / layout.size() << "\n";
+    out.write(reinterpret_cast<const char*>(records.data()), std::streamsize(records.size() * sizeof(double)));
+  });
+}
+
+std::vector<double> read_checkpoint(const std::string& path, const std::string& hash, const Layout& layout) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path + ": cannot open the checkpoint; check permissions or delete it");
+  std::string magic, key, file_hash;
+  std::size_t record_doubles = 0, n_records = 0;
+  std::getline(in, magic);
+  if (magic != checkpoint_magic) {
+    throw InputError(path + ": not a pvdfkit map checkpoint (first line '" + magic.substr(0, 40) +
+                     "'); delete it or choose another checkpoint file");
+  }
+  in >> key >> file_hash;
+  if (key != "hash") throw InputError(path + ": damaged checkpoint header; delete it");
+  if (file_hash != hash) {
+    throw InputError(path + ": checkpoint hash " + file_hash + " was written for a different scene or map options (this run: " +
+                     hash + "); delete it, start afresh without resuming, or choose another checkpoint file");
+  }
+  in >> key >> record_doubles;
+  if (key != "record_doubles" || record_doubles != layout.size()) {
+    throw InputError(path + ": checkpoint record size " + std::to_string(record_doubles) + " does not match " +
+                     std::to_string(layout.size()) + "; delete it");
+  }
+  in >> key >> n_records;
+  if (key != "records") throw InputError(path + ": damaged checkpoint header; delete it");
+  in.get();  // the newline
+  std::vector<double> data(n_records * layout.size());
+  in.read(reinterpret_cast<char*>(data.data()), std::streamsize(data.size() * sizeof(double)));
+  if (!in || std::size_t(in.gcount()) != data.size() * sizeof(double)) {
+    throw InputError(path + ": checkpoint truncated (" + std::to_string(n_records) +
+                     " records announced); delete it and start again");
+  }
+  return data;
+}
+
+std::string rank_checkpoint_path(const std::string& base, int rank, int size) {
+  return size == 1 ? base : base + ".rank" + std::to_string(rank);
+}
+
+// The base file and every `<base>.rank<digits>` beside it.
+std::vector<std::string> existing_checkpoints(const std::string& base) {
+  namespace fs = std::filesystem;
+  std::vector<std::string> out;
+  std::error_code ec;
+  if (fs::exists(base, ec)) out.push_back(base);
+  const fs::path p(base);
+  const fs::path dir = p.has_parent_path() ? p.parent_path() : fs::path(".");
+  const std::string prefix = p.filename().string() + ".rank";
+  if (!fs::is_directory(dir, ec)) return out;
+  for (const auto& entry : fs::directory_iterator(dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
+    const std::string tail = name.substr(prefix.size());
+    if (std::all_of(tail.begin(), tail.end(), [](char c) { return c >= '0' && c <= '9'; })) {
+      out.push_back((dir / name).string());
+    }
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+void Generator::store_record(const double* rec, bool resumed) {
+  const std::size_t p = std::size_t(rec[Layout::point_index]);
+  const std::size_t ne = layout_.ne;
+  for (std::size_t f = 0; f < layout_.nf; ++f) {
+    const double* r = layout_.level(rec, f);
+    const std::size_t pt = f * grid_.nx * grid_.ny + p;
+    map_.status[pt] = std::uint8_t(r[Layout::status]);
+    provenance_[pt] = std::uint8_t(r[Layout::provenance]);
+    map_.deflection_at_load_m[pt] = r[Layout::deflection];
+    node_model_[pt] = std::uint8_t(r[Layout::model]);
+    deflection_error_[pt] = r[Layout::deflection_error];
+    for (std::size_t k = 0; k < ne; ++k) {
+      map_.charge_C[pt * ne + k] = r[Layout::charges + k];
+      map_.estimated_charge_error_C[pt * ne + k] = r[layout_.errors() + k];
+    }
+    if (resumed) ++n_resumed_points_;
+  }
+  known_[p] = 1;
+}
+
+std::vector<double> Generator::known_records(bool only_this_run) const {
+  std::vector<double> out;
+  const std::size_t ne = layout_.ne, n = grid_.nx * grid_.ny;
+  for (std::size_t p = 0; p < n; ++p) {
+    if (!known_[p] || (only_this_run && !this_run_[p])) continue;
+    out.push_back(double(p));
+    for (std::size_t f = 0; f < layout_.nf; ++f) {
+      const std::size_t pt = f * n + p;
+      out.push_back(map_.status[pt]);
+      out.push_back(provenance_[pt]);
+      out.push_back(map_.deflection_at_load_m[pt]);
+      out.push_back(node_model_[pt]);
+      out.push_back(deflection_error_[pt]);
+      for (std::size_t k = 0; k < ne; ++k) out.push_back(map_.charge_C[pt * ne + k]);
+      for (std::size_t k = 0; k < ne; ++k) out.push_back(map_.estimated_charge_error_C[pt * ne + k]);
+    }
+  }
+  return out;
+}
+
+// Caller holds mutex_ (or runs single-threaded).
+void Generator::maybe_checkpoint(bool force) {
+  if (o_.checkpoint_path.empty()) return;
+  const auto now = std::chrono::steady_clock::now();
+  if (!force && std::chrono::duration<double>(now - last_checkpoint_).count() < o_.checkpoint_interval_s) return;
+  write_checkpoint(rank_checkpoint_path(o_.checkpoint_path, rank_, size_), hash_, layout_, known_records(false));
+  last_checkpoint_ = now;
+}
+
+// What ties a checkpoint to this run: everything that changes a point's value.
+std::string Generator::run_hash() const {
+  std::ostringstream key;
+  key.precision(17);
+  key << map_.scene_json << "|grid " << grid_.i0 << ' ' << grid_.j0 << ' ' << grid_.nx << ' ' << grid_.ny << ' '
+      << grid_.spacing << "|forces";
+  for (double f : o_.forces_N) key << ' ' << f;
+  key << "|model " << fem::model_name(sweep_options_.solver.model) << "|tol " << tolerance_ << "|margin " << margin_
+      << "|scaling " << o_.use_force_scaling << ' ' << o_.scaling_check_stride << "|sym " << sym_.about_x << sym_.about_y
+      << "|rim " << int(sweep_options_.rim_model) << ' ' << sweep_options_.rim_size_m << ' ' << sweep_options_.rim_grading;
+  if (o_.mesh) {  // another starting mesh changes every value
+    key << "|mesh " << o_.mesh->n_cells();
+    for (const auto& v : o_.mesh->vertices) key << ' ' << v[0] << ' ' << v[1];
+  }
+  return hex(fnv1a(key.str()));
+}
+
+// Takes the records of every checkpoint file of this run (one per rank that wrote one).
+void Generator::resume() {
+  if (o_.checkpoint_path.empty() || !o_.resume) return;
+  const std::size_t n = grid_.nx * grid_.ny, nf = layout_.nf;
+  for (const auto& file : existing_checkpoints(o_.checkpoint_path)) {
+    const std::vector<double> data = read_checkpoint(file, hash_, layout_);
+    for (std::size_t r = 0; r < data.size(); r += layout_.size()) {
+      const double* rec = data.data() + r;
+      const double pd = rec[Layout::point_index];
+      const bool index_ok = pd >= 0 && pd < double(n) && pd == std::floor(pd);
+      bool values_ok = index_ok && map_.mask[std::size_t(pd)] != 0;
+      for (std::size_t f = 0; values_ok && f < nf; ++f) {
+        const double st = layout_.level(rec, f)[Layout::status];
+        values_ok = st == double(PointStatus::ok) || st == double(PointStatus::not_converged);
+      }
+      if (!values_ok) throw InputError(file + ": checkpoint record " + std::to_string(r / layout_.size()) + " is invalid; delete the checkpoint");
+      if (known_[std::size_t(pd)]) continue;  // duplicates across rank files hold the same values
+      store_record(rec, true);
+    }
+  }
+}
+
+}  // namespace pvdf::mapping::detail
+
+namespace pvdf::mapping {
+
+void remove_checkpoint_files(const std::string& checkpoint_path) {
+  if (checkpoint_path.empty()) return;
+  for (const auto& f : detail::existing_checkpoints(checkpoint_path)) std::remove(f.c_str());
+}
+
+}  // namespace pvdf::mapping

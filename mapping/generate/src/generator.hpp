@@ -1,0 +1,190 @@
+// Private to pvdf_mapping_fem: the pieces of a map generation shared by its sources — the
+// scene's mirror symmetry, the grid, the row blocks of work, the record layout of checkpoints
+// and MPI gathers, and the Generator that runs them (docs/map-generation.md).
+//
+//   symmetry_grid.cpp  mirror symmetry, the grid and its mask, option checks, MPI/thread setup
+//   checkpoint.cpp     the run's hash, checkpoint files, records in and out of the map, resume
+//   solve_blocks.cpp   row blocks on the threads and ranks, force scaling, mirror images
+//   generate.cpp       Generator::run step by step, the report, generate_map, MpiSession
+#pragma once
+
+#include "pvdf/core/scene.hpp"
+#include "pvdf/fem/probe_sweep.hpp"
+#include "pvdf/mapping/generate.hpp"
+
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <cstddef>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <mutex>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace pvdf::mapping::detail {
+
+inline constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+
+inline std::string num(double v) {
+  std::ostringstream s;
+  s.precision(10);
+  s << v;
+  return s.str();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Mirror symmetry of the scene.
+
+struct Symmetry {
+  bool about_x = false;                  // y -> -y
+  bool about_y = false;                  // x -> -x
+  std::vector<std::size_t> perm_about_x; // electrode k <-> perm[k] under y -> -y
+  std::vector<std::size_t> perm_about_y; // under x -> -x
+  std::string reason;
+};
+
+/// Which mirrors leave the scene unchanged (film, material axes, electrodes), with the
+/// electrode permutations; `wanted` false = none used.
+Symmetry detect_symmetry(const pvdf::Scene& scene, bool wanted);
+
+// ---------------------------------------------------------------------------------------------
+// Grid: nodes at integer multiples of the spacing, I = i0 + i, J = j0 + j.
+
+struct Grid {
+  long i0 = 0, j0 = 0;
+  std::size_t nx = 0, ny = 0;
+  double spacing = 0;
+};
+
+/// Bounding box {xmin, xmax, ymin, ymax} (m) of the film outline.
+std::array<double, 4> outline_box(const FilmOutline& o);
+
+// Row blocks of tasks: the unit of work, of checkpointing and of distribution.
+struct Task {
+  std::size_t i = 0, j = 0;
+  bool all_levels = true;  // false: solve the largest level only, scale the others
+  double scaling_error = 0;  // worst force-scaling check error at the corners of its lattice cell
+};
+using Block = std::vector<Task>;
+
+// Data of one solved position (all levels): the record format of checkpoints and MPI gathers.
+// [point index j*nx+i, then per level: status, provenance, deflection, model, deflection error,
+//  charges..., charge errors...]
+struct Layout {
+  std::size_t nf = 0, ne = 0;
+  std::size_t per_level() const { return 5 + 2 * ne; }
+  std::size_t size() const { return 1 + nf * per_level(); }
+  // Fields of a level's block, at level(rec, f) + field (charges: + charges + k; errors: + errors() + k).
+  enum Field : std::size_t { status = 0, provenance = 1, deflection = 2, model = 3, deflection_error = 4, charges = 5 };
+  std::size_t errors() const { return charges + ne; }
+  static constexpr std::size_t point_index = 0;  // rec[point_index] = j*nx + i
+  double* level(double* rec, std::size_t f) const { return rec + 1 + f * per_level(); }
+  const double* level(const double* rec, std::size_t f) const { return rec + 1 + f * per_level(); }
+};
+
+// ---------------------------------------------------------------------------------------------
+// Checkpoint files (checkpoint.cpp).
+
+/// 64-bit FNV-1a hash of `text`, and its 16 hex digits.
+std::uint64_t fnv1a(const std::string& text);
+std::string hex(std::uint64_t v);
+/// Writes `records` (whole records of `layout`) atomically under a header holding `hash`.
+void write_checkpoint(const std::string& path, const std::string& hash, const Layout& layout,
+                      const std::vector<double>& records);
+/// Reads a checkpoint written for `hash` and `layout`; anything else throws pvdf::InputError.
+std::vector<double> read_checkpoint(const std::string& path, const std::string& hash, const Layout& layout);
+std::string rank_checkpoint_path(const std::string& base, int rank, int size);
+/// The base file and every `<base>.rank<digits>` beside it.
+std::vector<std::string> existing_checkpoints(const std::string& base);
+
+// ---------------------------------------------------------------------------------------------
+
+/// One map generation: run() reads as its steps (set up, resume, the force-scaling check
+/// positions, every other position, gather, mirror, report).
+class Generator {
+ public:
+  Generator(const pvdf::Scene& scene, const MapOptions& options) : scene_(scene), o_(options) {}
+  ChargeMap run(MapReport& report);
+
+ private:
+  // steps of run() (generate.cpp)
+  void init_map();
+  void setup_sweeps();
+  std::string run_hash() const;
+  void resume();  // with run_hash: checkpoint.cpp
+  void count_progress_total();
+  bool run_scaling_checks(MapReport& report);
+  bool run_other_positions();
+  std::array<std::size_t, 2> gather_on_rank0();
+  void summarize_estimates(MapReport& report);
+  void count_points(MapReport& report) const;
+  // setup (symmetry_grid.cpp)
+  void validate_options();
+  void build_grid();
+  void setup_mpi();
+  bool masked(long I, long J) const;
+  bool in_grid(long I, long J, std::size_t& i, std::size_t& j) const;
+  // representative (canonical) position of (i, j) under the scene symmetry
+  struct Rep {
+    std::size_t i, j;
+    bool flip_i, flip_j;
+  };
+  Rep rep(std::size_t i, std::size_t j) const;
+  bool canonical(std::size_t i, std::size_t j) const {
+    const Rep r = rep(i, j);
+    return r.i == i && r.j == j;
+  }
+  bool is_lattice(std::size_t i, std::size_t j) const {
+    const long k = o_.scaling_check_stride;
+    const long I = grid_.i0 + long(i), J = grid_.j0 + long(j);
+    return ((I % k) + k) % k == 0 && ((J % k) + k) % k == 0;
+  }
+  // work (solve_blocks.cpp; records and checkpoints in checkpoint.cpp)
+  void run_blocks(const std::vector<Block>& blocks);
+  void solve_block(fem::ProbeSweep& sweep, const Block& block, std::vector<double>& records, bool& abandoned);
+  void commit(const std::vector<double>& records, std::size_t n_positions);
+  void maybe_checkpoint(bool force);
+  std::vector<double> known_records(bool only_this_run) const;
+  void store_record(const double* rec, bool resumed);
+  std::vector<Block> split_for_rank(const std::vector<Block>& all) const;
+  double check_error(std::size_t i, std::size_t j) const;
+  void fill_mirrors();
+
+  const pvdf::Scene& scene_;
+  MapOptions o_;
+  double tolerance_ = 0.01;
+  double margin_ = 0;
+  fem::SweepOptions sweep_options_;
+  Grid grid_;
+  Symmetry sym_;
+  Layout layout_;
+  ChargeMap map_;
+  std::vector<std::uint8_t> provenance_;
+  std::vector<std::uint8_t> node_model_;  // [nf][ny][nx] fem::SweepModel codes
+  std::vector<double> deflection_error_;  // [nf][ny][nx] estimated |error| of the deflection (m)
+  std::vector<std::uint8_t> known_;      // [ny][nx] 1 = canonical position has its record
+  std::vector<std::uint8_t> this_run_;   // [ny][nx] 1 = computed in this run by this process
+  std::string hash_;
+  int rank_ = 0, size_ = 1, threads_ = 1;
+  bool use_mpi_ = false;
+  std::vector<std::unique_ptr<fem::ProbeSweep>> sweeps_;
+
+  std::mutex mutex_;                     // guards map_, known_, checkpoint and progress
+  std::atomic<bool> stop_{false};
+  std::atomic<std::size_t> positions_solved_{0};  // FEM-solved positions (stop hook)
+  std::size_t fem_points_solved_ = 0;    // FEM-solved points (position × level), committed
+  std::size_t n_resumed_points_ = 0;
+  std::size_t progress_done_ = 0, progress_total_ = 0;
+  std::chrono::steady_clock::time_point last_checkpoint_;
+  std::string first_failure_;
+
+  // force-scaling check (phase A), read when choosing scaled positions (phase B) and reporting
+  bool scaling_ = false;
+  std::vector<std::uint8_t> verdict_;  // [ny][nx] 1 pass, 2 fail (canonical lattice positions)
+  std::vector<double> check_err_;      // [ny][nx] their scaling-check errors
+};
+
+}  // namespace pvdf::mapping::detail
