@@ -1,7 +1,7 @@
 // pvdf::fem verification against independent oracles (tests/fem/oracles): Timoshenko plates,
 // Hencky membrane, axisymmetric probe membrane, membrane scaling, symmetry/invariance, the
 // tangent against finite differences, equilibrium of the rim reaction. Meshes are kept coarse
-// enough for CI; each tolerance is the issue's.
+// enough for CI; each tolerance is the target's.
 #include "pvdf/core/constants.hpp"
 #include "pvdf/fem/solver.hpp"
 

@@ -203,7 +203,7 @@ TEST_CASE("FEM presses with unknown force: the truth is among the solutions and 
          << (b.n ? b.sum_p / b.n : 0.0) << ", main answer right " << (b.n ? 100.0 * b.right / b.n : 0.0) << " %");
   }
   CHECK(n_located >= n_total * 99 / 100);
-  // Measured 98.98 % (13 of 1279 draws): the issue's 99 % is missed narrowly on this 2 mm map.
+  // Measured 98.98 % (13 of 1279 draws): the 99 % target is missed narrowly on this 2 mm map.
   // Each miss was examined (docs/lookup.md §7b): a fit started at the truth ends on the
   // reported solution, which lies 3-7 σ from the truth along a bent valley of the misfit, at
   // three presses widened by the map's own error; none is a lost or merged solution, none at
