@@ -9,6 +9,7 @@
 #include "pvdf/core/scene.hpp"
 #include "pvdf/fem/solver.hpp"
 #include "pvdf/mapping/ambiguity.hpp"
+#include "pvdf/mapping/ramp.hpp"
 #include "pvdf/mapping/generate.hpp"
 #include "pvdf/mesh/mesher.hpp"
 
@@ -191,6 +192,17 @@ void print_map_text(const MapCommandOptions& o, const ChargeMap& map, const MapR
                 "(--force-range-N) %.0f %%, a fourth electrode (pvdfkit design quantifies it; docs/lookup.md section 2)\n",
                 a.force_N, a.nodes, 100 * a.force_unknown, a.min_force_N, a.max_force_N, 100 * a.force_known,
                 100 * a.force_within_25);
+    if (map.nf() >= 2) {
+      // Whether a press's loading curve separates the candidates (docs/lookup.md section 2, "Force ramps"):
+      // only where the map's charge direction turns with the force (pretension, bending).
+      const pvdf::mapping::RampAmbiguity r = pvdf::mapping::ramp_ambiguity_share(map);
+      std::printf("force ramp (%d samples from %g to %g N, the map's noise, %zu nodes): ambiguous %.0f %% at the peak, "
+                  "%.0f %% after the ramp test (%.0f %% with as many samples held at the peak); the map is taken as "
+                  "exact, so its own error must be below the noise for this to hold\n",
+                  pvdf::mapping::RampOptions{}.n_samples, pvdf::mapping::RampOptions{}.ramp_start * r.peak_force_N,
+                  r.peak_force_N, r.nodes, 100 * r.ambiguous_at_peak, 100 * r.ambiguous_after_ramp,
+                  100 * r.ambiguous_after_hold);
+    }
   }
 }
 
