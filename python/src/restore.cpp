@@ -10,6 +10,7 @@
 #include "pvdf/restore/scanner.hpp"
 
 #include <cmath>
+#include <map>
 #include <optional>
 #include <variant>
 
@@ -82,7 +83,11 @@ r::BetaPolicy parse_policy(const std::string& policy) {
   if (policy == "frequency") return r::BetaPolicy::frequency;
   if (policy == "gcv") return r::BetaPolicy::gcv;
   if (policy == "discrepancy") return r::BetaPolicy::discrepancy;
-  throw pvdf::InputError("identify: beta_policy = " + policy + " must be constant, frequency, gcv or discrepancy");
+  if (policy == "lcurve") return r::BetaPolicy::lcurve;
+  if (policy == "morozov") return r::BetaPolicy::morozov;
+  if (policy == "predicted") return r::BetaPolicy::predicted;
+  throw pvdf::InputError("identify: beta_policy = " + policy +
+                         " must be constant, frequency, gcv, discrepancy, lcurve, morozov or predicted");
 }
 
 r::InverseFilter identify(const py::list& scans, std::variant<double, std::string> beta, const std::string& beta_policy,
@@ -104,10 +109,16 @@ r::InverseFilter identify(const py::list& scans, std::variant<double, std::strin
   d.window = window;
   std::string policy = beta_policy;
   if (const auto* text = std::get_if<std::string>(&beta)) {
-    if (*text != "auto" && *text != "gcv") {
-      throw pvdf::InputError("identify: beta = " + *text + " must be a number > 0 (relative, seed 000 used 1e-4), 'auto' or 'gcv'");
+    // The names `pvdfkit restore identify --beta` takes, with the same meanings.
+    static const std::map<std::string, std::string> named = {
+        {"auto", "predicted"}, {"predicted", "predicted"}, {"gcv", "gcv"},          {"lcurve", "lcurve"},
+        {"morozov", "morozov"}, {"noise-floor", "discrepancy"}, {"discrepancy", "discrepancy"}};
+    const auto it = named.find(*text);
+    if (it == named.end()) {
+      throw pvdf::InputError("identify: beta = '" + *text + "' must be a number > 0 (relative, seed 000 used 1e-4) or "
+                             "auto, predicted, gcv, lcurve, morozov, noise-floor");
     }
-    const std::string chosen = *text == "auto" ? "discrepancy" : "gcv";
+    const std::string& chosen = it->second;
     if (!policy.empty() && policy != chosen) throw pvdf::InputError("identify: beta " + *text + " contradicts beta_policy " + policy);
     policy = chosen;
   } else {
@@ -147,6 +158,8 @@ sample, with the modelling delay ``delay_samples``; g: the identified transfer m
       .def_readonly("beta_policy", &r::InverseFilter::beta_policy)
       .def_readonly("beta", &r::InverseFilter::beta, "relative regularization (the chosen one for gcv/auto)")
       .def_readonly("regularization", &r::InverseFilter::regularization, "'isotropic' or 'tikhonov'")
+      .def_readonly("peak_fraction", &r::InverseFilter::peak_fraction,
+                    "restored f_z peak of a sharp edge as a fraction of the target resolution's peak (1 = met)")
       .def_readonly("lobe_force_fraction", &r::InverseFilter::lobe_force_fraction,
                     "force an isolated sharp feature keeps within +-3 resolutions of it (fraction of the true force)")
       .def_readonly("beta_abs", &r::InverseFilter::beta_abs, "beta x max s^2 ((V/N)^2)")
@@ -181,7 +194,7 @@ sample, with the modelling delay ``delay_samples``; g: the identified transfer m
         return d;
       }, "condition numbers of G(k) over its band, and cond of the identification force matrix")
       .def_property_readonly("warnings", [](const r::InverseFilter& f) { return f.transfer.warnings; });
-  m.def("identify", &identify, py::arg("scans"), py::arg("beta") = 1e-4, py::arg("beta_policy") = "",
+  m.def("identify", &identify, py::arg("scans"), py::arg("beta") = "auto", py::arg("beta_policy") = "",
         py::arg("taps") = std::size_t(8192), py::arg("delay_samples") = -1L, py::arg("g_window") = std::size_t(0),
         py::arg("resolution_m") = 0.0, py::arg("low_cut_wavelength_m") = 0.0, py::arg("corner_wavelength_m") = 0.0,
         py::arg("window") = "tukey", py::arg("regularization") = "isotropic",
@@ -189,7 +202,8 @@ sample, with the modelling delay ``delay_samples``; g: the identified transfer m
 regularized inverse filters (eq. 4), as ``pvdfkit restore identify`` does.
 
 scans: list of (Scan, fx_N, fz_N, edge_x_m): the forces (N) of a raised edge at world position
-edge_x_m (m). beta: relative regularization (seed 000: 1e-4), 'auto' (noise floor of G) or 'gcv'.
+edge_x_m (m). beta: 'auto' (default, as the command: the beta minimizing the predicted mu error), a
+relative regularization (seed 000: 1e-4), or 'predicted', 'gcv', 'lcurve', 'morozov', 'noise-floor'.
 resolution_m: target Gaussian FWHM (m, 0 = none); low_cut_wavelength_m: damp longer wavelengths (m).
 regularization: 'isotropic' (default, as the command: f_x and f_z blurred alike, mu unbiased) or
 'tikhonov' (seed 000 eq. 4).)doc");
