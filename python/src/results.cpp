@@ -11,6 +11,7 @@
 #include <limits>
 
 #ifdef PVDF_PYTHON_WITH_FEM
+#include "pvdf/fem/result_json.hpp"
 #include "pvdf/fem/solver.hpp"
 #endif
 
@@ -168,6 +169,8 @@ order; sample arrays the ``samples`` passed to solve.)doc")
         d["refinement_cycles"] = s.refinement_cycles;
         d["final_residual_norm"] = s.final_residual_norm;
         d["estimated_relative_error"] = s.estimated_relative_error;
+        d["estimated_discretization_error"] = s.estimated_discretization_error;
+        d["estimated_model_error"] = s.estimated_model_error;
         d["error_estimator"] = s.error_estimator;
         d["wall_s"] = s.wall_s;
         d["assembly_s"] = s.assembly_s;
@@ -175,6 +178,15 @@ order; sample arrays the ``samples`` passed to solve.)doc")
         d["setup_s"] = s.setup_s;
         return d;
       }, "status, model, n_dofs, n_cells, iterations, estimated_relative_error, timings (s): a dict")
+      .def("to_dict", [](const Result& r) {
+        return py::module_::import("json").attr("loads")(pvdf::fem::result_json(r).dump());
+      }, "the object `pvdfkit solve --json` prints, as a dict (without the command's mesh keys; NaN as None)")
+      .def_property_readonly("estimated_discretization_error", [](const Result& r) { return r.summary.estimated_discretization_error; },
+                             "estimated relative error of the outputs from the mesh")
+      .def_property_readonly("estimated_model_error", [](const Result& r) { return r.summary.estimated_model_error; },
+                             "estimated relative error of the outputs from the model choice (bending dropped, ...)")
+      .def_readonly("wrinkled_area_fraction", &Result::wrinkled_area_fraction, "share of the film that is wrinkled (tension-field membrane)")
+      .def_readonly("slack_area_fraction", &Result::slack_area_fraction, "share of the film with no membrane force (tension-field membrane)")
       .def_readonly("max_deflection_m", &Result::max_deflection_m, "max |w| over the film, signed (m)")
       .def_readonly("deflection_at_load_m", &Result::deflection_at_load_m, "w at the first load (m)")
       .def_readonly("rim_reaction_N", &Result::rim_reaction_N, "vertical reaction of the clamped rim (N)")
@@ -190,6 +202,11 @@ order; sample arrays the ``samples`` passed to solve.)doc")
         for (const auto& e : r.electrodes) q.push_back(e.charge_C);
         return to_array(q);
       }, "charge of each electrode (C), shape (n_electrodes,)")
+      .def_property_readonly("charge_error_C", [](const Result& r) {
+        std::vector<double> q;
+        for (const auto& e : r.electrodes) q.push_back(e.charge_error_C);
+        return to_array(q);
+      }, "estimated absolute error of each electrode's charge (C), shape (n_electrodes,)")
       .def_property_readonly("electrode_area_m2", [](const Result& r) {
         std::vector<double> a;
         for (const auto& e : r.electrodes) a.push_back(e.area_m2);

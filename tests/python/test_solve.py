@@ -122,3 +122,35 @@ def test_generate_map_agrees_with_direct_solves(tmp_path):
     pvdfkit.write_map(str(path), cmap)
     back = pvdfkit.read_map(str(path))
     assert np.array_equal(back.charge_C, cmap.charge_C) and back.model == cmap.model
+
+
+def test_to_dict_is_the_command_line_json(tmp_path):
+    """SolveResult.to_dict() and `pvdfkit solve --json` on the same scene, load and samples: the same
+    keys and the same numbers (the solver is deterministic; timings and the command's mesh keys aside).
+    A key added to one and not the other, or a field copied wrongly, fails here."""
+    import json
+    import os
+    import subprocess
+    binary = os.environ.get("PVDF_BINARY_DIR")
+    cli = os.path.join(binary, "app", "pvdfkit") if binary else None
+    if not cli or not os.path.exists(cli):
+        pytest.fail("PVDF_BINARY_DIR/app/pvdfkit not found: run through ctest (tests/python/CMakeLists.txt)")
+    scene = plate_scene(0.5)
+    scene["membrane"]["thickness_m"] = 50e-6  # membrane-dominated: non-zero charges and estimates
+    path = tmp_path / "scene.json"
+    path.write_text(json.dumps(scene))
+    py = pvdfkit.solve(scene, samples=[[0.004, 0.0]], tolerance=0.02).to_dict()
+    out = subprocess.run([cli, "solve", str(path), "--sample", "0.004,0", "--tolerance", "0.02", "--json"],
+                         capture_output=True, text=True, check=True)
+    cl = json.loads(out.stdout)
+    assert set(py) == set(cl) - {"mesh", "mesh_file_cells"}
+    assert py["status"] == cl["status"] == "converged"
+    assert py["estimated_model_error"] >= 0 and "estimated_discretization_error" in py
+    assert py["model"] == cl["model"] and py["n_dofs"] == cl["n_dofs"]
+    for key in ("max_deflection_m", "rim_reaction_N", "estimated_relative_error"):
+        assert py[key] == pytest.approx(cl[key], rel=1e-9), key
+    for a, b in zip(py["electrodes"], cl["electrodes"]):
+        assert a["name"] == b["name"]
+        assert a["charge_C"] == pytest.approx(b["charge_C"], rel=1e-9) and abs(a["charge_C"]) > 0
+        assert a["charge_error_C"] == pytest.approx(b["charge_error_C"], rel=1e-9, abs=1e-30)
+    assert py["samples"][0]["w_m"] == pytest.approx(cl["samples"][0]["w_m"], rel=1e-9)
