@@ -107,7 +107,7 @@ PVDF_CLONES int Locator::add_fold_twins(const Query& Q, std::array<Fit, 8>& fits
 }
 
 PVDF_CLONES Location Locator::locate_impl(const double* charges_C, bool fixed_force, double log_known_force,
-                                          const std::array<double, 3>* hints, int n_hints) const {
+                                          const std::array<double, 3>* hints, int n_hints, bool held) const {
   Query Q;
   Location early;
   if (!prepare(charges_C, fixed_force, log_known_force, Q, early)) return early;
@@ -121,7 +121,8 @@ PVDF_CLONES Location Locator::locate_impl(const double* charges_C, bool fixed_fo
   int n_starts = 0;
   // Coarse search by the linearized direction model: one start per distinct predicted solution.
   StartList predicted;
-  if (predicted_starts(q_unit.data(), log_q_norm, noise2, fixed_force, log_known_force, log_lo, log_hi, predicted)) {
+  if (predicted_starts(q_unit.data(), log_q_norm, noise2, fixed_force, log_known_force, log_lo, log_hi, predicted,
+                       held && n_hints > 0)) {
     // Ask early for what each start's refinement and first fit read: its cell's model rows (the
     // two levels around its force) and the interpolant's coefficients.
     for (int s = 0; s < predicted.n && s < options_.max_starts; ++s) {
@@ -144,6 +145,16 @@ PVDF_CLONES Location Locator::locate_impl(const double* charges_C, bool fixed_fo
           levenberg_marquardt(q.data(), w.data(), st.x, st.y, st.l, fixed_force, log_lo, log_hi, fits.data(), n_starts);
       ++n_starts;
     }
+  }
+  if (held && n_hints > 0 && predicted.n == 0) {
+    // A stream's press held outside at the last sample whose charges no cell's direction model
+    // reaches now either (no start from the query's own direction bin: a press still weaker than
+    // the force range, or still off the map): outside, held where it was — no hint fit, no
+    // angular fallback (§1.9).
+    Location out;
+    out.flags = flag::outside_map;
+    out.held = hints[0];
+    return out;
   }
   n_starts = add_fold_twins(Q, fits, n_starts);
   bool any_within = false;
@@ -222,9 +233,10 @@ int Locator::add_hint_fits(const Query& Q, const std::array<double, 3>* hints, i
   return n_fits;
 }
 
-Location Locator::locate_near(const double* charges_C, const std::array<double, 3>* hints, int n_hints) const {
-  return fixed_force_ ? locate_impl(charges_C, true, log_force_lo_, hints, n_hints)
-                      : locate_impl(charges_C, false, 0.0, hints, n_hints);
+Location Locator::locate_near(const double* charges_C, const std::array<double, 3>* hints, int n_hints,
+                             bool held) const {
+  return fixed_force_ ? locate_impl(charges_C, true, log_force_lo_, hints, n_hints, held)
+                      : locate_impl(charges_C, false, 0.0, hints, n_hints, held);
 }
 
 Location Locator::locate_from(const double* charges_C, const std::array<double, 3>* starts, int n_starts) const {

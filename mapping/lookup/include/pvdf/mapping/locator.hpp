@@ -130,8 +130,12 @@ class Locator {
   /// when none of them fits within noise are the hints fitted, and if every hint's fit is held
   /// by the map's edge or the force range outside noise the answer is outside_map without
   /// locate()'s angular fallback (starts at cell centres). Otherwise locate()'s answer.
+  /// `held`: the hints are the last sample's held fit (an outside_map answer), not solutions;
+  /// then charges that no cell's direction model reaches (the coarse search has no start at
+  /// all) are outside_map at once, held at hints[0], without any fit (docs/lookup.md §1.9).
   /// Thread-safe, no allocation.
-  Location locate_near(const double* charges_C, const std::array<double, 3>* hints, int n_hints) const;
+  Location locate_near(const double* charges_C, const std::array<double, 3>* hints, int n_hints,
+                       bool held = false) const;
 
   /// The map's (calibrated, if enabled) charges for a press at (x, y) with force F; false outside.
   bool predict(double x_m, double y_m, double force_N, double* charges_C) const;
@@ -198,7 +202,7 @@ class Locator {
   /// The map's charge error (C) at (x, y, ln F); false off the grid or when none is stored.
   bool map_error_at(double x, double y, double l, double* error_C) const;
   Location locate_impl(const double* charges_C, bool fixed_force, double log_known_force,
-                       const std::array<double, 3>* hints = nullptr, int n_hints = 0) const;
+                       const std::array<double, 3>* hints = nullptr, int n_hints = 0, bool held = false) const;
   /// A query prepared for fitting: calibration undone, weights, unit direction, force bounds.
   struct Query {
     std::array<double, max_electrodes> q, w, q_unit;  ///< entries 0..ne−1 are set by prepare()
@@ -246,9 +250,10 @@ class Locator {
                     int n_fits) const;
   /// Coarse search: bins of the direction table → cells whose linearized direction reaches the
   /// query inside (or next to) the cell → distinct starts, best first. Returns false when no
-  /// cell can produce the direction (then the old angular shortlist is used).
+  /// cell can produce the direction (then the old angular shortlist is used). The query's own
+  /// bin is scanned, and when it has no start the ring of its 8 neighbours (own_bin_only: not).
   bool predicted_starts(const double* q_unit, double log_q_norm, double noise2, bool fixed_force, double log_force,
-                        double log_lo, double log_hi, StartList& starts) const;
+                        double log_lo, double log_hi, StartList& starts, bool own_bin_only = false) const;
   /// The compact model of the cell holding (x, y), blended between the force levels around l,
   /// with the point's offset from the cell centre (cell units). False off the usable cells.
   struct CellModel {
