@@ -445,12 +445,17 @@ void profile_tracking(const Locator& locator, const SyntheticModel& model) {
   std::printf("profile: 20 x %zu tracked samples (checksum %g)\n", q.size(), sink);
 }
 
-void tracking_table(const Locator& locator, const SyntheticModel& model) {
+/// The stream's lookup (linearised σ's, as `locate --stream` and `acquire --locate` use it) at
+/// three search intervals, then the default lookup (valley σ's, docs/lookup.md §1.6) for its cost.
+void tracking_table(const Locator& stream_locator, const Locator& locator, const SyntheticModel& model) {
   for (int interval : {200, 20, 2000}) {
     TrackerOptions o;
     o.search_interval = interval;
-    tracking_rows(locator, model, o);
+    std::printf("stream lookup (linearised sigmas): ");
+    tracking_rows(stream_locator, model, o);
   }
+  std::printf("default lookup (valley sigmas): ");
+  tracking_rows(locator, model, TrackerOptions{});
 }
 }  // namespace
 
@@ -466,6 +471,9 @@ int main(int argc, char** argv) {
   options.min_force_N = levels.front();
   options.max_force_N = levels.back();
   const Locator locator(map, options);
+  LocatorOptions stream_options = options;
+  stream_options.valley_sigma_cells = 0;  // what a stream uses
+  const Locator stream_locator(map, stream_options);
   LocatorOptions fast_options = options;
   fast_options.max_starts = 1;
   const Locator fast(map, fast_options);
@@ -477,11 +485,11 @@ int main(int argc, char** argv) {
   std::vector<std::array<double, 3>> q;
   random_presses(model, args.n, rng, presses, q);
   if (args.tracking_only) {
-    tracking_table(locator, model);
+    tracking_table(stream_locator, locator, model);
     return 0;
   }
   if (args.profile_tracking) {
-    profile_tracking(locator, model);
+    profile_tracking(stream_locator, model);
     return 0;
   }
   if (args.profile) {
@@ -498,7 +506,7 @@ int main(int argc, char** argv) {
               map.nx(), map.ny(), spacing * 1e3, map.nf(), args.n, build_s);
   method_rows(locator, fast, tri, presses, q);
   rose_stream_rows(locator, model);
-  tracking_table(locator, model);
+  tracking_table(stream_locator, locator, model);
   std::printf("\n(median/p95: error of the reported answer nearest the truth; 'ambiguous': another solution fits "
               "within noise and is reported too; 'stream': one press moving along a rose curve within 12 mm at "
               "up to 90 mm/s, 0.5-1.5 N, sampled at 10 kHz for 2 s)\n\n");

@@ -48,7 +48,7 @@ Location Locator::locate(const double* charges_C, double known_force_N) const {
 }
 
 PVDF_CLONES bool Locator::prepare(const double* charges_C, bool fixed_force, double log_known_force, Query& Q,
-                      Location& early) const {
+                                  std::uint32_t& early_flags) const {
   Q.fixed_force = fixed_force;
   Q.log_known_force = log_known_force;
   Q.log_lo = fixed_force ? log_known_force : log_force_lo_;
@@ -57,8 +57,7 @@ PVDF_CLONES bool Locator::prepare(const double* charges_C, bool fixed_force, dou
   double snr2 = 0, noise_norm2 = 0;
   for (std::size_t k = 0; k < ne_; ++k) {
     if (!std::isfinite(charges_C[k])) {
-      early = Location{};
-      early.flags = flag::outside_map | flag::no_press;
+      early_flags = flag::outside_map | flag::no_press;
       return false;
     }
     Q.q[k] = (charges_C[k] - offset_[k]) / gain_[k];
@@ -69,8 +68,7 @@ PVDF_CLONES bool Locator::prepare(const double* charges_C, bool fixed_force, dou
     Q.q_unit[k] = Q.q[k];
   }
   if (std::sqrt(snr2 / double(ne_)) < options_.no_press_snr) {
-    early = Location{};
-    early.flags = flag::no_press;
+    early_flags = flag::no_press;
     return false;
   }
   Q.q_norm = normalize(Q.q_unit.data(), ne_);
@@ -109,8 +107,12 @@ PVDF_CLONES int Locator::add_fold_twins(const Query& Q, std::array<Fit, 8>& fits
 PVDF_CLONES Location Locator::locate_impl(const double* charges_C, bool fixed_force, double log_known_force,
                                           const std::array<double, 3>* hints, int n_hints, bool held) const {
   Query Q;
-  Location early;
-  if (!prepare(charges_C, fixed_force, log_known_force, Q, early)) return early;
+  std::uint32_t early_flags = 0;
+  if (!prepare(charges_C, fixed_force, log_known_force, Q, early_flags)) {
+    Location early;
+    early.flags = early_flags;
+    return early;
+  }
   const double log_lo = Q.log_lo, log_hi = Q.log_hi, limit = Q.limit, noise2 = Q.noise2, log_q_norm = Q.log_q_norm;
   const Vec& q = Q.q;
   const Vec& w = Q.w;
@@ -241,8 +243,12 @@ Location Locator::locate_near(const double* charges_C, const std::array<double, 
 
 Location Locator::locate_from(const double* charges_C, const std::array<double, 3>* starts, int n_starts) const {
   Query Q;
-  Location early;
-  if (!prepare(charges_C, fixed_force_, fixed_force_ ? log_force_lo_ : 0.0, Q, early)) return early;
+  std::uint32_t early_flags = 0;
+  if (!prepare(charges_C, fixed_force_, fixed_force_ ? log_force_lo_ : 0.0, Q, early_flags)) {
+    Location early;
+    early.flags = early_flags;
+    return early;
+  }
   std::array<Fit, 8> fits{};
   int n = 0;
   for (int s = 0; s < n_starts && n < int(fits.size()); ++s) {

@@ -447,6 +447,7 @@ PVDF_CLONES Location Locator::finish(const Query& Q, std::array<Fit, 8>& fits, i
     return out;
   }
   Fit& b = fits[std::size_t(best)];
+  if (b.chi2 <= limit) b.log_widen = valley_sigma(Q, b);
   fill_main(b, out);
   if (b.chi2 > limit) {
     if (b.blocked) {
@@ -468,7 +469,9 @@ PVDF_CLONES Location Locator::finish(const Query& Q, std::array<Fit, 8>& fits, i
     for (int g = 1; g < n_group; ++g) {
       Fit& f = fits[std::size_t(group[std::size_t(g)])];
       covariance(f, Q);
-      if (!without_position(f, Q)) group[std::size_t(kept++)] = group[std::size_t(g)];
+      if (without_position(f, Q)) continue;
+      f.log_widen = valley_sigma(Q, f);
+      group[std::size_t(kept++)] = group[std::size_t(g)];
     }
     n_group = kept;
     if (n_group == 1) return out;
@@ -563,7 +566,7 @@ double Locator::log_posterior_weight(const Query& Q, const Fit& f) const {
     det = a00 * (a11 * a22 - a12 * a12) - a01 * (a01 * a22 - a12 * a02) + a02 * (a01 * a12 - a11 * a02);
     floor *= rl;
   }
-  return -0.5 * f.chi2 - 0.5 * std::log(std::max(det, floor)) + (Q.fixed_force ? 0.0 : f.l);
+  return -0.5 * f.chi2 - 0.5 * std::log(std::max(det, floor)) + f.log_widen + (Q.fixed_force ? 0.0 : f.l);
 }
 
 int Locator::distinct_solutions(const Query& Q, const std::array<Fit, 8>& fits, int n_starts, int best,

@@ -66,6 +66,11 @@ struct LocatorOptions {
   double known_force_N = 0.0;
   /// Coarse search: number of bins per axis of the charge-direction table (0 = automatic).
   int direction_bins = 0;
+  /// Valley σ's (docs/lookup.md §1.6): a solution whose linearised 1-σ along its weak position
+  /// direction exceeds this many grid cells gets its σ's from the profile of χ² along that
+  /// direction (Δχ² = 1, the other parameters re-fitted) where that is wider, and its
+  /// probability the same widening. 0 = linearised σ's only.
+  double valley_sigma_cells = 0.2;
 };
 
 /// A located press. Values are SI; σ's are 1-σ from the charge-noise model, (JᵀWJ)⁻¹.
@@ -179,6 +184,7 @@ class Locator {
     bool converged = false, blocked = false, ok = false, singular = false, duplicate = false;
     bool vague = false;     ///< within noise, but the charges do not place it (without_position)
     bool fallback = false;  ///< started by the angular fallback (no coarse-search start fitted within noise)
+    double log_widen = 0;   ///< ln(valley half-width / linearised σ) along the weak direction (valley_sigma)
   };
   Fit levenberg_marquardt(const double* q, const double* inv_sigma, double x, double y, double l, bool fixed_force,
                           double log_lo, double log_hi, const Fit* found, int n_found) const;
@@ -194,6 +200,13 @@ class Locator {
                     bool fixed_force, double log_lo, double log_hi) const;
   /// Fills fit.sigma / fit.singular from fit.jtj (only for the fits that are reported).
   void covariance(Fit& fit, const Query& query) const;
+  /// Widens fit.sigma to the profile of χ² along the weak position direction where that is
+  /// wider (locator_valley.cpp); returns the posterior volume's widening, ln ≥ 0.
+  double valley_sigma(const Query& query, Fit& fit) const;
+  /// The profile point at offset t along the unit direction v from the fit: the offset s across
+  /// and ln F re-fitted from (s, l); χ² there. False off the map.
+  bool valley_point(const Query& query, const Fit& fit, const std::array<double, 2>& v, double t, double& s, double& l,
+                    double& chi2) const;
   /// The weighted JᵀJ behind the reported σ's: fit.jtj, or with the map's own error added to
   /// the charge noise where the map stores one.
   std::array<double, 6> reported_jtj(const Fit& fit, const Query& query) const;
@@ -209,8 +222,10 @@ class Locator {
     double q_norm = 0, log_q_norm = 0, noise2 = 0, log_lo = 0, log_hi = 0, limit = 0, log_known_force = 0;
     bool fixed_force = false;
   };
-  /// False (with `early` set: no_press or non-finite charges) when there is nothing to fit.
-  bool prepare(const double* charges_C, bool fixed_force, double log_known_force, Query& query, Location& early) const;
+  /// False (with the answer's flags in `early_flags`: no_press, or outside_map|no_press for
+  /// non-finite charges) when there is nothing to fit.
+  bool prepare(const double* charges_C, bool fixed_force, double log_known_force, Query& query,
+               std::uint32_t& early_flags) const;
   /// Fits the fold twins of the fits within noise (fold-prone cells only); returns the new count.
   int add_fold_twins(const Query& query, std::array<Fit, 8>& fits, int n_fits) const;
   /// Choice, flags, covariance and alternatives from the fits.
