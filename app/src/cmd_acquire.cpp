@@ -257,6 +257,7 @@ std::unique_ptr<Stage> make_stage(const AcquireOptions& o, const StreamInfo& inf
   if (!o.locate_map.empty()) {
 #ifdef PVDF_ACQUIRE_HAVE_MAPPING
     pvdf::mapping::LocatorOptions options;
+    options.valley_sigma_cells = 0;  // a stream: linearised σ's (docs/lookup.md §1.6)
     if (!o.force_range.empty()) {
       const auto range = pvdf::parse_number_list(o.force_range, "--force-range-N", 2);
       if (!(range[0] > 0 && range[1] > range[0]))

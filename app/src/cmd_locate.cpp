@@ -78,6 +78,8 @@ LocatorOptions locator_options(const LocateOptions& o) {
     }
   }
   options.known_force_N = o.force_N;
+  // A stream reports linearised σ's: the valley σ's would halve its rate (docs/lookup.md §1.6).
+  if (o.stream || !o.input.empty()) options.valley_sigma_cells = 0;
   return options;
 }
 

@@ -153,6 +153,17 @@ void time_by_kind(const std::vector<double>& latency, const std::vector<Location
   for (int k = 0; k < 5; ++k) std::printf(" %s %.0f %% (%zu samples)%s", names[k], 100 * sum[k] / total, count[k], k < 4 ? "," : "\n\n");
 }
 
+/// What a stream's consumer keeps of an answer: the main answer, its σ's, flags and count.
+struct Answer {
+  double x_m = 0, y_m = 0, force_N = 0, sigma_x_m = 0, sigma_y_m = 0, sigma_F_N = 0, probability = 0;
+  std::uint32_t flags = 0;
+  int n_solutions = 0;
+  Answer() = default;
+  explicit Answer(const Location& r)
+      : x_m(r.x_m), y_m(r.y_m), force_N(r.force_N), sigma_x_m(r.sigma_x_m), sigma_y_m(r.sigma_y_m),
+        sigma_F_N(r.sigma_F_N), probability(r.probability), flags(r.flags), n_solutions(r.n_solutions) {}
+};
+
 /// The tracker against the full search on a realistic stream: samples/s of each (CPU time of
 /// one thread, best of 3), how often the tracker's answer equals the full search's, and the
 /// tracker's latency per sample. Agreement: both without a position, or both with one and the
@@ -162,16 +173,27 @@ void time_by_kind(const std::vector<double>& latency, const std::vector<Location
 void tracking_rows(const Locator& locator, const SyntheticModel& model, const TrackerOptions& options) {
   const auto q = realistic_stream(model, 10.0, 0.05e-12, 7);
   const std::size_t n = q.size();
-  std::vector<Location> full(n), tracked(n);
+  // The timed passes keep what a consumer of the stream keeps (main answer, σ's, flags, count);
+  // the whole answers (624 bytes each: storing them would time 62 MB of memory writes per pass)
+  // come from one more untimed pass of each (both are deterministic).
+  std::vector<Answer> kept(n);
   double best_full = 1e30, best_tracked = 1e30;
   for (int pass = 0; pass < 3; ++pass) {
     std::clock_t t0 = std::clock();
-    for (std::size_t i = 0; i < n; ++i) full[i] = locator.locate(q[i].data());
+    for (std::size_t i = 0; i < n; ++i) kept[i] = Answer(locator.locate(q[i].data()));
     best_full = std::min(best_full, double(std::clock() - t0) / CLOCKS_PER_SEC);
     Tracker tracker(locator, options);
     t0 = std::clock();
-    for (std::size_t i = 0; i < n; ++i) tracked[i] = tracker.next(q[i].data());
+    for (std::size_t i = 0; i < n; ++i) kept[i] = Answer(tracker.next(q[i].data()));
     best_tracked = std::min(best_tracked, double(std::clock() - t0) / CLOCKS_PER_SEC);
+  }
+  std::vector<Location> full(n), tracked(n);
+  {
+    Tracker tracker(locator, options);
+    for (std::size_t i = 0; i < n; ++i) {
+      full[i] = locator.locate(q[i].data());
+      tracked[i] = tracker.next(q[i].data());
+    }
   }
   std::size_t agree = 0, with_position = 0, agree_position = 0, differ_presence = 0, differ_presence_wide = 0;
   std::size_t differ_count = 0;
@@ -423,12 +445,17 @@ void profile_tracking(const Locator& locator, const SyntheticModel& model) {
   std::printf("profile: 20 x %zu tracked samples (checksum %g)\n", q.size(), sink);
 }
 
-void tracking_table(const Locator& locator, const SyntheticModel& model) {
+/// The stream's lookup (linearised σ's, as `locate --stream` and `acquire --locate` use it) at
+/// three search intervals, then the default lookup (valley σ's, docs/lookup.md §1.6) for its cost.
+void tracking_table(const Locator& stream_locator, const Locator& locator, const SyntheticModel& model) {
   for (int interval : {200, 20, 2000}) {
     TrackerOptions o;
     o.search_interval = interval;
-    tracking_rows(locator, model, o);
+    std::printf("stream lookup (linearised sigmas): ");
+    tracking_rows(stream_locator, model, o);
   }
+  std::printf("default lookup (valley sigmas): ");
+  tracking_rows(locator, model, TrackerOptions{});
 }
 }  // namespace
 
@@ -444,6 +471,9 @@ int main(int argc, char** argv) {
   options.min_force_N = levels.front();
   options.max_force_N = levels.back();
   const Locator locator(map, options);
+  LocatorOptions stream_options = options;
+  stream_options.valley_sigma_cells = 0;  // what a stream uses
+  const Locator stream_locator(map, stream_options);
   LocatorOptions fast_options = options;
   fast_options.max_starts = 1;
   const Locator fast(map, fast_options);
@@ -455,11 +485,11 @@ int main(int argc, char** argv) {
   std::vector<std::array<double, 3>> q;
   random_presses(model, args.n, rng, presses, q);
   if (args.tracking_only) {
-    tracking_table(locator, model);
+    tracking_table(stream_locator, locator, model);
     return 0;
   }
   if (args.profile_tracking) {
-    profile_tracking(locator, model);
+    profile_tracking(stream_locator, model);
     return 0;
   }
   if (args.profile) {
@@ -476,7 +506,7 @@ int main(int argc, char** argv) {
               map.nx(), map.ny(), spacing * 1e3, map.nf(), args.n, build_s);
   method_rows(locator, fast, tri, presses, q);
   rose_stream_rows(locator, model);
-  tracking_table(locator, model);
+  tracking_table(stream_locator, locator, model);
   std::printf("\n(median/p95: error of the reported answer nearest the truth; 'ambiguous': another solution fits "
               "within noise and is reported too; 'stream': one press moving along a rose curve within 12 mm at "
               "up to 90 mm/s, 0.5-1.5 N, sampled at 10 kHz for 2 s)\n\n");

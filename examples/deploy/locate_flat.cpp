@@ -28,9 +28,12 @@ int main(int argc, char** argv) {
     // 1. The flat map: checked (size, checksum, every value) as it is read.
     const pvdf::mapping::ChargeMap map = pvdf::mapping::read_flat_map(argv[1]);
 
-    // 2. The Locator, built once (interpolant and coarse search table); default options: the
-    //    map's charge noise, the force range half the lowest to twice the highest level.
-    const pvdf::mapping::Locator locator(map);
+    // 2. The Locator, built once (interpolant and coarse search table); the map's charge noise,
+    //    the force range half the lowest to twice the highest level, and — a stream — linearised
+    //    σ's (no valley σ's, which would halve the rate), as `pvdfkit locate --stream`.
+    pvdf::mapping::LocatorOptions locator_options;
+    locator_options.valley_sigma_cells = 0;
+    const pvdf::mapping::Locator locator(map, locator_options);
 
     // 3. Every row of the stream, tracked from the previous row's solutions.
     pvdf::mapping::StreamOptions options;

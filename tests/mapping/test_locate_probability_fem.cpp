@@ -1,6 +1,7 @@
 // The lookup's solutions and their probabilities on a multi-level FEM map with the force
 // unknown (docs/lookup.md §1.8): presses solved by the FEM between the map's nodes, with
-// Gaussian charge noise, must have the true press among the reported solutions (≥ 99 %), and
+// Gaussian charge noise, must have the true press among the reported solutions (≥ 99 %; the
+// σ's are the default lookup's, valley σ's where the misfit's valley is wide), and
 // the probability of the main answer must be calibrated: among presses whose p_best falls in a
 // bin, the main answer is the right one about as often as the bin says (p_best ≥ 0.9 → ≥ 90 %).
 // (The force-known accuracy target, median < 0.05 mm, is checked on a 1 mm FEM map by
@@ -203,12 +204,10 @@ TEST_CASE("FEM presses with unknown force: the truth is among the solutions and 
          << (b.n ? b.sum_p / b.n : 0.0) << ", main answer right " << (b.n ? 100.0 * b.right / b.n : 0.0) << " %");
   }
   CHECK(n_located >= n_total * 99 / 100);
-  // Measured 98.98 % (13 of 1279 draws): the 99 % target is missed narrowly on this 2 mm map.
-  // Each miss was examined (docs/lookup.md §7b): a fit started at the truth ends on the
-  // reported solution, which lies 3-7 σ from the truth along a bent valley of the misfit, at
-  // three presses widened by the map's own error; none is a lost or merged solution, none at
-  // the force bounds or the map's edge. Asserted at 98.5 % so that a lost branch fails.
-  CHECK(among_share >= 0.985);
+  // Measured 99.30 % (9 of 1279 draws) with the valley σ's (docs/lookup.md §1.6, §7b); 98.98 %
+  // with linearised σ's only, whose misses lay 3-7 σ from the truth along a bent valley of the
+  // misfit.
+  CHECK(among_share >= 0.99);
   // Calibration: the ≥ 0.9 bin is right ≥ 90 % of the time; every bin with enough presses is
   // right as often as its mean p_best says, within 0.1 plus two binomial standard errors.
   REQUIRE(bins[0].n >= 100);

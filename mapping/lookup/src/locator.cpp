@@ -48,7 +48,7 @@ Location Locator::locate(const double* charges_C, double known_force_N) const {
 }
 
 PVDF_CLONES bool Locator::prepare(const double* charges_C, bool fixed_force, double log_known_force, Query& Q,
-                      Location& early) const {
+                                  std::uint32_t& early_flags) const {
   Q.fixed_force = fixed_force;
   Q.log_known_force = log_known_force;
   Q.log_lo = fixed_force ? log_known_force : log_force_lo_;
@@ -57,8 +57,7 @@ PVDF_CLONES bool Locator::prepare(const double* charges_C, bool fixed_force, dou
   double snr2 = 0, noise_norm2 = 0;
   for (std::size_t k = 0; k < ne_; ++k) {
     if (!std::isfinite(charges_C[k])) {
-      early = Location{};
-      early.flags = flag::outside_map | flag::no_press;
+      early_flags = flag::outside_map | flag::no_press;
       return false;
     }
     Q.q[k] = (charges_C[k] - offset_[k]) / gain_[k];
@@ -69,8 +68,7 @@ PVDF_CLONES bool Locator::prepare(const double* charges_C, bool fixed_force, dou
     Q.q_unit[k] = Q.q[k];
   }
   if (std::sqrt(snr2 / double(ne_)) < options_.no_press_snr) {
-    early = Location{};
-    early.flags = flag::no_press;
+    early_flags = flag::no_press;
     return false;
   }
   Q.q_norm = normalize(Q.q_unit.data(), ne_);
@@ -107,10 +105,14 @@ PVDF_CLONES int Locator::add_fold_twins(const Query& Q, std::array<Fit, 8>& fits
 }
 
 PVDF_CLONES Location Locator::locate_impl(const double* charges_C, bool fixed_force, double log_known_force,
-                                          const std::array<double, 3>* hints, int n_hints) const {
+                                          const std::array<double, 3>* hints, int n_hints, bool held) const {
   Query Q;
-  Location early;
-  if (!prepare(charges_C, fixed_force, log_known_force, Q, early)) return early;
+  std::uint32_t early_flags = 0;
+  if (!prepare(charges_C, fixed_force, log_known_force, Q, early_flags)) {
+    Location early;
+    early.flags = early_flags;
+    return early;
+  }
   const double log_lo = Q.log_lo, log_hi = Q.log_hi, limit = Q.limit, noise2 = Q.noise2, log_q_norm = Q.log_q_norm;
   const Vec& q = Q.q;
   const Vec& w = Q.w;
@@ -121,7 +123,8 @@ PVDF_CLONES Location Locator::locate_impl(const double* charges_C, bool fixed_fo
   int n_starts = 0;
   // Coarse search by the linearized direction model: one start per distinct predicted solution.
   StartList predicted;
-  if (predicted_starts(q_unit.data(), log_q_norm, noise2, fixed_force, log_known_force, log_lo, log_hi, predicted)) {
+  if (predicted_starts(q_unit.data(), log_q_norm, noise2, fixed_force, log_known_force, log_lo, log_hi, predicted,
+                       held && n_hints > 0)) {
     // Ask early for what each start's refinement and first fit read: its cell's model rows (the
     // two levels around its force) and the interpolant's coefficients.
     for (int s = 0; s < predicted.n && s < options_.max_starts; ++s) {
@@ -144,6 +147,16 @@ PVDF_CLONES Location Locator::locate_impl(const double* charges_C, bool fixed_fo
           levenberg_marquardt(q.data(), w.data(), st.x, st.y, st.l, fixed_force, log_lo, log_hi, fits.data(), n_starts);
       ++n_starts;
     }
+  }
+  if (held && n_hints > 0 && predicted.n == 0) {
+    // A stream's press held outside at the last sample whose charges no cell's direction model
+    // reaches now either (no start from the query's own direction bin: a press still weaker than
+    // the force range, or still off the map): outside, held where it was — no hint fit, no
+    // angular fallback (§1.9).
+    Location out;
+    out.flags = flag::outside_map;
+    out.held = hints[0];
+    return out;
   }
   n_starts = add_fold_twins(Q, fits, n_starts);
   bool any_within = false;
@@ -222,15 +235,20 @@ int Locator::add_hint_fits(const Query& Q, const std::array<double, 3>* hints, i
   return n_fits;
 }
 
-Location Locator::locate_near(const double* charges_C, const std::array<double, 3>* hints, int n_hints) const {
-  return fixed_force_ ? locate_impl(charges_C, true, log_force_lo_, hints, n_hints)
-                      : locate_impl(charges_C, false, 0.0, hints, n_hints);
+Location Locator::locate_near(const double* charges_C, const std::array<double, 3>* hints, int n_hints,
+                             bool held) const {
+  return fixed_force_ ? locate_impl(charges_C, true, log_force_lo_, hints, n_hints, held)
+                      : locate_impl(charges_C, false, 0.0, hints, n_hints, held);
 }
 
 Location Locator::locate_from(const double* charges_C, const std::array<double, 3>* starts, int n_starts) const {
   Query Q;
-  Location early;
-  if (!prepare(charges_C, fixed_force_, fixed_force_ ? log_force_lo_ : 0.0, Q, early)) return early;
+  std::uint32_t early_flags = 0;
+  if (!prepare(charges_C, fixed_force_, fixed_force_ ? log_force_lo_ : 0.0, Q, early_flags)) {
+    Location early;
+    early.flags = early_flags;
+    return early;
+  }
   std::array<Fit, 8> fits{};
   int n = 0;
   for (int s = 0; s < n_starts && n < int(fits.size()); ++s) {

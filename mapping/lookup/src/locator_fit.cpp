@@ -30,7 +30,9 @@ using detail::LmPoint;
 
 namespace {
 
-PVDF_INLINE double chi2_of(const Vec& m, const double* q, const double* w, std::size_t ne) {
+template <std::size_t NE>
+PVDF_INLINE double chi2_of(const Vec& m, const double* q, const double* w, std::size_t ne_runtime) {
+  const std::size_t ne = NE > 0 ? NE : ne_runtime;
   double s = 0;
   for (std::size_t k = 0; k < ne; ++k) {
     const double r = (m[k] - q[k]) * w[k];
@@ -39,7 +41,9 @@ PVDF_INLINE double chi2_of(const Vec& m, const double* q, const double* w, std::
   return s;
 }
 
-PVDF_INLINE void normal_equations(LmPoint& p, const double* q, const double* w, std::size_t ne) {
+template <std::size_t NE>
+PVDF_INLINE void normal_equations(LmPoint& p, const double* q, const double* w, std::size_t ne_runtime) {
+  const std::size_t ne = NE > 0 ? NE : ne_runtime;
   p.JtJ = {0, 0, 0, 0, 0, 0};
   p.Jtr = {0, 0, 0};
   for (std::size_t k = 0; k < ne; ++k) {
@@ -100,11 +104,16 @@ PVDF_INLINE double step_limit(const std::array<double, 3>& step, double hx, doub
 PVDF_CLONES bool Locator::lm_evaluate(double x, double y, double l, bool fixed_force, const double* q, const double* w,
                           LmPoint& p) const {
   if (!interp_.evaluate(x, y, l, p.model.data(), p.grad.data())) return false;
-  p.chi2 = chi2_of(p.model, q, w, ne_);
   if (fixed_force) {  // only (x, y) move: drop the ln F column
     for (std::size_t k = 0; k < ne_; ++k) p.grad[k][2] = 0;
   }
-  normal_equations(p, q, w, ne_);
+  if (ne_ == 3) {  // fixed-size loops for the three-electrode film
+    p.chi2 = chi2_of<3>(p.model, q, w, ne_);
+    normal_equations<3>(p, q, w, ne_);
+  } else {
+    p.chi2 = chi2_of<0>(p.model, q, w, ne_);
+    normal_equations<0>(p, q, w, ne_);
+  }
   return true;
 }
 
@@ -148,10 +157,26 @@ PVDF_CLONES Locator::Fit Locator::levenberg_marquardt(const double* q, const dou
       w = w_map.data();
     }
   }
+  const double hx = interp_.hx(), hy = interp_.hy();
+  // A point within 0.05 cell and 0.01 in ln F of a solution an earlier start already found is
+  // heading into it: the fit stops there (two end points closer than a cell are never distinct
+  // solutions). Asked of the start and of every trial point before the model is evaluated there.
+  auto known = [&](double px, double py, double pl) {
+    for (int d = 0; d < n_found; ++d) {
+      if (found[d].ok && std::abs(px - found[d].x) < 0.05 * hx && std::abs(py - found[d].y) < 0.05 * hy &&
+          std::abs(pl - found[d].l) < 0.01) {
+        return true;
+      }
+    }
+    return false;
+  };
+  if (known(x, y, l)) {
+    fit.duplicate = true;
+    return fit;
+  }
   LmPoint p;
   if (!lm_evaluate(x, y, l, fixed_force, q, w, p)) return fit;
   double lambda = 1e-3;
-  const double hx = interp_.hx(), hy = interp_.hy();
   int it = 0;
   bool quadratic_exit = false;
   for (; it < options_.max_iterations; ++it) {
@@ -177,6 +202,10 @@ PVDF_CLONES Locator::Fit Locator::levenberg_marquardt(const double* q, const dou
       break;
     }
     const double nx = x + limit * step[0], ny = y + limit * step[1], nl = l + limit * step[2];
+    if (known(nx, ny, nl)) {
+      fit.duplicate = true;
+      return fit;
+    }
     LmPoint trial;
     if (nl < log_lo || nl > log_hi || !lm_evaluate(nx, ny, nl, fixed_force, q, w, trial)) {
       fit.blocked = true;
@@ -199,15 +228,6 @@ PVDF_CLONES Locator::Fit Locator::levenberg_marquardt(const double* q, const dou
       p = trial;
       lambda = std::max(lambda * 0.2, 1e-9);
       fit.blocked = false;
-      // Heading into a solution an earlier start already found: stop, it adds nothing (two
-      // end points closer than a cell are never distinct solutions).
-      for (int d = 0; d < n_found; ++d) {
-        if (found[d].ok && std::abs(x - found[d].x) < 0.05 * hx && std::abs(y - found[d].y) < 0.05 * hy &&
-            std::abs(l - found[d].l) < 0.01) {
-          fit.duplicate = true;
-          return fit;
-        }
-      }
       if (small || p.chi2 < 1e-20 || tiny_gain) {
         fit.converged = true;
         ++it;
@@ -427,6 +447,7 @@ PVDF_CLONES Location Locator::finish(const Query& Q, std::array<Fit, 8>& fits, i
     return out;
   }
   Fit& b = fits[std::size_t(best)];
+  if (b.chi2 <= limit) b.log_widen = valley_sigma(Q, b);
   fill_main(b, out);
   if (b.chi2 > limit) {
     if (b.blocked) {
@@ -448,7 +469,9 @@ PVDF_CLONES Location Locator::finish(const Query& Q, std::array<Fit, 8>& fits, i
     for (int g = 1; g < n_group; ++g) {
       Fit& f = fits[std::size_t(group[std::size_t(g)])];
       covariance(f, Q);
-      if (!without_position(f, Q)) group[std::size_t(kept++)] = group[std::size_t(g)];
+      if (without_position(f, Q)) continue;
+      f.log_widen = valley_sigma(Q, f);
+      group[std::size_t(kept++)] = group[std::size_t(g)];
     }
     n_group = kept;
     if (n_group == 1) return out;
@@ -543,7 +566,7 @@ double Locator::log_posterior_weight(const Query& Q, const Fit& f) const {
     det = a00 * (a11 * a22 - a12 * a12) - a01 * (a01 * a22 - a12 * a02) + a02 * (a01 * a12 - a11 * a02);
     floor *= rl;
   }
-  return -0.5 * f.chi2 - 0.5 * std::log(std::max(det, floor)) + (Q.fixed_force ? 0.0 : f.l);
+  return -0.5 * f.chi2 - 0.5 * std::log(std::max(det, floor)) + f.log_widen + (Q.fixed_force ? 0.0 : f.l);
 }
 
 int Locator::distinct_solutions(const Query& Q, const std::array<Fit, 8>& fits, int n_starts, int best,

@@ -69,7 +69,8 @@ void Locator::coarse_candidates(const double* q_unit, double noise2, Shortlist& 
 }
 
 PVDF_CLONES bool Locator::predicted_starts(const double* q_unit, double log_q_norm, double noise2, bool fixed_force,
-                               double log_force, double log_lo, double log_hi, StartList& starts) const {
+                               double log_force, double log_lo, double log_hi, StartList& starts,
+                                           bool own_bin_only) const {
   starts.n = 0;
   double phi, theta;
   direction_key(q_unit, phi, theta);
@@ -77,7 +78,8 @@ PVDF_CLONES bool Locator::predicted_starts(const double* q_unit, double log_q_no
   const int t = int(std::floor((theta - theta0_) / (theta1_ - theta0_) * bins_));
   const double p_exp = interp_.force_exponent(), inv_p = 1.0 / p_exp;
   const double hx = interp_.hx(), hy = interp_.hy();
-  for (int ring = 0; ring <= 1 && starts.n == 0; ++ring) {
+  const int last_ring = own_bin_only ? 0 : 1;
+  for (int ring = 0; ring <= last_ring && starts.n == 0; ++ring) {
     for (int tt = t - ring; tt <= t + ring; ++tt) {
       for (int pp = p - ring; pp <= p + ring; ++pp) {
         if (pp < 0 || tt < 0 || pp >= bins_ || tt >= bins_) continue;
@@ -136,6 +138,40 @@ PVDF_CLONES bool Locator::predicted_starts(const double* q_unit, double log_q_no
   return starts.n > 0;
 }
 
+namespace {
+
+/// Two Newton steps on q̂ = d + J δ + ½ H(δ, δ) in least squares, from δ = (dt, ds) (cell units;
+/// d = the cell model's rows d, Jt, Js, Htt, Hts, Hss of NE each; NE = 0: runtime count). False
+/// at a fold (singular) or where the model has no solution near.
+template <std::size_t NE>
+PVDF_INLINE bool newton_in_cell(const double* d, std::size_t ne_runtime, const double* q_unit, double& dt, double& ds) {
+  const std::size_t ne = NE > 0 ? NE : ne_runtime;
+  const double *jt = d + ne, *js = d + 2 * ne, *htt = d + 3 * ne, *hts = d + 4 * ne, *hss = d + 5 * ne;
+  for (int it = 0; it < 2; ++it) {
+    double a00 = 0, a01 = 0, a11 = 0, b0 = 0, b1 = 0;
+    for (std::size_t k = 0; k < ne; ++k) {
+      const double e = q_unit[k] - d[k] - jt[k] * dt - js[k] * ds -
+                       0.5 * (htt[k] * dt * dt + 2 * hts[k] * dt * ds + hss[k] * ds * ds);
+      const double ct = jt[k] + htt[k] * dt + hts[k] * ds, cs = js[k] + hts[k] * dt + hss[k] * ds;
+      a00 += ct * ct;
+      a01 += ct * cs;
+      a11 += cs * cs;
+      b0 += ct * e;
+      b1 += cs * e;
+    }
+    const double det = a00 * a11 - a01 * a01;
+    if (!(det > 1e-14 * (a00 * a11 + 1e-300))) return false;  // a fold: leave the start to the fit
+    const double idet = 1.0 / det;
+    const double st_t = (a11 * b0 - a01 * b1) * idet, st_s = (a00 * b1 - a01 * b0) * idet;
+    if (!(std::abs(st_t) < 1.0 && std::abs(st_s) < 1.0)) return false;  // the model has no solution near
+    dt += st_t;
+    ds += st_s;
+  }
+  return true;
+}
+
+}  // namespace
+
 PVDF_CLONES bool Locator::cell_model(double x, double y, double l, CellModel& m) const {
   const std::size_t nx = interp_.nx(), ny = interp_.ny(), nf = interp_.n_levels();
   const double u = (x - interp_.x0()) * interp_.inv_hx(), v = (y - interp_.y0()) * interp_.inv_hy();
@@ -151,8 +187,12 @@ PVDF_CLONES bool Locator::cell_model(double x, double y, double l, CellModel& m)
   interp_.level_bracket(l, f0, w);
   const float* m0 = &model_[(m.cell * nf + f0) * model_stride_];
   const float* m1 = nf > 1 ? m0 + model_stride_ : m0;
-  const std::size_t n = 6 * ne_ + 6;
-  for (std::size_t k = 0; k < n; ++k) m.v[k] = (1 - w) * double(m0[k]) + w * double(m1[k]);
+  if (ne_ == 3) {
+    for (std::size_t k = 0; k < 24; ++k) m.v[k] = (1 - w) * double(m0[k]) + w * double(m1[k]);
+  } else {
+    const std::size_t n = 6 * ne_ + 6;
+    for (std::size_t k = 0; k < n; ++k) m.v[k] = (1 - w) * double(m0[k]) + w * double(m1[k]);
+  }
   return true;
 }
 
@@ -170,29 +210,8 @@ PVDF_CLONES void Locator::refine_start(const double* q_unit, double log_q_norm, 
     last_u = std::floor((st.x - interp_.x0()) * interp_.inv_hx());
     last_v = std::floor((st.y - interp_.y0()) * interp_.inv_hy());
     const double* d = m.v.data();
-    const double *jt = d + ne_, *js = d + 2 * ne_, *htt = d + 3 * ne_, *hts = d + 4 * ne_, *hss = d + 5 * ne_;
     double dt = m.dt, ds = m.ds;
-    // Two Newton steps on q̂ = d + J δ + ½ H(δ, δ) in least squares.
-    for (int it = 0; it < 2; ++it) {
-      double a00 = 0, a01 = 0, a11 = 0, b0 = 0, b1 = 0;
-      for (std::size_t k = 0; k < ne_; ++k) {
-        const double e = q_unit[k] - d[k] - jt[k] * dt - js[k] * ds -
-                         0.5 * (htt[k] * dt * dt + 2 * hts[k] * dt * ds + hss[k] * ds * ds);
-        const double ct = jt[k] + htt[k] * dt + hts[k] * ds, cs = js[k] + hts[k] * dt + hss[k] * ds;
-        a00 += ct * ct;
-        a01 += ct * cs;
-        a11 += cs * cs;
-        b0 += ct * e;
-        b1 += cs * e;
-      }
-      const double det = a00 * a11 - a01 * a01;
-      if (!(det > 1e-14 * (a00 * a11 + 1e-300))) return;  // a fold: leave the start to the fit
-      const double idet = 1.0 / det;
-      const double st_t = (a11 * b0 - a01 * b1) * idet, st_s = (a00 * b1 - a01 * b0) * idet;
-      if (!(std::abs(st_t) < 1.0 && std::abs(st_s) < 1.0)) return;  // the model has no solution near
-      dt += st_t;
-      ds += st_s;
-    }
+    if (!(ne_ == 3 ? newton_in_cell<3>(d, ne_, q_unit, dt, ds) : newton_in_cell<0>(d, ne_, q_unit, dt, ds))) return;
     if (!(std::abs(dt) < 1.5 && std::abs(ds) < 1.5)) return;
     // Never off the map: a solution on the map's edge stays a start the fit can evaluate.
     const double nx = cell_xy_[m.cell][0] + dt * hx, ny = cell_xy_[m.cell][1] + ds * hy;

@@ -13,14 +13,17 @@ Tracker::Tracker(const Locator& locator, const TrackerOptions& options) : locato
 
 void Tracker::reset() {
   n_hints_ = 0;
+  held_ = false;
   since_search_ = 0;
 }
 
 void Tracker::remember(const Location& r) {
   n_hints_ = 0;
+  held_ = false;
   if ((r.flags & flag::outside_map) && !(r.flags & (flag::no_press | flag::saturated)) && r.held[2] > 0) {
     hints_[0] = r.held;  // held by the map's edge or the force range: where to look next
     n_hints_ = 1;
+    held_ = true;
     return;
   }
   if (!r.has_position()) return;
@@ -42,13 +45,11 @@ Location Tracker::next(const double* charges_C) {
     search = true;
     ++summary_.intervals;
   }
-  Location r;
+  const Location r = search ? locator_->locate(charges_C) : locator_->locate_near(charges_C, hints_.data(), n_hints_, held_);
   if (search) {
-    r = locator_->locate(charges_C);
     ++summary_.full_searches;
     since_search_ = 0;
   } else {
-    r = locator_->locate_near(charges_C, hints_.data(), n_hints_);
     ++summary_.tracked;
     ++since_search_;
   }

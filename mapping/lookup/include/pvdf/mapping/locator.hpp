@@ -66,6 +66,11 @@ struct LocatorOptions {
   double known_force_N = 0.0;
   /// Coarse search: number of bins per axis of the charge-direction table (0 = automatic).
   int direction_bins = 0;
+  /// Valley σ's (docs/lookup.md §1.6): a solution whose linearised 1-σ along its weak position
+  /// direction exceeds this many grid cells gets its σ's from the profile of χ² along that
+  /// direction (Δχ² = 1, the other parameters re-fitted) where that is wider, and its
+  /// probability the same widening. 0 = linearised σ's only.
+  double valley_sigma_cells = 0.2;
 };
 
 /// A located press. Values are SI; σ's are 1-σ from the charge-noise model, (JᵀWJ)⁻¹.
@@ -130,8 +135,12 @@ class Locator {
   /// when none of them fits within noise are the hints fitted, and if every hint's fit is held
   /// by the map's edge or the force range outside noise the answer is outside_map without
   /// locate()'s angular fallback (starts at cell centres). Otherwise locate()'s answer.
+  /// `held`: the hints are the last sample's held fit (an outside_map answer), not solutions;
+  /// then charges that no cell's direction model reaches (the coarse search has no start at
+  /// all) are outside_map at once, held at hints[0], without any fit (docs/lookup.md §1.9).
   /// Thread-safe, no allocation.
-  Location locate_near(const double* charges_C, const std::array<double, 3>* hints, int n_hints) const;
+  Location locate_near(const double* charges_C, const std::array<double, 3>* hints, int n_hints,
+                       bool held = false) const;
 
   /// The map's (calibrated, if enabled) charges for a press at (x, y) with force F; false outside.
   bool predict(double x_m, double y_m, double force_N, double* charges_C) const;
@@ -175,6 +184,7 @@ class Locator {
     bool converged = false, blocked = false, ok = false, singular = false, duplicate = false;
     bool vague = false;     ///< within noise, but the charges do not place it (without_position)
     bool fallback = false;  ///< started by the angular fallback (no coarse-search start fitted within noise)
+    double log_widen = 0;   ///< ln(valley half-width / linearised σ) along the weak direction (valley_sigma)
   };
   Fit levenberg_marquardt(const double* q, const double* inv_sigma, double x, double y, double l, bool fixed_force,
                           double log_lo, double log_hi, const Fit* found, int n_found) const;
@@ -190,6 +200,13 @@ class Locator {
                     bool fixed_force, double log_lo, double log_hi) const;
   /// Fills fit.sigma / fit.singular from fit.jtj (only for the fits that are reported).
   void covariance(Fit& fit, const Query& query) const;
+  /// Widens fit.sigma to the profile of χ² along the weak position direction where that is
+  /// wider (locator_valley.cpp); returns the posterior volume's widening, ln ≥ 0.
+  double valley_sigma(const Query& query, Fit& fit) const;
+  /// The profile point at offset t along the unit direction v from the fit: the offset s across
+  /// and ln F re-fitted from (s, l); χ² there. False off the map.
+  bool valley_point(const Query& query, const Fit& fit, const std::array<double, 2>& v, double t, double& s, double& l,
+                    double& chi2) const;
   /// The weighted JᵀJ behind the reported σ's: fit.jtj, or with the map's own error added to
   /// the charge noise where the map stores one.
   std::array<double, 6> reported_jtj(const Fit& fit, const Query& query) const;
@@ -198,15 +215,17 @@ class Locator {
   /// The map's charge error (C) at (x, y, ln F); false off the grid or when none is stored.
   bool map_error_at(double x, double y, double l, double* error_C) const;
   Location locate_impl(const double* charges_C, bool fixed_force, double log_known_force,
-                       const std::array<double, 3>* hints = nullptr, int n_hints = 0) const;
+                       const std::array<double, 3>* hints = nullptr, int n_hints = 0, bool held = false) const;
   /// A query prepared for fitting: calibration undone, weights, unit direction, force bounds.
   struct Query {
     std::array<double, max_electrodes> q, w, q_unit;  ///< entries 0..ne−1 are set by prepare()
     double q_norm = 0, log_q_norm = 0, noise2 = 0, log_lo = 0, log_hi = 0, limit = 0, log_known_force = 0;
     bool fixed_force = false;
   };
-  /// False (with `early` set: no_press or non-finite charges) when there is nothing to fit.
-  bool prepare(const double* charges_C, bool fixed_force, double log_known_force, Query& query, Location& early) const;
+  /// False (with the answer's flags in `early_flags`: no_press, or outside_map|no_press for
+  /// non-finite charges) when there is nothing to fit.
+  bool prepare(const double* charges_C, bool fixed_force, double log_known_force, Query& query,
+               std::uint32_t& early_flags) const;
   /// Fits the fold twins of the fits within noise (fold-prone cells only); returns the new count.
   int add_fold_twins(const Query& query, std::array<Fit, 8>& fits, int n_fits) const;
   /// Choice, flags, covariance and alternatives from the fits.
@@ -246,9 +265,10 @@ class Locator {
                     int n_fits) const;
   /// Coarse search: bins of the direction table → cells whose linearized direction reaches the
   /// query inside (or next to) the cell → distinct starts, best first. Returns false when no
-  /// cell can produce the direction (then the old angular shortlist is used).
+  /// cell can produce the direction (then the old angular shortlist is used). The query's own
+  /// bin is scanned, and when it has no start the ring of its 8 neighbours (own_bin_only: not).
   bool predicted_starts(const double* q_unit, double log_q_norm, double noise2, bool fixed_force, double log_force,
-                        double log_lo, double log_hi, StartList& starts) const;
+                        double log_lo, double log_hi, StartList& starts, bool own_bin_only = false) const;
   /// The compact model of the cell holding (x, y), blended between the force levels around l,
   /// with the point's offset from the cell centre (cell units). False off the usable cells.
   struct CellModel {

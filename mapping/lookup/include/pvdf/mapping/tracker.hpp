@@ -49,6 +49,7 @@ class Tracker {
   TrackerSummary summary_;
   std::array<std::array<double, 3>, Location::max_solutions> hints_{};
   int n_hints_ = 0;
+  bool held_ = false;  ///< the hint is the last sample's held fit (outside_map), not a solution
   int since_search_ = 0;
 };
 
