@@ -99,7 +99,6 @@ double Locator::valley_sigma(const Query& Q, Fit& f) const {
     // points; off the map or the force range ends the walk there).
     double t_in = 0, d_in = 0, t = sigma_v, s_in = 0, l_in = f.l, t_out = sigma_v;
     double s_at = 0, l_at = f.l;
-    bool crossed = false;
     for (int step = 0; step < 6 && t <= reach; ++step) {
       double s = slope_s * t * side, l = std::clamp(f.l + slope_l * t * side, Q.log_lo, Q.log_hi), chi2 = 0;
       if (!valley_point(Q, f, v, side * t, s, l, chi2)) break;
@@ -110,7 +109,6 @@ double Locator::valley_sigma(const Query& Q, Fit& f) const {
         t_out = t_in + a * (t - t_in);
         s_at = s_in + a * (s - s_in);
         l_at = l_in + a * (l - l_in);
-        crossed = true;
         break;
       }
       t_in = t;
@@ -122,7 +120,7 @@ double Locator::valley_sigma(const Query& Q, Fit& f) const {
       l_at = l;
       t *= std::clamp(1.0 / std::sqrt(std::max(d, 1e-2)), 1.25, 3.0);
     }
-    (void)crossed;
+    // Not crossed within `reach` or the map: the extent reached is kept (a lower bound of the valley's).
     const double x = side * t_out * v[0] - s_at * v[1], y = side * t_out * v[1] + s_at * v[0];
     extent[0] = std::max(extent[0], std::abs(x));
     extent[1] = std::max(extent[1], std::abs(y));
