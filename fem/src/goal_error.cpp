@@ -1,11 +1,12 @@
 // Goal-oriented error estimates (docs/fem.md §6): the dual-weighted residual (DWR) method for the
 // nonlinear film, for every output J (each electrode's charge, w at each load).
 //   adjoint           K(u_h) z_h = J'(u_h)        (the converged tangent, symmetric: K = ∇²Π)
-//   discretization    J(u) − J(u_h) ≈ −R⁺(u_h)[z⁺ − z_h]
+//   discretization    J(u) − J(u_h) ≈ −R⁺(u_h)[z⁺ − z_h]   (z⁺: Q(p+1) adjoint or extrapolated z_h)
 //   bending (model)   J(u_b) − J(u_h) ≈ −z_b · B u_h   with (K + B) z_b = J'
 // R⁺ is the residual of the same forms in FE_Q(p+1) on the same mesh (quadrature and penalty of
 // degree p, so that R⁺(u_h)[v_h] = R(u_h)[v_h] = 0 for every v_h of the primal space), z⁺ the
-// patch-wise Q(p+1) extrapolation of z_h, B the C0 interior-penalty bending operator.
+// adjoint solved in Q(p+1) on the same mesh or the patch-wise Q(p+1) extrapolation of z_h (see
+// estimate_goal_errors), B the C0 interior-penalty bending operator.
 #include "electrode_cells.hpp"
 #include "film_solver.hpp"
 
@@ -142,7 +143,8 @@ double relative_max(const std::vector<double>& est, const std::vector<double>& s
 
 // All estimates at the converged u (see the file comment). Cost: one factorization of K(u) (the
 // factorization left behind, which a probe sweep's next chord step reuses), one more of K + B for
-// the bending part, one back substitution per output and adjoint, one residual in Q(p+1).
+// the bending part, one back substitution per output and adjoint, one residual in Q(p+1); with
+// `higher_order_adjoint` (solve's loop) one factorization of the Q(p+1) tangent for the charges.
 FilmSolver::GoalErrors FilmSolver::estimate_goal_errors(const Vector<double>& u, Model model,
                                                         bool higher_order_adjoint) {
   GoalErrors ge;
