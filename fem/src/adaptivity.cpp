@@ -95,13 +95,14 @@ void FilmSolver::refine_mesh(Vector<double>& u, const Vector<float>* goal_indica
 // with `where` naming the cycle.
 NewtonOutcome FilmSolver::refine_until_tolerance(Model model, std::string& where) {
   Summary& s = summary_;
-  s.error_estimator = std::string("dual-weighted residual: adjoint of the converged tangent (LDL^T back substitution), ") +
-                      "weights from its patch-wise Q" + std::to_string(options_.fe_degree + 1) +
-                      " extrapolation, residual in Q" + std::to_string(options_.fe_degree + 1) + " on the same mesh; " +
+  const std::string q = "Q" + std::to_string(options_.fe_degree + 1);
+  s.error_estimator = "dual-weighted residual: adjoint of the converged tangent, solved in " + q +
+                      " on the same mesh for the charges, " + q + " patch extrapolation of the Q" +
+                      std::to_string(options_.fe_degree) + " adjoint for the deflections; residual in " + q + "; " +
                       (options_.refinement == Refinement::goal ? "goal-oriented" : "Kelly") + " refinement";
   const int max_cycles = options_.adaptive ? options_.max_refinements : 0;
   while (true) {
-    goal_ = estimate_goal_errors(solution_, model);
+    goal_ = estimate_goal_errors(solution_, model, true);
     if (goal_.model_estimated && bending_switchable_) {
       const bool leave_out = bending_may_be_left_out(goal_.relative_model, options_.tolerance, bending_reason_);
       if (!leave_out) {  // the richer model, from the membrane solution on this mesh

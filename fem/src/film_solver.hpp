@@ -24,6 +24,7 @@
 #include <deal.II/base/tensor.h>
 #include <deal.II/dofs/dof_handler.h>
 #include <deal.II/fe/fe_system.h>
+#include <deal.II/fe/fe_values.h>
 #include <deal.II/fe/mapping_q.h>
 #include <deal.II/grid/manifold_lib.h>
 #include <deal.II/grid/tria.h>
@@ -185,7 +186,10 @@ class FilmSolver {
   };
   /// Estimates at the converged state u of `model`. The bending-model part is computed when the
   /// solver runs without bending but kept the bending pattern (keep_bending_pattern()).
-  GoalErrors estimate_goal_errors(const Vector<double>& u, Model model);
+  /// `higher_order_adjoint`: the adjoint weights from a Q(p+1) solve on the same mesh (one more
+  /// factorization, reliable on coarse meshes) instead of the patch-wise extrapolation of the Q(p)
+  /// adjoint (cheap; what the probe sweep uses).
+  GoalErrors estimate_goal_errors(const Vector<double>& u, Model model, bool higher_order_adjoint = false);
   /// Assemble the bending operator and its sparsity even when the model leaves bending out (call
   /// before the first setup_system()): needed to estimate what bending would change.
   /// `switchable`: the adaptive loop switches bending on when its estimated effect is too large
@@ -249,6 +253,16 @@ class FilmSolver {
   unsigned int form_degree() const { return form_degree_ > 0 ? form_degree_ : options_.fe_degree; }
 
   // outputs.cpp
+  /// One cell of an electrode integral: FE values at points of the cell's part inside the outline
+  /// (the cell's Gauss rule when the cell lies wholly inside) and their weights (m²).
+  struct ElectrodeCell {
+    DoFHandler<dim>::active_cell_iterator cell;
+    std::unique_ptr<dealii::FEValues<dim>> values;  // reinit'ed on its cell
+    std::vector<double> jxw;
+  };
+  /// The cells and points of electrode k's integral on this mesh (built on first use, dropped
+  /// when the mesh or the DOFs change).
+  const std::vector<ElectrodeCell>& electrode_cells(std::size_t k) const;
   void fill_result(Result& result, Model model);
   Kinematics kinematics_at(const Vector<double>& u, const Point<dim>& p) const;
   std::array<double, 3> electrode_mean_force(const Vector<double>& u, Model model, std::size_t k,
@@ -353,6 +367,9 @@ class FilmSolver {
   std::string bending_reason_;    // the bending part of `auto` decided by its estimate
   double kinematics_model_error_ = 0;  // relative, from the `auto` trial solves
   bool dof_cap_reached_ = false;
+  // outputs.cpp: electrode_cells() per electrode; declared last, so destroyed before the mapping,
+  // the finite element and the DoF handler its FEValues refer to.
+  mutable std::vector<std::vector<ElectrodeCell>> electrode_cells_;
 };
 
 }  // namespace pvdf::fem::detail

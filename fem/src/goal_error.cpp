@@ -1,11 +1,12 @@
 // Goal-oriented error estimates (docs/fem.md §6): the dual-weighted residual (DWR) method for the
 // nonlinear film, for every output J (each electrode's charge, w at each load).
 //   adjoint           K(u_h) z_h = J'(u_h)        (the converged tangent, symmetric: K = ∇²Π)
-//   discretization    J(u) − J(u_h) ≈ −R⁺(u_h)[z⁺ − z_h]
+//   discretization    J(u) − J(u_h) ≈ −R⁺(u_h)[z⁺ − z_h]   (z⁺: Q(p+1) adjoint or extrapolated z_h)
 //   bending (model)   J(u_b) − J(u_h) ≈ −z_b · B u_h   with (K + B) z_b = J'
 // R⁺ is the residual of the same forms in FE_Q(p+1) on the same mesh (quadrature and penalty of
 // degree p, so that R⁺(u_h)[v_h] = R(u_h)[v_h] = 0 for every v_h of the primal space), z⁺ the
-// patch-wise Q(p+1) extrapolation of z_h, B the C0 interior-penalty bending operator.
+// adjoint solved in Q(p+1) on the same mesh or the patch-wise Q(p+1) extrapolation of z_h (see
+// estimate_goal_errors), B the C0 interior-penalty bending operator.
 #include "electrode_cells.hpp"
 #include "film_solver.hpp"
 
@@ -31,41 +32,34 @@ using namespace dealii;
 // material axes, Voigt rows) and λ = Cᵀa, dQ/du_i = A/(h·|Ω_k|) ∫_Ω_k λ·δE(φ_i) dA, δE(φ) for
 // component c being (v_c0 φ_x, v_c1 φ_y, v_c0 φ_y + v_c1 φ_x) as in the residual (assembly.cpp).
 Vector<double> FilmSolver::charge_derivative(const Vector<double>& u, Model model, std::size_t k) const {
-  const auto& poly = electrode_polygons_[k];
-  const std::array<double, 4> box = polygon_box(poly);
   const Eigen::Matrix3d T = pvdf::stress_to_material(draw_angle_);
   const double d31 = scene_.material.d31_C_per_N, d32 = scene_.material.d32_C_per_N;
   double lam[3] = {0, 0, 0};
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) lam[i] += membrane_C_.c[j][i] * (d31 * T(0, j) + d32 * T(1, j));
 
-  const QIterated<dim> quadrature(QGauss<1>(2), 8);
-  FEValues<dim> fe_values(*mapping_, *fe_, quadrature, update_gradients | update_JxW_values | update_quadrature_points);
   const FEValuesExtractors::Vector inplane(0);
   const FEValuesExtractors::Scalar w(2);
-  std::vector<Tensor<2, dim>> grad_u(quadrature.size());
-  std::vector<Tensor<1, dim>> grad_w(quadrature.size());
+  std::vector<Tensor<2, dim>> grad_u;
+  std::vector<Tensor<1, dim>> grad_w;
   const unsigned int n = fe_->n_dofs_per_cell();
   std::vector<types::global_dof_index> dofs(n);
   Vector<double> cell_g(n), g(dof_handler_.n_dofs());
   double area = 0;
-  for (const auto& cell : dof_handler_.active_cell_iterators()) {
-    if (cell_misses_box(cell, box)) continue;
-    fe_values.reinit(cell);
+  for (const ElectrodeCell& ec : electrode_cells(k)) {  // the points of the charge itself (outputs.cpp)
+    const FEValues<dim>& fe_values = *ec.values;
+    grad_u.resize(ec.jxw.size());
+    grad_w.resize(ec.jxw.size());
     fe_values[inplane].get_function_gradients(u, grad_u);
     fe_values[w].get_function_gradients(u, grad_w);
     cell_g = 0;
-    bool inside = false;
-    for (unsigned int q = 0; q < quadrature.size(); ++q) {
-      const Point<dim>& x = fe_values.quadrature_point(q);
-      if (!polygon_contains(poly, x[0], x[1])) continue;
-      inside = true;
+    for (unsigned int q = 0; q < ec.jxw.size(); ++q) {
       double v[3][2];
       for (unsigned int c = 0; c < 2; ++c)
         for (unsigned int b = 0; b < 2; ++b)
           v[c][b] = (c == b ? 1.0 : 0.0) + (model == Model::large_rotation ? grad_u[q][c][b] : 0.0);
       for (unsigned int b = 0; b < 2; ++b) v[2][b] = model == Model::linear ? 0.0 : grad_w[q][b];
-      const double jxw = fe_values.JxW(q);
+      const double jxw = ec.jxw[q];
       area += jxw;
       for (unsigned int i = 0; i < n; ++i) {
         const unsigned int c = fe_->system_to_component_index(i).first;
@@ -73,8 +67,7 @@ Vector<double> FilmSolver::charge_derivative(const Vector<double>& u, Model mode
         cell_g(i) += (gr[0] * (lam[0] * v[c][0] + lam[2] * v[c][1]) + gr[1] * (lam[1] * v[c][1] + lam[2] * v[c][0])) * jxw;
       }
     }
-    if (!inside) continue;
-    cell->get_dof_indices(dofs);
+    ec.cell->get_dof_indices(dofs);
     for (unsigned int i = 0; i < n; ++i) g(dofs[i]) += cell_g(i);
   }
   if (area > 0) g *= scene_.electrodes[k].area_m2() / (thickness_ * area);
@@ -150,8 +143,10 @@ double relative_max(const std::vector<double>& est, const std::vector<double>& s
 
 // All estimates at the converged u (see the file comment). Cost: one factorization of K(u) (the
 // factorization left behind, which a probe sweep's next chord step reuses), one more of K + B for
-// the bending part, one back substitution per output and adjoint, one residual in Q(p+1).
-FilmSolver::GoalErrors FilmSolver::estimate_goal_errors(const Vector<double>& u, Model model) {
+// the bending part, one back substitution per output and adjoint, one residual in Q(p+1); with
+// `higher_order_adjoint` (solve's loop) one factorization of the Q(p+1) tangent for the charges.
+FilmSolver::GoalErrors FilmSolver::estimate_goal_errors(const Vector<double>& u, Model model,
+                                                        bool higher_order_adjoint) {
   GoalErrors ge;
   const std::size_t ne = electrode_polygons_.size(), nl = loads_.size(), n_out = ne + nl;
   std::vector<Vector<double>> dJ;
@@ -200,14 +195,22 @@ FilmSolver::GoalErrors FilmSolver::estimate_goal_errors(const Vector<double>& u,
     ge.model_estimated = true;
   }
 
-  // 2. Discretization: adjoint with the model's own tangent, weights from the Q(p+1) extrapolation.
-  // A mesh with unrefined cells (a Gmsh file as read) has no patches to extrapolate on: there the
-  // adjoint is solved in Q(p+1) itself on the same mesh (the higher-order dual of deal.II's step-14),
-  // about (p+1)^2/p^2 the DOFs of the primal problem, once per output.
+  // 2. Discretization: adjoint with the model's own tangent, weights from the Q(p+1) extrapolation
+  // of z_h, or the adjoint solved in Q(p+1) itself on the same mesh (the higher-order dual of deal.II's
+  // step-14; about (p+1)^2/p^2 the DOFs of the primal problem, one more factorization): for the
+  // charges when `higher_order_adjoint`, and for every output on a mesh with unrefined cells (a Gmsh
+  // file as read), which has no patches to extrapolate on. Measured against the oracle (docs/fem.md
+  // §6.1): where cells are larger than the electrode, the extrapolated Q(p) adjoint of a charge
+  // misses its source and the estimate took the wrong sign (effectivity −0.4 … 3.4), the Q(p+1)
+  // adjoint gives 0.8 … 1.15; for w at a probe's centre the extrapolation did better (0.6 … 0.8,
+  // against 3.0 at 2e-4 true error with the Q(p+1) adjoint, whose point source is singular).
   assemble(u, model, 0.0, true, r);
   bool patches = true;
   for (const auto& cell : triangulation_.active_cell_iterators()) patches = patches && cell->level() > 0;
-  prepare_enriched(!patches);
+  auto solved_in_richer_space = [&](std::size_t j) { return !patches || (higher_order_adjoint && j < ne); };
+  bool any_richer = false;
+  for (std::size_t j = 0; j < n_out; ++j) any_richer = any_richer || solved_in_richer_space(j);
+  prepare_enriched(any_richer);
   FilmSolver& e = *enriched_;
   e.loads_ = loads_;
   e.total_force_ = total_force_;
@@ -215,17 +218,20 @@ FilmSolver::GoalErrors FilmSolver::estimate_goal_errors(const Vector<double>& u,
   e.assemble_load_vector();
   Vector<double> ue(e.n_dofs()), re(e.n_dofs()), zplus(e.n_dofs()), zi(e.n_dofs());
   FETools::interpolate(dof_handler_, u, e.dof_handler_, e.constraints_, ue);
-  e.assemble(ue, model, 0.0, !patches, re);
+  e.assemble(ue, model, 0.0, any_richer, re);
   const auto e_multiplicity = cell_multiplicity(e.dof_handler_);
+  bool richer_factorized = false;
   for (std::size_t j = 0; j < n_out; ++j) {
     if (!solve_linear(dJ[j], z, message, j == 0)) continue;
     constraints_.distribute(z);
-    if (patches) {
+    if (!solved_in_richer_space(j)) {
       FETools::extrapolate(dof_handler_, z, e.dof_handler_, e.constraints_, zplus);
     } else {
       Vector<double> dJe = j < ne ? e.charge_derivative(ue, model, j) : e.deflection_derivative(loads_[j - ne].center);
       e.constraints_.condense(dJe);
-      if (!e.solve_linear(dJe, zplus, message, j == 0)) continue;
+      const bool ok = e.solve_linear(dJe, zplus, message, !richer_factorized);
+      richer_factorized = richer_factorized || ok;
+      if (!ok) continue;
       e.constraints_.distribute(zplus);
     }
     FETools::interpolate(dof_handler_, z, e.dof_handler_, e.constraints_, zi);

@@ -47,36 +47,84 @@ MembraneForce FilmSolver::membrane_force(const Kinematics& k, const Point<dim>& 
   return n;
 }
 
-// Mean membrane force over electrode k: ∫χ_k N dA / ∫χ_k dA with the exact outline χ_k, by a
-// sub-sampled (8×8 Gauss-2) quadrature on every cell near the electrode.
-std::array<double, 3> FilmSolver::electrode_mean_force(const Vector<double>& u, Model model, std::size_t k,
-                                                       double* integrated_area) const {
+// The quadrature of electrode k's integrals (electrode_cells.hpp): every cell whose box meets the
+// outline's; a cell wholly inside keeps its Gauss rule (degree p + 2, with the curved mapping), a
+// cut cell gets the degree-5 rule of the outline clipped to its straight-sided quadrilateral, the
+// points taken back to the unit cell. The cells' chords differ from the Q2 mapping's curved edges by
+// the sagitta (~1e-6 of a cell near the electrodes), the whole error of this geometry.
+const std::vector<FilmSolver::ElectrodeCell>& FilmSolver::electrode_cells(std::size_t k) const {
+  if (electrode_cells_.size() != electrode_polygons_.size()) {
+    electrode_cells_.clear();
+    electrode_cells_.resize(electrode_polygons_.size());
+  }
+  std::vector<ElectrodeCell>& out = electrode_cells_[k];
+  if (!out.empty()) return out;
   const auto& poly = electrode_polygons_[k];
   const std::array<double, 4> box = polygon_box(poly);
-  const QIterated<dim> quadrature(QGauss<1>(2), 8);
-  FEValues<dim> fe_values(*mapping_, *fe_, quadrature, update_gradients | update_JxW_values | update_quadrature_points);
-  const FEValuesExtractors::Vector inplane(0);
-  const FEValuesExtractors::Scalar w(2);
-  std::vector<Tensor<2, dim>> grad_u(quadrature.size());
-  std::vector<Tensor<1, dim>> grad_w(quadrature.size());
-  std::array<double, 3> sum{0, 0, 0};
-  double area = 0;
+  const QGauss<dim> whole(options_.fe_degree + 2);
+  const UpdateFlags flags = update_gradients | update_JxW_values | update_quadrature_points;
   for (const auto& cell : dof_handler_.active_cell_iterators()) {
     if (cell_misses_box(cell, box)) continue;
-    fe_values.reinit(cell);
+    std::array<pvdf::Point2, 4> quad;
+    const unsigned int order[4] = {0, 1, 3, 2};
+    for (int v = 0; v < 4; ++v) quad[v] = {cell->vertex(order[v])[0], cell->vertex(order[v])[1]};
+    const std::vector<pvdf::Point2> part = clip_to_convex_quad(poly, quad);
+    const double quad_area = std::abs(twice_signed_area({quad.begin(), quad.end()}));
+    const double part_area = part.size() < 3 ? 0.0 : std::abs(twice_signed_area(part));
+    if (part_area <= 1e-12 * quad_area) continue;
+    ElectrodeCell ec;
+    ec.cell = cell;
+    if (part_area >= (1 - 1e-12) * quad_area) {
+      ec.values = std::make_unique<FEValues<dim>>(*mapping_, *fe_, whole, flags);
+      ec.values->reinit(cell);
+      ec.jxw = ec.values->get_JxW_values();
+    } else {
+      std::vector<pvdf::Point2> points;
+      std::vector<double> weights;
+      polygon_quadrature(part, points, weights);
+      std::vector<Point<dim>> unit;
+      for (std::size_t q = 0; q < points.size(); ++q) {
+        try {
+          unit.push_back(mapping_->transform_real_to_unit_cell(cell, Point<dim>(points[q][0], points[q][1])));
+          ec.jxw.push_back(weights[q]);
+        } catch (const Mapping<dim>::ExcTransformationFailed&) {  // outside a strongly curved cell: skip it
+        }
+      }
+      if (unit.empty()) continue;
+      ec.values = std::make_unique<FEValues<dim>>(*mapping_, *fe_, Quadrature<dim>(unit, std::vector<double>(unit.size(), 1.0)),
+                                                  flags);
+      ec.values->reinit(cell);
+    }
+    out.push_back(std::move(ec));
+  }
+  return out;
+}
+
+// Mean membrane force over electrode k: ∫χ_k N dA / ∫χ_k dA with the exact outline χ_k
+// (electrode_cells).
+std::array<double, 3> FilmSolver::electrode_mean_force(const Vector<double>& u, Model model, std::size_t k,
+                                                       double* integrated_area) const {
+  const FEValuesExtractors::Vector inplane(0);
+  const FEValuesExtractors::Scalar w(2);
+  std::vector<Tensor<2, dim>> grad_u;
+  std::vector<Tensor<1, dim>> grad_w;
+  std::array<double, 3> sum{0, 0, 0};
+  double area = 0;
+  for (const ElectrodeCell& ec : electrode_cells(k)) {
+    const FEValues<dim>& fe_values = *ec.values;
+    grad_u.resize(ec.jxw.size());
+    grad_w.resize(ec.jxw.size());
     fe_values[inplane].get_function_gradients(u, grad_u);
     fe_values[w].get_function_gradients(u, grad_w);
-    for (unsigned int q = 0; q < quadrature.size(); ++q) {
-      const Point<dim>& x = fe_values.quadrature_point(q);
-      if (!polygon_contains(poly, x[0], x[1])) continue;
+    for (unsigned int q = 0; q < ec.jxw.size(); ++q) {
       Kinematics kin;
       for (int a = 0; a < 2; ++a) {
         kin.g[a] = grad_w[q][a];
         for (int b = 0; b < 2; ++b) kin.H[a][b] = grad_u[q][a][b];
       }
       const std::array<double, 3> S = membrane_stress(membrane_strain(kin, model));  // with S0, relaxed if wrinkling
-      for (int c = 0; c < 3; ++c) sum[c] += S[c] * fe_values.JxW(q);
-      area += fe_values.JxW(q);
+      for (int c = 0; c < 3; ++c) sum[c] += S[c] * ec.jxw[q];
+      area += ec.jxw[q];
     }
   }
   if (integrated_area) *integrated_area = area;

@@ -268,6 +268,7 @@ void FilmSolver::set_material_ids() {
 
 void FilmSolver::setup_system() {
   const auto t0 = Clock::now();
+  electrode_cells_.clear();  // every change of the mesh passes here before its next output
   if (!fe_) {
     fe_ = std::make_unique<FESystem<dim>>(FE_Q<dim>(options_.fe_degree), 3);
     mapping_ = std::make_unique<MappingQ<dim>>(2);

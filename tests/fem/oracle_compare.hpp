@@ -94,6 +94,37 @@ inline RaySamples solve_on_ray(const pvdf::Scene& s, pvdf::fem::Options o, const
   return out;
 }
 
+/// The charge of a rectangular electrode of a centred_probe_scene from the oracle's fields: Q = ∫
+/// (d31 N11 + d32 N22)/h dA (docs/charge-model.md) with N in the film's material axes. For the
+/// isotropic film under a centred probe N is diagonal in polar axes; at polar angle φ with the draw
+/// direction at θ and β = φ − θ, N11 = N_r cos²β + N_θ sin²β and N22 = N_r sin²β + N_θ cos²β.
+/// Integrated over the electrode rectangle in its own axes with `n_sub` × `n_sub` cells of 6 × 6
+/// Gauss points: a rule independent of the FEM's.
+inline double oracle_electrode_charge(const oracles::AxisymmetricSolution& oracle, const pvdf::Scene& s,
+                                      const pvdf::Electrode& el, int n_sub = 4) {
+  const double gx[3] = {0.2386191860831969, 0.6612093864662645, 0.9324695142031521};
+  const double gw[3] = {0.4679139345726910, 0.3607615730481386, 0.1713244923791703};
+  const double h = s.membrane.thickness_m, theta = s.material.draw_angle_rad;
+  const double w = el.size_m[0], hgt = el.size_m[1], ca = std::cos(el.angle_rad), sa = std::sin(el.angle_rad);
+  double q = 0;
+  for (int i = 0; i < n_sub; ++i)
+    for (int j = 0; j < n_sub; ++j)
+      for (int gi = 0; gi < 6; ++gi)
+        for (int gj = 0; gj < 6; ++gj) {
+          const double xi = (i + 0.5 + 0.5 * (gi < 3 ? -gx[gi] : gx[gi - 3])) / n_sub - 0.5;
+          const double eta = (j + 0.5 + 0.5 * (gj < 3 ? -gx[gj] : gx[gj - 3])) / n_sub - 0.5;
+          const double weight = 0.25 * gw[gi % 3] * gw[gj % 3] * w * hgt / (n_sub * n_sub);
+          const double lx = xi * w, ly = eta * hgt;
+          const double x = el.center_m[0] + ca * lx - sa * ly, y = el.center_m[1] + sa * lx + ca * ly;
+          const double r = std::hypot(x, y), beta = std::atan2(y, x) - theta;
+          const double nr = oracle.radial_force_N_per_m(r), nt = oracle.hoop_force_N_per_m(r);
+          const double cb = std::cos(beta), sb = std::sin(beta);
+          const double n11 = nr * cb * cb + nt * sb * sb, n22 = nr * sb * sb + nt * cb * cb;
+          q += weight * (s.material.d31_C_per_N * n11 + s.material.d32_C_per_N * n22) / h;
+        }
+  return q;
+}
+
 /// The acceptance rule of the header comment for one output. `what` names it in the report.
 /// Returns the fine-mesh relative error against the oracle (for tables).
 inline double check_converges_to(const std::string& what, double coarse, double fine, double oracle,

@@ -142,10 +142,8 @@ TEST_CASE("pretension against the tensioned-membrane oracle, and Lee et al. 2008
 }
 
 // The charge law (docs/charge-model.md): Q = ∫_S (d31 N11 + d32 N22)/h dA, N in the film's material
-// axes. For an isotropic film under a centred probe N is diagonal in polar axes; at a point at polar
-// angle φ, with the draw direction at θ and β = φ − θ, N11 = N_r cos²β + N_θ sin²β and
-// N22 = N_r sin²β + N_θ cos²β. The oracle's N_r(r), N_θ(r) are integrated over each electrode square
-// with a 4×4-cell, 6×6-point Gauss rule: an integration independent of the FEM's.
+// axes; the oracle's N_r(r), N_θ(r) are integrated over each electrode square by
+// oracle_electrode_charge (oracle_compare.hpp), independently of the FEM's quadrature.
 TEST_CASE("electrode charge (sign and magnitude) against the integrated oracle fields", "[fem][oracle][charge]") {
   pvdf::Scene s = centred_probe_scene(a, 25e-6, E, nu, 1.0, c);
   const pvdf::Scene seed = pvdf::default_scene();
@@ -153,32 +151,9 @@ TEST_CASE("electrode charge (sign and magnitude) against the integrated oracle f
   s.material.draw_angle_rad = 0.5;    // oblique draw: N11 and N22 both differ from N_r and N_θ
   s.material.d31_C_per_N = 6.5e-12;
   s.material.d32_C_per_N = 0.65e-12;
-  const double h = s.membrane.thickness_m, theta = s.material.draw_angle_rad;
   const auto oracle = oracles::solve_axisymmetric(oracle_problem(s, false, oracles::Kinematics::green_lagrange));
   REQUIRE(oracle.converged);
-  const double gx[3] = {0.2386191860831969, 0.6612093864662645, 0.9324695142031521};
-  const double gw[3] = {0.4679139345726910, 0.3607615730481386, 0.1713244923791703};
-  auto oracle_charge = [&](const pvdf::Electrode& el) {
-    const double w = el.size_m[0], hgt = el.size_m[1], ca = std::cos(el.angle_rad), sa = std::sin(el.angle_rad);
-    double q = 0;
-    const int n_sub = 4;
-    for (int i = 0; i < n_sub; ++i)
-      for (int j = 0; j < n_sub; ++j)
-        for (int gi = 0; gi < 6; ++gi)
-          for (int gj = 0; gj < 6; ++gj) {
-            const double xi = (i + 0.5 + 0.5 * (gi < 3 ? -gx[gi] : gx[gi - 3])) / n_sub - 0.5;
-            const double eta = (j + 0.5 + 0.5 * (gj < 3 ? -gx[gj] : gx[gj - 3])) / n_sub - 0.5;
-            const double weight = 0.25 * gw[gi % 3] * gw[gj % 3] * w * hgt / (n_sub * n_sub);
-            const double lx = xi * w, ly = eta * hgt;
-            const double x = el.center_m[0] + ca * lx - sa * ly, y = el.center_m[1] + sa * lx + ca * ly;
-            const double r = std::hypot(x, y), beta = std::atan2(y, x) - theta;
-            const double nr = oracle.radial_force_N_per_m(r), nt = oracle.hoop_force_N_per_m(r);
-            const double cb = std::cos(beta), sb = std::sin(beta);
-            const double n11 = nr * cb * cb + nt * sb * sb, n22 = nr * sb * sb + nt * cb * cb;
-            q += weight * (s.material.d31_C_per_N * n11 + s.material.d32_C_per_N * n22) / h;
-          }
-    return q;
-  };
+  auto oracle_charge = [&](const pvdf::Electrode& el) { return oracle_electrode_charge(oracle, s, el); };
   pvdf::fem::Options o = membrane_mesh(pvdf::fem::Model::large_rotation, false, 0);
   // 1 mm cells on the electrodes: with 2 mm the uniform-refinement change (5e-5) understated the
   // error (3e-4) for electrode A and the rule below failed, rightly.
