@@ -288,6 +288,8 @@ class FilmSolver {
   double relax_membrane_point(const Kinematics& k, Model model, double artificial_tension, bool want_tangent,
                               std::array<double, 3>& S, Stiffness3& D) const;
   NewtonOutcome solve_slack_from_flat(Model model, Vector<double>& u);
+  NewtonOutcome solve_slack_by_pretension(Model model, Vector<double>& u);
+  double slack_cone_slope(double natural_strain) const;
   double tension_field_regularization() const;
   WrinkleMap wrinkle_map(const Vector<double>& u, Model model) const;
 
@@ -301,6 +303,7 @@ class FilmSolver {
   bool tension_field_ = false;
   std::array<double, 3> initial_stress_{0, 0, 0}, compliance_initial_stress_{0, 0, 0}, unit_compliance_{0, 0, 0};
   double tangent_regularization_ = tension_field_tangent_regularization;  // 0 in check_jacobian
+  double residual_stiffness_ = 0;
   double load_factor_ = 1;  // the slack continuation's force factor on load_
   mutable double regularization_force_ = -1, regularization_eta_ = 0;
   Stiffness3 membrane_C_;  // h·Q̄

@@ -9,12 +9,16 @@
 #include "pvdf/core/membrane_scaling.hpp"
 
 #include <deal.II/base/quadrature_lib.h>
+#include <deal.II/dofs/dof_tools.h>
 #include <deal.II/fe/fe_values.h>
+#include <deal.II/fe/mapping.h>
 
 #include <Eigen/LU>
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <map>
 
 namespace pvdf::fem::detail {
 
@@ -38,6 +42,8 @@ void FilmSolver::setup_natural_state() {
     unit_compliance_[i] = cu[i];
   }
   tension_field_ = m.tension_field || m.pretension_N_per_m < 0 || m.slack_strain > 0;
+  residual_stiffness_ = tension_field_ ? std::clamp(options_.tension_field_residual_stiffness, 0.0, 1.0) : 0.0;
+  if (residual_stiffness_ > 0) tangent_regularization_ = 0;  // the tangent of the ε-law is exact and regular
 }
 
 // The relaxed law at the Green–Lagrange strain E with the artificial isotropic tension t of the
@@ -46,7 +52,19 @@ RelaxedMembrane FilmSolver::membrane_law(const std::array<double, 3>& E, double 
                                          bool want_tangent) const {
   std::array<double, 3> e;
   for (int i = 0; i < 3; ++i) e[i] = E[i] + compliance_initial_stress_[i] + artificial_tension * unit_compliance_[i];
-  return relaxed_membrane(membrane_C_.c, e, want_tangent);
+  RelaxedMembrane L = relaxed_membrane(membrane_C_.c, e, want_tangent);
+  const double eps = residual_stiffness_;
+  if (eps > 0 && L.state != MembraneState::taut) {
+    // Residual stiffness (Options::tension_field_residual_stiffness): W_ε = (1 − ε)·W_relaxed + ε·½e·C·e,
+    // S_ε and D_ε likewise; the law is unchanged where taut.
+    const std::array<double, 3> Ce = membrane_C_.apply(e);
+    L.W = (1 - eps) * L.W + eps * 0.5 * (Ce[0] * e[0] + Ce[1] * e[1] + Ce[2] * e[2]);
+    for (int i = 0; i < 3; ++i) L.S[i] = (1 - eps) * L.S[i] + eps * Ce[i];
+    if (want_tangent)
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) L.D[i][j] = (1 - eps) * L.D[i][j] + eps * membrane_C_.c[i][j];
+  }
+  return L;
 }
 
 // Membrane force of a converged state at the strain E (N/m): C·E + S0, relaxed when wrinkling is modelled.
@@ -118,6 +136,91 @@ struct LoadScale {
 };
 }  // namespace
 
+// Rim slope α of a slack film hanging as a cone from the probe to the rim, at natural strain s and
+// the current force: α² = 2(s + N/(E·h)) with the mean tension N = F/(π·L·α) (twice the rim value
+// F/(2π·L·α)), L the distance from the probe to the nearest rim point. For s = 0 it is the taut
+// film's α ∝ (F/(E·h·L))^(1/3); for large s the inextensible cone's √(2s).
+double FilmSolver::slack_cone_slope(double s) const {
+  double L = radius_;
+  if (!loads_.empty()) {
+    L = std::numeric_limits<double>::max();
+    const Point<dim> p = loads_.front().center;
+    for (const auto& cell : triangulation_.active_cell_iterators())
+      for (unsigned int f = 0; f < cell->n_faces(); ++f)
+        if (cell->face(f)->at_boundary())
+          for (unsigned int v = 0; v < 2; ++v) L = std::min(L, p.distance(cell->face(f)->vertex(v)));
+    L = std::max(L, 1e-3 * radius_);
+  }
+  const double Eh = std::sqrt(membrane_C_.c[0][0] * membrane_C_.c[1][1]);
+  const double k = 2 * total_force_ * load_factor_ / (pvdf::pi * L * Eh);
+  double lo = 0, hi = 1;  // α³ − 2sα − k is increasing where it changes sign
+  for (int i = 0; i < 60; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (mid * mid * mid - 2 * s * mid - k > 0 ? hi : lo) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+// A slack film (N0 < 0) from the flat state (docs/fem.md §5.2): an artificial isotropic tension
+// t = |N0| cancels the slack, so the first solve is the ordinary stress-free membrane (its own
+// continuation, solve_from_flat's schedule shifted by |N0|); then t steps down to 0. Each step
+// predicts the deflection by the cone scaling w ∝ α(s_eff) (slack_cone_slope, with the natural
+// strain s_eff = s·(1 − t/|N0|) left at t) and corrects by Newton; steps double after a success and
+// shrink 4× after a failure. The pretension path stays near equilibrium throughout, instead of
+// asking Newton to find the cone from a flat, slack film (which has no stiffness at all).
+NewtonOutcome FilmSolver::solve_slack_by_pretension(Model model, Vector<double>& u) {
+  NewtonOutcome total;
+  u = 0;
+  const double n0 = -0.5 * (initial_stress_[0] + initial_stress_[1]);  // |N0|
+  const double s = std::max(0.0, -0.5 * (compliance_initial_stress_[0] + compliance_initial_stress_[1]));
+  const double Eh = std::sqrt(membrane_C_.c[0][0] * membrane_C_.c[1][1]);
+  const double n_star = 2.0 * pvdf::membrane_force_scale_N_per_m(Eh, total_force_, radius_);
+  auto stage = [&](double t) {
+    NewtonOutcome o = newton(model, t, u);
+    ++summary_.load_steps;
+    summary_.newton_iterations += o.iterations;
+    total.residual_norm = o.residual_norm;
+    return o;
+  };
+  // (1) The stress-free film: extra tension N*, 0.1 N*, 0.01 N*, 0 on top of |N0|.
+  Vector<double> saved = u;
+  for (double extra : {n_star, 0.1 * n_star, 0.01 * n_star, 0.0}) {
+    const NewtonOutcome o = stage(n0 + extra);
+    if (o.status != Status::converged) {
+      total.status = o.status;
+      total.message = o.message + "; the slack film did not converge even with its slack cancelled by an artificial tension of " +
+                      fmt(n0 + extra) + " N/m";
+      return total;
+    }
+  }
+  // (2) t = |N0| → 0, with the cone predictor on w.
+  double f = 1, step = 0.25;  // f = t/|N0|
+  saved = u;
+  int failures = 0;
+  while (f > 0) {
+    const double next = f - step < 1e-3 ? 0.0 : f - step;
+    const double ratio = slack_cone_slope(s * (1 - next)) / slack_cone_slope(s * (1 - f));
+    scale_state(u, 1.0, ratio);
+    const NewtonOutcome o = stage(next * n0);
+    if (o.status == Status::converged) {
+      f = next;
+      saved = u;
+      step = std::min(2 * step, 0.5);
+      continue;
+    }
+    u = saved;
+    step *= 0.25;
+    if (++failures > 2 * options_.max_cutbacks) {
+      total.status = o.status;
+      total.message = o.message + "; slack-film continuation gave up at " + fmt((1 - next) * n0) + " N/m of the " +
+                      fmt(n0) + " N/m slack (artificial tension " + fmt(next * n0) + " N/m)";
+      return total;
+    }
+  }
+  total.status = Status::converged;
+  return total;
+}
+
 // From the flat film to equilibrium with the relaxed law (docs/fem.md §5.2). A slack flat film has
 // no stiffness at all, so (1) at a force F1 ≥ F large enough for the film's stretch to dominate its
 // slack (membrane force scale N*(F1) ≥ |N0|), start taut under an artificial isotropic tension
@@ -127,6 +230,8 @@ struct LoadScale {
 // with its status (exit 3 in the app), never with a non-finite state.
 NewtonOutcome FilmSolver::solve_slack_from_flat(Model model, Vector<double>& u) {
   NewtonOutcome total;
+  if (residual_stiffness_ > 0 && 0.5 * (initial_stress_[0] + initial_stress_[1]) < 0)
+    return solve_slack_by_pretension(model, u);
   u = 0;
   const double F = total_force_;
   const double Eh = std::sqrt(membrane_C_.c[0][0] * membrane_C_.c[1][1]);

@@ -81,6 +81,13 @@ struct Options {
   /// (Summary::estimated_model_error, *_model_error_* of the results) without switching it on.
   bool estimate_bending_effect = false;
 
+  /// Tension-field membrane: residual stiffness ε of the relaxed law (docs/fem.md §3.3). 0 = the exact
+  /// relaxed law (wrinkled or slack points carry no stiffness across the wrinkles; the Newton tangent
+  /// alone is regularized). ε > 0: the energy (1 − ε)·W_relaxed + ε·½e·C·e (unchanged where taut), its
+  /// exact tangent, and for slack films the pretension-stepping continuation; strongly slack films
+  /// converge with ε = 1e-3 and bending kept. Its effect on the answers is of order ε·|N0|.
+  double tension_field_residual_stiffness = 0.0;
+
   // Newton–Raphson.
   int max_newton_iterations = 40;       ///< per continuation stage
   double residual_rtol = 1e-9;          ///< ‖r‖ ≤ rtol·‖f_ext‖ + atol
