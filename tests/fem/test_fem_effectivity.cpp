@@ -45,18 +45,20 @@ pvdf::fem::Options refined_mesh(pvdf::fem::Model model, bool bending, double pro
   return o;
 }
 
+/// One oracle case: film thickness, probe radius, pretension, model and the refinement cycles checked.
+struct Case {
+  std::string name;
+  double h_m, probe_m, n0;
+  bool bending;
+  pvdf::fem::Model model;
+  oracles::Kinematics kin;
+  std::vector<int> cycles;
+};
+
 }  // namespace
 
 TEST_CASE("discretization estimate of w(0) against the oracle: membrane, bending, pretension",
           "[fem][effectivity][slow]") {
-  struct Case {
-    std::string name;
-    double h_m, probe_m, n0;
-    bool bending;
-    pvdf::fem::Model model;
-    oracles::Kinematics kin;
-    std::vector<int> cycles;
-  };
   const Case cases[] = {
       {"large rotation 25um 1N", 25e-6, 1e-3, 0, false, pvdf::fem::Model::large_rotation,
        oracles::Kinematics::green_lagrange, {1, 2}},
@@ -119,14 +121,6 @@ TEST_CASE("bending-free estimate of the bending effect against the oracle with a
 // the estimate is only reported), and at least 10 such cases must occur.
 TEST_CASE("discretization estimate of the electrode charges against the integrated oracle",
           "[fem][effectivity][charge][slow]") {
-  struct Case {
-    std::string name;
-    double h_m, probe_m, n0;
-    bool bending;
-    pvdf::fem::Model model;
-    oracles::Kinematics kin;
-    std::vector<int> cycles;
-  };
   const Case cases[] = {
       {"large rotation 25um", 25e-6, 1e-3, 0, false, pvdf::fem::Model::large_rotation,
        oracles::Kinematics::green_lagrange, {0, 1, 2}},
