@@ -20,6 +20,7 @@
 //                            [--start-probe-size-m S] [--start-electrode-size-m S] [--start-grading G]
 //                            [--press X_M,Y_M] ...   (default presses (0, 0) and (3, 7) mm, 1 N)
 // Defaults: 8 cycles, uniform levels 0-3, reference levels 0-2 (~4 min CPU in all, docs/fem.md §6.2).
+#include "pvdf/core/io.hpp"
 #include "pvdf/core/scene.hpp"
 #include "pvdf/fem/solver.hpp"
 
@@ -28,7 +29,6 @@
 #include <cstdio>
 #include <ctime>
 #include <iostream>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -119,14 +119,6 @@ const Cycle* first_below(const std::vector<Cycle>& cycles, double level) {
   return nullptr;
 }
 
-std::vector<double> split(const std::string& s) {
-  std::vector<double> v;
-  std::stringstream in(s);
-  std::string item;
-  while (std::getline(in, item, ',')) v.push_back(std::stod(item));
-  return v;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -134,22 +126,27 @@ int main(int argc, char** argv) {
   int max_cycles = 8, uniform_levels = 3, reference_level = 2;
   double start_probe_m = 4e-3, start_electrode_m = 0.015, start_grading = 0.8;
   std::vector<std::vector<double>> presses;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--scene" && i + 1 < argc) scene_path = argv[++i];
-    else if (a == "--cycles" && i + 1 < argc) max_cycles = std::stoi(argv[++i]);
-    else if (a == "--uniform-levels" && i + 1 < argc) uniform_levels = std::stoi(argv[++i]);
-    else if (a == "--reference-level" && i + 1 < argc) reference_level = std::stoi(argv[++i]);
-    else if (a == "--start-probe-size-m" && i + 1 < argc) start_probe_m = std::stod(argv[++i]);
-    else if (a == "--start-electrode-size-m" && i + 1 < argc) start_electrode_m = std::stod(argv[++i]);
-    else if (a == "--start-grading" && i + 1 < argc) start_grading = std::stod(argv[++i]);
-    else if (a == "--press" && i + 1 < argc) presses.push_back(split(argv[++i]));
-    else {
-      std::cerr << "usage: bench_goal_vs_kelly [--scene FILE] [--cycles N] [--uniform-levels N] "
-                   "[--reference-level L] [--start-probe-size-m S] [--start-electrode-size-m S] "
-                   "[--start-grading G] [--press X_M,Y_M] ...\n";
-      return a == "--help" || a == "-h" ? 0 : 2;
+  try {  // bad numbers: one line and exit 2, not an abort
+    for (int i = 1; i < argc; ++i) {
+      const std::string a = argv[i];
+      if (a == "--scene" && i + 1 < argc) scene_path = argv[++i];
+      else if (a == "--cycles" && i + 1 < argc) max_cycles = std::stoi(argv[++i]);
+      else if (a == "--uniform-levels" && i + 1 < argc) uniform_levels = std::stoi(argv[++i]);
+      else if (a == "--reference-level" && i + 1 < argc) reference_level = std::stoi(argv[++i]);
+      else if (a == "--start-probe-size-m" && i + 1 < argc) start_probe_m = std::stod(argv[++i]);
+      else if (a == "--start-electrode-size-m" && i + 1 < argc) start_electrode_m = std::stod(argv[++i]);
+      else if (a == "--start-grading" && i + 1 < argc) start_grading = std::stod(argv[++i]);
+      else if (a == "--press" && i + 1 < argc) presses.push_back(pvdf::parse_number_list(argv[++i], "--press", 2));
+      else {
+        std::cerr << "usage: bench_goal_vs_kelly [--scene FILE] [--cycles N] [--uniform-levels N] "
+                     "[--reference-level L] [--start-probe-size-m S] [--start-electrode-size-m S] "
+                     "[--start-grading G] [--press X_M,Y_M] ...\n";
+        return a == "--help" || a == "-h" ? 0 : 2;
+      }
     }
+  } catch (const std::exception& e) {
+    std::cerr << "error: " << e.what() << "\n";
+    return 2;
   }
   if (presses.empty()) presses = {{0.0, 0.0}, {0.003, 0.007}};
   pvdf::Scene base;

@@ -6,6 +6,7 @@
 //
 // Usage: bench_rim_model [--scene FILE] [--force-N F] [--rim-size-m S] [--rim-grading G]
 //                        [--rim-sectors N] [--tolerance T] X_M,Y_M[,QA_C,QB_C,...] ...
+#include "pvdf/core/io.hpp"
 #include "pvdf/core/scene.hpp"
 #include "pvdf/fem/probe_sweep.hpp"
 #include "pvdf/fem/solver.hpp"
@@ -15,7 +16,6 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -23,14 +23,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 double wall_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
-
-std::vector<double> split(const std::string& s) {
-  std::vector<double> v;
-  std::stringstream in(s);
-  std::string item;
-  while (std::getline(in, item, ',')) v.push_back(std::stod(item));
-  return v;
-}
 
 double relative(const std::vector<double>& a, const std::vector<double>& ref) {
   double d = 0, scale = 0;
@@ -76,7 +68,7 @@ int main(int argc, char** argv) {
                      "[--rim-sectors N] [--tolerance T] X_M,Y_M[,Q1_C,...] ...\n";
         return 0;
       } else if (!a.empty() && (std::isdigit(static_cast<unsigned char>(a[0])) || a[0] == '-' || a[0] == '.')) {
-        points.push_back(split(a));
+        points.push_back(pvdf::parse_number_list(a, "probe position X_M,Y_M[,Q_C...]"));
       } else {
         std::cerr << "error: unknown argument " << a << "\n";
         return 2;

@@ -37,6 +37,13 @@ pvdf::fem::Options membrane_mesh(pvdf::fem::Model model, int level) {
 /// r_w from the wrinkled area share (the hoop force vanishes on r_w < r < a).
 double wrinkle_radius(double wrinkled_area_fraction) { return a * std::sqrt(std::max(0.0, 1 - wrinkled_area_fraction)); }
 
+/// The axisymmetric tension-field oracle (von Kármán, 200 radial elements) of a centred-probe scene.
+oracles::AxisymmetricSolution slack_oracle(const pvdf::Scene& s) {
+  oracles::AxisymmetricProblem p = oracle_problem(s, false, oracles::Kinematics::von_karman);
+  p.tension_field = true;
+  return oracles::solve_axisymmetric(p, {200});
+}
+
 }  // namespace
 
 TEST_CASE("tension field: slack film under a centred probe against the axisymmetric oracle",
@@ -44,9 +51,7 @@ TEST_CASE("tension field: slack film under a centred probe against the axisymmet
   // N0 = −700 N/m: stress-free radius 45.45 mm (natural strain 1e-2); 1 N.
   const double n0 = -700, F = 1.0;
   pvdf::Scene s = centred_probe_scene(a, h, E, nu, F, c, n0);
-  oracles::AxisymmetricProblem p = oracle_problem(s, false, oracles::Kinematics::von_karman);
-  p.tension_field = true;
-  const auto oracle = oracles::solve_axisymmetric(p, {200});
+  const auto oracle = slack_oracle(s);
   REQUIRE(oracle.converged);
   const auto zones = oracle.wrinkled_intervals_m();
   REQUIRE(zones.size() == 1);
@@ -231,9 +236,7 @@ TEST_CASE("tension field: residual stiffness and the pretension-stepping path ag
   // oracle at ε = 1e-3 and 1e-4, and shrinking with ε.
   const double n0 = -700, F = 1.0;
   pvdf::Scene s = centred_probe_scene(a, h, E, nu, F, c, n0);
-  oracles::AxisymmetricProblem p = oracle_problem(s, false, oracles::Kinematics::von_karman);
-  p.tension_field = true;
-  const auto oracle = oracles::solve_axisymmetric(p, {200});
+  const auto oracle = slack_oracle(s);
   REQUIRE(oracle.converged);
   const double w_oracle = oracle.centre_deflection_m(), r_sample = 10e-3;
   const double nr_oracle = oracle.radial_force_N_per_m(r_sample);
