@@ -54,6 +54,7 @@ struct MapCommandOptions {
   int scaling_check_stride = 4;
   int setup_checks = 3;
   std::string rim_model = "by-estimate";
+  std::string direct_solves = "by-estimate";
   std::string noise;
   bool json = false;
   bool force_mpi = false;
@@ -110,6 +111,10 @@ MapOptions map_options(const MapCommandOptions& o, const pvdf::Scene& scene) {
     throw pvdf::InputError("--rim-model " + pvdf::escape_control_bytes(o.rim_model) + ": use by-estimate, never or always");
   }
   options.rim_model = o.rim_model;
+  if (o.direct_solves != "by-estimate" && o.direct_solves != "never") {
+    throw pvdf::InputError("--direct-solves " + pvdf::escape_control_bytes(o.direct_solves) + ": use by-estimate or never");
+  }
+  options.direct_solves = o.direct_solves;
   if (!o.noise.empty()) {
     options.noise_C = pvdf::parse_number_list(o.noise, "--noise-C", scene.electrodes.size());
     for (const double n : options.noise_C) {
@@ -151,6 +156,9 @@ void print_map_json(const MapCommandOptions& o, const ChargeMap& map, const MapR
   j["rim_solves"] = report.rim_solves;
   j["rim_s"] = report.rim_s;
   j["estimate_s"] = report.estimate_s;
+  j["n_direct"] = report.n_direct;
+  j["direct_solves"] = report.direct_solves;
+  j["direct_s"] = report.direct_s;
   j["rim_n_dofs"] = report.rim_n_dofs;
   j["n_dofs"] = report.n_dofs;
   j["mesh"] = o.mesh_path.empty() ? std::string("built-in") : o.mesh_path;
@@ -181,6 +189,8 @@ void print_map_text(const MapCommandOptions& o, const ChargeMap& map, const MapR
               100 * map.estimated_relative_error, 100 * map.estimated_deflection_relative_error,
               report.n_tolerance_not_met);
   std::printf("rim model (bending, rim-graded mesh, %zu DOFs): %zu points\n", report.rim_n_dofs, report.n_rim_model);
+  std::printf("direct adaptive solves (own mesh, bending kept) where the sweep missed the tolerance: %zu points "
+              "(%zu solves, %.1f s)\n", report.n_direct, report.direct_solves, report.direct_s);
   std::printf("symmetry: %s\n", report.symmetry_reason.c_str());
   std::printf("%d rank(s) x %d thread(s), %.1f s, %.3g s per solved position and core\n", report.ranks,
               report.threads, report.wall_s, report.per_position_s);
@@ -306,6 +316,9 @@ PVDF_COMMAND(35, [](CLI::App& root) {
       ->check(pvdf::app::integer_in(0, 3));
   sub->add_option("--rim-model", o->rim_model,
                   "Where bending on a rim-graded mesh solves a node: by-estimate (default), never, always");
+  sub->add_option("--direct-solves", o->direct_solves,
+                  "Nodes still above the tolerance after the sweep: by-estimate (default: solved again on their own "
+                  "adaptive mesh), never (kept, flagged tolerance_not_met)");
   sub->add_option("--noise-C", o->noise, "1-sigma charge noise per electrode N1,N2,... (C; default 5e-14 each)");
   sub->add_option("--mesh", o->mesh_path,
                   "Start the sweep mesh from this Gmsh mesh (.msh from `pvdfkit mesh`, physical groups of docs/mesh.md); "

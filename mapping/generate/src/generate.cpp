@@ -58,6 +58,8 @@ ChargeMap Generator::run(MapReport& report) {
     report.rim_s += t.rim_s;
     report.estimate_s += t.estimate_s;
   }
+  report.direct_solves = direct_solves_;
+  report.direct_s = direct_s_;
   report.ranks = size_;
   report.threads = threads_;
   report.model = map_.model;
@@ -125,6 +127,9 @@ void Generator::setup_sweeps() {
   else if (o_.rim_model == "always") sweep_options_.rim_model = fem::SweepOptions::RimModel::always;
   else if (o_.rim_model != "by-estimate") {
     throw InputError("map: rim model '" + o_.rim_model + "' is not one of by-estimate, never, always (MapOptions::rim_model)");
+  }
+  if (o_.direct_solves != "by-estimate" && o_.direct_solves != "never") {
+    throw InputError("map: direct solves '" + o_.direct_solves + "' is not one of by-estimate, never (MapOptions::direct_solves)");
   }
   sweep_options_.mesh = o_.mesh;
   sweeps_.resize(std::size_t(threads_));
@@ -268,6 +273,7 @@ void Generator::summarize_estimates(MapReport& report) {
     const double w = std::abs(map_.deflection_at_load_m[pt]);
     if (w > 0) deflection = std::max(deflection, deflection_error_[pt] / w);
     if (node_model_[pt] == std::uint8_t(fem::SweepModel::rim)) ++report.n_rim_model;
+    if (node_model_[pt] == std::uint8_t(direct_model)) ++report.n_direct;
     if (provenance_[pt] & provenance::tolerance_not_met) ++report.n_tolerance_not_met;
   }
   map_.estimated_relative_error = charge;

@@ -5,6 +5,7 @@
 //   symmetry_grid.cpp  mirror symmetry, the grid and its mask, option checks, MPI/thread setup
 //   checkpoint.cpp     the run's hash, checkpoint files, records in and out of the map, resume
 //   solve_blocks.cpp   row blocks on the threads and ranks, force scaling, mirror images
+//   direct_solve.cpp   nodes the sweep leaves above the tolerance, solved on their own adaptive mesh
 //   generate.cpp       Generator::run step by step, the report, generate_map, MpiSession
 #pragma once
 
@@ -27,6 +28,9 @@
 namespace pvdf::mapping::detail {
 
 inline constexpr double nan = std::numeric_limits<double>::quiet_NaN();
+
+/// Node model code of a direct adaptive solve (after fem::SweepModel's cheap = 0 and rim = 1).
+inline constexpr fem::SweepModel direct_model = static_cast<fem::SweepModel>(2);
 
 inline std::string num(double v) {
   std::ostringstream s;
@@ -146,6 +150,7 @@ class Generator {
   void run_blocks(const std::vector<Block>& blocks);
   void solve_block(fem::ProbeSweep& sweep, const Block& block, std::vector<double>& records, bool& abandoned);
   void commit(const std::vector<double>& records, std::size_t n_positions);
+  void improve_by_direct_solve(double x_m, double y_m, fem::ProbeSolution& s);  // direct_solve.cpp
   void maybe_checkpoint(bool force);
   std::vector<double> known_records(bool only_this_run) const;
   void store_record(const double* rec, bool resumed);
@@ -180,6 +185,8 @@ class Generator {
   std::size_t progress_done_ = 0, progress_total_ = 0;
   std::chrono::steady_clock::time_point last_checkpoint_;
   std::string first_failure_;
+  std::size_t direct_solves_ = 0;        // direct adaptive solves (this process), under mutex_
+  double direct_s_ = 0;                  // their thread-seconds
 
   // force-scaling check (phase A), read when choosing scaled positions (phase B) and reporting
   bool scaling_ = false;

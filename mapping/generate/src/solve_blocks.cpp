@@ -75,15 +75,18 @@ void Generator::solve_block(fem::ProbeSweep& sweep, const Block& block, std::vec
       }
     };
     auto solve = [&](std::size_t f, const fem::SweepState* warm, fem::SweepState* out) {
+      fem::ProbeSolution s;
       try {
-        return sweep.solve(x, y, o_.forces_N[f], warm, out);
+        s = sweep.solve(x, y, o_.forces_N[f], warm, out);
       } catch (const NumericalError& e) {
-        fem::ProbeSolution s;
+        s = fem::ProbeSolution{};
         s.status = fem::Status::no_convergence;
         s.force_N = o_.forces_N[f];
         s.message = e.what();
         return s;
       }
+      if (s.status == fem::Status::tolerance_not_met && o_.direct_solves == "by-estimate") improve_by_direct_solve(x, y, s);
+      return s;
     };
     std::vector<fem::SweepState> next(nf);
     std::vector<char> next_have(nf, 0);

@@ -56,6 +56,11 @@ struct MapOptions {
   /// "by-estimate" (where the cheap model's estimated model error exceeds half the tolerance),
   /// "never", "always".
   std::string rim_model = "by-estimate";
+  /// Nodes whose estimate still exceeds the tolerance after the sweep (and the rim model):
+  /// "by-estimate" solves each again with the adaptive solver at that press alone (its own
+  /// goal-oriented mesh, bending kept; node model 2), "never" keeps the sweep's values flagged
+  /// tolerance_not_met.
+  std::string direct_solves = "by-estimate";
   /// Worker threads in this process (one ProbeSweep each); 0 = hardware concurrency.
   int threads = 0;
   /// Checkpoint file ("" = none). Completed rows are saved periodically (atomically); an
@@ -91,7 +96,7 @@ namespace provenance {
 inline constexpr std::uint8_t solved = 0;    ///< solved by the FEM at this position and force
 inline constexpr std::uint8_t scaled = 1;    ///< from the largest level by Q ∝ F^(2/3), w ∝ F^(1/3)
 inline constexpr std::uint8_t mirrored = 2;  ///< copied from the mirror-image position (electrodes permuted)
-/// The node's estimated charge error exceeds the tolerance even with the rim model (values usable,
+/// The node's estimated charge error exceeds the tolerance even with the rim model and the direct solve (values usable,
 /// /estimated_charge_error_C says by how much).
 inline constexpr std::uint8_t tolerance_not_met = 4;
 }  // namespace provenance
@@ -121,6 +126,9 @@ struct MapReport {
   std::size_t rim_n_dofs = 0;     ///< rim-graded mesh of the rim model (0 = none)
   std::size_t n_rim_model = 0;    ///< map points solved by the rim model (mirror images included)
   std::size_t n_tolerance_not_met = 0;  ///< map points whose estimate exceeds the tolerance
+  std::size_t n_direct = 0;       ///< map points solved by a direct adaptive solve (mirror images included)
+  std::size_t direct_solves = 0;  ///< direct adaptive solves (this process), kept or not
+  double direct_s = 0;            ///< thread-seconds spent in them (this process)
   std::size_t rim_solves = 0;     ///< rim-model solves (this process)
   double rim_s = 0;               ///< thread-seconds spent in rim-model solves (this process)
   double estimate_s = 0;          ///< thread-seconds spent in the error estimates (this process)
@@ -134,7 +142,7 @@ struct MapReport {
   std::string first_failure;      ///< first failed point and the solver's message ("" = none)
   /// [nf][ny][nx] provenance flags (see namespace provenance).
   std::vector<std::uint8_t> provenance;
-  /// [nf][ny][nx] which model solved each point (pvdf::fem::SweepModel: 0 cheap, 1 rim).
+  /// [nf][ny][nx] which model solved each point (pvdf::fem::SweepModel: 0 cheap, 1 rim; 2 direct adaptive solve).
   std::vector<std::uint8_t> node_model;
 };
 
