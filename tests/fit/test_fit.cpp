@@ -288,8 +288,8 @@ std::array<double, 2> oracle_mean_force(const pvdf::fem::oracles::AxisymmetricSo
 TEST_CASE("with the residual stiffness the predictor solves strongly slack films like the tension-field oracle",
           "[fit][slack-residual]") {
   // N0 = −2000 and −1800 N/m on a 30 mm film (natural strain 2.8 % and 2.5 %), a centred 1 N press: the
-  // fit's path with ε = 1e-3 (bending kept, the second N0 warm-started from the first, as the fit
-  // steps) against the independent axisymmetric tension-field membrane (Green–Lagrange, no bending,
+  // fit's path with ε = 1e-3 (bending kept; the second N0 on its own sweep, started from the first's
+  // state as the fit steps, with the cold continuation behind it) against the independent axisymmetric tension-field membrane (Green–Lagrange, no bending,
   // no ε). Allowed: the ε bias of the membrane forces, 2·ε·|N0| (docs/fem.md §3.3), plus 3 % for the
   // sweep mesh (tolerance 2 %) and bending, which the oracle leaves out (boundary layer
   // sqrt(D/N)/a ≈ 2 % at the rim).
