@@ -23,7 +23,7 @@
 namespace {
 
 struct FitCliOptions {
-  std::string scene_path, measured_path, output_path, plot_path, params, start;
+  std::string scene_path, measured_path, output_path, plot_path, params, start, residual_stiffness;
   bool json = false, verbose = false;
   double tolerance = 0;
   int max_iterations = 40;
@@ -79,6 +79,10 @@ void print_text(const pvdf::fit::FitResult& r, const pvdf::fit::MeasuredTable& m
   std::printf("FEM: %s%s, %zu DOFs, estimated charge error %.3g %%, deflection error %.3g %% (not in the intervals)\n",
               pvdf::fem::model_name(s.model).c_str(), s.include_bending ? " with bending" : " (bending neglected)",
               s.n_dofs, 100 * s.estimated_relative_error, 100 * s.estimated_deflection_relative_error);
+  if (r.fem.residual_stiffness > 0) {
+    std::printf("FEM: tension-field residual stiffness %g (slack-film stresses biased by about %g x |N0|)\n",
+                r.fem.residual_stiffness, r.fem.residual_stiffness);
+  }
 }
 
 int run_fit(const FitCliOptions& o) {
@@ -110,6 +114,14 @@ int run_fit(const FitCliOptions& o) {
     fo.predictor.use_scene_model = false;
     fo.predictor.sweep.solver = pvdf::fem::options_from_scene(scene);
     fo.predictor.sweep.solver.tolerance = o.tolerance;
+  }
+  if (!o.residual_stiffness.empty()) {
+    double eps = 0;
+    if (!pvdf::parse_finite(o.residual_stiffness, eps) || !(eps >= 0 && eps < 1)) {
+      throw pvdf::InputError("--residual-stiffness '" + pvdf::escape_control_bytes(o.residual_stiffness) +
+                             "' must be a number in [0, 1) (0 = the exact relaxed law; 1e-3 for strongly slack films)");
+    }
+    fo.predictor.sweep.solver.tension_field_residual_stiffness = eps;
   }
   // Progress on stderr: a bar with ETA per batch of FEM solves on a terminal, a line per iteration.
   const bool tty = isatty(STDERR_FILENO) != 0;
@@ -181,6 +193,12 @@ PVDF_COMMAND(67, [](CLI::App& root) {
       ->check(pvdf::app::number_in(1e-8, 0.5, "(the rule of the scene key model.tolerance), e.g. 0.01"));
   sub->add_option("--max-iterations", o->max_iterations, "Levenberg-Marquardt iterations (default 40)")
       ->check(pvdf::app::integer_in(1, 10000));
+  sub->add_option("--residual-stiffness", o->residual_stiffness,
+                  "Tension-field residual stiffness EPS in [0, 1) for slack films (negative pretension_N_per_m): the "
+                  "membrane energy (1-EPS) W_relaxed + EPS W_elastic, with bending kept; 1e-3 lets strongly slack films "
+                  "converge, biasing their membrane forces by about EPS x |N0| (default 0: the exact relaxed law, "
+                  "docs/fem.md 3.3)")
+      ->type_name("EPS");
   sub->add_flag("--verbose", o->verbose, "One line per iteration on stderr even when it is not a terminal");
   return pvdf::app::Subcommand{sub, [o] { return run_fit(*o); }};
 });

@@ -168,7 +168,8 @@ class FilmSolver {
   // it; DOFs, sparsity and the symbolic factorization are kept.
   void prepare_sweep(const SweepMeshSizes& sizes, const pvdf::mesh::FilmMesh* mesh = nullptr);
   void set_probe(double x_m, double y_m, double force_N);
-  NewtonOutcome solve_probe(Model model, Vector<double>& u, bool warm, int& newton_iterations, bool& warm_used);
+  NewtonOutcome solve_probe(Model model, Vector<double>& u, bool warm, int& newton_iterations, bool& warm_used,
+                            bool cold_fallback = true);
   void scale_state(Vector<double>& u, double inplane_factor, double w_factor) const;
   // outputs.cpp
   void probe_outputs(const Vector<double>& u, Model model, EngineSolution& out);

@@ -133,7 +133,55 @@ struct ProbeSweep::Impl {
   double rim_s = 0;
   int rim_solves = 0;
   ProbeSolution from_engine(const detail::EngineSolution& e, SweepModel used) const;
+  detail::EngineSolution walk_probe(double x_m, double y_m, double force_N, std::vector<double>& state, bool warm,
+                                    double state_force_N, const SweepState* from);
 };
+
+// The cheap engine's solve, with a walk for slack films with the residual stiffness
+// (Options::tension_field_residual_stiffness > 0): their cold solve is a long continuation (tens of
+// seconds, and on a coarse sweep mesh it may not converge), and Newton from a neighbour's state fails
+// when the probe moved far, because the cone a slack film hangs in moves with it. So a failed warm
+// start walks the probe from the neighbour's position to this one, each step a warm Newton solve
+// from the last (steps of two probe radii, doubled after a success, halved after a failure, down to
+// a quarter radius); only if the walk fails is the film solved from flat. Elsewhere: one solve.
+detail::EngineSolution ProbeSweep::Impl::walk_probe(double x_m, double y_m, double force_N, std::vector<double>& state,
+                                                    bool warm, double state_force_N, const SweepState* from) {
+  const bool slack = scene.membrane.pretension_N_per_m < 0 || scene.membrane.slack_strain > 0;
+  if (!warm || !slack || !(options.solver.tension_field_residual_stiffness > 0))
+    return engine->solve(x_m, y_m, force_N, state, warm, state_force_N);
+  detail::EngineSolution e = engine->solve(x_m, y_m, force_N, state, true, state_force_N, false);
+  if (e.status == Status::converged) return e;
+  int iterations = e.newton_iterations;
+  const double r = scene.probe.radius_m;
+  double px = from->x_m, py = from->y_m, step = 2 * r, force = state_force_N;
+  std::vector<double> walked = state;
+  while (step >= 0.25 * r) {
+    const double dx = x_m - px, dy = y_m - py, d = std::hypot(dx, dy);
+    if (d <= 0) break;
+    const double t = std::min(1.0, step / d);
+    std::vector<double> trial = walked;
+    e = engine->solve(px + t * dx, py + t * dy, force_N, trial, true, force, false);
+    iterations += e.newton_iterations;
+    if (e.status != Status::converged) {
+      step = 0.5 * std::min(step, d);
+      continue;
+    }
+    walked = std::move(trial);
+    force = force_N;
+    px += t * dx;
+    py += t * dy;
+    step *= 2;
+    if (t >= 1) {
+      state = std::move(walked);
+      e.newton_iterations = iterations;
+      e.warm_started = true;
+      return e;
+    }
+  }
+  e = engine->solve(x_m, y_m, force_N, state, false);
+  e.newton_iterations += iterations;
+  return e;
+}
 
 int ProbeSweep::Impl::sector_of(double x_m, double y_m) const {
   const int n = static_cast<int>(rim_engines.size());
@@ -335,7 +383,7 @@ ProbeSolution ProbeSweep::solve(double x_m, double y_m, double force_N, const Sw
     state = warm_start->dofs;
     state_force = warm_start->force_N;
   }
-  ProbeSolution s = im.from_engine(im.engine->solve(x_m, y_m, force_N, state, warm, state_force), SweepModel::cheap);
+  ProbeSolution s = im.from_engine(im.walk_probe(x_m, y_m, force_N, state, warm, state_force, warm_start), SweepModel::cheap);
   std::vector<double> rim_state;
   double rim_force = 0, rim_x = 0, rim_y = 0;
   int rim_sector = -1;

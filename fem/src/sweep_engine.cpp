@@ -59,9 +59,10 @@ void FilmSolver::set_probe(double x_m, double y_m, double force_N) {
 }
 
 // Warm: Newton from the given state (no continuation: a neighbour's state is already tensioned);
-// if that fails, or when cold, the artificial-pretension continuation from the flat film.
+// if that fails (unless cold_fallback is false: then the failure is returned, u as given), or when
+// cold, the artificial-pretension continuation from the flat film.
 NewtonOutcome FilmSolver::solve_probe(Model model, Vector<double>& u, bool warm, int& newton_iterations,
-                                      bool& warm_used) {
+                                      bool& warm_used, bool cold_fallback) {
   const int before = summary_.newton_iterations;
   warm_used = false;
   reuse_factorization_ = true;
@@ -69,7 +70,7 @@ NewtonOutcome FilmSolver::solve_probe(Model model, Vector<double>& u, bool warm,
     // The warm state is a neighbour's converged one: its last factorized tangent is a good chord.
     chord_first_step_ = true;
     const int cap = options_.max_newton_iterations;
-    options_.max_newton_iterations = std::min(cap, 25);
+    options_.max_newton_iterations = cold_fallback ? std::min(cap, 25) : cap;
     Vector<double> start = u;
     NewtonOutcome o = newton(model, 0.0, u);
     options_.max_newton_iterations = cap;
@@ -80,6 +81,11 @@ NewtonOutcome FilmSolver::solve_probe(Model model, Vector<double>& u, bool warm,
       return o;
     }
     u = start;
+    if (!cold_fallback) {
+      newton_iterations = summary_.newton_iterations - before;
+      o.iterations = newton_iterations;
+      return o;
+    }
   }
   NewtonOutcome o = solve_from_flat(model, u);
   newton_iterations = summary_.newton_iterations - before;
@@ -151,7 +157,7 @@ EngineTiming SweepEngine::timing() const {
 }
 
 EngineSolution SweepEngine::solve(double x_m, double y_m, double force_N, std::vector<double>& state, bool warm,
-                                  double state_force_N) {
+                                  double state_force_N, bool cold_fallback) {
   FilmSolver& fs = *impl_->solver;
   EngineSolution out;
   const int factorizations_before = fs.n_factorizations();
@@ -167,7 +173,7 @@ EngineSolution SweepEngine::solve(double x_m, double y_m, double force_N, std::v
       fs.scale_state(u, pvdf::membrane_charge_factor(ratio), pvdf::membrane_deflection_factor(ratio));
     }
   }
-  NewtonOutcome o = fs.solve_probe(impl_->model, u, use_warm, out.newton_iterations, out.warm_started);
+  NewtonOutcome o = fs.solve_probe(impl_->model, u, use_warm, out.newton_iterations, out.warm_started, cold_fallback);
   out.status = o.status;
   out.message = o.message;
   out.factorizations = fs.n_factorizations() - factorizations_before;

@@ -81,9 +81,10 @@ class SweepEngine {
   /// One vertical probe (x, y, F). `state` (size n_dofs) is the starting guess when `warm`;
   /// if it was converged under another force `state_force_N` (> 0), it is first scaled by the
   /// pure-membrane law (w by (F/F0)^(1/3), in-plane displacements by (F/F0)^(2/3)). On a usable
-  /// outcome `state` receives the converged state.
+  /// outcome `state` receives the converged state (else it is left as given). A failed warm start
+  /// falls back to the continuation from the flat film unless `cold_fallback` is false.
   EngineSolution solve(double x_m, double y_m, double force_N, std::vector<double>& state, bool warm,
-                       double state_force_N = 0);
+                       double state_force_N = 0, bool cold_fallback = true);
 
  private:
   struct Impl;

@@ -28,6 +28,7 @@ struct Predictor::Impl {
   std::vector<Press> presses;
   PredictorOptions options;
   fem::SweepOptions fixed;                                  ///< model and mesh frozen after the reference setup
+  double residual_stiffness = 0;                            ///< ε of the tension-field law (fixed.solver)
   /// Per worker thread (a sweep is not shared between threads), by N0/E_scale (N/m).
   std::vector<std::map<double, std::unique_ptr<fem::ProbeSweep>>> sweeps = std::vector<std::map<double, std::unique_ptr<fem::ProbeSweep>>>(1);
   std::vector<fem::SweepState> warm;                        ///< last converged state of each press
@@ -83,8 +84,9 @@ struct Predictor::Impl {
     n.resize(s.mean_membrane_force_material_N_per_m.size());
     for (std::size_t k = 0; k < n.size(); ++k) {
       // The isotropic pre-tension is (N0, N0, 0) in any axes; the amplifier sees only the change. A
-      // slack film (N0 < 0) is stress-free when flat (tension-field membrane): nothing to remove.
-      const double flat = std::max(tension, 0.0);
+      // slack film (N0 < 0) is stress-free when flat under the exact relaxed law; with the residual
+      // stiffness ε its flat state keeps ε·C·e0 = ε·N0·I (all of it slack), which is removed too.
+      const double flat = tension >= 0 ? tension : residual_stiffness * tension;
       n[k] = {s.mean_membrane_force_material_N_per_m[k][0] - flat, s.mean_membrane_force_material_N_per_m[k][1] - flat};
     }
   }
@@ -105,6 +107,20 @@ Predictor::Predictor(const pvdf::Scene& scene, std::vector<Press> presses, const
     const fem::Options from_scene = fem::options_from_scene(scene);
     ref.solver.model = from_scene.model;
     ref.solver.tolerance = from_scene.tolerance;
+  }
+  const double eps = ref.solver.tension_field_residual_stiffness;
+  if (!(eps >= 0 && eps < 1)) {
+    std::ostringstream m;
+    m << "fit: residual stiffness " << eps << " must be in [0, 1) (0 = the exact relaxed law; 1e-3 converges on strongly slack films)";
+    throw pvdf::InputError(m.str());
+  }
+  im.residual_stiffness = eps;
+  im.stats.residual_stiffness = eps;
+  if (eps > 0) {
+    // Slack films with the residual stiffness converge with bending kept (docs/fem.md §3.3): the
+    // auto rule, which would drop it for a thin film, is not asked.
+    ref.solver.include_bending = true;
+    if (ref.solver.model == fem::Model::automatic) ref.solver.model = fem::Model::large_rotation;
   }
   if (ref.forces_N.empty()) {
     for (const auto& p : im.presses) ref.forces_N.push_back(p.force_N);
@@ -175,13 +191,36 @@ std::vector<PressResponse> Predictor::predict(const FilmState& state, std::array
     if (want_tau) shifted[t] = &im.sweep(t, tau + h_tau, tau);
   }
   std::vector<PredictorStats> stats(workers);
+  // With the residual stiffness (slack films), a press never solved before starts from the nearest
+  // press solved so far (the sweep walks the probe from there: a slack film's cold solve is long),
+  // copied before the workers start; the first press of the first evaluation is solved alone first.
+  const bool seed_nearest = im.residual_stiffness > 0;
+  std::vector<fem::SweepState> seeds(n);
+  auto make_seeds = [&] {
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!im.warm[i].dofs.empty()) continue;
+      double best = std::numeric_limits<double>::infinity();
+      for (std::size_t j = 0; j < n; ++j) {
+        if (im.warm[j].dofs.empty()) continue;
+        const double d = std::hypot(im.presses[j].x_m - im.presses[i].x_m, im.presses[j].y_m - im.presses[i].y_m);
+        if (d < best) {
+          best = d;
+          seeds[i] = im.warm[j];
+        }
+      }
+    }
+  };
   auto work = [&](std::size_t t, std::size_t lo, std::size_t hi) {
     for (std::size_t i = lo; i < hi; ++i) {
       const double f = im.presses[i].force_N / E;
       // A press never solved before starts from the previous press of this worker (a neighbour,
       // usually closer than the flat film), as map generation does.
       const fem::SweepState* start = &im.warm[i];
-      if (im.warm[i].dofs.empty() && i > lo && !im.warm[i - 1].dofs.empty()) start = &im.warm[i - 1];
+      if (seed_nearest) {
+        if (im.warm[i].dofs.empty() && !seeds[i].dofs.empty()) start = &seeds[i];
+      } else if (im.warm[i].dofs.empty() && i > lo && !im.warm[i - 1].dofs.empty()) {
+        start = &im.warm[i - 1];
+      }
       fem::SweepState solved, scratch;
       im.solve(*base[t], tau, i, f, w0[i], n0[i], start, solved, stats[t]);
       im.warm[i] = std::move(solved);
@@ -196,11 +235,20 @@ std::vector<PressResponse> Predictor::predict(const FilmState& state, std::array
       }
     }
   };
-  const std::size_t split = workers == 2 ? n / 2 : n;
+  std::size_t first = 0;
+  if (seed_nearest) {
+    const bool none = std::all_of(im.warm.begin(), im.warm.end(), [](const fem::SweepState& w) { return w.dofs.empty(); });
+    if (none) {
+      work(0, 0, 1);
+      first = 1;
+    }
+    make_seeds();
+  }
+  const std::size_t split = workers == 2 ? first + (n - first) / 2 : n;
   std::future<void> second;
   if (workers == 2) second = std::async(std::launch::async, work, std::size_t(1), split, n);
   try {
-    work(0, 0, split);
+    work(0, first, split);
   } catch (...) {
     if (second.valid()) second.wait();  // never leave the thread running on a sweep we may free
     throw;

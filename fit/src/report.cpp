@@ -77,6 +77,7 @@ nlohmann::json to_json(const FitResult& r, const MeasuredTable& m) {
   const auto& s = r.fem.reference_setup;
   j["fem"] = {{"model", fem::model_name(s.model)},
               {"include_bending", s.include_bending},
+              {"residual_stiffness", r.fem.residual_stiffness},
               {"n_dofs", s.n_dofs},
               {"estimated_charge_relative_error", s.estimated_relative_error},
               {"estimated_deflection_relative_error", s.estimated_deflection_relative_error},

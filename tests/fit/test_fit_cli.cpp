@@ -7,6 +7,7 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -69,6 +70,18 @@ TEST_CASE("fit: unknown parameter names and a pre-tension slacker than the bound
   const auto s = fit(csv, "--params pretension_N_per_m --start pretension_N_per_m=-1e5");
   CHECK(s.exit_code == 2);
   CHECK(s.err.find("slacker") != std::string::npos);
+}
+
+TEST_CASE("fit: a residual stiffness that is negative, >= 1 or not a number exits 2 with one line", "[fit][cli]") {
+  const auto csv = write("good_eps.csv", "x_m,y_m,force_N,deflection_m,charge_A_C\n0,0,1,0.003,1e-10\n0.002,0,1,0.003,1e-10\n");
+  for (const char* bad : {"-1e-3", "1", "nan", "inf", "1e-3x"}) {
+    INFO(bad);
+    const auto r = fit(csv, std::string("--residual-stiffness ") + bad);
+    CHECK(r.exit_code == 2);
+    CHECK(r.err.find("--residual-stiffness") != std::string::npos);
+    CHECK(r.err.find("[0, 1)") != std::string::npos);
+    CHECK(std::count(r.err.begin(), r.err.end(), '\n') == 1);
+  }
 }
 
 TEST_CASE("fit end to end: the fitted scene loads and carries the stiffness the data demand; compare SCENE runs",

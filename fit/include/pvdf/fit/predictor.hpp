@@ -46,6 +46,9 @@ struct PressResponse {
 /// Settings of the predictor.
 struct PredictorOptions {
   /// FEM settings of the sweep mesh (model, tolerance...). Default: the scene's model section.
+  /// `sweep.solver.tension_field_residual_stiffness` (ε, in [0, 1)) is the tension-field residual
+  /// stiffness of slack films (docs/fem.md §3.3); ε > 0 also keeps bending (large-rotation kinematics
+  /// when the scene's are `auto`): the combination on which strongly slack films converge.
   fem::SweepOptions sweep;
   bool use_scene_model = true;          ///< take model/tolerance from the scene's `model` section
   /// Relative step of the force finite difference and of a pretension difference (scaled by
@@ -66,6 +69,7 @@ struct PredictorStats {
   std::size_t n_sweeps = 0;             ///< sweep meshes prepared (one per distinct N0/E_scale ratio and worker thread)
   double setup_s = 0, solve_s = 0;      ///< time in sweep setups and in probe solves (summed over threads)
   fem::SweepSetup reference_setup;      ///< model, mesh and charge-error estimate of the first sweep
+  double residual_stiffness = 0;        ///< ε of the tension-field law the sweeps use
 };
 
 /// FEM predictions for a fixed list of presses, for any FilmState.
@@ -74,7 +78,7 @@ struct PredictorStats {
 /// in (E_scale, N0, F) — membrane and bending stresses are proportional to E_scale at a given
 /// displacement, the pre-tension and the load enter linearly — so the displacement under
 /// (E_scale, N0, F) equals the one under (1, N0/E_scale, F/E_scale), and the membrane forces
-/// are E_scale times those. All solves therefore run on sweeps of the scene's own material,
+/// are E_scale times those (also with the residual stiffness ε·C, which scales with E_scale). All solves therefore run on sweeps of the scene's own material,
 /// one per value of N0/E_scale (the same mesh each, so warm starts carry over between them).
 /// With N0 = 0 a change of E_scale is a change of force on one sweep.
 class Predictor {
