@@ -55,6 +55,7 @@ struct MapCommandOptions {
   int setup_checks = 3;
   std::string rim_model = "by-estimate";
   std::string direct_solves = "by-estimate";
+  std::string probe_refinement = "footprint";
   std::string noise;
   bool json = false;
   bool force_mpi = false;
@@ -115,6 +116,11 @@ MapOptions map_options(const MapCommandOptions& o, const pvdf::Scene& scene) {
     throw pvdf::InputError("--direct-solves " + pvdf::escape_control_bytes(o.direct_solves) + ": use by-estimate or never");
   }
   options.direct_solves = o.direct_solves;
+  if (o.probe_refinement != "footprint" && o.probe_refinement != "none") {
+    throw pvdf::InputError("--probe-refinement " + pvdf::escape_control_bytes(o.probe_refinement) +
+                           ": use footprint or none");
+  }
+  options.probe_refinement = o.probe_refinement;
   if (!o.noise.empty()) {
     options.noise_C = pvdf::parse_number_list(o.noise, "--noise-C", scene.electrodes.size());
     for (const double n : options.noise_C) {
@@ -156,6 +162,9 @@ void print_map_json(const MapCommandOptions& o, const ChargeMap& map, const MapR
   j["rim_solves"] = report.rim_solves;
   j["rim_s"] = report.rim_s;
   j["estimate_s"] = report.estimate_s;
+  j["probe_size_m"] = report.probe_size_m;
+  j["probe_mesh_s"] = report.probe_mesh_s;
+  j["probe_mesh_dofs"] = report.probe_mesh_dofs;
   j["n_direct"] = report.n_direct;
   j["direct_solves"] = report.direct_solves;
   j["direct_s"] = report.direct_s;
@@ -319,6 +328,9 @@ PVDF_COMMAND(35, [](CLI::App& root) {
   sub->add_option("--direct-solves", o->direct_solves,
                   "Nodes still above the tolerance after the sweep: by-estimate (default: solved again on their own "
                   "adaptive mesh), never (kept, flagged tolerance_not_met)");
+  sub->add_option("--probe-refinement", o->probe_refinement,
+                  "Mesh of each probe solve: footprint (default: the sweep mesh refined around the probe's footprint), "
+                  "none (the sweep mesh alone: faster, footprint error unseen by the estimate)");
   sub->add_option("--noise-C", o->noise, "1-sigma charge noise per electrode N1,N2,... (C; default 5e-14 each)");
   sub->add_option("--mesh", o->mesh_path,
                   "Start the sweep mesh from this Gmsh mesh (.msh from `pvdfkit mesh`, physical groups of docs/mesh.md); "

@@ -171,6 +171,11 @@ class FilmSolver {
   NewtonOutcome solve_probe(Model model, Vector<double>& u, bool warm, int& newton_iterations, bool& warm_used,
                             bool cold_fallback = true);
   void scale_state(Vector<double>& u, double inplane_factor, double w_factor) const;
+  /// u (on this mesh) = the interpolant of `other`'s state u_other, both meshes refined from the same
+  /// coarse mesh (the sweep mesh and a probe's footprint-refined copy of it).
+  void interpolate_state_from(const FilmSolver& other, const Vector<double>& u_other, Vector<double>& u) const;
+  /// Largest size (diameter/√2) of the active cells that reach within `radius_m` of (x, y).
+  double largest_cell_near(double x_m, double y_m, double radius_m) const;
   // outputs.cpp
   void probe_outputs(const Vector<double>& u, Model model, EngineSolution& out);
 
@@ -216,6 +221,9 @@ class FilmSolver {
  private:
   // setup.cpp
   void refine_initial_mesh();
+  // adaptivity.cpp: with bending, cells toward the clamped rim down to its boundary layer (once);
+  // u, when given, is carried over to the new mesh.
+  void grade_toward_rim(Vector<double>* u);
   void set_material_ids();
   void setup_system();
   void copy_pattern_to_eigen();
@@ -363,6 +371,7 @@ class FilmSolver {
   std::vector<std::string> vtu_files_;
   // goal_error.cpp: the same mesh with FE_Q(p+1) (residual and adjoint reconstruction there).
   std::unique_ptr<FilmSolver> enriched_;
+  bool rim_graded_ = false;      // grade_toward_rim() done
   bool bending_pattern_ = false;  // bending operator assembled although the model leaves it out
   bool bending_switchable_ = false;
   unsigned int form_degree_ = 0;  // > 0: quadrature and penalty of this degree (the enriched space)

@@ -3,6 +3,7 @@
 // linear / von Kármán / large rotation whose outputs stay within the tolerance.
 #include "film_solver.hpp"
 
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/membrane_scaling.hpp"
 
 #include <algorithm>
@@ -46,6 +47,19 @@ std::string bending_negligible_reason(const pvdf::Scene& scene, const Options& o
 }
 
 }  // namespace
+
+// The bending boundary layer at the clamp: sqrt(D/N) with N the rim membrane force of the
+// point-loaded membrane, from equilibrium N sin(a) 2 pi R = F and the membrane strain
+// N/(E h) = a^2/2: N = (F/(2 pi R))^(2/3) (E h/2)^(1/3), or the pretension when larger.
+double rim_boundary_layer_m(const pvdf::Scene& scene, double force_N) {
+  const double h = scene.membrane.thickness_m;
+  const double E = std::max(scene.material.E1_Pa, scene.material.E2_Pa);
+  const double R = scene.membrane.outline.characteristic_radius_m();
+  const double D = E * h * h * h / 12.0;
+  const double n = std::max(scene.membrane.pretension_N_per_m,
+                            pvdf::membrane_force_scale_N_per_m(E * h, force_N / (2 * pvdf::pi), R) * 0.7937005259840998);  // x 2^(-1/3)
+  return std::sqrt(D / n);
+}
 
 // Steps 2–3 of the rule on the current mesh, from the flat film: the linear plate first; if its
 // deflection is not small against the thickness (membrane coupling changes the outputs by

@@ -3,7 +3,8 @@
 // mesh graded to the electrodes and nowhere coarser than a size that serves every probe position,
 // sized by the sweep's own error estimate at a few check positions; when that model drops bending
 // it also builds the rim model (bending kept, mesh graded toward the clamped rim). Each probe solve
-// re-integrates the load, warm-starts Newton from a given state, and carries the solver's
+// runs on that mesh refined around the probe's own footprint where the mesh does not resolve it
+// (sweep_engine.cpp), warm-starts Newton from a given state, and carries the solver's
 // adjoint-weighted estimates of its discretization and model errors for every electrode charge;
 // where the cheap model's model-error estimate exceeds its share of the tolerance the probe is
 // solved again with the rim model.
@@ -51,7 +52,9 @@ double smallest_electrode_side(const pvdf::Scene& scene) {
 // (docs/bench-fem.md): these sizes keep the charges within 0.7 % of once-refined direct solves at
 // 9 probe positions on, beside, between and far from the electrodes (grading 0.5 brings that to
 // 0.36 % at twice the DOFs). Smaller tolerances shrink the sizes and the grading; the setup
-// check decides. Sizes given in the options win.
+// check decides. Under each probe the cells are refined to the footprint's diameter (probe_size_m):
+// without it a 1 mm footprint in 7.5 mm cells left charges 1.6 % off with an estimate of 0.28 %
+// (docs/map-generation.md §6). Sizes given in the options win.
 detail::SweepMeshSizes initial_mesh_sizes(const pvdf::Scene& scene, const SweepOptions& options) {
   const double tolerance = options.solver.tolerance;
   const double a = scene.membrane.outline.characteristic_radius_m();
@@ -60,6 +63,9 @@ detail::SweepMeshSizes initial_mesh_sizes(const pvdf::Scene& scene, const SweepO
   sizes.region_size_m = std::min(a / 6.0, 8.0 * scene.probe.radius_m) * shrink;
   sizes.electrode_size_m = (scene.electrodes.empty() ? sizes.region_size_m : 0.5 * smallest_electrode_side(scene)) * shrink;
   sizes.grading = std::clamp(2.0 * tolerance / 0.01, 0.5, 2.0);
+  sizes.probe_size_m = 2.0 * scene.probe.radius_m * shrink;
+  if (options.probe_size_m > 0) sizes.probe_size_m = options.probe_size_m;
+  if (options.probe_size_m < 0) sizes.probe_size_m = 0;
   if (options.region_size_m > 0) sizes.region_size_m = options.region_size_m;
   if (options.electrode_size_m > 0) sizes.electrode_size_m = options.electrode_size_m;
   if (options.grading > 0) sizes.grading = options.grading;
@@ -103,19 +109,6 @@ double relative(const std::vector<double>& err, const std::vector<double>& q) {
   for (double v : q) scale = std::max(scale, std::abs(v));
   for (double v : err) e = std::max(e, std::abs(v));
   return scale > 0 ? e / scale : (e > 0 ? 1.0 : 0.0);
-}
-
-// The rim model's cell size at the clamp: the bending boundary layer sqrt(D/N) with N the rim
-// membrane force of the point-loaded membrane at the smallest force, from equilibrium
-// N sin(a) 2 pi R = F and the membrane strain N/(E h) = a^2/2: N = (F/(2 pi R))^(2/3) (E h/2)^(1/3).
-double boundary_layer_m(const pvdf::Scene& scene, double force_N) {
-  const double h = scene.membrane.thickness_m;
-  const double E = std::max(scene.material.E1_Pa, scene.material.E2_Pa);
-  const double R = scene.membrane.outline.characteristic_radius_m();
-  const double D = E * h * h * h / 12.0;
-  const double n = std::max(scene.membrane.pretension_N_per_m,
-                            pvdf::membrane_force_scale_N_per_m(E * h, force_N / (2 * pvdf::pi), R) * 0.7937005259840998);  // x 2^(-1/3)
-  return std::sqrt(D / n);
 }
 
 }  // namespace
@@ -316,9 +309,11 @@ ProbeSweep::ProbeSweep(const pvdf::Scene& scene, const SweepOptions& options) : 
     if ((disc <= 0.5 * so.tolerance && !failed) || attempt == 2) break;
     sizes.region_size_m *= 0.5;
     sizes.electrode_size_m *= 0.5;
+    sizes.probe_size_m *= 0.5;
   }
   im.setup.region_size_m = sizes.region_size_m;
   im.setup.electrode_size_m = sizes.electrode_size_m;
+  im.setup.probe_size_m = sizes.probe_size_m;
 
   // 5. The rim model: bending kept on a mesh graded toward the clamp, for the probes where the
   // cheap model's estimate says bending matters (ProbeSweep::solve).
@@ -327,7 +322,7 @@ ProbeSweep::ProbeSweep(const pvdf::Scene& scene, const SweepOptions& options) : 
   }
   if (!bending && options.estimate_errors && options.rim_model != SweepOptions::RimModel::never) {
     im.rim_sizes = sizes;
-    const double layer = boundary_layer_m(scene, f_min);
+    const double layer = detail::rim_boundary_layer_m(scene, f_min);
     im.rim_sizes.rim_size_m = options.rim_size_m > 0 ? options.rim_size_m : layer;
     im.rim_sizes.rim_grading = options.rim_grading > 0 ? options.rim_grading : 0.5;
     im.rim_engines.resize(static_cast<std::size_t>(std::max(1, options.rim_sectors)));
@@ -353,6 +348,7 @@ SweepTiming ProbeSweep::timing() const {
     t.newton_iterations += r.newton_iterations;
     t.factorizations += r.factorizations;
     t.estimate_s += r.estimate_s;
+    t.probe_mesh_s += r.probe_mesh_s;
   }
   t.rim_solves = impl_->rim_solves;
   t.rim_s = impl_->rim_s;

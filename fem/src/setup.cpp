@@ -250,6 +250,7 @@ void FilmSolver::refine_initial_mesh() {
     triangulation_.execute_coarsening_and_refinement();
   }
   if (options_.initial_global_refinements > 0) triangulation_.refine_global(options_.initial_global_refinements);
+  if (options_.include_bending) grade_toward_rim(nullptr);
   set_material_ids();
 }
 

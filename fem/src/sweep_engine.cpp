@@ -1,11 +1,15 @@
-// The fixed-mesh probe solver behind ProbeSweep (docs/bench-fem.md, "ProbeSweep"): one mesh graded
-// to the electrodes and built without any probe, its DOFs, sparsity and symbolic factorization kept;
-// each probe re-integrates the load and warm-starts Newton from a neighbour's state, scaled by the
-// pure-membrane laws across forces (pvdf/core/membrane_scaling.hpp).
+// The probe solver behind ProbeSweep (docs/bench-fem.md, "ProbeSweep"; docs/map-generation.md §6):
+// one sweep mesh graded to the electrodes and built without any probe. Each probe is solved on a
+// copy of it refined around that probe's footprint (or, without a footprint size, on the sweep mesh
+// itself, whose DOFs, sparsity and symbolic factorization are then kept), warm-started from a
+// neighbour's state stored on the sweep mesh and scaled by the pure-membrane laws across forces
+// (pvdf/core/membrane_scaling.hpp).
 #include "pvdf/core/constants.hpp"
 #include "film_solver.hpp"
 
 #include "pvdf/core/membrane_scaling.hpp"
+
+#include <deal.II/numerics/vector_tools.h>
 
 #include <algorithm>
 #include <cmath>
@@ -107,19 +111,92 @@ void FilmSolver::scale_state(Vector<double>& u, double inplane_factor, double w_
   }
 }
 
+// u = the interpolant of other's u_other: cell by cell through the common coarse mesh (where this
+// mesh is finer, by interpolation of other's cell; where coarser, of its children), then the
+// hanging nodes and the clamped rim made consistent.
+void FilmSolver::interpolate_state_from(const FilmSolver& other, const Vector<double>& u_other, Vector<double>& u) const {
+  u.reinit(dof_handler_.n_dofs());
+  VectorTools::interpolate_to_different_mesh(other.dof_handler_, u_other, dof_handler_, constraints_, u);
+}
+
+double FilmSolver::largest_cell_near(double x_m, double y_m, double radius_m) const {
+  const Point<dim> p(x_m, y_m);
+  double largest = 0;
+  for (const auto& cell : triangulation_.active_cell_iterators()) {
+    const double half = 0.5 * cell->diameter();
+    if (cell->center().distance(p) - half > radius_m) continue;
+    largest = std::max(largest, cell->diameter() / std::sqrt(2.0));
+  }
+  return largest;
+}
+
 struct SweepEngine::Impl {
   pvdf::Scene scene;  // outlives the solver, which keeps a reference
   Options options;
   Model model = Model::large_rotation;
-  std::unique_ptr<FilmSolver> solver;
+  std::unique_ptr<FilmSolver> solver;  // the sweep mesh: every state lives on it
   EngineTiming timing;
   bool estimate_errors = false;
+  bool include_bending = false;
+  SweepMeshSizes sizes;
+  const pvdf::mesh::FilmMesh* mesh = nullptr;
+  // With sizes.probe_size_m > 0: the last probe's footprint-refined mesh (kept while the probe
+  // stays at that position, e.g. across force levels) and its scene (with that probe as its load).
+  pvdf::Scene probe_scene;
+  std::unique_ptr<FilmSolver> probe_solver;
+  double probe_x = 0, probe_y = 0;
+  Summary retired;  // time and iterations of the probe meshes already dropped
+  int retired_factorizations = 0;
+  double retired_load_s = 0;
+  double probe_dofs_sum = 0;
+  int probe_meshes = 0;
+  void retire_probe_solver();
+  FilmSolver& probe_solver_at(double x_m, double y_m, double force_N);
 };
+
+void SweepEngine::Impl::retire_probe_solver() {
+  if (!probe_solver) return;
+  const Summary& s = probe_solver->summary();
+  retired.assembly_s += s.assembly_s;
+  retired.linear_solve_s += s.linear_solve_s;
+  retired.newton_iterations += s.newton_iterations;
+  retired_factorizations += probe_solver->n_factorizations();
+  retired_load_s += probe_solver->load_vector_s;
+  probe_solver.reset();
+}
+
+// The sweep mesh refined around this probe's footprint: the same construction as the sweep mesh
+// (same coarse mesh, electrode and rim grading) with the probe as the scene's load, so the graded
+// a-priori refinement (setup.cpp) also brings the cells under the footprint to sizes.probe_size_m.
+FilmSolver& SweepEngine::Impl::probe_solver_at(double x_m, double y_m, double force_N) {
+  if (probe_solver && probe_x == x_m && probe_y == y_m) return *probe_solver;
+  const auto t0 = Clock::now();
+  retire_probe_solver();
+  probe_scene = scene;
+  pvdf::Load load;
+  load.position_m = {x_m, y_m};
+  load.force_N = force_N;
+  probe_scene.loads = {load};
+  Options o = options;
+  o.probe_size_m = sizes.probe_size_m;
+  probe_solver = std::make_unique<FilmSolver>(probe_scene, o);
+  if (estimate_errors && !include_bending) probe_solver->keep_bending_pattern(false);
+  probe_solver->prepare_sweep(sizes, mesh);
+  probe_x = x_m;
+  probe_y = y_m;
+  probe_dofs_sum += probe_solver->n_dofs();
+  ++probe_meshes;
+  timing.probe_mesh_s += seconds_since(t0);
+  return *probe_solver;
+}
 
 SweepEngine::SweepEngine(const pvdf::Scene& scene, const Options& options, Model model, bool include_bending,
                          const SweepMeshSizes& sizes, bool estimate_errors, const pvdf::mesh::FilmMesh* mesh)
     : impl_(std::make_unique<Impl>()) {
   impl_->estimate_errors = estimate_errors;
+  impl_->include_bending = include_bending;
+  impl_->sizes = sizes;
+  impl_->mesh = mesh;
   impl_->scene = scene;
   impl_->scene.loads.clear();
   impl_->model = model;
@@ -127,6 +204,7 @@ SweepEngine::SweepEngine(const pvdf::Scene& scene, const Options& options, Model
   o.model = model;
   o.include_bending = include_bending;
   o.adaptive = false;
+  o.grade_rim_for_bending = false;  // the rim model grades its own arc (sizes.rim_size_m)
   o.coarse_size_m = sizes.region_size_m;
   o.probe_size_m = sizes.region_size_m;
   o.electrode_size_m = sizes.electrode_size_m;
@@ -147,30 +225,58 @@ std::size_t SweepEngine::n_cells() const { return impl_->solver->n_cells(); }
 
 EngineTiming SweepEngine::timing() const {
   EngineTiming t = impl_->timing;
-  const Summary& s = impl_->solver->summary();
+  Summary s = impl_->solver->summary();
+  int factorizations = impl_->solver->n_factorizations() + impl_->retired_factorizations;
+  double load_s = impl_->solver->load_vector_s + impl_->retired_load_s;
+  s.assembly_s += impl_->retired.assembly_s;
+  s.linear_solve_s += impl_->retired.linear_solve_s;
+  s.newton_iterations += impl_->retired.newton_iterations;
+  if (impl_->probe_solver) {
+    const Summary& p = impl_->probe_solver->summary();
+    s.assembly_s += p.assembly_s;
+    s.linear_solve_s += p.linear_solve_s;
+    s.newton_iterations += p.newton_iterations;
+    factorizations += impl_->probe_solver->n_factorizations();
+    load_s += impl_->probe_solver->load_vector_s;
+  }
   t.assembly_s = s.assembly_s;
   t.linear_solve_s = s.linear_solve_s;
-  t.load_vector_s = impl_->solver->load_vector_s;
+  t.load_vector_s = load_s;
   t.newton_iterations = s.newton_iterations;
-  t.factorizations = impl_->solver->n_factorizations();
+  t.factorizations = factorizations;
+  t.probe_mesh_dofs = impl_->probe_meshes > 0 ? impl_->probe_dofs_sum / impl_->probe_meshes : 0.0;
   return t;
 }
 
 EngineSolution SweepEngine::solve(double x_m, double y_m, double force_N, std::vector<double>& state, bool warm,
                                   double state_force_N, bool cold_fallback) {
-  FilmSolver& fs = *impl_->solver;
+  FilmSolver& sweep = *impl_->solver;
+  // Where the sweep mesh already resolves the footprint (near the electrodes, or the rim model's
+  // graded cells near the clamp), the probe is solved on it directly.
+  const double probe_size = impl_->sizes.probe_size_m;
+  const bool refine_probe =
+      probe_size > 0 && sweep.largest_cell_near(x_m, y_m, impl_->scene.probe.radius_m) > 1.3 * probe_size;
+  FilmSolver& fs = refine_probe ? impl_->probe_solver_at(x_m, y_m, force_N) : sweep;
   EngineSolution out;
   const int factorizations_before = fs.n_factorizations();
   fs.set_probe(x_m, y_m, force_N);
   Vector<double> u(fs.n_dofs());
-  const bool use_warm = warm && state.size() == u.size();
+  const bool use_warm = warm && state.size() == sweep.n_dofs();
   if (use_warm) {
-    std::copy(state.begin(), state.end(), u.begin());
+    Vector<double> s(sweep.n_dofs());
+    std::copy(state.begin(), state.end(), s.begin());
     // Pure-membrane scaling (w ∝ F^(1/3), strains and in-plane displacements ∝ F^(2/3)): exact for
     // von Kármán without bending or pretension, a close start otherwise.
     if (state_force_N > 0 && state_force_N != force_N) {
       const double ratio = force_N / state_force_N;
-      fs.scale_state(u, pvdf::membrane_charge_factor(ratio), pvdf::membrane_deflection_factor(ratio));
+      sweep.scale_state(s, pvdf::membrane_charge_factor(ratio), pvdf::membrane_deflection_factor(ratio));
+    }
+    if (refine_probe) {
+      const auto t0 = Clock::now();
+      fs.interpolate_state_from(sweep, s, u);
+      impl_->timing.probe_mesh_s += seconds_since(t0);
+    } else {
+      u = s;
     }
   }
   NewtonOutcome o = fs.solve_probe(impl_->model, u, use_warm, out.newton_iterations, out.warm_started, cold_fallback);
@@ -198,7 +304,15 @@ EngineSolution SweepEngine::solve(double x_m, double y_m, double force_N, std::v
     out.message = "non-finite outputs";
     return out;
   }
-  state.assign(u.begin(), u.end());
+  if (refine_probe) {
+    const auto t1 = Clock::now();
+    Vector<double> s;
+    sweep.interpolate_state_from(fs, u, s);
+    state.assign(s.begin(), s.end());
+    impl_->timing.probe_mesh_s += seconds_since(t1);
+  } else {
+    state.assign(u.begin(), u.end());
+  }
   return out;
 }
 

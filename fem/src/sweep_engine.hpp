@@ -18,6 +18,10 @@ namespace pvdf::fem::detail {
 struct SweepMeshSizes {
   double region_size_m = 0;     ///< largest cell size anywhere (also under every probe)
   double electrode_size_m = 0;  ///< cell size on the electrodes
+  /// Cell size under the probe's footprint (0 = none): each probe is then solved on the sweep mesh
+  /// refined around its footprint (sizes <= max(probe_size_m, grading x distance)); states stay on
+  /// the sweep mesh, interpolated to and from each probe's mesh.
+  double probe_size_m = 0;
   double grading = 1.0;         ///< away from the electrodes: size <= grading x distance
   int global_refinements = 0;   ///< uniform refinements after the grading
   /// Grading toward the clamped rim (0 = none): cells within the arc are refined until their size
@@ -90,6 +94,11 @@ class SweepEngine {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+/// Width of the bending boundary layer at the clamped rim, sqrt(D/N), with N the larger of the
+/// pretension and the rim membrane force of the point-loaded membrane under force_N
+/// (model_choice.cpp): the rim cell size that resolves it.
+double rim_boundary_layer_m(const pvdf::Scene& scene, double force_N);
 
 /// What the `auto` rule decided.
 struct ModelChoice {

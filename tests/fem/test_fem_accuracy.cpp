@@ -115,6 +115,10 @@ TEST_CASE("bending + membrane against the von Karman oracle with bending, 100 um
     o.adaptive = false;
     o.coarse_size_m = a / 3;
     o.probe_size_m = probe / 2;
+    // The acceptance rule needs two meshes one uniform refinement apart; the default rim grading
+    // (docs/fem.md §6.1) would grade the coarse one only (the fine one's rim cells are already
+    // small enough), so it is off here. With it, at 100 µm: w(0) 9e-5 off the oracle instead of 8e-4.
+    o.grade_rim_for_bending = false;
     const std::string name = "vK+bending h=" + std::to_string(static_cast<int>(std::lround(h * 1e6))) + "um";
     compare_ray(name.c_str(), s, with, o, {5e-3, 20e-3});
   }

@@ -59,8 +59,11 @@ TEST_CASE("probe sweep setup: auto model, estimated charge error within the tole
 
 TEST_CASE("probe sweep charges equal direct solves within the tolerance", "[fem][sweep]") {
   auto& sweep = seed001_sweep();
-  // Positions other than the setup's own checks: near electrode B, and between A and C.
-  for (const auto& p : {std::array<double, 2>{-0.008, -0.004}, std::array<double, 2>{0.013, 0.006}}) {
+  // Positions other than the setup's own checks: near electrode B, between A and C, and (12, -12) mm,
+  // where the 1 mm footprint lies in cells of several times its size (on the sweep mesh alone the
+  // charges there were 1.6 % off, with an estimate of 0.28 %: docs/map-generation.md §6).
+  for (const auto& p : {std::array<double, 2>{-0.008, -0.004}, std::array<double, 2>{0.013, 0.006},
+                        std::array<double, 2>{0.012, -0.012}}) {
     const auto s = sweep.solve(p[0], p[1], 1.0);
     REQUIRE(pvdf::fem::usable(s.status));
     const auto r = direct_solve(p[0], p[1], 1.0);
@@ -69,6 +72,7 @@ TEST_CASE("probe sweep charges equal direct solves within the tolerance", "[fem]
     for (const auto& e : r.electrodes) q_direct.push_back(e.charge_C);
     INFO("probe at (" << p[0] << ", " << p[1] << ") m");
     CHECK(charge_difference(s.charge_C, q_direct) <= 0.01);
+    CHECK(charge_difference(s.charge_C, q_direct) <= 3 * s.estimated_relative_error + 2e-3);  // the estimate sees it
     CHECK(s.rim_reaction_N == Approx(1.0).epsilon(1e-6));
   }
 }

@@ -110,6 +110,7 @@ const std::vector<Row> rows = {
   // ---- map flags and output
   {"map-nodir", "map good.json -o nodir/m.h5 --quiet", 2, "nodir", "nodir", 10},
   {"map-tolerance-0", "map good.json -o m.h5 --quiet --tolerance 0", 2, "--tolerance", "m.h5"},
+  {"map-probe-refinement-bad", "map good.json -o m.h5 --quiet --probe-refinement coarse", 2, "--probe-refinement", "m.h5"},
   {"map-tolerance-1e-12", "map good.json -o m.h5 --quiet --tolerance 1e-12", 2, "--tolerance", "m.h5"},
   {"map-setup-checks-5", "map good.json -o m.h5 --quiet --setup-checks 5", 2, "--setup-checks", "m.h5"},
   {"map-setup-checks-neg", "map good.json -o m.h5 --quiet --setup-checks -1", 2, "--setup-checks", "m.h5"},

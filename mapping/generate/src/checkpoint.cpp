@@ -164,7 +164,7 @@ std::string Generator::run_hash() const {
   key << "|model " << fem::model_name(sweep_options_.solver.model) << "|tol " << tolerance_ << "|margin " << margin_
       << "|scaling " << o_.use_force_scaling << ' ' << o_.scaling_check_stride << "|sym " << sym_.about_x << sym_.about_y
       << "|rim " << int(sweep_options_.rim_model) << ' ' << sweep_options_.rim_size_m << ' ' << sweep_options_.rim_grading
-      << "|direct " << o_.direct_solves;
+      << "|direct " << o_.direct_solves << "|probe " << sweep_options_.probe_size_m;
   if (o_.mesh) {  // another starting mesh changes every value
     key << "|mesh " << o_.mesh->n_cells();
     for (const auto& v : o_.mesh->vertices) key << ' ' << v[0] << ' ' << v[1];

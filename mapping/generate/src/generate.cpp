@@ -57,7 +57,10 @@ ChargeMap Generator::run(MapReport& report) {
     report.rim_solves += std::size_t(t.rim_solves);
     report.rim_s += t.rim_s;
     report.estimate_s += t.estimate_s;
+    report.probe_mesh_s += t.probe_mesh_s;
+    report.probe_mesh_dofs = std::max(report.probe_mesh_dofs, t.probe_mesh_dofs);
   }
+  report.probe_size_m = setup.probe_size_m;
   report.direct_solves = direct_solves_;
   report.direct_s = direct_s_;
   report.ranks = size_;
@@ -132,6 +135,11 @@ void Generator::setup_sweeps() {
     throw InputError("map: direct solves '" + o_.direct_solves + "' is not one of by-estimate, never (MapOptions::direct_solves)");
   }
   sweep_options_.mesh = o_.mesh;
+  if (o_.probe_refinement == "none") sweep_options_.probe_size_m = -1;
+  else if (o_.probe_refinement != "footprint") {
+    throw InputError("map: probe refinement '" + o_.probe_refinement +
+                     "' is not one of footprint, none (MapOptions::probe_refinement)");
+  }
   sweeps_.resize(std::size_t(threads_));
   sweeps_[0] = std::make_unique<fem::ProbeSweep>(scene_, sweep_options_);
 }

@@ -32,6 +32,13 @@ struct SweepOptions {
   double region_size_m = 0;
   double electrode_size_m = 0;
   double grading = 0;
+  /// Cell size under the probe's footprint (m): each probe is solved on the sweep mesh refined
+  /// around its own footprint to this size (graded away from it), so that a footprint smaller than
+  /// the sweep's cells is resolved (docs/map-generation.md §6). 0 = the footprint's diameter, scaled
+  /// with the tolerance like the other sizes; < 0 = no per-probe refinement (every probe on the one
+  /// fixed mesh, as before; the charges then carry the footprint's discretization error, which the
+  /// estimate does not see).
+  double probe_size_m = 0;
   /// Where the richer rim model (bending kept, mesh graded toward the clamped rim) solves a probe:
   /// `by_estimate` = where the cheap model's estimated model error exceeds its share of the
   /// tolerance (only when the cheap model drops bending), `never`, `always`.
@@ -72,6 +79,7 @@ struct SweepSetup {
   double rim_size_m = 0;                ///< cell size at the clamp of the rim mesh (m)
   double region_size_m = 0;             ///< largest cell size of the sweep mesh (also under any probe)
   double electrode_size_m = 0;          ///< cell size on the electrodes
+  double probe_size_m = 0;              ///< cell size under each probe's footprint (0 = not refined there)
   double setup_s = 0;                   ///< wall time of the setup
 };
 
@@ -131,6 +139,8 @@ struct SweepTiming {
   int rim_solves = 0;         ///< probes solved (also) by the rim model
   double rim_s = 0;           ///< wall time of the rim-model solves
   double estimate_s = 0;      ///< wall time of the error estimates
+  double probe_mesh_s = 0;    ///< building each probe's footprint-refined mesh and moving states to and from it
+  double probe_mesh_dofs = 0; ///< mean DOFs of the footprint-refined probe meshes (0 = none)
 };
 
 /// A reusable single-probe solver for one scene. Not thread-safe: use one instance per thread

@@ -63,6 +63,11 @@ struct Options {
   double probe_size_m = 0.0;
   /// Target cell size on electrodes (m); 0 = smallest electrode side / 4.
   double electrode_size_m = 0.0;
+  /// With bending: refine toward the clamped rim until the cells there are no larger than its
+  /// bending boundary layer sqrt(D/N) (growing by half the distance from the rim), on the first
+  /// mesh or when `auto` switches bending on (docs/fem.md §6). The goal-oriented loop cannot find
+  /// that layer from a coarse rim (its estimate is blind there).
+  bool grade_rim_for_bending = true;
   /// Initial-mesh grading: away from probes and electrodes the cell size is at most
   /// grading × distance (smaller = finer far field).
   double grading = 0.8;

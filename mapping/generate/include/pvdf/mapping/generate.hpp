@@ -61,6 +61,10 @@ struct MapOptions {
   /// goal-oriented mesh, bending kept; node model 2), "never" keeps the sweep's values flagged
   /// tolerance_not_met.
   std::string direct_solves = "by-estimate";
+  /// "footprint": each probe is solved on the sweep mesh refined around its own footprint
+  /// (pvdf::fem::SweepOptions::probe_size_m); "none": on the sweep mesh alone (faster, but its
+  /// charges then carry the footprint's discretization error, which the estimate does not see).
+  std::string probe_refinement = "footprint";
   /// Worker threads in this process (one ProbeSweep each); 0 = hardware concurrency.
   int threads = 0;
   /// Checkpoint file ("" = none). Completed rows are saved periodically (atomically); an
@@ -132,6 +136,9 @@ struct MapReport {
   std::size_t rim_solves = 0;     ///< rim-model solves (this process)
   double rim_s = 0;               ///< thread-seconds spent in rim-model solves (this process)
   double estimate_s = 0;          ///< thread-seconds spent in the error estimates (this process)
+  double probe_size_m = 0;        ///< cell size under each probe's footprint (0 = probes solved on the sweep mesh alone)
+  double probe_mesh_s = 0;        ///< thread-seconds building the footprint-refined probe meshes and moving states (this process)
+  double probe_mesh_dofs = 0;     ///< mean DOFs of the footprint-refined probe meshes of the cheap model (largest over threads)
   int ranks = 1;                  ///< MPI ranks
   int threads = 1;                ///< threads per rank
   double setup_s = 0;             ///< ProbeSweep setup (max over threads of this process)
