@@ -64,6 +64,11 @@ detail::SweepMeshSizes initial_mesh_sizes(const pvdf::Scene& scene, const SweepO
   sizes.electrode_size_m = (scene.electrodes.empty() ? sizes.region_size_m : 0.5 * smallest_electrode_side(scene)) * shrink;
   sizes.grading = std::clamp(2.0 * tolerance / 0.01, 0.5, 2.0);
   sizes.probe_size_m = 2.0 * scene.probe.radius_m * shrink;
+  // Slack and wrinkling films: no per-probe refinement. Their warm starts must carry the cone the
+  // film hangs in from one press to the next (the walk of walk_probe), which the round trip
+  // through the sweep mesh would smooth away (measured: the walk then no longer converges).
+  const auto& m = scene.membrane;
+  if (m.pretension_N_per_m < 0 || m.slack_strain > 0 || m.tension_field) sizes.probe_size_m = 0;
   if (options.probe_size_m > 0) sizes.probe_size_m = options.probe_size_m;
   if (options.probe_size_m < 0) sizes.probe_size_m = 0;
   if (options.region_size_m > 0) sizes.region_size_m = options.region_size_m;

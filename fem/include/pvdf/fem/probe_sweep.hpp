@@ -37,7 +37,8 @@ struct SweepOptions {
   /// the sweep's cells is resolved (docs/map-generation.md §6). 0 = the footprint's diameter, scaled
   /// with the tolerance like the other sizes; < 0 = no per-probe refinement (every probe on the one
   /// fixed mesh, as before; the charges then carry the footprint's discretization error, which the
-  /// estimate does not see).
+  /// estimate does not see). Slack and wrinkling films get no per-probe refinement unless a
+  /// size is given here (their warm starts must carry the film's cone from press to press).
   double probe_size_m = 0;
   /// Where the richer rim model (bending kept, mesh graded toward the clamped rim) solves a probe:
   /// `by_estimate` = where the cheap model's estimated model error exceeds its share of the
