@@ -345,7 +345,7 @@ TEST_CASE("nodes the sweep leaves above the tolerance are solved again on their 
   // Nodes near the clamp with the rim model off: the sweep's model (bending dropped) misses the
   // 1 % tolerance there by its own estimate. With direct solves off those nodes stay flagged;
   // with them on, each is solved again at its press alone and must then be within the tolerance
-  // of a reference solved with bending to a tenth of it in Q3 (and closer to it than the sweep was).
+  // of a reference solved with bending to a quarter of it in Q3 (and closer to it than the sweep was).
   const auto scene = small_scene();
   MapOptions o = cheap_options({0.004, 0.008, -0.004, 0.0});
   o.tolerance = 0.01;
@@ -375,8 +375,8 @@ TEST_CASE("nodes the sweep leaves above the tolerance are solved again on their 
       direct.loads = {load};
       pvdf::fem::Options options = pvdf::fem::options_from_scene(direct);
       options.model = pvdf::fem::parse_model(m.model, "map model");
-      options.tolerance = o.tolerance / 10;
-      options.max_refinements = 8;
+      options.tolerance = o.tolerance / 4;  // 0.25 %, on a mesh graded to the clamp's bending layer
+      options.max_refinements = 4;
       options.fe_degree = 3;  // another discretization than the direct solve's (Q2), not its own mesh again
       const auto r = pvdf::fem::solve(direct, options);
       REQUIRE(r.summary.status == pvdf::fem::Status::converged);
