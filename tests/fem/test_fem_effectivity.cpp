@@ -58,6 +58,41 @@ struct Case {
   std::vector<int> cycles;
 };
 
+/// A rectangular electrode of an oracle scene: name, centre (m), size (m), angle (rad).
+struct Rectangle {
+  const char* name;
+  double x, y, w, hgt, angle;
+};
+
+/// The charge-effectivity scene: a centred probe on an isotropic film, oblique draw direction,
+/// d31 = 6.5 and d32 = 0.65 pC/N, the given electrodes.
+pvdf::Scene oracle_charge_scene(double h_m, double probe_m, double n0, const std::vector<Rectangle>& layout) {
+  pvdf::Scene s = centred_probe_scene(a, h_m, E, nu, 1.0, probe_m, n0);
+  s.material.draw_angle_rad = 0.5;
+  s.material.d31_C_per_N = 6.5e-12;
+  s.material.d32_C_per_N = 0.65e-12;
+  for (const auto& l : layout) {
+    pvdf::Electrode e;
+    e.name = l.name;
+    e.center_m = {l.x, l.y};
+    e.size_m = {l.w, l.hgt};
+    e.angle_rad = l.angle;
+    s.electrodes.push_back(e);
+  }
+  return s;
+}
+
+/// The oracle's charge of every electrode of s, and the largest magnitude among them.
+std::vector<double> oracle_charges(const oracles::AxisymmetricSolution& oracle, const pvdf::Scene& s, double& q_scale) {
+  std::vector<double> q;
+  q_scale = 0;
+  for (const auto& e : s.electrodes) {
+    q.push_back(oracle_electrode_charge(oracle, s, e, 8));
+    q_scale = std::max(q_scale, std::abs(q.back()));
+  }
+  return q;
+}
+
 }  // namespace
 
 TEST_CASE("discretization estimate of w(0) against the oracle: membrane, bending, pretension",
@@ -132,36 +167,17 @@ TEST_CASE("discretization estimate of the electrode charges against the integrat
       {"vK + bending 400um", 400e-6, 2e-3, 0, true, pvdf::fem::Model::von_karman, oracles::Kinematics::von_karman,
        {0, 1, 2}},
   };
-  // Rectangles: centre (m), size (m), angle (rad).
-  const struct {
-    const char* name;
-    double x, y, w, hgt, angle;
-  } layout[] = {{"near", 0.003, 0.0, 1e-3, 1e-3, 0.0},     {"A", 0.0, 0.010, 2e-3, 2e-3, 0.0},
+  const std::vector<Rectangle> layout = {{"near", 0.003, 0.0, 1e-3, 1e-3, 0.0},     {"A", 0.0, 0.010, 2e-3, 2e-3, 0.0},
                 {"tilted", -0.012, -0.009, 4e-3, 2e-3, 0.4}, {"wide", 0.0, -0.022, 6e-3, 3e-3, 0.0},
                 {"rim", 0.035, 0.0, 3e-3, 3e-3, 0.2}};
   const oracles::AxisymmetricOptions grid{200};
   int asserted = 0;
   for (const Case& c : cases) {
-    pvdf::Scene s = centred_probe_scene(a, c.h_m, E, nu, 1.0, c.probe_m, c.n0);
-    s.material.draw_angle_rad = 0.5;
-    s.material.d31_C_per_N = 6.5e-12;
-    s.material.d32_C_per_N = 0.65e-12;
-    for (const auto& l : layout) {
-      pvdf::Electrode e;
-      e.name = l.name;
-      e.center_m = {l.x, l.y};
-      e.size_m = {l.w, l.hgt};
-      e.angle_rad = l.angle;
-      s.electrodes.push_back(e);
-    }
+    const pvdf::Scene s = oracle_charge_scene(c.h_m, c.probe_m, c.n0, layout);
     const auto oracle = oracles::solve_axisymmetric(oracle_problem(s, c.bending, c.kin), grid);
     REQUIRE(oracle.converged);
-    std::vector<double> q_oracle;
     double q_scale = 0;
-    for (const auto& e : s.electrodes) {
-      q_oracle.push_back(oracle_electrode_charge(oracle, s, e, 8));
-      q_scale = std::max(q_scale, std::abs(q_oracle.back()));
-    }
+    const std::vector<double> q_oracle = oracle_charges(oracle, s, q_scale);
     for (int n : c.cycles) {
       pvdf::fem::Options o = refined_mesh(c.model, c.bending, 2 * c.probe_m, n);
       o.electrode_size_m = a / 3;  // no grading toward the electrodes: the estimate must find them
@@ -189,36 +205,19 @@ TEST_CASE("discretization estimate of the electrode charges against the integrat
 // integrated oracle: a 1 mm probe on a sweep mesh whose cells are several times the footprint.
 // Each probe is solved on the sweep mesh refined around its own footprint (SweepOptions::probe_size_m);
 // the charges must meet the tolerance and the per-probe estimate must see their error. The
-// probe at the centre, the electrodes as above (3 mm … 35 mm from it).
+// probe at the centre, five electrodes 8 mm … 35 mm from it.
 TEST_CASE("probe sweep charges and their per-probe estimate against the integrated oracle",
           "[fem][effectivity][charge][sweep]") {
-  pvdf::Scene s = centred_probe_scene(a, 25e-6, E, nu, 1.0, 1e-3);
-  s.material.draw_angle_rad = 0.5;
-  s.material.d31_C_per_N = 6.5e-12;
-  s.material.d32_C_per_N = 0.65e-12;
-  const struct {
-    const char* name;
-    double x, y, w, hgt, angle;
-  } layout[] = {{"A", 0.0, 0.008, 2e-3, 2e-3, 0.0}, {"B", 0.007, -0.004, 2e-3, 2e-3, 0.0},
-                {"tilted", -0.012, -0.009, 4e-3, 2e-3, 0.4}, {"wide", 0.0, -0.022, 6e-3, 3e-3, 0.0},
-                {"rim", 0.035, 0.0, 3e-3, 3e-3, 0.2}};
-  for (const auto& l : layout) {
-    pvdf::Electrode e;
-    e.name = l.name;
-    e.center_m = {l.x, l.y};
-    e.size_m = {l.w, l.hgt};
-    e.angle_rad = l.angle;
-    s.electrodes.push_back(e);
-  }
+  const pvdf::Scene s = oracle_charge_scene(25e-6, 1e-3, 0.0,
+                                            {{"A", 0.0, 0.008, 2e-3, 2e-3, 0.0}, {"B", 0.007, -0.004, 2e-3, 2e-3, 0.0},
+                                             {"tilted", -0.012, -0.009, 4e-3, 2e-3, 0.4},
+                                             {"wide", 0.0, -0.022, 6e-3, 3e-3, 0.0},
+                                             {"rim", 0.035, 0.0, 3e-3, 3e-3, 0.2}});
   const auto oracle = oracles::solve_axisymmetric(oracle_problem(s, false, oracles::Kinematics::green_lagrange),
                                                   oracles::AxisymmetricOptions{200});
   REQUIRE(oracle.converged);
-  std::vector<double> q_oracle;
   double q_scale = 0;
-  for (const auto& e : s.electrodes) {
-    q_oracle.push_back(oracle_electrode_charge(oracle, s, e, 8));
-    q_scale = std::max(q_scale, std::abs(q_oracle.back()));
-  }
+  const std::vector<double> q_oracle = oracle_charges(oracle, s, q_scale);
   // The oracle has no bending: so neither has the sweep (the bending model part is not compared here).
   pvdf::fem::SweepOptions so;
   so.solver.model = pvdf::fem::Model::large_rotation;
