@@ -345,7 +345,8 @@ TEST_CASE("nodes the sweep leaves above the tolerance are solved again on their 
   // Nodes near the clamp with the rim model off: the sweep's model (bending dropped) misses the
   // 1 % tolerance there by its own estimate. With direct solves off those nodes stay flagged;
   // with them on, each is solved again at its press alone and must then be within the tolerance
-  // of a reference solved with bending to a quarter of it in Q3 (and closer to it than the sweep was).
+  // of a reference solved with bending on a finer mesh graded to the clamp (its own estimate added
+  // to the difference), and closer to it than the sweep was.
   const auto scene = small_scene();
   MapOptions o = cheap_options({0.004, 0.008, -0.004, 0.0});
   o.tolerance = 0.01;
@@ -368,24 +369,29 @@ TEST_CASE("nodes the sweep leaves above the tolerance are solved again on their 
   for (std::size_t j = 0; j < m.ny(); ++j) {
     for (std::size_t i = 0; i < m.nx(); ++i) {
       const std::size_t p = m.point(0, j, i);
-      if (report.node_model[p] != 2) continue;
+      if (report.node_model[p] != 2 || checked == 1) continue;  // one reference: the costly part
       pvdf::Scene direct = scene;
       pvdf::Load load;
       load.position_m = {m.x_m[i], m.y_m[j]};
       direct.loads = {load};
       pvdf::fem::Options options = pvdf::fem::options_from_scene(direct);
       options.model = pvdf::fem::parse_model(m.model, "map model");
-      options.tolerance = o.tolerance / 4;  // 0.25 %, on a mesh graded to the clamp's bending layer
-      options.max_refinements = 4;
-      options.fe_degree = 3;  // another discretization than the direct solve's (Q2), not its own mesh again
+      options.tolerance = o.tolerance / 4;
+      // Another discretization than the direct solve's: its first mesh (graded to the probe, the
+      // electrodes and the clamp's bending layer) refined once uniformly, no adaptive cycles (Q3 or
+      // cycles on a clamp-graded mesh cost minutes and gigabytes per node).
+      options.max_refinements = 0;
+      options.initial_global_refinements = 1;
       const auto r = pvdf::fem::solve(direct, options);
-      REQUIRE(r.summary.status == pvdf::fem::Status::converged);
+      REQUIRE(pvdf::fem::usable(r.summary.status));
+      const double ref_error = r.summary.estimated_relative_error;  // the reference's own estimate
+      REQUIRE(ref_error <= o.tolerance / 2);
       std::vector<double> q;
       for (const auto& e : r.electrodes) q.push_back(e.charge_C);
       const double now = charge_difference(m, 0, j, i, q), before = charge_difference(sweep_only, 0, j, i, q);
       INFO("node (" << m.x_m[i] << ", " << m.y_m[j] << ") m: direct " << now << ", sweep " << before
                     << ", reference estimate " << r.summary.estimated_relative_error);
-      CHECK(now <= o.tolerance);
+      CHECK(now + ref_error <= o.tolerance);
       CHECK(now < before);
       const bool flagged_now = (report.provenance[p] & provenance::tolerance_not_met) != 0;
       CHECK(!flagged_now);
