@@ -3,6 +3,8 @@
 // the change of the outputs between meshes, extrapolated with the observed contraction.
 #include "film_solver.hpp"
 
+#include "pvdf/core/constants.hpp"
+
 #include "pvdf/core/material.hpp"
 
 #include <deal.II/base/quadrature_lib.h>
@@ -86,31 +88,23 @@ void FilmSolver::refine_mesh(Vector<double>& u, const Vector<float>* goal_indica
   u = u_new;
 }
 
-// With bending the clamp carries a boundary layer of width l_b = sqrt(D/N) (0.2 mm on seed 001
-// at 1 N) that a first mesh with cells of a/6 at the rim does not resolve. Primal and adjoint both
-// miss it there, so the goal-oriented loop neither sees nor finds it (docs/fem.md §6), while it
-// moves the charges everywhere by tenths of a percent (0.5 % at r = 24 mm on seed 001). So
-// the cells are refined toward the whole rim until their size is at most max(l_b, distance / 2),
-// l_b at the total load.
-void FilmSolver::grade_toward_rim(Vector<double>* u) {
-  if (!options_.grade_rim_for_bending || rim_graded_ || !(total_force_ > 0)) return;
-  // The linear plate carries no membrane force: no layer (unless pretensioned).
-  if (options_.model == Model::linear && !(pretension_ > 0)) return;
-  rim_graded_ = true;
+// Refines the cells near the rim, within half_angle_rad of the direction angle_rad as seen from the
+// film centre (>= pi: the whole rim), until each is no larger than max(size_m, grading x distance
+// to the rim); u, when given, is carried over (DOFs distributed, constraints not yet rebuilt).
+// Returns whether anything was refined. Shared by the map's rim model (prepare_sweep, one arc) and
+// grade_toward_rim (the whole rim).
+bool FilmSolver::refine_toward_rim(double size_m, double grading, double angle_rad, double half_angle_rad,
+                                   Vector<double>* u) {
   const auto& outline = scene_.membrane.outline;
-  const double a = outline.characteristic_radius_m();
-  // The layer acts like a clamp moved inward by about l_b: its effect on the outputs is ~l_b/a
-  // (0.4 % on seed 001: 0.2 mm of 45 mm; measured 0.1-0.6 % on the charges). Below a tenth of the
-  // tolerance it is left unresolved; cells are never made smaller than a/1000 (films of ~1 µm).
-  const double layer = std::max(rim_boundary_layer_m(scene_, total_force_), a / 1000);
-  if (rim_boundary_layer_m(scene_, total_force_) / a <= 0.1 * options_.tolerance) return;
   bool refined = false;
   for (int pass = 0; pass < 30; ++pass) {
     bool marked = false;
     for (const auto& cell : triangulation_.active_cell_iterators()) {
       const Point<dim> c = cell->center();
+      const double off = std::remainder(std::atan2(c[1], c[0]) - angle_rad, 2 * pvdf::pi);
+      if (std::abs(off) > half_angle_rad) continue;
       const double d = std::max(0.0, outline.inside_distance_m({c[0], c[1]}) - 0.5 * cell->diameter());
-      if (cell->diameter() / std::sqrt(2.0) > 1.3 * std::max(layer, 0.5 * d)) {
+      if (cell->diameter() / std::sqrt(2.0) > 1.3 * std::max(size_m, grading * d)) {
         cell->set_refine_flag();
         marked = true;
       }
@@ -131,6 +125,28 @@ void FilmSolver::grade_toward_rim(Vector<double>* u) {
     transfer.interpolate(*u, u_new);
     *u = u_new;
   }
+  return refined;
+}
+
+// With bending the clamp carries a boundary layer of width l_b = sqrt(D/N) (0.2 mm on seed 001
+// at 1 N) that a first mesh with cells of a/6 at the rim does not resolve. Primal and adjoint both
+// miss it there, so the goal-oriented loop neither sees nor finds it (docs/fem.md §6), while it
+// moves the charges everywhere by tenths of a percent (0.5 % at r = 24 mm on seed 001). So
+// the cells are refined toward the whole rim until their size is at most max(l_b, distance / 2),
+// l_b at the total load.
+void FilmSolver::grade_toward_rim(Vector<double>* u) {
+  if (!options_.grade_rim_for_bending || rim_graded_ || !(total_force_ > 0)) return;
+  // The linear plate carries no membrane force: no layer (unless pretensioned).
+  if (options_.model == Model::linear && !(pretension_ > 0)) return;
+  rim_graded_ = true;
+  const auto& outline = scene_.membrane.outline;
+  const double a = outline.characteristic_radius_m();
+  // The layer acts like a clamp moved inward by about l_b: its effect on the outputs is ~l_b/a
+  // (0.4 % on seed 001: 0.2 mm of 45 mm; measured 0.1-0.6 % on the charges). Below a tenth of the
+  // tolerance it is left unresolved; cells are never made smaller than a/1000 (films of ~1 µm).
+  const double layer = std::max(rim_boundary_layer_m(scene_, total_force_), a / 1000);
+  if (rim_boundary_layer_m(scene_, total_force_) / a <= 0.1 * options_.tolerance) return;
+  const bool refined = refine_toward_rim(layer, 0.5, 0.0, 4.0, u);
   if (refined && u) {
     set_material_ids();
     setup_system();

@@ -224,6 +224,7 @@ class FilmSolver {
   // adaptivity.cpp: with bending, cells toward the clamped rim down to its boundary layer (once);
   // u, when given, is carried over to the new mesh.
   void grade_toward_rim(Vector<double>* u);
+  bool refine_toward_rim(double size_m, double grading, double angle_rad, double half_angle_rad, Vector<double>* u);
   void set_material_ids();
   void setup_system();
   void copy_pattern_to_eigen();

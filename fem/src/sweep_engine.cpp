@@ -25,23 +25,7 @@ void FilmSolver::prepare_sweep(const SweepMeshSizes& sizes, const pvdf::mesh::Fi
   if (mesh) make_grid_from(*mesh);
   else make_grid();
   if (sizes.rim_size_m > 0) {
-    const auto& outline = scene_.membrane.outline;
-    for (int pass = 0; pass < 30; ++pass) {
-      bool marked = false;
-      for (const auto& cell : triangulation_.active_cell_iterators()) {
-        const Point<dim> c = cell->center();
-        const double off = std::remainder(std::atan2(c[1], c[0]) - sizes.rim_angle_rad, 2 * pvdf::pi);
-        if (std::abs(off) > sizes.rim_half_angle_rad) continue;
-        const double d = std::max(0.0, outline.inside_distance_m({c[0], c[1]}) - 0.5 * cell->diameter());
-        const double target = std::max(sizes.rim_size_m, sizes.rim_grading * d);
-        if (cell->diameter() / std::sqrt(2.0) > 1.3 * target) {
-          cell->set_refine_flag();
-          marked = true;
-        }
-      }
-      if (!marked) break;
-      triangulation_.execute_coarsening_and_refinement();
-    }
+    refine_toward_rim(sizes.rim_size_m, sizes.rim_grading, sizes.rim_angle_rad, sizes.rim_half_angle_rad, nullptr);
     set_material_ids();
   }
   setup_system();
