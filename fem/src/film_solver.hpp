@@ -18,6 +18,7 @@
 #include "pvdf/fem/solver.hpp"
 
 #include "sweep_engine.hpp"
+#include "tangent_factorization.hpp"
 #include "tension_field.hpp"
 
 #include <deal.II/base/point.h>
@@ -34,8 +35,6 @@
 #include <deal.II/lac/sparsity_pattern.h>
 #include <deal.II/lac/vector.h>
 
-#include <Eigen/SparseCholesky>
-#include <Eigen/SparseCore>
 
 #include <array>
 #include <chrono>
@@ -211,7 +210,7 @@ class FilmSolver {
   const Summary& summary() const { return summary_; }
   unsigned int n_dofs() const { return dof_handler_.n_dofs(); }
   unsigned int n_cells() const { return triangulation_.n_active_cells(); }
-  int n_factorizations() const { return n_factorizations_; }
+  int n_factorizations() const { return factorization_.n_factorizations(); }
   double load_vector_s = 0;
 
   // outputs.cpp (also used by the VTU postprocessor)
@@ -227,7 +226,6 @@ class FilmSolver {
   bool refine_toward_rim(double size_m, double grading, double angle_rad, double half_angle_rad, Vector<double>* u);
   void set_material_ids();
   void setup_system();
-  void copy_pattern_to_eigen();
   void mark_rim_w_dofs();
   void add_bending_face_couplings(DynamicSparsityPattern& dsp) const;
 
@@ -240,7 +238,9 @@ class FilmSolver {
 
   // newton.cpp
   bool solve_linear(const Vector<double>& rhs, Vector<double>& x, std::string& message, bool factorize = true);
-  NewtonOutcome newton(Model model, double artificial_tension, Vector<double>& u);
+  /// `stage_rtol` > 0: a stepping-stone solve (an intermediate continuation stage), stopped as
+  /// soon as ‖r‖ ≤ stage_rtol·‖f‖ with no increment test.
+  NewtonOutcome newton(Model model, double artificial_tension, Vector<double>& u, double stage_rtol = 0);
   struct LineSearch {
     double alpha = 1.0;        // accepted step length
     double residual_norm = 0;  // ‖r‖ at u + alpha·du (max() = every trial non-finite)
@@ -342,15 +342,9 @@ class FilmSolver {
   Vector<double> solution_;
   std::vector<bool> rim_w_dof_;
   Vector<double> membrane_raw_;       // unconstrained membrane internal force of the last assembly
-  // Sparse direct solver: Eigen's simplicial LDLᵀ (AMD ordering, symbolic analysis once per
-  // mesh) on a copy of the symmetric tangent; UMFPACK is the fallback. (UMFPACK spends most of
-  // its time in dense BLAS kernels, slow with Debian's reference BLAS.)
-  Eigen::SparseMatrix<double> eigen_tangent_;
-  std::vector<std::ptrdiff_t> eigen_index_;
-  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, Eigen::AMDOrdering<int>> ldlt_;
-  bool ldlt_analyzed_ = false;
-  int n_factorizations_ = 0;
-  bool ldlt_good_ = false;            // ldlt_ holds a usable factorization of the current pattern
+  // Sparse direct solver (tangent_factorization.hpp): symbolic analysis once per pattern,
+  // CHOLMOD supernodal LLᵀ, simplicial LDLᵀ where indefinite; UMFPACK is the caller's fallback.
+  TangentFactorization factorization_;
   // Chord steps (probe sweeps): keep the last factorized tangent while Newton contracts fast.
   bool reuse_factorization_ = false;
   bool chord_first_step_ = false;     // the first step of the next newton() may use the old factorization

@@ -1,6 +1,7 @@
-// Nonlinear solution (docs/fem.md §5): the sparse linear solves (Eigen LDLᵀ with a kept symbolic
-// analysis, chord steps, UMFPACK or GMRES as fallbacks), Newton–Raphson with a line search on the
-// potential, and the artificial-pretension continuation from the flat film.
+// Nonlinear solution (docs/fem.md §5): the sparse linear solves (tangent_factorization.hpp:
+// CHOLMOD supernodal Cholesky with a kept symbolic analysis, chord steps, UMFPACK or GMRES as
+// fallbacks), Newton–Raphson with a line search on the potential, and the artificial-pretension
+// continuation from the flat film.
 #include "film_solver.hpp"
 
 #include "pvdf/core/membrane_scaling.hpp"
@@ -31,34 +32,18 @@ bool FilmSolver::solve_linear(const Vector<double>& rhs, Vector<double>& x, std:
       SolverGMRES<Vector<double>> gmres(control, SolverGMRES<Vector<double>>::AdditionalData(100));
       x = 0;
       gmres.solve(tangent_, x, rhs, ilu);
-    } else if (!factorize && ldlt_analyzed_ && ldlt_good_) {
+    } else if (!factorize && factorization_.usable()) {
       // Chord step: the factorization of an earlier tangent of the same pattern.
-      const Eigen::Map<const Eigen::VectorXd> b(rhs.begin(), rhs.size());
-      Eigen::Map<Eigen::VectorXd> xv(x.begin(), x.size());
-      xv = ldlt_.solve(b);
+      factorization_.solve(rhs.begin(), x.begin(), x.size());
     } else {
-      // Copy the values in the pattern's row order (the order eigen_index_ was built in).
-      double* values = eigen_tangent_.valuePtr();
-      std::size_t k = 0;
-      for (types::global_dof_index r = 0; r < tangent_.m(); ++r)
-        for (auto it = tangent_.begin(r); it != tangent_.end(r); ++it) values[eigen_index_[k++]] = it->value();
-      if (!ldlt_analyzed_) {
-        ldlt_.analyzePattern(eigen_tangent_);
-        ldlt_analyzed_ = true;
-      }
-      ldlt_.factorize(eigen_tangent_);
-      ++n_factorizations_;
-      bool good = ldlt_.info() == Eigen::Success;
-      ldlt_good_ = false;
+      bool good = factorization_.factorize(tangent_);
       if (good) {
-        const Eigen::Map<const Eigen::VectorXd> b(rhs.begin(), rhs.size());
-        Eigen::Map<Eigen::VectorXd> xv(x.begin(), x.size());
-        xv = ldlt_.solve(b);
+        factorization_.solve(rhs.begin(), x.begin(), x.size());
         Vector<double> check(x.size());
         tangent_.vmult(check, x);
         check -= rhs;
         good = std::isfinite(check.l2_norm()) && check.l2_norm() <= 1e-6 * rhs.l2_norm() + 1e-300;
-        ldlt_good_ = good;
+        if (!good) factorization_.invalidate();
       }
       if (!good) {  // indefinite or ill-conditioned pivots: pivoting LU
         SparseDirectUMFPACK direct;
@@ -85,7 +70,7 @@ bool FilmSolver::solve_linear(const Vector<double>& rhs, Vector<double>& x, std:
 
 // Newton–Raphson with backtracking line search on ‖r‖. Stops when ‖r‖ ≤ rtol·‖f‖ + atol AND
 // ‖Δu‖ ≤ increment_tol·‖u‖ (both), or after max_newton_iterations (no_convergence).
-NewtonOutcome FilmSolver::newton(Model model, double artificial_tension, Vector<double>& u) {
+NewtonOutcome FilmSolver::newton(Model model, double artificial_tension, Vector<double>& u, double stage_rtol) {
   NewtonOutcome out;
   const double f_norm = load_.l2_norm();
   const double r_tol = options_.residual_rtol * f_norm + options_.residual_atol;
@@ -95,7 +80,7 @@ NewtonOutcome FilmSolver::newton(Model model, double artificial_tension, Vector<
   // Chord steps (reuse_factorization_, probe sweeps): while a step contracts the residual by 10x or
   // more, the next step reuses the factorized tangent (one back substitution instead of assembly
   // of the tangent + factorization); a weaker contraction refactorizes.
-  bool refactorize = !(reuse_factorization_ && chord_first_step_ && ldlt_analyzed_ && ldlt_good_);
+  bool refactorize = !(reuse_factorization_ && chord_first_step_ && factorization_.usable());
   chord_first_step_ = false;
   bool have_r = false;  // r and last_energy_ already belong to u (the accepted line-search trial)
   for (int it = 0; it <= options_.max_newton_iterations; ++it) {
@@ -118,7 +103,8 @@ NewtonOutcome FilmSolver::newton(Model model, double artificial_tension, Vector<
     // Round-off floor: the stiffness ratio membrane/bending reaches 1e12 for thin films, so the
     // residual cannot always reach rtol; an update at round-off level with ‖r‖ ≤ 1e-6‖f‖ is converged.
     const bool roundoff_floor = it > 0 && last_increment <= 1e-11 * std::max(u_norm, 1e-300) && r_norm <= 1e-6 * f_norm;
-    if ((r_norm <= r_tol && small_increment) || roundoff_floor) {
+    const bool stage_done = stage_rtol > 0 && r_norm <= stage_rtol * f_norm;
+    if ((r_norm <= r_tol && small_increment) || roundoff_floor || stage_done) {
       out.status = Status::converged;
       return out;
     }
@@ -259,7 +245,10 @@ NewtonOutcome FilmSolver::solve_from_flat(Model model, Vector<double>& u) {
   std::size_t k = 0;
   while (k < targets.size()) {
     const double target = targets[k];
-    auto o = newton(model, target, u);
+    // The stages with artificial pretension only lead to the last one, which alone must meet
+    // the Newton tolerance: each stops at ‖r‖ ≤ 1e-3‖f‖ (measured on seed 001's centre solve:
+    // 18 instead of 25 Newton iterations, outputs unchanged to 10 digits).
+    auto o = newton(model, target, u, target > 0 ? 1e-3 : 0.0);
     ++summary_.load_steps;
     summary_.newton_iterations += o.iterations;
     total.residual_norm = o.residual_norm;

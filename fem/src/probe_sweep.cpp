@@ -118,6 +118,18 @@ double relative(const std::vector<double>& err, const std::vector<double>& q) {
 
 }  // namespace
 
+// t += r for the work counters of a rim engine (its rim_solves and rim_s are counted by the sweep).
+static void add_timing(SweepTiming& t, const SweepTiming& r) {
+  t.assembly_s += r.assembly_s;
+  t.linear_solve_s += r.linear_solve_s;
+  t.load_vector_s += r.load_vector_s;
+  t.outputs_s += r.outputs_s;
+  t.newton_iterations += r.newton_iterations;
+  t.factorizations += r.factorizations;
+  t.estimate_s += r.estimate_s;
+  t.probe_mesh_s += r.probe_mesh_s;
+}
+
 struct ProbeSweep::Impl {
   pvdf::Scene scene;
   SweepOptions options;
@@ -125,6 +137,15 @@ struct ProbeSweep::Impl {
   std::unique_ptr<detail::SweepEngine> engine;
   // Bending kept, mesh graded toward the clamp along one sector of the rim each (built lazily).
   std::vector<std::unique_ptr<detail::SweepEngine>> rim_engines;
+  // Memory bound: at most max_live_rim_engines of them are alive at once (the least recently used
+  // is dropped and rebuilt when its sector is visited again). Each holds a mesh graded to the
+  // bending layer, its Q(p+1) estimator space and factorizations (~0.1–0.2 GB on seed 001): kept
+  // for all 16 sectors of every thread's sweep, a map's resident memory grew with the positions
+  // solved (3.1 GB after 4 minutes of the 4 mm seed-001 map, 12 GiB in the README's `design`).
+  // A map row visits the rim at its two ends, so two live engines serve it.
+  static constexpr std::size_t max_live_rim_engines = 2;
+  std::vector<int> rim_recent;  // sectors with a live engine, most recently used last
+  SweepTiming retired_rim;      // timing of the rim engines already dropped
   detail::SweepMeshSizes rim_sizes;
   int sector_of(double x_m, double y_m) const;
   detail::SweepEngine& rim_engine(int sector);
@@ -190,6 +211,14 @@ int ProbeSweep::Impl::sector_of(double x_m, double y_m) const {
 
 detail::SweepEngine& ProbeSweep::Impl::rim_engine(int sector) {
   auto& e = rim_engines[static_cast<std::size_t>(sector)];
+  rim_recent.erase(std::remove(rim_recent.begin(), rim_recent.end(), sector), rim_recent.end());
+  rim_recent.push_back(sector);
+  while (rim_recent.size() > max_live_rim_engines) {
+    auto& old = rim_engines[static_cast<std::size_t>(rim_recent.front())];
+    if (old) add_timing(retired_rim, old->timing());
+    old.reset();
+    rim_recent.erase(rim_recent.begin());
+  }
   if (!e) {
     const int n = static_cast<int>(rim_engines.size());
     detail::SweepMeshSizes sizes = rim_sizes;
@@ -343,18 +372,9 @@ const SweepSetup& ProbeSweep::setup() const { return impl_->setup; }
 
 SweepTiming ProbeSweep::timing() const {
   SweepTiming t = impl_->engine->timing();
-  for (const auto& engine : impl_->rim_engines) {
-    if (!engine) continue;
-    const SweepTiming r = engine->timing();
-    t.assembly_s += r.assembly_s;
-    t.linear_solve_s += r.linear_solve_s;
-    t.load_vector_s += r.load_vector_s;
-    t.outputs_s += r.outputs_s;
-    t.newton_iterations += r.newton_iterations;
-    t.factorizations += r.factorizations;
-    t.estimate_s += r.estimate_s;
-    t.probe_mesh_s += r.probe_mesh_s;
-  }
+  add_timing(t, impl_->retired_rim);
+  for (const auto& engine : impl_->rim_engines)
+    if (engine) add_timing(t, engine->timing());
   t.rim_solves = impl_->rim_solves;
   t.rim_s = impl_->rim_s;
   return t;

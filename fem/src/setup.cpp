@@ -1,7 +1,7 @@
 // Setup of a film problem (docs/fem.md §1, §4): the scene's thickness, pretension, material and
 // loads checked and turned into stiffnesses; the initial mesh (deal.II grid or a pvdf::mesh
 // FilmMesh) graded to the probes and electrodes; DOFs, the clamped-rim and hanging-node
-// constraints, the sparsity pattern (with the C0IP face couplings) and its Eigen copy.
+// constraints, the sparsity pattern (with the C0IP face couplings), handed to the factorization.
 #include "film_solver.hpp"
 
 #include "pvdf/core/error.hpp"
@@ -292,7 +292,7 @@ void FilmSolver::setup_system() {
   sparsity_.copy_from(dsp);
   if (!residual_only_) {  // the enriched space (goal_error.cpp) assembles residuals only
     tangent_.reinit(sparsity_);
-    copy_pattern_to_eigen();
+    factorization_.set_pattern(sparsity_);
   }
   bending_.reinit(sparsity_);
   bending_raw_.reinit(sparsity_);
@@ -303,30 +303,6 @@ void FilmSolver::setup_system() {
   assemble_bending_matrix();
   assemble_load_vector();
   summary_.setup_s += seconds_since(t0);
-}
-
-// The Eigen copy of the pattern (the LDLᵀ works on it) and the map deal.II entry → Eigen value
-// slot, so each factorization copies values without searching; a new pattern needs a new
-// symbolic analysis.
-void FilmSolver::copy_pattern_to_eigen() {
-  const auto n = static_cast<int>(dof_handler_.n_dofs());
-  std::vector<Eigen::Triplet<double>> triplets;
-  triplets.reserve(sparsity_.n_nonzero_elements());
-  for (int r = 0; r < n; ++r)
-    for (auto it = sparsity_.begin(r); it != sparsity_.end(r); ++it)
-      triplets.emplace_back(r, static_cast<int>(it->column()), 0.0);
-  eigen_tangent_.resize(n, n);
-  eigen_tangent_.setFromTriplets(triplets.begin(), triplets.end());
-  eigen_tangent_.makeCompressed();
-  eigen_index_.clear();
-  eigen_index_.reserve(triplets.size());
-  const int* outer = eigen_tangent_.outerIndexPtr();
-  const int* inner = eigen_tangent_.innerIndexPtr();
-  for (const auto& t : triplets) {
-    const int* pos = std::lower_bound(inner + outer[t.col()], inner + outer[t.col() + 1], t.row());
-    eigen_index_.push_back(pos - inner);
-  }
-  ldlt_analyzed_ = false;
 }
 
 // w DOFs on the rim: the clamped rim's vertical reaction is summed over them (outputs.cpp).
