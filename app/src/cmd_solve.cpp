@@ -40,10 +40,10 @@ void apply_load_flags(const SolveOptions& o, pvdf::Scene& scene) {
   scene.loads.clear();
   for (const auto& text : o.loads) {
     const auto v = pvdf::parse_number_list(text, "--load X_M,Y_M,F_N", 3);
-    // The rules of the scene's loads[]: |force_N| <= 1e4, the footprint clear of the rim.
-    if (!(std::abs(v[2]) <= 1e4)) {
-      throw pvdf::InputError("--load " + pvdf::escape_control_bytes(text) + ": force " + pvdf::format_g(v[2]) +
-                             " N must lie in [-1e4, 1e4] N (the rule of loads[].force_N)");
+    // The rules of the scene's loads[]: 1e-9 <= force_N <= 1e4, the footprint clear of the rim.
+    if (!(v[2] >= 1e-9 && v[2] <= 1e4)) {
+      throw pvdf::InputError("--load " + pvdf::quote_cell(text) + ": force " + pvdf::format_g(v[2]) +
+                             " N must lie in [1e-9, 1e4] N (a probe pushes the film; the rule of loads[].force_N)");
     }
     const std::string problem = pvdf::probe_footprint_problem(scene, {v[0], v[1]}, scene.probe.radius_m);
     if (!problem.empty()) throw pvdf::InputError("--load " + pvdf::escape_control_bytes(text) + ": " + problem);
