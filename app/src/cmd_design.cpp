@@ -22,6 +22,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <filesystem>
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -579,6 +580,13 @@ int run_design(const DesignCommandOptions& o) {
     throw pvdf::InputError(std::string("--vary: ") + e.what());
   }
   std::vector<Candidate> all = collect_candidates(o, sweep, series_names);
+  if (!o.no_plots && std::filesystem::is_directory(o.out_dir)) {
+    // The files the run ends with, checked before the maps are computed (a device or a link
+    // where design.json belongs is refused now, not after the work).
+    for (const char* name : {"/design.json", "/design_position.png", "/design_force.png", "/design_sweep.png"}) {
+      pvdf::app::check_output_file(o.out_dir + name, "--out-dir");
+    }
+  }
 
   // Step 2: maps (coarse previews) and their evaluation.
   for (auto& c : all) {
@@ -598,14 +606,14 @@ int run_design(const DesignCommandOptions& o) {
   for (std::size_t k = 0; k < d.noise_C.size(); ++k) noise_text += (k ? "/" : "") + fmt("%.3g", d.noise_C[k] * 1e12);
   noise_text = "σ = " + noise_text + " pC" + (o.adc_bits > 0 ? ", " + std::to_string(o.adc_bits) + "-bit ADC" : "");
   std::vector<std::string> written;
-  if (!o.no_plots) {
+  if (!o.no_plots && std::filesystem::is_directory(o.out_dir)) {
     pvdf::make_directories(o.out_dir);
     write_map_figures(ranked_refined.empty() ? ranked : ranked_refined, o, noise_text, written);
     if (sweep) write_sweep_figure(all, series_names, o, sweep->key, written);
   }
   const Candidate* best = ranked_refined.empty() ? ranked.front() : ranked_refined.front();
   const nlohmann::json j = design_json(d, any_synthetic, spacing, ranked, refined, ranked_refined, best, sweep, written);
-  if (!o.no_plots) {
+  if (!o.no_plots && std::filesystem::is_directory(o.out_dir)) {
     pvdf::write_file_atomically(o.out_dir + "/design.json", [&j](std::ostream& out) { out << j.dump(2) << '\n'; });
   }
 

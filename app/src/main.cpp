@@ -354,6 +354,13 @@ int run(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     std::string what = e.what();
     if (what.empty()) what = e.get_name();
+    // A single-value flag given twice: CLI11 says "--start: At Most 1 required but received 2".
+    const std::string at_most = ": At Most 1 required but received ";
+    const auto at = what.find(at_most);
+    if (at != std::string::npos) {
+      what = what.substr(0, at) + " is given " + what.substr(at + at_most.size()) +
+             " times; it takes one value: give it once";
+    }
     return fail(pvdf::exit_code::bad_input, what + "; run 'pvdfkit --help' or 'pvdfkit COMMAND --help'");
   }
   for (auto& sub : runners) {
