@@ -217,23 +217,28 @@ void print_map_text(const MapCommandOptions& o, const ChargeMap& map, const MapR
   std::printf("%d rank(s) x %d thread(s), %.1f s, %.3g s per solved position and core\n", report.ranks,
               report.threads, report.wall_s, report.per_position_s);
   if (map.ne() == 3 && report.n_failed == 0) {
-    // How much of the film three charges leave ambiguous with the force unknown, and the remedies.
-    const pvdf::mapping::AmbiguityShare a = pvdf::mapping::ambiguity_share(map);
-    std::printf("ambiguity at %g N (%zu nodes): more than one press fits the charges at %.0f %% of the film with the force "
-                "unknown (range %g-%g N); remedies: a force reading (--force-N) %.0f %%, the force known within +-25 %% "
-                "(--force-range-N) %.0f %%, a fourth electrode (pvdfkit design quantifies it; docs/lookup.md section 2)\n",
-                a.force_N, a.nodes, 100 * a.force_unknown, a.min_force_N, a.max_force_N, 100 * a.force_known,
-                100 * a.force_within_25);
-    if (map.nf() >= 2) {
-      // Whether a press's loading curve separates the candidates (docs/lookup.md section 2, "Force ramps"):
-      // only where the map's charge direction turns with the force (pretension, bending).
-      const pvdf::mapping::RampAmbiguity r = pvdf::mapping::ramp_ambiguity_share(map);
-      std::printf("force ramp (%d samples from %g to %g N, the map's noise, %zu nodes): ambiguous %.0f %% at the peak, "
-                  "%.0f %% after the ramp test (%.0f %% with as many samples held at the peak); the map is taken as "
-                  "exact, so its own error must be below the noise for this to hold\n",
-                  pvdf::mapping::RampOptions{}.n_samples, pvdf::mapping::RampOptions{}.ramp_start * r.peak_force_N,
-                  r.peak_force_N, r.nodes, 100 * r.ambiguous_at_peak, 100 * r.ambiguous_after_ramp,
-                  100 * r.ambiguous_after_hold);
+    try {
+      // How much of the film three charges leave ambiguous with the force unknown, and the remedies.
+      const pvdf::mapping::AmbiguityShare a = pvdf::mapping::ambiguity_share(map);
+      std::printf("ambiguity at %g N (%zu nodes): more than one press fits the charges at %.0f %% of the film with the force "
+                  "unknown (range %g-%g N); remedies: a force reading (--force-N) %.0f %%, the force known within +-25 %% "
+                  "(--force-range-N) %.0f %%, a fourth electrode (pvdfkit design quantifies it; docs/lookup.md section 2)\n",
+                  a.force_N, a.nodes, 100 * a.force_unknown, a.min_force_N, a.max_force_N, 100 * a.force_known,
+                  100 * a.force_within_25);
+      if (map.nf() >= 2) {
+        // Whether a press's loading curve separates the candidates (docs/lookup.md section 2, "Force ramps"):
+        // only where the map's charge direction turns with the force (pretension, bending).
+        const pvdf::mapping::RampAmbiguity r = pvdf::mapping::ramp_ambiguity_share(map);
+        std::printf("force ramp (%d samples from %g to %g N, the map's noise, %zu nodes): ambiguous %.0f %% at the peak, "
+                    "%.0f %% after the ramp test (%.0f %% with as many samples held at the peak); the map is taken as "
+                    "exact, so its own error must be below the noise for this to hold\n",
+                    pvdf::mapping::RampOptions{}.n_samples, pvdf::mapping::RampOptions{}.ramp_start * r.peak_force_N,
+                    r.peak_force_N, r.nodes, 100 * r.ambiguous_at_peak, 100 * r.ambiguous_after_ramp,
+                    100 * r.ambiguous_after_hold);
+      }
+    } catch (const pvdf::InputError& e) {
+      // A map on which nothing can be located (no usable cell) has no ambiguity to report.
+      std::printf("ambiguity: not computed (%s)\n", e.what());
     }
   }
 }
@@ -292,6 +297,14 @@ int run_map(const MapCommandOptions& o) {
                 << " holds the completed rows: rerun the same command to resume\n";
     }
     return interrupted ? 130 : pvdf::exit_code::numerical;
+  }
+  if (report.n_failed == 0 &&
+      std::none_of(map.charge_C.begin(), map.charge_C.end(), [](double q) { return std::isfinite(q) && q != 0; })) {
+    // A map whose every charge is zero locates nothing: not written, a reported outcome.
+    std::cerr << "error: every charge of the map is zero (model " << report.model
+              << "): nothing could be located with it, so no map was written to " << o.output
+              << "; linear kinematics leave no net charge on a flat film (no stretching): use --model auto\n";
+    return pvdf::exit_code::numerical;
   }
   write_generated_map(o.output, map, report.provenance, report.node_model);
   remove_checkpoint_files(options.checkpoint_path);

@@ -249,6 +249,9 @@ const std::vector<Row> rows = {
   {"map-region-1e10", "map good.json -o m.h5 --quiet --region -1e10,1e10,-1e10,1e10", 2, "beyond the film", "m.h5"},
   {"map-region-mm", "map good.json -o m.h5 --quiet --region -12,12,-12,12", 2, "look like mm", "m.h5"},
   {"map-spacing-mm", "map good.json -o m.h5 --quiet --spacing-m 2", 2, "metres", "m.h5"},
+  {"map-linear-all-zero", "map good.json -o lin.h5 --spacing-m 0.01 --region -0.01,0.01,-0.01,0.01 --setup-checks 0 "
+                          "--model linear --rim-model never --direct-solves never --tolerance 0.3 --quiet --no-checkpoint",
+   3, "every charge of the map is zero", "lin.h5", 30},
   {"map-stop-after-neg", "map good.json -o m.h5 --quiet --stop-after-positions -1", 2, "--stop-after-positions", "m.h5"},
   {"map-spacing-twice", "map good.json -o m.h5 --quiet --spacing-m 0.004 --spacing-m 0.002", 2, "--spacing-m", "m.h5"},
   {"calibrate-o-input-map", "calibrate $M measured.csv -o map.h5", 2, "is the input"},
