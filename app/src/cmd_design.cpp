@@ -606,14 +606,14 @@ int run_design(const DesignCommandOptions& o) {
   for (std::size_t k = 0; k < d.noise_C.size(); ++k) noise_text += (k ? "/" : "") + fmt("%.3g", d.noise_C[k] * 1e12);
   noise_text = "σ = " + noise_text + " pC" + (o.adc_bits > 0 ? ", " + std::to_string(o.adc_bits) + "-bit ADC" : "");
   std::vector<std::string> written;
-  if (!o.no_plots && std::filesystem::is_directory(o.out_dir)) {
+  if (!o.no_plots) {
     pvdf::make_directories(o.out_dir);
     write_map_figures(ranked_refined.empty() ? ranked : ranked_refined, o, noise_text, written);
     if (sweep) write_sweep_figure(all, series_names, o, sweep->key, written);
   }
   const Candidate* best = ranked_refined.empty() ? ranked.front() : ranked_refined.front();
   const nlohmann::json j = design_json(d, any_synthetic, spacing, ranked, refined, ranked_refined, best, sweep, written);
-  if (!o.no_plots && std::filesystem::is_directory(o.out_dir)) {
+  if (!o.no_plots) {
     pvdf::write_file_atomically(o.out_dir + "/design.json", [&j](std::ostream& out) { out << j.dump(2) << '\n'; });
   }
 
