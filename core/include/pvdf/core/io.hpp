@@ -28,8 +28,10 @@ void check_output_path(const std::string& path, const std::string& what);
 
 /// Largest number of data rows a whole-file CSV input (fit, compare, calibrate) may hold.
 inline constexpr std::size_t max_csv_rows = 100000;
-/// Longest CSV cell accepted (characters); messages quote at most `max_quoted_chars` of a cell.
-inline constexpr std::size_t max_csv_cell_chars = 1000;
+/// Longest cell of a whole-file CSV input (characters): a number or a column name needs far
+/// fewer, and the readers that quote a cell in a message then quote at most this many.
+inline constexpr std::size_t max_csv_cell_chars = 80;
+/// Messages quote at most this many characters of a cell or flag value.
 inline constexpr std::size_t max_quoted_chars = 80;
 /// `text` for a message: control bytes escaped, cut to `max_quoted_chars` characters ("..." marks a cut).
 std::string quote_cell(const std::string& text);
