@@ -99,6 +99,20 @@ int run_fit(const FitCliOptions& o) {
                              " must lie in [1e-9, 1e4] N (the rule of loads[].force_N); fix or remove the row");
     }
   }
+  for (const auto& column : measured.observed) {
+    // A 1-sigma finer than 1 ppm of the column's scale is no bench measurement, and a denormal one
+    // (1e-320) overflows the weighted residuals inside the solver.
+    if (!column.has_sigma) continue;
+    double scale = 0;
+    for (const double v : column.value) scale = std::max(scale, std::abs(v));
+    for (std::size_t i = 0; i < column.sigma.size(); ++i) {
+      if (!(column.sigma[i] >= 1e-6 * scale) || !(column.sigma[i] >= 1e-300)) {
+        throw pvdf::InputError(o.measured_path + ":" + std::to_string(measured.line[i]) + ": sigma_" + column.name + " = " +
+                               pvdf::format_g(column.sigma[i]) + " is below 1e-6 of the column's largest value (" +
+                               pvdf::format_g(scale) + "): no bench measures to 1 ppm; give the real 1-sigma");
+      }
+    }
+  }
   pvdf::fit::FitOptions fo;
   fo.parameters = split(o.params);
   if (o.params_given && fo.parameters.empty()) {

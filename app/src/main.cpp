@@ -113,7 +113,6 @@ void collect_paths(CLI::App* app, std::vector<NamedPath>& outputs, std::vector<N
   for (CLI::App* sub : app->get_subcommands()) collect_paths(sub, outputs, inputs);
 }
 
-
 }  // namespace
 
 void check_outputs_against_inputs(CLI::App* app) {

@@ -121,6 +121,7 @@ void write_hostile_fixtures(const std::filesystem::path& d) {
   write(d / "measured_nul.csv", measured_head + bytes("0,0,1,5e-12,5e\x00-12,5e-12\n"));
   write(d / "fit_tiny_force.csv", "x_m,y_m,force_N,deflection_m\n0,0,1e-300,0.003\n0.002,0,1,0.003\n");
   write(d / "fit_dup.csv", "x_m,y_m,force_N,deflection_m,deflection_m\n0,0,1,0.003,0.003\n");
+  write(d / "fit_sigma_denormal.csv", "x_m,y_m,force_N,deflection_m,sigma_deflection_m\n0,0,1,0.003,1e-320\n0.002,0,1,0.003,1e-4\n");
   write(d / "fit_ok.csv", "x_m,y_m,force_N,deflection_m\n0,0,1,0.003\n0.002,0,1,0.003\n");
   write(d / "stream_dup.csv", "t_s,charge_A_C,charge_B_C,charge_C_C,charge_B_C\n0,4e-11,2e-11,1.5e-11,2e-11\n");
   // Scenes the parser reads but no real film is (docs/scene.md "Physical bounds").

@@ -233,6 +233,9 @@ const std::vector<Row> rows = {
   {"fit-params-empty", "fit good.json fit_ok.csv -o f.json --params ''", 2, "--params", "f.json"},
   {"fit-start-twice", "fit good.json fit_ok.csv -o f.json --start E_scale=1 --start E_scale=2", 2, "--start", "f.json"},
   {"fit-force-1e-300", "fit good.json fit_tiny_force.csv -o f.json", 2, "force_N", "f.json"},
+  {"fit-sigma-denormal", "fit good.json fit_sigma_denormal.csv -o f.json", 2, "fit_sigma_denormal.csv:2: sigma_deflection_m", "f.json"},
+  {"solve-json-verbose", "$X solve good.json --json --verbose --tolerance 0.3 2>/dev/null | python3 -c 'import json,sys; json.load(sys.stdin)' "
+                         "2>.err", 0, "", "", 60},
   {"fit-dup-column", "fit good.json fit_dup.csv -o f.json", 2, "appears twice", "f.json"},
   {"map-o-dev-full", "map good.json -o /dev/full --quiet", 2, "/dev/full"},
   {"map-o-symlink", "map good.json -o link.out --quiet", 2, "symbolic link", "link.out.checkpoint"},
