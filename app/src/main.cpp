@@ -233,10 +233,18 @@ OutputLock::OutputLock(const std::string& path, const std::string& flag) : lock_
   // The lock file may be unlinked by its previous holder between our open and flock: then the
   // lock we hold is on a file no one else can find, so open again until the path is ours.
   for (int attempt = 0; attempt < 100; ++attempt) {
-    fd_ = ::open(lock_path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    // O_NOFOLLOW, and a regular file only: the lock file is truncated once held, so it must never
+    // be a link to (or a device standing for) something else.
+    fd_ = ::open(lock_path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC | O_NOFOLLOW, 0644);
     if (fd_ < 0) {
       throw InputError(flag + ": cannot create the lock file " + quote_cell(lock_path_) + " (" + std::strerror(errno) +
-                       "); choose a writable folder");
+                       "); remove it if it is a link, or choose a writable folder");
+    }
+    struct stat kind {};
+    if (::fstat(fd_, &kind) != 0 || !S_ISREG(kind.st_mode)) {
+      ::close(fd_);
+      fd_ = -1;
+      throw InputError(flag + ": the lock file " + quote_cell(lock_path_) + " is not a regular file; remove it");
     }
     if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
       const int why = errno;

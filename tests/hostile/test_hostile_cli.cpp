@@ -246,6 +246,8 @@ const std::vector<Row> rows = {
   {"map-checkpoint-scene", "map good.json -o mc3.h5 --checkpoint good.json --quiet", 2, "is the input", "mc3.h5"},
   {"map-locked", "flock -x ml.h5.lock sleep 2 & sleep 0.5; $X map good.json -o ml.h5 --quiet 2>.err; rc=$?; wait; "
                  "exit $rc", 2, "being written by another pvdfkit", "ml.h5"},
+  {"map-lock-symlink", "ln -sf target.txt ml2.h5.lock; $X map good.json -o ml2.h5 --quiet 2>.err", 2, "ml2.h5.lock",
+   "ml2.h5"},
   {"map-forces-not-distinct", "map good.json -o m.h5 --quiet --forces-N 1,1.0000000000000002", 2, "not distinct", "m.h5"},
   {"map-forces-1e-300", "map good.json -o m.h5 --quiet --forces-N 1e-300", 2, "--forces-N", "m.h5"},
   {"map-forces-1e5", "map good.json -o m.h5 --quiet --forces-N 1e5", 2, "--forces-N", "m.h5"},
