@@ -135,7 +135,14 @@ MapOptions map_options(const MapCommandOptions& o, const pvdf::Scene& scene) {
   }
   options.probe_refinement = o.probe_refinement;
   if (!o.noise.empty()) {
-    options.noise_C = pvdf::parse_number_list(o.noise, "--noise-C", scene.electrodes.size());
+    options.noise_C = pvdf::parse_number_list(o.noise, "--noise-C");
+    if (options.noise_C.size() != scene.electrodes.size()) {
+      std::string order;
+      for (const auto& e : scene.electrodes) order += (order.empty() ? "" : ",") + e.name;
+      throw pvdf::InputError("--noise-C " + pvdf::quote_cell(o.noise) + ": " + std::to_string(options.noise_C.size()) +
+                             " values for " + std::to_string(scene.electrodes.size()) +
+                             " electrodes; give one per electrode in the scene's order " + order);
+    }
     for (const double n : options.noise_C) {
       if (!(n > 0 && n < 1e-6)) {
         throw pvdf::InputError("--noise-C " + pvdf::escape_control_bytes(o.noise) + ": " + pvdf::format_g(n) +

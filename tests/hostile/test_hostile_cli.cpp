@@ -313,6 +313,7 @@ const std::vector<Row> rows = {
   // ---- unit and order mistakes get a hint (issue 31 item 2)
   {"locate-charges-pC", "locate $M --charges-C 146.1,165.1,160.2", 2, "look like pC"},
   {"locate-charges-count", "locate $M --charges-C 1e-11,2e-11", 2, "order A,B,C"},
+  {"map-noise-count", "map good.json -o m.h5 --quiet --noise-C 5e-14,5e-14", 2, "order A,B,C", "m.h5"},
   {"locate-noise-count", "locate $M --charges-C 1e-11,2e-11,3e-11 --noise-C 1e-14,1e-14", 2, "order A,B,C"},
   // ---- the command line itself
   {"unknown-command", "frobnicate", 2, "frobnicate"},
