@@ -26,6 +26,7 @@ struct CalibrateOptions {
 int run_calibrate(const CalibrateOptions& o) {
   using namespace pvdf::mapping;
   ChargeMap map = read_map(o.map_path);
+  pvdf::check_csv_file(o.measured_path, "MEASURED");
   const auto presses = read_measurements(o.measured_path, map.electrode_names);
   LocatorOptions options;
   if (!o.noise.empty()) options.noise_C = pvdf::parse_number_list(o.noise, "--noise-C");

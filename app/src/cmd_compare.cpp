@@ -38,6 +38,8 @@ nlohmann::json number_or_null(double v) { return std::isfinite(v) ? nlohmann::js
 
 int run_compare(const CompareCliOptions& o) {
   using namespace pvdf::mapping;
+  // The CSV is checked whole before any solve: rows, header, cells (fit and compare load it all).
+  pvdf::check_csv_file(o.measured_path, "MEASURED");
 #ifdef PVDF_HAVE_FIT
   if (pvdf::app::is_scene_file(o.map_path))  // a scene: FEM solves at the presses (compare_scene.cpp)
     return pvdf::app::run_compare_scene(o.map_path, o.measured_path, o.json, o.plot_path, o.report_path);
@@ -161,7 +163,7 @@ PVDF_COMMAND(66, [](CLI::App& root) {
       ->required();
   sub->add_flag("--json", o->json, "Print the comparison as JSON (summary, per electrode, per press)");
   sub->add_option("--plot", o->plot_path, "Figure (.png, .svg or .pdf): CSV against map charge, and % difference per press")
-      ->check(pvdf::app::output_file());
+      ->check(pvdf::app::figure_file());
   sub->add_option("-o,--report", o->report_path, "Write the per-press report as CSV")->check(pvdf::app::output_file());
   sub->add_option("--min-map-charge-C", o->min_map_charge_C,
                   "Map charges smaller than this are not compared as a percentage (C); default 3x the map's noise_C")

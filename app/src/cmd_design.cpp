@@ -22,6 +22,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <filesystem>
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -579,6 +580,13 @@ int run_design(const DesignCommandOptions& o) {
     throw pvdf::InputError(std::string("--vary: ") + e.what());
   }
   std::vector<Candidate> all = collect_candidates(o, sweep, series_names);
+  if (!o.no_plots && std::filesystem::is_directory(o.out_dir)) {
+    // The files the run ends with, checked before the maps are computed (a device or a link
+    // where design.json belongs is refused now, not after the work).
+    for (const char* name : {"/design.json", "/design_position.png", "/design_force.png", "/design_sweep.png"}) {
+      pvdf::app::check_output_file(o.out_dir + name, "--out-dir");
+    }
+  }
 
   // Step 2: maps (coarse previews) and their evaluation.
   for (auto& c : all) {

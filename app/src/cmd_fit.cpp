@@ -24,7 +24,7 @@ namespace {
 
 struct FitCliOptions {
   std::string scene_path, measured_path, output_path, plot_path, params, start, residual_stiffness;
-  bool json = false, verbose = false;
+  bool json = false, verbose = false, params_given = false;
   double tolerance = 0;
   int max_iterations = 40;
 };
@@ -89,9 +89,36 @@ int run_fit(const FitCliOptions& o) {
   const pvdf::Scene scene = pvdf::load_scene(o.scene_path);
   std::vector<std::string> names;
   for (const auto& e : scene.electrodes) names.push_back(e.name);
+  pvdf::check_csv_file(o.measured_path, "MEASURED");  // rows, header and cells, before anything is read
   const pvdf::fit::MeasuredTable measured = pvdf::fit::read_measured(o.measured_path, names);
+  for (std::size_t i = 0; i < measured.force_N.size(); ++i) {
+    // The rule of loads[].force_N: a press of 1e-300 N would "fit" with a prediction of zero.
+    const double f = measured.force_N[i];
+    if (!(f >= 1e-9 && f <= 1e4)) {
+      throw pvdf::InputError(o.measured_path + ": press " + std::to_string(i + 1) + ": force_N = " + pvdf::format_g(f) +
+                             " must lie in [1e-9, 1e4] N (the rule of loads[].force_N); fix or remove the row");
+    }
+  }
+  for (const auto& column : measured.observed) {
+    // A 1-sigma finer than 1 ppm of the column's scale is no bench measurement, and a denormal one
+    // (1e-320) overflows the weighted residuals inside the solver.
+    if (!column.has_sigma) continue;
+    double scale = 0;
+    for (const double v : column.value) scale = std::max(scale, std::abs(v));
+    for (std::size_t i = 0; i < column.sigma.size(); ++i) {
+      if (!(column.sigma[i] >= 1e-6 * scale) || !(column.sigma[i] >= 1e-300)) {
+        throw pvdf::InputError(o.measured_path + ":" + std::to_string(measured.line[i]) + ": sigma_" + column.name + " = " +
+                               pvdf::format_g(column.sigma[i]) + " is below 1e-6 of the column's largest value (" +
+                               pvdf::format_g(scale) + "): no bench measures to 1 ppm; give the real 1-sigma");
+      }
+    }
+  }
   pvdf::fit::FitOptions fo;
   fo.parameters = split(o.params);
+  if (o.params_given && fo.parameters.empty()) {
+    throw pvdf::InputError("--params '" + pvdf::quote_cell(o.params) + "' names no parameter; give NAME,... or omit "
+                           "--params for the default");
+  }
   fo.start = parse_start(o.start);
   {  // names refused here, naming the flag (the library checks the values)
     const std::vector<std::string> known = pvdf::fit::parameter_names(scene);
@@ -181,13 +208,14 @@ PVDF_COMMAND(67, [](CLI::App& root) {
       ->required();
   sub->add_option("--params", o->params,
                   "Parameters to fit, comma-separated: pretension_N_per_m, E_scale, d31_C_per_N, d32_C_per_N, "
-                  "gain_<electrode> (default: E_scale if deflections are given, d31_C_per_N if charges are)");
+                  "gain_<electrode> (default: E_scale if deflections are given, d31_C_per_N if charges are)")
+      ->each([o](const std::string&) { o->params_given = true; });
   sub->add_option("-o,--output", o->output_path, "Fitted scene (JSON, same format as SCENE)")
       ->required()
       ->check(pvdf::app::output_file());
   sub->add_flag("--json", o->json, "Print the result as JSON (keys in docs/fem-vs-experiment.md)");
   sub->add_option("--plot", o->plot_path, "Figure (.png, .svg or .pdf): measured against FEM before and after the fit")
-      ->check(pvdf::app::output_file());
+      ->check(pvdf::app::figure_file());
   sub->add_option("--start", o->start, "Starting values NAME=VALUE,... (default: the scene's, E_scale 1, gains 1)");
   sub->add_option("--tolerance", o->tolerance, "FEM relative tolerance of the sweep mesh (default: the scene's)")
       ->check(pvdf::app::number_in(1e-8, 0.5, "(the rule of the scene key model.tolerance), e.g. 0.01"));

@@ -11,6 +11,7 @@
 #include "pvdf/mapping/pictures.hpp"
 
 #include <cmath>
+#include <filesystem>
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -42,6 +43,10 @@ int run_isocharge(const IsochargeOptions& o) {
     if (!locator.predict(xy[0], xy[1], o.force_N > 0 ? o.force_N : 1.0, q.data())) {
       throw pvdf::InputError("--at-m " + o.at + ": not inside the map's usable cells; choose a position inside the map");
     }
+  }
+  for (const char* name : {"/isocharge_all.png", "/charges.vtk", "/intersection.png"}) {
+    // Before any picture is drawn (a folder still to be created holds nothing to protect).
+    if (std::filesystem::is_directory(o.out_dir)) pvdf::app::check_output_file(o.out_dir + name, "--out-dir");
   }
   pvdf::make_directories(o.out_dir);
   double force = o.force_N;

@@ -12,6 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -58,10 +59,22 @@ nlohmann::json flags_json(std::uint32_t flags) {
 
 using namespace pvdf::mapping;
 
+/// The map's electrode names in order, "A,B,C": the order of --charges-C and of every output.
+std::string electrode_order(const ChargeMap& map) {
+  std::string out;
+  for (const auto& n : map.electrode_names) out += (out.empty() ? "" : ",") + n;
+  return out;
+}
+
 /// The lookup options from the flags, each checked against its rule.
-LocatorOptions locator_options(const LocateOptions& o) {
+LocatorOptions locator_options(const LocateOptions& o, const ChargeMap& map) {
   LocatorOptions options;
   if (!o.noise.empty()) options.noise_C = pvdf::parse_number_list(o.noise, "--noise-C");
+  if (options.noise_C.size() > 1 && options.noise_C.size() != map.ne()) {
+    throw pvdf::InputError("--noise-C " + pvdf::quote_cell(o.noise) + ": " + std::to_string(options.noise_C.size()) +
+                           " values for a map of " + std::to_string(map.ne()) + " electrodes; give one value, or one per " +
+                           "electrode in the map's order " + electrode_order(map));
+  }
   options.use_calibration = !o.no_calibration;
   if (!o.force_range.empty()) {
     const auto r = pvdf::parse_number_list(o.force_range, "--force-range-N", 2);
@@ -103,8 +116,9 @@ void write_pictures(const LocateOptions& o, const ChargeMap& map, const Locator&
   std::printf("wrote %s\n", vtk.c_str());
 }
 
-void print_location_json(const Location& r, const Locator& locator) {
+void print_location_json(const Location& r, const Locator& locator, const ChargeMap& map) {
   nlohmann::json j;
+  j["electrodes"] = map.electrode_names;  // the order of --charges-C
   j["flags"] = flags_json(r.flags);
   if (r.has_position()) {
     j["x_m"] = r.x_m;
@@ -132,7 +146,8 @@ void print_location_json(const Location& r, const Locator& locator) {
   std::cout << j.dump(2) << '\n';
 }
 
-void print_location_text(const LocateOptions& o, const Location& r) {
+void print_location_text(const LocateOptions& o, const Location& r, const ChargeMap& map) {
+  std::printf("electrodes: %s (the order of --charges-C)\n", electrode_order(map).c_str());
   if (!r.has_position()) {
     std::printf("flags: %s\n", flags_text(r.flags).c_str());
     return;
@@ -150,15 +165,60 @@ void print_location_text(const LocateOptions& o, const Location& r) {
   if (r.flags & flag::ambiguous) std::printf("%d solutions fit within noise in all (all shown)\n", r.n_solutions);
 }
 
+/// "0.2-5 N" (or "1 N" for a one-level map): the forces the map was computed at.
+std::string force_coverage(const ChargeMap& map) {
+  const double lo = map.forces_N.front(), hi = map.forces_N.back();
+  return lo == hi ? g_text(lo) + " N" : g_text(lo) + "-" + g_text(hi) + " N";
+}
+
+/// The charges of --charges-C, one per electrode in the map's order, refused (naming that order)
+/// when their count differs, and refused with the likely cause when they are a thousand times
+/// larger than any charge of the map (pC typed where C is meant).
+std::vector<double> parse_charges(const std::string& text, const ChargeMap& map) {
+  const auto q = pvdf::parse_number_list(text, "--charges-C");
+  if (q.size() != map.ne()) {
+    throw pvdf::InputError("--charges-C " + pvdf::quote_cell(text) + ": " + std::to_string(q.size()) +
+                           " charges for a map of " + std::to_string(map.ne()) + " electrodes; give one charge (C) per " +
+                           "electrode in the map's order " + electrode_order(map));
+  }
+  double map_max_C = 0;
+  for (const double c : map.charge_C) {
+    if (std::isfinite(c)) map_max_C = std::max(map_max_C, std::abs(c));
+  }
+  double given_max_C = 0;
+  for (const double c : q) given_max_C = std::max(given_max_C, std::abs(c));
+  if (map_max_C > 0 && given_max_C > 1e3 * map_max_C) {
+    const bool pico = given_max_C * 1e-12 <= 10 * map_max_C;
+    throw pvdf::InputError("--charges-C " + pvdf::quote_cell(text) + ": " + g_text(given_max_C) +
+                           " C is more than 1000 times the map's largest charge (" + g_text(map_max_C) + " C)" +
+                           (pico ? "; these look like pC: the unit is coulombs (1 pC = 1e-12 C), e.g. " +
+                                       g_text(q[0] * 1e-12) + " for " + g_text(q[0])
+                                 : "; the unit is coulombs: check the charge amplifier's gain"));
+  }
+  return q;
+}
+
 /// `--charges-C`: one press.
 int locate_one(const LocateOptions& o, const ChargeMap& map, const Locator& locator) {
   if (o.stream || !o.input.empty()) throw pvdf::InputError("--charges-C and --stream/--input: choose one press or a stream");
-  const auto q = pvdf::parse_number_list(o.charges, "--charges-C", map.ne());
+  const auto q = parse_charges(o.charges, map);
+  const bool force_outside_levels =
+      o.force_N > 0 && (o.force_N < map.forces_N.front() * (1 - 1e-9) || o.force_N > map.forces_N.back() * (1 + 1e-9));
   const Location r = locator.locate(q.data());
   if (o.json) {
-    print_location_json(r, locator);
+    print_location_json(r, locator, map);
   } else {
-    print_location_text(o, r);
+    print_location_text(o, r, map);
+  }
+  if (force_outside_levels) {
+    const std::string where = "--force-N " + g_text(o.force_N) + " N lies beyond the map's force levels: the map covers " +
+                              force_coverage(map);
+    if (!r.has_position()) {
+      std::cerr << "error: " << where << ", and no press fits there; give a force within it, or build the map with "
+                << "--forces-N reaching " << g_text(o.force_N) << " N\n";
+    } else {
+      pvdf::app::warn(where + "; the charges were extrapolated in force");
+    }
   }
   if (!o.plot_path.empty()) {
     if (!r.has_position()) {
@@ -180,6 +240,7 @@ int locate_rows(const LocateOptions& o, const Locator& locator) {
   std::ifstream file;
   std::istream* in = &std::cin;
   if (!o.input.empty() && o.input != "-") {
+    pvdf::check_csv_file(o.input, "--input", 0);  // a stream: its header only (unique columns, no NUL, short cells)
     file.open(o.input);
     if (!file) throw pvdf::InputError(o.input + ": cannot open; check the path");
     in = &file;
@@ -193,7 +254,7 @@ int locate_rows(const LocateOptions& o, const Locator& locator) {
 
 int run_locate(const LocateOptions& o) {
   const ChargeMap map = read_map(o.map_path);
-  const Locator locator(map, locator_options(o));
+  const Locator locator(map, locator_options(o, map));
 
   if (!o.pictures_dir.empty()) {
     write_pictures(o, map, locator);
@@ -217,7 +278,9 @@ PVDF_COMMAND(60, [](CLI::App& root) {
       "one press, a CSV stream, or pictures of the map (docs/lookup.md)");
   auto o = std::make_shared<LocateOptions>();
   sub->add_option("MAP", o->map_path, "Charge map (HDF5 from `pvdfkit map` or `pvdfkit calibrate`)")->required();
-  sub->add_option("--charges-C", o->charges, "One press: the charges of the map's electrodes, in its order (C), e.g. 4e-11,2e-11,1.5e-11");
+  sub->add_option("--charges-C", o->charges,
+                  "One press: one charge per electrode (C), e.g. 4e-11,2e-11,1.5e-11; the order follows the map's "
+                  "electrode names (stored in the map; printed as `electrodes` by locate, text and JSON)");
   sub->add_flag("--json", o->json, "Print the single result as JSON");
   sub->add_option("--noise-C", o->noise, "1-sigma charge noise, one value or one per electrode (C); default: the map's");
   sub->add_option("--force-N", o->force_N, "Known force (N): fit the position only (and the force of --pictures)")
@@ -227,7 +290,9 @@ PVDF_COMMAND(60, [](CLI::App& root) {
   sub->add_flag("--stream", o->stream, "Read CSV rows (t_s,charge_<name>_C,...) on stdin, write located rows on stdout");
   sub->add_option("--input", o->input, "Read the CSV rows from this file instead of stdin (implies --stream)");
   sub->add_flag("--strict", o->strict, "Stream: refuse a malformed row (exit 2) instead of skipping it with a warning");
-  sub->add_option("--plot", o->plot_path, "Single press: PNG of the isocharge contours of the charges and their intersection");
-  sub->add_option("--pictures", o->pictures_dir, "Write isocharge_<name>.png per electrode and charges.vtk of the map here");
+  sub->add_option("--plot", o->plot_path, "Single press: figure (.png, .svg or .pdf) of the isocharge contours of the charges and their intersection")
+      ->check(pvdf::app::figure_file());
+  sub->add_option("--pictures", o->pictures_dir, "Write isocharge_<name>.png per electrode and charges.vtk of the map here")
+      ->check(pvdf::app::output_folder());
   return pvdf::app::Subcommand{sub, [o] { return run_locate(*o); }};
 });

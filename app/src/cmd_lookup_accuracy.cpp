@@ -126,7 +126,7 @@ PVDF_COMMAND(62, [](CLI::App& root) {
   sub->add_option("--noise-C", o->noise, "Charge-noise levels, 1-sigma per electrode (C)")->capture_default_str();
   sub->add_option("--seed", o->seed, "Random seed")->capture_default_str();
   sub->add_option("--plot", o->plot_path, "Figure of median position error against noise (.png, .svg or .pdf)")
-      ->check(pvdf::app::output_file());
+      ->check(pvdf::app::figure_file());
   sub->add_flag("--json", o->json, "Print the table as JSON");
   return pvdf::app::Subcommand{sub, [o] { return run_compare(*o); }};
 });

@@ -69,18 +69,27 @@ struct MapCommandOptions {
 MapOptions map_options(const MapCommandOptions& o, const pvdf::Scene& scene) {
   MapOptions options;
   options.spacing_m = o.spacing_m;
-  options.forces_N = pvdf::parse_number_list(o.forces, "--forces-N");
-  for (const double f : options.forces_N) {
-    if (!(f > 0 && f <= 1e4)) {
-      throw pvdf::InputError("--forces-N " + pvdf::escape_control_bytes(o.forces) + ": " + pvdf::format_g(f) +
-                             " must lie in (0, 1e4] N (a press pushes the film; the rule of loads[].force_N)");
-    }
-  }
+  options.forces_N = pvdf::app::parse_force_levels(o.forces, "--forces-N");
   double area_m2 = scene.membrane.outline.area_m2();
   if (!o.region.empty()) {
     const auto r = pvdf::parse_number_list(o.region, "--region XMIN,XMAX,YMIN,YMAX (m)", 4);
     if (!(r[0] < r[1] && r[2] < r[3])) {
-      throw pvdf::InputError("--region " + pvdf::escape_control_bytes(o.region) + ": needs XMIN < XMAX and YMIN < YMAX (m)");
+      throw pvdf::InputError("--region " + pvdf::quote_cell(o.region) + ": needs XMIN < XMAX and YMIN < YMAX (m)");
+    }
+    // A region far beyond the film maps nothing (and its node count would overflow): refused,
+    // with the likely cause when the numbers are the film's size in millimetres.
+    const double half_size_m = scene.membrane.outline.characteristic_radius_m();
+    for (const double v : r) {
+      if (std::abs(v) > 2 * half_size_m) {
+        const bool looks_like_mm = std::abs(r[0]) / 1e3 <= 2 * half_size_m && std::abs(r[1]) / 1e3 <= 2 * half_size_m &&
+                                   std::abs(r[2]) / 1e3 <= 2 * half_size_m && std::abs(r[3]) / 1e3 <= 2 * half_size_m;
+        throw pvdf::InputError(
+            "--region " + pvdf::quote_cell(o.region) + ": " + pvdf::format_g(v) + " m lies beyond the film (half-size " +
+            pvdf::format_g(half_size_m) + " m)" +
+            (looks_like_mm ? "; these look like mm: the unit is metres, e.g. --region " + pvdf::format_g(r[0] / 1e3) + "," +
+                                 pvdf::format_g(r[1] / 1e3) + "," + pvdf::format_g(r[2] / 1e3) + "," + pvdf::format_g(r[3] / 1e3)
+                           : "; give XMIN,XMAX,YMIN,YMAX in metres within the film"));
+      }
     }
     options.region_m = std::array<double, 4>{r[0], r[1], r[2], r[3]};
     area_m2 = std::min(area_m2, (r[1] - r[0]) * (r[3] - r[2]));
@@ -93,7 +102,11 @@ MapOptions map_options(const MapCommandOptions& o, const pvdf::Scene& scene) {
                            " force levels, more than the limit " + pvdf::format_g(max_map_points) +
                            " points; use a larger --spacing-m or a smaller --region");
   }
-  if (!o.no_checkpoint && !o.checkpoint.empty()) pvdf::app::check_output_file(o.checkpoint, "--checkpoint");
+  if (!o.no_checkpoint) {
+    // The default checkpoint OUTPUT.checkpoint is derived: checked as an output here (the flags
+    // were checked by main, including --checkpoint against -o and the inputs).
+    pvdf::app::check_output_file(o.checkpoint.empty() ? o.output + ".checkpoint" : o.checkpoint, "--checkpoint");
+  }
   if (o.rim_margin_m != 0 && o.rim_margin_m < 2 * scene.probe.radius_m) {
     throw pvdf::InputError("--rim-margin-m " + pvdf::format_g(o.rim_margin_m) + " must be 0 (default) or >= " +
                            pvdf::format_g(2 * scene.probe.radius_m) +
@@ -122,7 +135,14 @@ MapOptions map_options(const MapCommandOptions& o, const pvdf::Scene& scene) {
   }
   options.probe_refinement = o.probe_refinement;
   if (!o.noise.empty()) {
-    options.noise_C = pvdf::parse_number_list(o.noise, "--noise-C", scene.electrodes.size());
+    options.noise_C = pvdf::parse_number_list(o.noise, "--noise-C");
+    if (options.noise_C.size() != scene.electrodes.size()) {
+      std::string order;
+      for (const auto& e : scene.electrodes) order += (order.empty() ? "" : ",") + e.name;
+      throw pvdf::InputError("--noise-C " + pvdf::quote_cell(o.noise) + ": " + std::to_string(options.noise_C.size()) +
+                             " values for " + std::to_string(scene.electrodes.size()) +
+                             " electrodes; give one per electrode in the scene's order " + order);
+    }
     for (const double n : options.noise_C) {
       if (!(n > 0 && n < 1e-6)) {
         throw pvdf::InputError("--noise-C " + pvdf::escape_control_bytes(o.noise) + ": " + pvdf::format_g(n) +
@@ -204,23 +224,28 @@ void print_map_text(const MapCommandOptions& o, const ChargeMap& map, const MapR
   std::printf("%d rank(s) x %d thread(s), %.1f s, %.3g s per solved position and core\n", report.ranks,
               report.threads, report.wall_s, report.per_position_s);
   if (map.ne() == 3 && report.n_failed == 0) {
-    // How much of the film three charges leave ambiguous with the force unknown, and the remedies.
-    const pvdf::mapping::AmbiguityShare a = pvdf::mapping::ambiguity_share(map);
-    std::printf("ambiguity at %g N (%zu nodes): more than one press fits the charges at %.0f %% of the film with the force "
-                "unknown (range %g-%g N); remedies: a force reading (--force-N) %.0f %%, the force known within +-25 %% "
-                "(--force-range-N) %.0f %%, a fourth electrode (pvdfkit design quantifies it; docs/lookup.md section 2)\n",
-                a.force_N, a.nodes, 100 * a.force_unknown, a.min_force_N, a.max_force_N, 100 * a.force_known,
-                100 * a.force_within_25);
-    if (map.nf() >= 2) {
-      // Whether a press's loading curve separates the candidates (docs/lookup.md section 2, "Force ramps"):
-      // only where the map's charge direction turns with the force (pretension, bending).
-      const pvdf::mapping::RampAmbiguity r = pvdf::mapping::ramp_ambiguity_share(map);
-      std::printf("force ramp (%d samples from %g to %g N, the map's noise, %zu nodes): ambiguous %.0f %% at the peak, "
-                  "%.0f %% after the ramp test (%.0f %% with as many samples held at the peak); the map is taken as "
-                  "exact, so its own error must be below the noise for this to hold\n",
-                  pvdf::mapping::RampOptions{}.n_samples, pvdf::mapping::RampOptions{}.ramp_start * r.peak_force_N,
-                  r.peak_force_N, r.nodes, 100 * r.ambiguous_at_peak, 100 * r.ambiguous_after_ramp,
-                  100 * r.ambiguous_after_hold);
+    try {
+      // How much of the film three charges leave ambiguous with the force unknown, and the remedies.
+      const pvdf::mapping::AmbiguityShare a = pvdf::mapping::ambiguity_share(map);
+      std::printf("ambiguity at %g N (%zu nodes): more than one press fits the charges at %.0f %% of the film with the force "
+                  "unknown (range %g-%g N); remedies: a force reading (--force-N) %.0f %%, the force known within +-25 %% "
+                  "(--force-range-N) %.0f %%, a fourth electrode (pvdfkit design quantifies it; docs/lookup.md section 2)\n",
+                  a.force_N, a.nodes, 100 * a.force_unknown, a.min_force_N, a.max_force_N, 100 * a.force_known,
+                  100 * a.force_within_25);
+      if (map.nf() >= 2) {
+        // Whether a press's loading curve separates the candidates (docs/lookup.md section 2, "Force ramps"):
+        // only where the map's charge direction turns with the force (pretension, bending).
+        const pvdf::mapping::RampAmbiguity r = pvdf::mapping::ramp_ambiguity_share(map);
+        std::printf("force ramp (%d samples from %g to %g N, the map's noise, %zu nodes): ambiguous %.0f %% at the peak, "
+                    "%.0f %% after the ramp test (%.0f %% with as many samples held at the peak); the map is taken as "
+                    "exact, so its own error must be below the noise for this to hold\n",
+                    pvdf::mapping::RampOptions{}.n_samples, pvdf::mapping::RampOptions{}.ramp_start * r.peak_force_N,
+                    r.peak_force_N, r.nodes, 100 * r.ambiguous_at_peak, 100 * r.ambiguous_after_ramp,
+                    100 * r.ambiguous_after_hold);
+      }
+    } catch (const pvdf::InputError& e) {
+      // A map on which nothing can be located (no usable cell) has no ambiguity to report.
+      std::printf("ambiguity: not computed (%s)\n", e.what());
     }
   }
 }
@@ -258,6 +283,12 @@ int run_map(const MapCommandOptions& o) {
       bar->update(done);
     };
   }
+  // One writer per output: a second `map` to the same file (or checkpoint) refuses at once.
+  std::optional<pvdf::app::OutputLock> output_lock, checkpoint_lock;
+  if (rank == 0) {
+    output_lock.emplace(o.output, "-o/--output");
+    if (!o.no_checkpoint && !o.checkpoint.empty()) checkpoint_lock.emplace(o.checkpoint, "--checkpoint");
+  }
   MapReport report;
   const ChargeMap map = generate_map(scene, options, &report);
   if (bar) bar->finish();
@@ -273,6 +304,14 @@ int run_map(const MapCommandOptions& o) {
                 << " holds the completed rows: rerun the same command to resume\n";
     }
     return interrupted ? 130 : pvdf::exit_code::numerical;
+  }
+  if (report.n_failed == 0 &&
+      std::none_of(map.charge_C.begin(), map.charge_C.end(), [](double q) { return std::isfinite(q) && q != 0; })) {
+    // A map whose every charge is zero locates nothing: not written, a reported outcome.
+    std::cerr << "error: every charge of the map is zero (model " << report.model
+              << "): nothing could be located with it, so no map was written to " << o.output
+              << "; linear kinematics leave no net charge on a flat film (no stretching): use --model auto\n";
+    return pvdf::exit_code::numerical;
   }
   write_generated_map(o.output, map, report.provenance, report.node_model);
   remove_checkpoint_files(options.checkpoint_path);
@@ -301,8 +340,8 @@ PVDF_COMMAND(35, [](CLI::App& root) {
       ->required()
       ->check(pvdf::app::output_file());
   sub->add_option("--spacing-m", o->spacing_m, "Grid spacing (m); nodes at multiples of it (default 0.002)")
-      ->check(pvdf::app::number_in(1e-5, 0.1, "m"));
-  sub->add_option("--forces-N", o->forces, "Force levels F1,F2,... (N, > 0; default 1)");
+      ->check(pvdf::app::number_in(1e-5, 0.1, "m (the unit is metres: 2 mm is 0.002)"));
+  sub->add_option("--forces-N", o->forces, "Force levels F1,F2,... (N, in [1e-9, 1e4], distinct; default 1)");
   sub->add_option("--region", o->region, "Map only XMIN,XMAX,YMIN,YMAX (m; default: the whole film)");
   sub->add_option("--rim-margin-m", o->rim_margin_m, "No probe centres closer than this to the rim (m; 0 = 2 x probe radius)")
       ->check(pvdf::app::number_in(0, 1, "m"));
@@ -339,6 +378,7 @@ PVDF_COMMAND(35, [](CLI::App& root) {
   sub->add_flag("--quiet", o->quiet, "No progress bar");
   sub->add_flag("--mpi", o->force_mpi, "Initialize MPI even when not started by mpirun (singleton)");
   sub->add_option("--stop-after-positions", o->stop_after,
-                  "Testing: stop as if killed after N solved positions (checkpoint kept, no map written)");
+                  "Testing: stop as if killed after N solved positions (checkpoint kept, no map written)")
+      ->check(pvdf::app::integer_in(1, 1000000000));
   return pvdf::app::Subcommand{sub, [o] { return run_map(*o); }};
 });

@@ -94,8 +94,8 @@ PVDF_COMMAND(20, [](CLI::App& root) {
   sub->add_option("-o,--output", o->output_path, "Gmsh .msh file to write (format 4.1, metres)")
       ->capture_default_str()
       ->check(pvdf::app::output_file());
-  sub->add_option("--preview", o->preview_path, "PNG preview path (default: the output with .png)")
-      ->check(pvdf::app::output_file());
+  sub->add_option("--preview", o->preview_path, "Preview figure (.png, .svg or .pdf; default: the output with .png)")
+      ->check(pvdf::app::figure_file());
   sub->add_flag("--no-preview", o->no_preview, "Do not write the PNG preview");
   sub->add_option("--size-factor", o->size_factor, "Multiply the scene's mesh sizes (0.5 = about 4x the cells)")
       ->capture_default_str()

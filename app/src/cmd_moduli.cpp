@@ -129,6 +129,6 @@ PVDF_COMMAND(10, [](CLI::App& root) {
   sub->add_flag("--json", o->json, "Print a JSON array of {angle_deg, Ex_Pa, Ey_Pa, Gxy_Pa, nuxy, nuyx}");
   sub->add_flag("--csv", o->csv, "Print CSV with the same columns");
   sub->add_option("--plot", o->plot_path, "Write the moduli against angle (seed 001 Fig. 2) as .png, .svg or .pdf")
-      ->check(pvdf::app::output_file());
+      ->check(pvdf::app::figure_file());
   return pvdf::app::Subcommand{sub, [o] { return run_moduli(*o); }};
 });

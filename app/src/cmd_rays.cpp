@@ -89,6 +89,7 @@ RayPlotChoice ray_plot_choice(const RaysOptions& o, const ChargeMap& map) {
     }
     plot.angles_deg = pvdf::parse_number_list(o.plot_angles, "--plot-angles-deg");
     if (!o.measured_path.empty()) {
+      pvdf::check_csv_file(o.measured_path, "--measured");
       plot.measured = read_measured_csv(o.measured_path, map.electrode_names);
       pvdf::app::warn_if_map_too_coarse(map, plot.measured);  // the same rule as `compare MAP`
     }
@@ -248,7 +249,7 @@ PVDF_COMMAND(64, [](CLI::App& root) {
   sub->add_option("--csv", o->csv_path, "Write the fit table as CSV (electrode,beta_deg,fitted,C1_C,C2,...)")
       ->check(pvdf::app::output_file());
   sub->add_option("--plot", o->plot_path, "Figure like seed 001 Fig. 7 (.png, .svg or .pdf): Q(d) and the fits of one electrode, log-log")
-      ->check(pvdf::app::output_file());
+      ->check(pvdf::app::figure_file());
   sub->add_option("--electrode", o->electrode, "Electrode drawn by --plot (default B if the map has one, else the first)");
   sub->add_option("--plot-angles-deg", o->plot_angles, "Rays drawn by --plot, e.g. 45,65,85 (default 0,10,...,90)");
   sub->add_option("--measured", o->measured_path, "Add measured presses on the drawn rays to --plot (CSV as for `compare`; Fig. 12)");

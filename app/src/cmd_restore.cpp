@@ -299,8 +299,11 @@ PVDF_COMMAND(60, [](CLI::App& root) {
   auto so = std::make_shared<SimulateOptions>();
   auto* sim = sub->add_subcommand("simulate", "Simulate a scan of a surface (raised edges, textures) from a scanner scene");
   sim->add_option("SCENE", so->scene, "Scanner scene JSON (examples/restore/scanner.json; keys in docs/restore.md)")->required();
-  sim->add_option("-o,--output", so->output, "Scan CSV to write: x_m,m1_V,m2_V,fx_ref_N,fz_ref_N")->required();
-  sim->add_option("--plot", so->plot, "Also write the signals as PNG (seed 000 Figs 11-12)");
+  sim->add_option("-o,--output", so->output, "Scan CSV to write: x_m,m1_V,m2_V,fx_ref_N,fz_ref_N")
+      ->required()
+      ->check(pvdf::app::output_file());
+  sim->add_option("--plot", so->plot, "Also write the signals as PNG (seed 000 Figs 11-12)")
+      ->check(pvdf::app::output_file());
   sim->add_flag("--no-noise", so->no_noise, "Leave out the white noise (ADC and moving average stay)");
 
   auto io = std::make_shared<IdentifyOptions>();
@@ -310,7 +313,7 @@ PVDF_COMMAND(60, [](CLI::App& root) {
   id->add_option("--force", io->forces, "Known force FX,FZ in N of the preceding --scan (seed 000: 0.6,0.9 and 0.2,1.0)")->required();
   id->add_option("--edge-x-m", io->edges, "Edge position in m for each --scan, in order (default 0 for all)");
   id->add_option("--speed-m-per-s", io->speed, "Scan speed, needed for scans given in t_s");
-  id->add_option("-o,--output", io->output, "Filter file to write (JSON)")->required();
+  id->add_option("-o,--output", io->output, "Filter file to write (JSON)")->required()->check(pvdf::app::output_file());
   id->add_option("--taps", io->taps, "FIR length N of h11..h22 and of the G window")->capture_default_str();
   io->delay_flag = id->add_option("--delay-samples", io->delay, "Modelling delay D in samples (default taps/2)");
   id->add_option("--beta", io->beta, "Regularization: auto (= predicted: the beta minimizing the predicted mu error; "
@@ -332,13 +335,14 @@ PVDF_COMMAND(60, [](CLI::App& root) {
   id->add_option("--g-window", io->g_window, "Lags of G kept by identification (default = --taps)");
   id->add_option("--beta-corner-m", io->corner, "Wavelength in m for beta(k) = beta (1 + (k L/2pi)^2)");
   id->add_option("--window", io->window, "Taper of the FIR taps: tukey, hann, none")->capture_default_str();
-  id->add_option("--plot-dir", io->plot_dir, "Write Fig 11-14 analogues (signals, filters, |G|, restored) as PNG here");
+  id->add_option("--plot-dir", io->plot_dir, "Write Fig 11-14 analogues (signals, filters, |G|, restored) as PNG here")
+      ->check(pvdf::app::output_folder());
 
   auto ao = std::make_shared<ApplyOptions>();
   auto* ap = sub->add_subcommand("apply", "Restore f_x, f_z and mu from a scan with a filter: x_m,fx_N,fz_N,mu,mu_valid,fx_N_per_m,fz_N_per_m");
   ap->add_option("FILTER", ao->filter, "Filter file from 'restore identify'")->required();
   ap->add_option("SCAN", ao->scan, "Scan CSV x_m,m1_V,m2_V (or t_s with --speed-m-per-s)")->required();
-  ap->add_option("-o,--output", ao->output, "Forces CSV to write")->required();
+  ap->add_option("-o,--output", ao->output, "Forces CSV to write")->required()->check(pvdf::app::output_file());
   ap->add_option("--speed-m-per-s", ao->speed, "Scan speed, needed for scans given in t_s");
   ao->threshold_flag = ap->add_option("--mu-threshold-N", ao->mu_threshold, "mu where f_z exceeds this (N per sample; default 30 % of max f_z)");
   ao->block_flag = ap->add_option("--block", ao->block, "Use the streaming restorer with blocks of this many samples (same result)");
@@ -346,7 +350,8 @@ PVDF_COMMAND(60, [](CLI::App& root) {
   ao->scale_flag = ap->add_option("--baseline-scale-m", ao->baseline_scale, "Gaussian scale of the flat-surface level (m; default low cut / 2 pi)");
   ap->add_flag("--resample", ao->resample, "Resample a scan taken at another speed onto the filter's grid (amplitude scaled "
                                           "by the speed ratio, same sample rate assumed)");
-  ap->add_option("--plot", ao->plot, "Also write the restored forces as PNG (seed 000 Fig. 14)");
+  ap->add_option("--plot", ao->plot, "Also write the restored forces as PNG (seed 000 Fig. 14)")
+      ->check(pvdf::app::output_file());
 
   return pvdf::app::Subcommand{sub, [sim, id, ap, so, io, ao]() -> int {
                                  if (sim->parsed()) return run_simulate(*so);

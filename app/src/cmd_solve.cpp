@@ -16,6 +16,9 @@
 #include <cstdio>
 #include <iostream>
 #include <memory>
+#include <optional>
+
+#include <unistd.h>
 
 namespace {
 
@@ -40,10 +43,10 @@ void apply_load_flags(const SolveOptions& o, pvdf::Scene& scene) {
   scene.loads.clear();
   for (const auto& text : o.loads) {
     const auto v = pvdf::parse_number_list(text, "--load X_M,Y_M,F_N", 3);
-    // The rules of the scene's loads[]: |force_N| <= 1e4, the footprint clear of the rim.
-    if (!(std::abs(v[2]) <= 1e4)) {
-      throw pvdf::InputError("--load " + pvdf::escape_control_bytes(text) + ": force " + pvdf::format_g(v[2]) +
-                             " N must lie in [-1e4, 1e4] N (the rule of loads[].force_N)");
+    // The rules of the scene's loads[]: 1e-9 <= force_N <= 1e4, the footprint clear of the rim.
+    if (!(v[2] >= 1e-9 && v[2] <= 1e4)) {
+      throw pvdf::InputError("--load " + pvdf::quote_cell(text) + ": force " + pvdf::format_g(v[2]) +
+                             " N must lie in [1e-9, 1e4] N (a probe pushes the film; the rule of loads[].force_N)");
     }
     const std::string problem = pvdf::probe_footprint_problem(scene, {v[0], v[1]}, scene.probe.radius_m);
     if (!problem.empty()) throw pvdf::InputError("--load " + pvdf::escape_control_bytes(text) + ": " + problem);
@@ -76,6 +79,28 @@ pvdf::fem::Options solver_options(const SolveOptions& o, const pvdf::Scene& scen
   options.verbose = o.verbose;
   return options;
 }
+
+/// While alive, standard output (file descriptor 1, where the solver prints its Newton lines)
+/// goes to standard error: `solve --json --verbose` keeps stdout for the JSON alone.
+class StdoutToStderr {
+ public:
+  StdoutToStderr() {
+    std::fflush(stdout);
+    saved_ = ::dup(STDOUT_FILENO);
+    if (saved_ >= 0) ::dup2(STDERR_FILENO, STDOUT_FILENO);
+  }
+  ~StdoutToStderr() {
+    std::fflush(stdout);
+    if (saved_ < 0) return;
+    ::dup2(saved_, STDOUT_FILENO);
+    ::close(saved_);
+  }
+  StdoutToStderr(const StdoutToStderr&) = delete;
+  StdoutToStderr& operator=(const StdoutToStderr&) = delete;
+
+ private:
+  int saved_ = -1;
+};
 
 /// The solve, on the built-in mesh or on `--mesh`: the first solve on the file's cells exactly as
 /// written (what `pvdfkit mesh` previewed), then the same output-driven refinement as on the
@@ -144,7 +169,10 @@ int run_solve(const SolveOptions& o) {
   apply_load_flags(o, scene);
   const pvdf::fem::Options options = solver_options(o, scene);
   std::size_t mesh_file_cells = 0;
+  std::optional<StdoutToStderr> progress_to_stderr;
+  if (o.json && o.verbose) progress_to_stderr.emplace();  // stdout carries the JSON alone
   const pvdf::fem::Result r = solve_scene(o, scene, options, mesh_file_cells);
+  progress_to_stderr.reset();
   const auto& s = r.summary;
   const bool ok = pvdf::fem::usable(s.status);
 

@@ -22,12 +22,7 @@ struct SyntheticMapOptions {
 };
 
 int run_synthetic_map(const SyntheticMapOptions& o) {
-  const auto forces = pvdf::parse_number_list(o.forces, "--forces-N");
-  for (const double f : forces) {
-    if (!(f > 0 && f <= 1e4)) {
-      throw pvdf::InputError("--forces-N " + pvdf::escape_control_bytes(o.forces) + ": " + pvdf::format_g(f) + " must lie in (0, 1e4] N");
-    }
-  }
+  const std::vector<double> forces = pvdf::app::parse_force_levels(o.forces, "--forces-N");
   pvdf::mapping::SyntheticModel model;
   pvdf::mapping::write_map(o.output, pvdf::mapping::build_synthetic_map(model, o.spacing_m, o.rim_margin_m, forces, o.noise_C));
   std::printf("wrote %s (analytic stand-in, not an FEM result)\n", o.output.c_str());

@@ -9,6 +9,7 @@
 #include "pvdf/version.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cmath>
 #include <csignal>
@@ -20,7 +21,9 @@
 #include <iostream>
 #include <new>
 
+#include <fcntl.h>
 #include <poll.h>
+#include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -39,22 +42,93 @@ std::string range_text(double lo, double hi, bool lo_open) {
   return std::string(lo_open ? "(" : "[") + format_g(lo) + ", " + format_g(hi) + "]";
 }
 
-/// Why `path` cannot be an output file, or "".
-std::string output_file_problem(const std::string& path) {
-  namespace fs = std::filesystem;
-  if (path.empty()) return "is empty; give a file name";
-  std::error_code ec;
-  if (fs::is_directory(path, ec)) return "is a folder; give a file name";
-  const fs::path parent = fs::path(path).parent_path();
-  const fs::path folder = parent.empty() ? fs::path(".") : parent;
-  if (!fs::is_directory(folder, ec)) {
-    return "cannot be written: folder " + folder.string() + " does not exist; create it or choose another path";
+/// Validator names that mark an option as an output (file or folder): after parsing, main finds
+/// the outputs by them and checks them against the command's inputs and against each other.
+const char* const output_file_validator = "pvdf-output-file";
+const char* const output_folder_validator = "pvdf-output-folder";
+
+/// The command's input files (every option value naming an existing regular file that is not an
+/// output), recorded once after parsing for check_output_file's paths derived later.
+std::vector<NamedPath>& recorded_inputs() {
+  static std::vector<NamedPath> inputs;
+  return inputs;
+}
+
+bool has_validator(CLI::Option* opt, const char* name) {
+  try {
+    opt->get_validator(name);
+    return true;
+  } catch (const CLI::OptionNotFound&) {
+    return false;
   }
-  if (::access(folder.c_str(), W_OK) != 0) return "cannot be written: folder " + folder.string() + " is not writable";
-  return "";
+}
+
+std::string flag_name(const CLI::Option* opt) {
+  const std::string name = opt->get_name(false, false);
+  return name.empty() ? opt->get_name(true, false) : name;
+}
+
+/// Same file: the same inode when both exist (symbolic and hard links included), else the same
+/// absolute path after resolving its folder.
+bool same_file(const std::string& a, const std::string& b) {
+  struct stat sa {}, sb {};
+  const bool ea = ::stat(a.c_str(), &sa) == 0, eb = ::stat(b.c_str(), &sb) == 0;
+  if (ea && eb) return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+  if (ea != eb) return false;
+  std::error_code ec;
+  namespace fs = std::filesystem;
+  const fs::path ca = fs::weakly_canonical(fs::absolute(a), ec), cb = fs::weakly_canonical(fs::absolute(b), ec);
+  return !ec && ca == cb;
+}
+
+bool is_regular_file(const std::string& path) {
+  struct stat st {};
+  return ::stat(path.c_str(), &st) == 0 && S_ISREG(st.st_mode);
+}
+
+/// Throws when `output` is one of `inputs`: writing it would destroy the input.
+void check_not_an_input(const NamedPath& output, const std::vector<NamedPath>& inputs) {
+  for (const NamedPath& in : inputs) {
+    if (same_file(output.path, in.path)) {
+      throw InputError(output.flag + ": " + quote_cell(output.path) + " is the input " + in.flag + " (" +
+                       quote_cell(in.path) + "); writing it would destroy that input: choose another output name");
+    }
+  }
+}
+
+/// Every option value of `app` and its parsed subcommands, sorted into outputs and input files.
+void collect_paths(CLI::App* app, std::vector<NamedPath>& outputs, std::vector<NamedPath>& inputs) {
+  for (CLI::Option* opt : app->get_options()) {
+    if (opt->count() == 0) continue;
+    const bool is_output = has_validator(opt, output_file_validator);
+    if (has_validator(opt, output_folder_validator)) continue;
+    for (const std::string& value : opt->results()) {
+      if (is_output) {
+        outputs.push_back({flag_name(opt), value});
+      } else if (is_regular_file(value)) {
+        inputs.push_back({flag_name(opt), value});
+      }
+    }
+  }
+  for (CLI::App* sub : app->get_subcommands()) collect_paths(sub, outputs, inputs);
 }
 
 }  // namespace
+
+void check_outputs_against_inputs(CLI::App* app) {
+  std::vector<NamedPath> outputs, inputs;
+  collect_paths(app, outputs, inputs);
+  for (std::size_t i = 0; i < outputs.size(); ++i) {
+    check_not_an_input(outputs[i], inputs);
+    for (std::size_t j = 0; j < i; ++j) {
+      if (same_file(outputs[i].path, outputs[j].path)) {
+        throw InputError(outputs[i].flag + ": " + quote_cell(outputs[i].path) + " is also the output " + outputs[j].flag +
+                         "; one would overwrite the other: give them different names");
+      }
+    }
+  }
+  recorded_inputs() = inputs;
+}
 
 CLI::Validator number_in(double lo, double hi, const std::string& why, bool lo_open) {
   const std::string desc = "in " + range_text(lo, hi, lo_open);
@@ -85,31 +159,127 @@ CLI::Validator integer_in(long long lo, long long hi, const std::string& why) {
 
 CLI::Validator output_file() {
   return CLI::Validator(
-      [](std::string& path) -> std::string {
-        const std::string problem = output_file_problem(path);
-        return problem.empty() ? "" : escape_control_bytes(path) + " " + problem;
-      },
-      "FILE");
+             [](std::string& path) -> std::string {
+               const std::string problem = output_path_problem(path);
+               return problem.empty() ? "" : quote_cell(path) + " " + problem;
+             },
+             "FILE")
+      .name(output_file_validator);
+}
+
+CLI::Validator figure_file() {
+  return CLI::Validator(
+             [](std::string& path) -> std::string {
+               const std::string problem = output_path_problem(path);
+               if (!problem.empty()) return quote_cell(path) + " " + problem;
+               std::string ext = std::filesystem::path(path).extension().string();
+               std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+               if (ext == ".png" || ext == ".svg" || ext == ".pdf") return "";
+               return quote_cell(path) + ": figure format '" + (ext.empty() ? std::string("(no extension)") : quote_cell(ext)) +
+                      "' is not supported; end the file name in .png, .svg or .pdf";
+             },
+             "FILE.png|.svg|.pdf")
+      .name(output_file_validator);
 }
 
 CLI::Validator output_folder() {
   return CLI::Validator(
-      [](std::string& path) -> std::string {
-        namespace fs = std::filesystem;
-        std::error_code ec;
-        if (fs::is_directory(path, ec)) {
-          return ::access(path.c_str(), W_OK) == 0 ? "" : escape_control_bytes(path) + " is a folder that is not writable";
-        }
-        if (fs::exists(path, ec)) return escape_control_bytes(path) + " is a file, not a folder; choose a folder name";
-        const std::string problem = output_file_problem(path);
-        return problem.empty() ? "" : escape_control_bytes(path) + " " + problem;
-      },
-      "DIR");
+             [](std::string& path) -> std::string {
+               namespace fs = std::filesystem;
+               struct stat st {};
+               if (::lstat(path.c_str(), &st) == 0 && S_ISLNK(st.st_mode)) {
+                 return quote_cell(path) + " is a symbolic link; give the folder's real path";
+               }
+               std::error_code ec;
+               if (fs::is_directory(path, ec)) {
+                 return ::access(path.c_str(), W_OK) == 0 ? "" : quote_cell(path) + " is a folder that is not writable";
+               }
+               if (fs::exists(path, ec)) return quote_cell(path) + " is a file, not a folder; choose a folder name";
+               const std::string problem = output_path_problem(path);
+               return problem.empty() ? "" : quote_cell(path) + " " + problem;
+             },
+             "DIR")
+      .name(output_folder_validator);
 }
 
 void check_output_file(const std::string& path, const std::string& flag) {
-  const std::string problem = output_file_problem(path);
-  if (!problem.empty()) throw InputError(flag + ": " + escape_control_bytes(path) + " " + problem);
+  check_output_path(path, flag);
+  check_not_an_input({flag, path}, recorded_inputs());
+}
+
+std::vector<double> parse_force_levels(const std::string& text, const std::string& flag) {
+  std::vector<double> forces = parse_number_list(text, flag);
+  for (const double f : forces) {
+    if (!(f >= 1e-9 && f <= 1e4)) {
+      throw InputError(flag + " " + quote_cell(text) + ": " + format_g(f) +
+                             " must lie in [1e-9, 1e4] N (a press pushes the film; the rule of loads[].force_N)");
+    }
+  }
+  std::vector<double> sorted = forces;
+  std::sort(sorted.begin(), sorted.end());
+  for (std::size_t i = 1; i < sorted.size(); ++i) {
+    if (sorted[i] - sorted[i - 1] <= 1e-6 * sorted[i]) {
+      char a[32], b[32];
+      std::snprintf(a, sizeof a, "%.17g", sorted[i - 1]);
+      std::snprintf(b, sizeof b, "%.17g", sorted[i]);
+      throw InputError(flag + " " + quote_cell(text) + ": the levels " + a + " and " + b +
+                             " N are not distinct (closer than a relative 1e-6); give each force level once");
+    }
+  }
+  return forces;
+}
+
+OutputLock::OutputLock(const std::string& path, const std::string& flag) : lock_path_(path + ".lock") {
+  // The lock file may be unlinked by its previous holder between our open and flock: then the
+  // lock we hold is on a file no one else can find, so open again until the path is ours.
+  for (int attempt = 0; attempt < 100; ++attempt) {
+    // O_NOFOLLOW, and a regular file only: the lock file is truncated once held, so it must never
+    // be a link to (or a device standing for) something else.
+    fd_ = ::open(lock_path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC | O_NOFOLLOW, 0644);
+    if (fd_ < 0) {
+      throw InputError(flag + ": cannot create the lock file " + quote_cell(lock_path_) + " (" + std::strerror(errno) +
+                       "); remove it if it is a link, or choose a writable folder");
+    }
+    struct stat kind {};
+    if (::fstat(fd_, &kind) != 0 || !S_ISREG(kind.st_mode)) {
+      ::close(fd_);
+      fd_ = -1;
+      throw InputError(flag + ": the lock file " + quote_cell(lock_path_) + " is not a regular file; remove it");
+    }
+    if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+      const int why = errno;
+      char holder[32] = {0};
+      const ssize_t n = ::pread(fd_, holder, sizeof holder - 1, 0);
+      ::close(fd_);
+      fd_ = -1;
+      if (why == EWOULDBLOCK) {
+        std::string pid = n > 0 ? std::string(holder, static_cast<std::size_t>(n)) : std::string("?");
+        pid.erase(std::remove_if(pid.begin(), pid.end(), [](char c) { return c < '0' || c > '9'; }), pid.end());
+        throw InputError(flag + ": " + quote_cell(path) + " is being written by another pvdfkit (process " +
+                         (pid.empty() ? std::string("?") : pid) + " holds " + quote_cell(lock_path_) +
+                         "); wait for it to finish or choose another output");
+      }
+      throw InputError(flag + ": cannot lock " + quote_cell(lock_path_) + " (" + std::strerror(why) + ")");
+    }
+    struct stat held {}, now {};
+    if (::fstat(fd_, &held) == 0 && ::stat(lock_path_.c_str(), &now) == 0 && held.st_ino == now.st_ino &&
+        held.st_dev == now.st_dev) {
+      const std::string pid = std::to_string(::getpid()) + "\n";
+      if (::ftruncate(fd_, 0) == 0 && ::pwrite(fd_, pid.data(), pid.size(), 0) < 0) {
+        // The pid is only for the other process's message; the lock holds without it.
+      }
+      return;
+    }
+    ::close(fd_);
+    fd_ = -1;
+  }
+  throw InputError(flag + ": could not take the lock " + quote_cell(lock_path_) + "; another process keeps replacing it");
+}
+
+OutputLock::~OutputLock() {
+  if (fd_ < 0) return;
+  ::unlink(lock_path_.c_str());  // while still held: a waiting opener sees the path vanish and retries
+  ::close(fd_);
 }
 
 }  // namespace pvdf::app
@@ -191,10 +361,20 @@ int run(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     std::string what = e.what();
     if (what.empty()) what = e.get_name();
+    // A single-value flag given twice: CLI11 says "--start: At Most 1 required but received 2".
+    const std::string at_most = ": At Most 1 required but received ";
+    const auto at = what.find(at_most);
+    if (at != std::string::npos) {
+      what = what.substr(0, at) + " is given " + what.substr(at + at_most.size()) +
+             " times; it takes one value: give it once";
+    }
     return fail(pvdf::exit_code::bad_input, what + "; run 'pvdfkit --help' or 'pvdfkit COMMAND --help'");
   }
   for (auto& sub : runners) {
-    if (sub.app != nullptr && sub.app->parsed()) return finish_stdout(sub.run());
+    if (sub.app == nullptr || !sub.app->parsed()) continue;
+    // Before any work: no output may be an input or another output of the same command.
+    pvdf::app::check_outputs_against_inputs(sub.app);
+    return finish_stdout(sub.run());
   }
   return fail(pvdf::exit_code::bad_input, "no command given; run 'pvdfkit --help'");
 }

@@ -12,6 +12,7 @@
 #include <random>
 #include <sstream>
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 namespace pvdf {
@@ -29,6 +30,84 @@ std::string temporary_name_for(const std::string& path) {
 
 }  // namespace
 
+std::string output_path_problem(const std::string& path) {
+  if (path.empty()) return "is empty; give a file name";
+  struct stat st {};
+  if (::lstat(path.c_str(), &st) == 0) {
+    if (S_ISLNK(st.st_mode)) {
+      return "is a symbolic link: writing would replace the link, not its target; give the file's real path or "
+             "another name";
+    }
+    if (S_ISDIR(st.st_mode)) return "is a folder; give a file name";
+    if (!S_ISREG(st.st_mode)) {
+      return "is a device or special file, not a regular file: it would be replaced; give a regular file name";
+    }
+  }
+  const fs::path parent = fs::path(path).parent_path();
+  const fs::path folder = parent.empty() ? fs::path(".") : parent;
+  std::error_code ec;
+  if (!fs::is_directory(folder, ec)) {
+    return "cannot be written: folder " + folder.string() + " does not exist; create it or choose another path";
+  }
+  if (::access(folder.c_str(), W_OK) != 0) {
+    return "cannot be written: folder " + folder.string() + " is not writable; choose a writable folder";
+  }
+  return "";
+}
+
+void check_output_path(const std::string& path, const std::string& what) {
+  const std::string problem = output_path_problem(path);
+  if (!problem.empty()) throw InputError(what + ": " + quote_cell(path) + " " + problem);
+}
+
+std::string quote_cell(const std::string& text) {
+  if (text.size() <= max_quoted_chars) return escape_control_bytes(text);
+  return escape_control_bytes(text.substr(0, max_quoted_chars)) + "... (" + std::to_string(text.size()) + " characters)";
+}
+
+void check_csv_file(const std::string& path, const std::string& what, std::size_t max_rows) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(what + ": " + quote_cell(path) + ": cannot open the file; check the path and its permissions");
+  const std::string where = what + ": " + quote_cell(path);
+  std::string line;
+  std::size_t line_no = 0, n_rows = 0;
+  bool have_header = false;
+  while (std::getline(in, line)) {
+    ++line_no;
+    if (line.find('\0') != std::string::npos) {
+      throw InputError(where + ":" + std::to_string(line_no) + ": holds a NUL byte; is this a CSV text file? remove it");
+    }
+    const auto first = line.find_first_not_of(" \t\r");
+    if (first == std::string::npos || line[first] == '#') continue;
+    const std::vector<std::string> fields = split_csv_line(line);
+    for (const auto& f : fields) {
+      if (f.size() > max_csv_cell_chars) {
+        throw InputError(where + ":" + std::to_string(line_no) + ": a cell of " + std::to_string(f.size()) +
+                         " characters ('" + quote_cell(f) + "'), the limit is " + std::to_string(max_csv_cell_chars) +
+                         "; cells hold one number or one column name");
+      }
+    }
+    if (!have_header) {
+      for (std::size_t i = 0; i < fields.size(); ++i) {
+        for (std::size_t j = 0; j < i; ++j) {
+          if (fields[i] == fields[j] && !fields[i].empty()) {
+            throw InputError(where + ":" + std::to_string(line_no) + ": column '" + quote_cell(fields[i]) +
+                             "' appears twice in the header (columns " + std::to_string(j + 1) + " and " +
+                             std::to_string(i + 1) + "); keep one of them");
+          }
+        }
+      }
+      have_header = true;
+      if (max_rows == 0) return;
+      continue;
+    }
+    if (++n_rows > max_rows) {
+      throw InputError(where + ": more than " + std::to_string(max_rows) +
+                       " data rows (the limit of a whole-file input); split the file or thin it");
+    }
+  }
+}
+
 void make_directories(const std::string& path) {
   if (path.empty()) return;
   std::error_code ec;
@@ -38,6 +117,13 @@ void make_directories(const std::string& path) {
 
 void write_path_atomically(const std::string& path, const std::function<void(const std::string&)>& write) {
   const fs::path target(path);
+  {
+    // Never replace a device, a symbolic link or a folder (only a regular file, or nothing).
+    struct stat st {};
+    if (::lstat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
+      throw InputError(quote_cell(path) + " " + output_path_problem(path));
+    }
+  }
   if (target.has_parent_path()) {
     std::error_code ec;
     if (!fs::exists(target.parent_path(), ec)) {
@@ -51,6 +137,14 @@ void write_path_atomically(const std::string& path, const std::function<void(con
   } catch (...) {
     std::remove(tmp.c_str());
     throw;
+  }
+  {
+    // Checked again just before the rename: the target may have changed during a long write.
+    struct stat st {};
+    if (::lstat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode)) {
+      std::remove(tmp.c_str());
+      throw InputError(quote_cell(path) + " " + output_path_problem(path) + " (it changed while the output was written)");
+    }
   }
   if (std::rename(tmp.c_str(), path.c_str()) != 0) {
     const std::string why = std::strerror(errno);
@@ -99,14 +193,14 @@ std::vector<double> parse_number_list(const std::string& text, const std::string
     const auto e = item.find_last_not_of(" \t");
     const std::string t = b == std::string::npos ? "" : item.substr(b, e - b + 1);
     if (!parse_finite(t, x)) {
-      throw InputError(what + " = '" + escape_control_bytes(text) + "': '" + escape_control_bytes(t) +
+      throw InputError(what + " = '" + quote_cell(text) + "': '" + quote_cell(t) +
                        "' is not a finite number; write numbers separated by commas");
     }
     out.push_back(x);
   }
-  if (out.empty()) throw InputError(what + " = '" + escape_control_bytes(text) + "' is empty; give at least one number");
+  if (out.empty()) throw InputError(what + " = '" + quote_cell(text) + "' is empty; give at least one number");
   if (count != 0 && out.size() != count) {
-    throw InputError(what + " = '" + escape_control_bytes(text) + "' has " + std::to_string(out.size()) + " numbers; it needs exactly " +
+    throw InputError(what + " = '" + quote_cell(text) + "' has " + std::to_string(out.size()) + " numbers; it needs exactly " +
                      std::to_string(count));
   }
   return out;
@@ -120,14 +214,14 @@ std::vector<double> parse_range(const std::string& text, const std::string& what
   double start = 0, step = 0, stop = 0;
   if (parts.size() != 3 || !parse_finite(parts[0], start) || !parse_finite(parts[1], step) ||
       !parse_finite(parts[2], stop)) {
-    throw InputError(what + " = '" + escape_control_bytes(text) + "' must be START:STEP:STOP with three finite numbers, e.g. 0:5:90");
+    throw InputError(what + " = '" + quote_cell(text) + "' must be START:STEP:STOP with three finite numbers, e.g. 0:5:90");
   }
   if (step == 0 || (stop - start) / step < 0) {
-    throw InputError(what + " = '" + escape_control_bytes(text) + "': STEP must be non-zero and lead from START to STOP");
+    throw InputError(what + " = '" + quote_cell(text) + "': STEP must be non-zero and lead from START to STOP");
   }
   const double n_real = std::floor((stop - start) / step + 1e-9) + 1;
   if (n_real > static_cast<double>(max_count)) {
-    throw InputError(what + " = '" + escape_control_bytes(text) + "' gives " + std::to_string(static_cast<long long>(n_real)) +
+    throw InputError(what + " = '" + quote_cell(text) + "' gives " + std::to_string(static_cast<long long>(n_real)) +
                      " values; the limit is " + std::to_string(max_count) + ": use a larger STEP");
   }
   std::vector<double> out;
@@ -238,8 +332,16 @@ CsvTable read_csv(std::istream& in, const std::string& source, BadRowPolicy poli
       for (const auto& f : fields) {
         if (f.empty()) throw InputError(source + ":" + std::to_string(line_no) + ": empty column name in the header; name every column");
         if (escape_control_bytes(f) != f) {
-          throw InputError(source + ":" + std::to_string(line_no) + ": column name '" + escape_control_bytes(f) +
+          throw InputError(source + ":" + std::to_string(line_no) + ": column name '" + quote_cell(f) +
                            "' holds control bytes; is this a CSV file?");
+        }
+      }
+      for (std::size_t i = 0; i < fields.size(); ++i) {
+        for (std::size_t j = 0; j < i; ++j) {
+          if (fields[i] == fields[j]) {
+            throw InputError(source + ":" + std::to_string(line_no) + ": column '" + quote_cell(fields[i]) +
+                             "' appears twice in the header; keep one of them");
+          }
         }
       }
       t.columns = fields;

@@ -33,6 +33,15 @@ Point2 polygon_centroid(const std::vector<Point2>& v) {
   return {cx / (6 * a), cy / (6 * a)};
 }
 
+// Physical bounds of a scene (docs/scene.md "Physical bounds"), refused by the scene reader.
+// Kept here, not in scene.hpp, so that tuning them rebuilds one file.
+constexpr double modulus_min_Pa = 1e5;          // E_Pa, E1_Pa, E2_Pa, G12_Pa: soft rubber
+constexpr double modulus_max_Pa = 1e12;         // ... to diamond
+constexpr double poisson_margin = 0.05;         // 1 - nu12*nu21 >= this: positive definite with a margin
+constexpr double pretension_max_strain = 0.1;   // |pretension| <= this x sqrt(E1 E2) x thickness
+constexpr double force_min_N = 1e-9;            // loads[].force_N (the app's force flags use the same)
+constexpr double force_max_N = 1e4;
+
 std::string fmt(double x) {
   std::ostringstream os;
   os.precision(6);
@@ -263,6 +272,24 @@ Material parse_material(const JsonObjectReader& r, std::vector<std::string>& war
       }
     }
   }
+  // Plausibility (docs/scene.md "Physical bounds"): moduli from soft rubber to diamond, and a
+  // compliance that is positive definite with a margin; outside, the solver would work for minutes
+  // on an absurd film (E = 1e-30 Pa deflects a 45 mm film by 4e10 m) instead of refusing.
+  for (const char* k : {"E_Pa", "E1_Pa", "E2_Pa", "G12_Pa"}) {
+    if (!r.has(k)) continue;
+    const double v = std::string(k) == "E_Pa" ? m.E1_Pa : std::string(k) == "E1_Pa" ? m.E1_Pa
+                                                : std::string(k) == "E2_Pa" ? m.E2_Pa : m.G12_Pa;
+    if (!(v >= modulus_min_Pa && v <= modulus_max_Pa)) {
+      r.fail(k, "must lie in [" + fmt(modulus_min_Pa) + ", " + fmt(modulus_max_Pa) +
+                    "] Pa (soft rubber to diamond); check the unit (Pa: PVDF is about 2e9)");
+    }
+  }
+  if (m.E1_Pa > 0 && m.E2_Pa > 0 && m.nu12 * m.nu21() < 1.0 && !(1.0 - m.nu12 * m.nu21() >= poisson_margin)) {
+    r.fail(m.isotropic ? "nu" : "nu12",
+           "gives 1 - nu12*nu21 = " + fmt(1.0 - m.nu12 * m.nu21()) + " < " + fmt(poisson_margin) +
+               ": the compliance is within a hair of losing positive definiteness (no real film); use |nu12| < " +
+               fmt(std::sqrt((1 - poisson_margin) * m.E1_Pa / m.E2_Pa)) + " (PVDF: about 0.35)");
+  }
   m.draw_angle_rad = r.in_range_or("draw_angle_deg", 0.0, -360.0, 360.0) * deg;
   m.d31_C_per_N = r.in_range_or("d31_C_per_N", m.d31_C_per_N, -1e-9, 1e-9);
   m.d32_C_per_N = r.in_range_or("d32_C_per_N", m.d32_C_per_N, -1e-9, 1e-9);
@@ -322,6 +349,17 @@ Scene parse_scene(const nlohmann::json& json, const std::string& source) {
     s.material = parse_material(*m, s.warnings);
     m->finish();
   }
+  {
+    // |pretension| beyond a tenth of the film's membrane stiffness is a pre-strain of more than
+    // 10 % (PVDF yields at a few %): a typo, or a unit mistake (N/m, not N/mm or Pa).
+    const double bound = pretension_max_strain * std::sqrt(s.material.E1_Pa * s.material.E2_Pa) * s.membrane.thickness_m;
+    if (!(std::abs(s.membrane.pretension_N_per_m) <= bound)) {
+      top.object_if("membrane")->fail(
+          "pretension_N_per_m", "must lie in [" + fmt(-bound) + ", " + fmt(bound) + "] N/m: |N0| <= " +
+                                    fmt(pretension_max_strain) + " x sqrt(E1 E2) x thickness (a pre-strain of at most " +
+                                    fmt(100 * pretension_max_strain) + " %); check the unit (N per metre of film)");
+    }
+  }
   const auto electrodes = top.objects("electrodes");
   std::set<std::string> names;
   for (std::size_t i = 0; i < electrodes.size(); ++i) {
@@ -343,7 +381,10 @@ Scene parse_scene(const nlohmann::json& json, const std::string& source) {
         load.kind = Load::Kind::probe;
         load.position_m = l.pair_or("position_m", {0.0, 0.0});
         load.force_N = l.number_or("force_N", 1.0);
-        if (!(std::abs(load.force_N) <= 1e4)) l.fail("force_N", "must lie in [-1e4, 1e4] N");
+        if (!(load.force_N >= force_min_N && load.force_N <= force_max_N)) {
+          l.fail("force_N", "must lie in [" + fmt(force_min_N) + ", " + fmt(force_max_N) +
+                                "] N (a probe pushes the film: 1 nN to 10 kN)");
+        }
         load.radius_m = l.positive_or("radius_m", 0.0);
         if (!s.membrane.outline.contains(load.position_m)) {
           l.fail("position_m", "lies outside the film; give a point inside the clamped outline");

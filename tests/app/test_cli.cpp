@@ -4,13 +4,17 @@
 
 #include "pvdf/core/constants.hpp"
 #include "pvdf/core/material.hpp"
+#include "pvdf/core/scene.hpp"
 
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+
+#include <unistd.h>
 
 using pvdf::test::line_count;
 using pvdf::test::run_pvdfkit;
@@ -142,4 +146,80 @@ TEST_CASE("bad flags give exit 2 with one error line", "[cli][errors]") {
     CHECK(line_count(r.err) == 1);
     CHECK_THAT(r.err, Catch::StartsWith("error: "));
   }
+}
+
+namespace {
+
+/// A fresh folder for one test's files.
+std::filesystem::path fresh_dir(const std::string& name) {
+  const auto d = std::filesystem::temp_directory_path() / ("pvdf_cli_" + name + "_" + std::to_string(::getpid()));
+  std::filesystem::remove_all(d);
+  std::filesystem::create_directories(d);
+  return d;
+}
+
+bool process_alive(long pid) { return std::system(("kill -0 " + std::to_string(pid) + " 2>/dev/null").c_str()) == 0; }
+
+}  // namespace
+
+TEST_CASE("locate names the electrode order in --help, text, JSON and the wrong-count error", "[cli][locate]") {
+  const auto d = fresh_dir("order");
+  const std::string map = (d / "map.h5").string();
+  REQUIRE(run_pvdfkit("synthetic-map -o " + map + " --spacing-m 0.002").exit_code == 0);
+  const auto help = run_pvdfkit("locate --help");
+  CHECK_THAT(help.out, Catch::Contains("order follows the map's electrode names"));
+  const std::string q = " --charges-C 2.4925e-12,1.87487e-11,1.87487e-11";
+  const auto text = run_pvdfkit("locate " + map + q);
+  CHECK(text.exit_code == 0);
+  CHECK_THAT(text.out, Catch::StartsWith("electrodes: A,B,C"));
+  const auto json = run_pvdfkit("locate " + map + q + " --json");
+  REQUIRE(json.exit_code == 0);
+  CHECK(nlohmann::json::parse(json.out)["electrodes"] == nlohmann::json({"A", "B", "C"}));
+  const auto count = run_pvdfkit("locate " + map + " --charges-C 1e-11,2e-11");
+  CHECK(count.exit_code == 2);
+  CHECK(line_count(count.err) == 1);
+  CHECK_THAT(count.err, Catch::Contains("order A,B,C"));
+  // pC typed for C: refused with the conversion; a force beyond the map's levels: its range named.
+  const auto pico = run_pvdfkit("locate " + map + " --charges-C 146.1,165.1,160.2");
+  CHECK(pico.exit_code == 2);
+  CHECK_THAT(pico.err, Catch::Contains("look like pC") && Catch::Contains("1.461e-10"));
+  const auto beyond = run_pvdfkit("locate " + map + q + " --force-N 70");
+  CHECK(beyond.exit_code == 3);
+  CHECK(line_count(beyond.err) == 1);
+  CHECK_THAT(beyond.err, Catch::Contains("the map covers 1 N"));
+  std::filesystem::remove_all(d);
+}
+
+TEST_CASE("a second map writing the same output refuses at once; a stale lock file does not block", "[cli][map][lock]") {
+  if (run_pvdfkit("map --help").exit_code != 0) return;  // built without the finite-element solver
+  const auto d = fresh_dir("lock");
+  const std::string scene = write_temp("pvdf_cli_lock_scene.json", pvdf::default_scene_json());
+  const std::string out = (d / "m.h5").string();
+  // 1. A first map (minutes of work at 4 mm) in the background.
+  const std::string pid_file = (d / "pid").string();
+  std::system(("'" + std::string(PVDFKIT_EXE) + "' map " + scene + " -o " + out + " --spacing-m 0.004 --quiet " +
+               "</dev/null >/dev/null 2>&1 & echo $! > " + pid_file).c_str());
+  long pid = 0;
+  std::ifstream(pid_file) >> pid;
+  REQUIRE(pid > 0);
+  for (int i = 0; i < 300 && !std::filesystem::exists(out + ".lock"); ++i) ::usleep(100000);
+  REQUIRE(std::filesystem::exists(out + ".lock"));
+  // 2. The second writer: exit 2 at once, naming the holder.
+  const auto t0 = std::chrono::steady_clock::now();
+  const auto second = run_pvdfkit("map " + scene + " -o " + out + " --spacing-m 0.004 --quiet");
+  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  CHECK(second.exit_code == 2);
+  CHECK(line_count(second.err) == 1);
+  CHECK_THAT(second.err, Catch::Contains("being written by another pvdfkit (process " + std::to_string(pid)));
+  CHECK(wall_s < 5);
+  // 3. Killed without cleanup, the first leaves its lock file; a new run takes it over.
+  std::system(("kill -9 " + std::to_string(pid)).c_str());
+  for (int i = 0; i < 100 && process_alive(pid); ++i) ::usleep(100000);
+  const auto third = run_pvdfkit("map " + scene + " -o " + out + " --spacing-m 0.01 --region -0.01,0.01,-0.01,0.01 " +
+                                 "--setup-checks 0 --rim-model never --direct-solves never --tolerance 0.3 --quiet --no-checkpoint");
+  INFO(third.err);
+  CHECK(third.exit_code == 0);
+  CHECK(std::filesystem::exists(out));
+  CHECK_FALSE(std::filesystem::exists(out + ".lock"));
+  std::filesystem::remove_all(d);
 }

@@ -103,6 +103,41 @@ void write_hostile_fixtures(const std::filesystem::path& d) {
   for (int i = 0; i < 20000; ++i) stream += std::to_string(i * 1e-4) + ",4e-11,2e-11,1.5e-11\n";
   write(d / "stream.csv", stream);
   write(d / "scan.csv", "x_m,m1_V,m2_V\n0,0,0\n0.001,0,0\n0.002,0,0\n0.003,0,0\n");
+  // Outputs that must never be replaced: a symbolic link to a file, one to standard output.
+  write(d / "target.txt", "the link's target: must stay unchanged\n");
+  std::filesystem::create_symlink("target.txt", d / "link.out");
+  std::filesystem::create_symlink("/proc/self/fd/1", d / "link_stdout.out");
+  std::filesystem::create_directory(d / "realdir");
+  std::filesystem::create_directory_symlink("realdir", d / "link_dir");
+  // Measured CSVs: a good one (compare, calibrate, rays), duplicate columns, too many rows, huge
+  // cells, NUL bytes; fit CSVs with an absurd force.
+  const std::string measured_head = "x_m,y_m,force_N,charge_A_C,charge_B_C,charge_C_C\n";
+  write(d / "measured.csv", measured_head + "0.002,0.001,1,2e-12,1.8e-11,1.9e-11\n0,0,1,5e-12,5e-12,5e-12\n");
+  write(d / "measured_dup.csv", "x_m,y_m,force_N,charge_A_C,charge_B_C,charge_C_C,charge_A_C\n0,0,1,1e-12,1e-12,1e-12,2e-12\n");
+  std::string many = measured_head;
+  for (int i = 0; i < 100001; ++i) many += "0,0,1,5e-12,5e-12,5e-12\n";
+  write(d / "measured_many.csv", many);
+  write(d / "measured_bigcell.csv", measured_head + "0,0,1,5e-12," + std::string(50000, '7') + ",5e-12\n");
+  write(d / "measured_nul.csv", measured_head + bytes("0,0,1,5e-12,5e\x00-12,5e-12\n"));
+  write(d / "fit_tiny_force.csv", "x_m,y_m,force_N,deflection_m\n0,0,1e-300,0.003\n0.002,0,1,0.003\n");
+  write(d / "fit_dup.csv", "x_m,y_m,force_N,deflection_m,deflection_m\n0,0,1,0.003,0.003\n");
+  write(d / "fit_sigma_denormal.csv", "x_m,y_m,force_N,deflection_m,sigma_deflection_m\n0,0,1,0.003,1e-320\n0.002,0,1,0.003,1e-4\n");
+  write(d / "fit_ok.csv", "x_m,y_m,force_N,deflection_m\n0,0,1,0.003\n0.002,0,1,0.003\n");
+  write(d / "stream_dup.csv", "t_s,charge_A_C,charge_B_C,charge_C_C,charge_B_C\n0,4e-11,2e-11,1.5e-11,2e-11\n");
+  // Scenes the parser reads but no real film is (docs/scene.md "Physical bounds").
+  write(d / "E_tiny.json", seed001_with(R"({"material": {"E1_Pa": 1e-30, "E2_Pa": 1e-30, "G12_Pa": 1e-30}})"));
+  write(d / "E2_milli.json", seed001_with(R"({"material": {"E2_Pa": 2.2e-3}})"));
+  write(d / "E_huge.json", seed001_with(R"({"material": {"E1_Pa": 1e15}})"));
+  write(d / "iso_E_MPa.json", seed001_with(R"({"material": {"E1_Pa": null, "E2_Pa": null, "G12_Pa": null, "nu12": null,
+                                                           "E_Pa": 2000, "nu": 0.3}})"));
+  write(d / "nu_auxetic.json", seed001_with(R"({"material": {"E1_Pa": null, "E2_Pa": null, "G12_Pa": null, "nu12": null,
+                                                            "E_Pa": 2e9, "nu": -0.99}})"));
+  write(d / "nu12_edge.json", seed001_with(R"({"material": {"nu12": 1.08}})"));
+  write(d / "pretension_huge.json", seed001_with(R"({"membrane": {"pretension_N_per_m": -1e9}})"));
+  write(d / "pretension_pos.json", seed001_with(R"({"membrane": {"pretension_N_per_m": 1e5}})"));
+  write(d / "force_tiny.json", seed001_with(R"({"loads": [{"position_m": [0, 0], "force_N": 1e-300}]})"));
+  write(d / "force_zero.json", seed001_with(R"({"loads": [{"position_m": [0, 0], "force_N": 0}]})"));
+  write(d / "force_neg.json", seed001_with(R"({"loads": [{"position_m": [0, 0], "force_N": -1}]})"));
 }
 
 }  // namespace pvdf::test

@@ -6,6 +6,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
@@ -14,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -215,6 +217,104 @@ const std::vector<Row> rows = {
   {"acquire-usb-spec", "acquire --device usb:12 --quiet", 2, "--device usb:12"},
   {"acquire-replay-empty", "acquire --device replay: --quiet", 2, "--device"},
   {"acquire-record-nodir", "acquire --device sim: --quiet --record nodir/r.pvdfrec", 2, "--record", "nodir"},
+  // ---- outputs never destroy files (issue 30): devices, symbolic links, folders, inputs, the
+  // checkpoint; refused before any work, the target untouched (checked again by the next case)
+  {"compare-o-dev-full", "compare $M measured.csv -o /dev/full", 2, "/dev/full"},
+  {"compare-o-symlink", "compare $M measured.csv -o link.out", 2, "symbolic link"},
+  {"compare-o-input-csv", "compare $M measured.csv -o measured.csv", 2, "is the input"},
+  {"compare-o-input-map", "compare $M measured.csv -o map.h5", 2, "is the input"},
+  {"compare-o-folder", "compare $M measured.csv -o realdir", 2, "is a folder"},
+  {"compare-plot-bmp", "compare $M measured.csv --plot p.bmp", 2, "figure format", "p.bmp"},
+  {"compare-plot-report-same", "compare $M measured.csv --plot pr.png -o pr.png", 2, "pr.png", "pr.png"},
+  {"fit-o-dev-full", "fit good.json fit_ok.csv -o /dev/full", 2, "/dev/full"},
+  {"fit-o-input-scene", "fit good.json fit_ok.csv -o good.json", 2, "is the input"},
+  {"fit-o-symlink", "fit good.json fit_ok.csv -o link_stdout.out", 2, "symbolic link"},
+  {"fit-plot-txt", "fit good.json fit_ok.csv -o f.json --plot p.txt", 2, "figure format", "f.json,p.txt"},
+  {"fit-params-empty", "fit good.json fit_ok.csv -o f.json --params ''", 2, "--params", "f.json"},
+  {"fit-start-twice", "fit good.json fit_ok.csv -o f.json --start E_scale=1 --start E_scale=2", 2, "--start", "f.json"},
+  {"fit-force-1e-300", "fit good.json fit_tiny_force.csv -o f.json", 2, "force_N", "f.json"},
+  {"fit-sigma-denormal", "fit good.json fit_sigma_denormal.csv -o f.json", 2, "fit_sigma_denormal.csv:2: sigma_deflection_m", "f.json"},
+  {"solve-json-verbose", "$X solve good.json --json --verbose --tolerance 0.3 2>/dev/null | python3 -c 'import json,sys; json.load(sys.stdin)' "
+                         "2>.err", 0, "", "", 60},
+  {"fit-dup-column", "fit good.json fit_dup.csv -o f.json", 2, "appears twice", "f.json"},
+  {"map-o-dev-full", "map good.json -o /dev/full --quiet", 2, "/dev/full"},
+  {"map-o-symlink", "map good.json -o link.out --quiet", 2, "symbolic link", "link.out.checkpoint"},
+  {"map-o-scene", "map good.json -o good.json --quiet", 2, "is the input", "good.json.checkpoint"},
+  {"map-o-folder", "map good.json -o realdir --quiet", 2, "is a folder"},
+  {"map-o-is-checkpoint", "map good.json -o mc.h5 --checkpoint mc.h5 --quiet", 2, "--checkpoint", "mc.h5"},
+  {"map-checkpoint-dev-full", "map good.json -o mc2.h5 --checkpoint /dev/full --quiet", 2, "/dev/full", "mc2.h5"},
+  {"map-checkpoint-scene", "map good.json -o mc3.h5 --checkpoint good.json --quiet", 2, "is the input", "mc3.h5"},
+  {"map-locked", "flock -x ml.h5.lock sleep 2 & sleep 0.5; $X map good.json -o ml.h5 --quiet 2>.err; rc=$?; wait; "
+                 "exit $rc", 2, "being written by another pvdfkit", "ml.h5"},
+  {"map-lock-symlink", "ln -sf target.txt ml2.h5.lock; $X map good.json -o ml2.h5 --quiet 2>.err", 2, "ml2.h5.lock",
+   "ml2.h5"},
+  {"map-forces-not-distinct", "map good.json -o m.h5 --quiet --forces-N 1,1.0000000000000002", 2, "not distinct", "m.h5"},
+  {"map-forces-1e-300", "map good.json -o m.h5 --quiet --forces-N 1e-300", 2, "--forces-N", "m.h5"},
+  {"map-forces-1e5", "map good.json -o m.h5 --quiet --forces-N 1e5", 2, "--forces-N", "m.h5"},
+  {"map-region-1e10", "map good.json -o m.h5 --quiet --region -1e10,1e10,-1e10,1e10", 2, "beyond the film", "m.h5"},
+  {"map-region-mm", "map good.json -o m.h5 --quiet --region -12,12,-12,12", 2, "look like mm", "m.h5"},
+  {"map-spacing-mm", "map good.json -o m.h5 --quiet --spacing-m 2", 2, "metres", "m.h5"},
+  {"map-linear-all-zero", "map good.json -o lin.h5 --spacing-m 0.01 --region -0.01,0.01,-0.01,0.01 --setup-checks 0 "
+                          "--model linear --rim-model never --direct-solves never --tolerance 0.3 --quiet --no-checkpoint",
+   3, "every charge of the map is zero", "lin.h5", 30},
+  {"map-stop-after-neg", "map good.json -o m.h5 --quiet --stop-after-positions -1", 2, "--stop-after-positions", "m.h5"},
+  {"map-spacing-twice", "map good.json -o m.h5 --quiet --spacing-m 0.004 --spacing-m 0.002", 2, "--spacing-m", "m.h5"},
+  {"calibrate-o-input-map", "calibrate $M measured.csv -o map.h5", 2, "is the input"},
+  {"calibrate-o-dev-full", "calibrate $M measured.csv -o /dev/full", 2, "/dev/full"},
+  {"calibrate-dup-column", "calibrate $M measured_dup.csv -o cal2.h5", 2, "appears twice", "cal2.h5"},
+  {"mesh-o-dev-full", "mesh good.json -o /dev/full", 2, "/dev/full"},
+  {"mesh-o-scene", "mesh good.json -o good.json --no-preview", 2, "is the input"},
+  {"mesh-preview-txt", "mesh good.json -o k7.msh --preview k7.txt", 2, "figure format", "k7.msh,k7.txt"},
+  {"mesh-preview-is-output", "mesh good.json -o k8.msh --preview k8.msh", 2, "k8.msh", "k8.msh"},
+  {"rays-csv-dev-full", "rays $M --csv /dev/full", 2, "/dev/full"},
+  {"rays-csv-input-map", "rays $M --csv map.h5", 2, "is the input"},
+  {"rays-plot-bmp", "rays $M --plot r.bmp", 2, "figure format", "r.bmp"},
+  {"synthetic-map-dev-full", "synthetic-map -o /dev/full", 2, "/dev/full"},
+  {"synthetic-map-symlink", "synthetic-map -o link.out", 2, "symbolic link"},
+  {"synthetic-map-not-distinct", "synthetic-map -o s.h5 --forces-N 1,1.0000000000000002", 2, "not distinct", "s.h5"},
+  {"export-map-dev-full", "export-map $M -o /dev/full", 2, "/dev/full"},
+  {"export-map-symlink-stdout", "export-map $M -o link_stdout.out", 2, "symbolic link"},
+  {"export-map-o-input", "export-map $M -o map.h5", 2, "is the input"},
+  {"restore-apply-o-dev-full", "restore apply filter_ok.json scan.csv -o /dev/full", 2, "/dev/full"},
+  {"restore-apply-o-input", "restore apply filter_ok.json scan.csv -o scan.csv", 2, "is the input"},
+  {"restore-apply-o-symlink", "restore apply filter_ok.json scan.csv -o link.out", 2, "symbolic link"},
+  {"moduli-plot-txt", "moduli --plot m.txt", 2, "figure format", "m.txt"},
+  {"moduli-plot-dev-full", "moduli --plot /dev/full", 2, "/dev/full"},
+  {"lookup-accuracy-plot-bmp", "lookup-accuracy $M --presses 10 --plot p.bmp", 2, "figure format", "p.bmp"},
+  {"locate-plot-txt", "locate $M --charges-C 2.4925e-12,1.87487e-11,1.87487e-11 --plot p.txt", 2, "figure format", "p.txt"},
+  {"locate-plot-input", "locate $M --charges-C 2.4925e-12,1.87487e-11,1.87487e-11 --plot map.h5", 2, "figure format"},
+  {"locate-pictures-symlink", "locate $M --pictures link_dir", 2, "symbolic link"},
+  {"isocharge-out-dir-symlink", "isocharge $M --out-dir link_dir", 2, "symbolic link"},
+  {"solve-vtu-dev-full", "solve good.json --vtu /dev/full", 2, "/dev/full"},
+  // ---- absurd scenes refused before work (docs/scene.md "Physical bounds")
+  {"solve-E-1e-30", "solve E_tiny.json", 2, "material.E1_Pa"},
+  {"solve-E2-milli", "solve E2_milli.json", 2, "material.E2_Pa"},
+  {"solve-E-huge", "solve E_huge.json", 2, "material.E1_Pa"},
+  {"solve-E-MPa", "solve iso_E_MPa.json", 2, "material.E_Pa"},
+  {"solve-nu-auxetic", "solve nu_auxetic.json", 2, "material.nu"},
+  {"solve-nu12-edge", "solve nu12_edge.json", 2, "material.nu12"},
+  {"solve-pretension-1e9", "solve pretension_huge.json", 2, "membrane.pretension_N_per_m"},
+  {"solve-pretension-1e5", "solve pretension_pos.json", 2, "membrane.pretension_N_per_m"},
+  {"solve-force-1e-300", "solve force_tiny.json", 2, "loads[0].force_N"},
+  {"solve-force-0", "solve force_zero.json", 2, "loads[0].force_N"},
+  {"solve-force-neg", "solve force_neg.json", 2, "loads[0].force_N"},
+  {"solve-load-flag-1e-300", "solve good.json --load 0,0,1e-300", 2, "--load"},
+  {"map-pretension-1e9", "map pretension_huge.json -o m8.h5 --quiet", 2, "membrane.pretension_N_per_m", "m8.h5"},
+  {"map-nu-auxetic", "map nu_auxetic.json -o m9.h5 --quiet", 2, "material.nu", "m9.h5"},
+  {"fit-E-1e-30", "fit E_tiny.json fit_ok.csv -o f.json", 2, "material.E1_Pa", "f.json"},
+  // ---- CSV inputs: rows, duplicate columns, cells quoted to 80 characters, NUL bytes
+  {"compare-too-many-rows", "compare $M measured_many.csv", 2, "100000"},
+  {"compare-dup-column", "compare $M measured_dup.csv", 2, "appears twice"},
+  {"compare-big-cell", "compare $M measured_bigcell.csv", 2, "50000 characters"},
+  {"compare-nul", "compare $M measured_nul.csv", 2, "NUL"},
+  {"fit-too-many-rows", "fit good.json measured_many.csv -o f.json", 2, "100000", "f.json"},
+  {"locate-input-dup-column", "locate $M --input stream_dup.csv", 2, "appears twice"},
+  {"locate-charges-huge-cell", "$X locate $M --charges-C $(head -c 20000 /dev/zero | tr '\\0' 7) 2>.err", 2, "20000 characters"},
+  // ---- unit and order mistakes get a hint (issue 31 item 2)
+  {"locate-charges-pC", "locate $M --charges-C 146.1,165.1,160.2", 2, "look like pC"},
+  {"locate-charges-count", "locate $M --charges-C 1e-11,2e-11", 2, "order A,B,C"},
+  {"map-noise-count", "map good.json -o m.h5 --quiet --noise-C 5e-14,5e-14", 2, "order A,B,C", "m.h5"},
+  {"locate-noise-count", "locate $M --charges-C 1e-11,2e-11,3e-11 --noise-C 1e-14,1e-14", 2, "order A,B,C"},
   // ---- the command line itself
   {"unknown-command", "frobnicate", 2, "frobnicate"},
   {"unknown-command-ctl", "$X $'fro\\x1bbnicate' 2>.err", 2, "fro\\x1bbnicate"},
@@ -240,18 +340,21 @@ std::string replace_all(std::string s, const std::string& from, const std::strin
 
 std::string quote(const std::string& s) { return "'" + s + "'"; }
 
-/// The fixture folder, written once (with a small synthetic map for the map-reading commands).
+/// A fresh fixture folder named by `tag` (with a small synthetic map for the map-reading commands).
+fs::path make_fixture_dir(const std::string& tag) {
+  const fs::path d = fs::temp_directory_path() / ("pvdf_hostile_" + tag + "_" + std::to_string(::getpid()));
+  fs::remove_all(d);
+  fs::create_directories(d);
+  pvdf::test::write_hostile_fixtures(d);
+  const std::string cmd = quote(PVDFKIT_EXE) + " synthetic-map -o " + quote((d / "map.h5").string()) +
+                          " --spacing-m 0.002 >/dev/null 2>&1";
+  REQUIRE(std::system(cmd.c_str()) == 0);
+  return d;
+}
+
+/// The fixture folder of the table, written once.
 const fs::path& fixture_dir() {
-  static const fs::path dir = [] {
-    const fs::path d = fs::temp_directory_path() / ("pvdf_hostile_" + std::to_string(::getpid()));
-    fs::remove_all(d);
-    fs::create_directories(d);
-    pvdf::test::write_hostile_fixtures(d);
-    const std::string cmd = quote(PVDFKIT_EXE) + " synthetic-map -o " + quote((d / "map.h5").string()) +
-                            " --spacing-m 0.002 >/dev/null 2>&1";
-    REQUIRE(std::system(cmd.c_str()) == 0);
-    return d;
-  }();
+  static const fs::path dir = make_fixture_dir("table");
   return dir;
 }
 
@@ -308,6 +411,60 @@ TEST_CASE("hostile input: every row fails cleanly, fast, with one error line and
       CHECK_FALSE(fs::exists(dir / p));
     }
     CHECK_FALSE(has_temporary(dir));
+  }
+  fs::remove_all(dir);
+}
+
+TEST_CASE("outputs never destroy files: /dev/full, a symbolic link and an input given as the output are refused, "
+          "the target unchanged", "[hostile][cli][output]") {
+  const fs::path dir = make_fixture_dir("outputs");
+  struct Writer {
+    const char* args;   ///< `{OUT}` is the output under test
+    const char* input;  ///< an input of the same command, given as the output ("" = none)
+  };
+  const std::vector<Writer> writers = {
+      {"compare map.h5 measured.csv -o {OUT}", "measured.csv"},
+      {"compare map.h5 measured.csv --plot {OUT}", "map.h5"},
+      {"fit good.json fit_ok.csv -o {OUT}", "good.json"},
+      {"fit good.json fit_ok.csv -o f2.json --plot {OUT}", "fit_ok.csv"},
+      {"map good.json -o {OUT} --quiet", "good.json"},
+      {"map good.json -o mx.h5 --checkpoint {OUT} --quiet", "good.json"},
+      {"calibrate map.h5 measured.csv -o {OUT}", "map.h5"},
+      {"mesh good.json -o {OUT} --no-preview", "good.json"},
+      {"mesh good.json -o k9.msh --preview {OUT}", "good.json"},
+      {"rays map.h5 --csv {OUT}", "map.h5"},
+      {"synthetic-map -o {OUT}", ""},
+      {"export-map map.h5 -o {OUT}", "map.h5"},
+      {"restore apply filter_ok.json scan.csv -o {OUT}", "scan.csv"},
+      {"locate map.h5 --charges-C 2.4925e-12,1.87487e-11,1.87487e-11 --plot {OUT}", "map.h5"},
+      {"lookup-accuracy map.h5 --presses 10 --plot {OUT}", "map.h5"},
+      {"moduli --plot {OUT}", ""},
+  };
+  const std::string target_before = slurp(dir / "target.txt");
+  for (const Writer& w : writers) {
+    std::vector<std::string> outputs = {"/dev/full", "link.out"};
+    if (std::string(w.input).size() > 0) outputs.push_back(w.input);
+    for (const std::string& out : outputs) {
+      const std::string input_before = out.rfind('/', 0) == 0 ? "" : slurp(dir / (out == "link.out" ? "target.txt" : out));
+      const std::string args = replace_all(w.args, "{OUT}", out);
+      const std::string cmd = "cd " + quote(dir.string()) + " && timeout 60 " + quote(PVDFKIT_EXE) + " " + args +
+                              " </dev/null >.out 2>.err";
+      const int status = std::system(cmd.c_str());
+      const int code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+      const std::string err = slurp(dir / ".err");
+      INFO("pvdfkit " << args << "\nexit " << code << ", stderr: " << err);
+      CHECK(code == 2);
+      CHECK(err.rfind("error: ", 0) == 0);
+      CHECK(std::count(err.begin(), err.end(), '\n') == 1);
+      struct stat st {};
+      REQUIRE(::stat("/dev/full", &st) == 0);
+      CHECK(S_ISCHR(st.st_mode));  // still the device
+      CHECK(fs::is_symlink(dir / "link.out"));
+      CHECK(fs::read_symlink(dir / "link.out") == "target.txt");
+      CHECK(slurp(dir / "target.txt") == target_before);
+      if (out != "/dev/full" && out != "link.out") CHECK(slurp(dir / out) == input_before);
+      CHECK_FALSE(has_temporary(dir));
+    }
   }
   fs::remove_all(dir);
 }

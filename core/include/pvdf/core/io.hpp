@@ -17,6 +17,30 @@ void write_file_atomically(const std::string& path, const std::function<void(std
 /// path, and the file is renamed to `path` afterwards.
 void write_path_atomically(const std::string& path, const std::function<void(const std::string&)>& write);
 
+/// Why `path` cannot be an output file, or "" when it can: an empty name, a folder, a symbolic
+/// link (renaming over it would replace the link, not its target), a device or other special
+/// file (/dev/full, a FIFO), or a folder that is missing or not writable. Outputs are renamed only
+/// over a regular file or nothing; write_path_atomically applies this rule before it writes and
+/// again before it renames.
+std::string output_path_problem(const std::string& path);
+/// Throws InputError "`what`: PATH <problem>" when output_path_problem(path) is not empty.
+void check_output_path(const std::string& path, const std::string& what);
+
+/// Largest number of data rows a whole-file CSV input (fit, compare, calibrate) may hold.
+inline constexpr std::size_t max_csv_rows = 100000;
+/// Longest cell of a whole-file CSV input (characters): a number or a column name needs far
+/// fewer, and the readers that quote a cell in a message then quote at most this many.
+inline constexpr std::size_t max_csv_cell_chars = 80;
+/// Messages quote at most this many characters of a cell or flag value.
+inline constexpr std::size_t max_quoted_chars = 80;
+/// `text` for a message: control bytes escaped, cut to `max_quoted_chars` characters ("..." marks a cut).
+std::string quote_cell(const std::string& text);
+/// Checks a CSV input before a reader loads it: no NUL byte, a header whose column names are
+/// unique, no cell longer than max_csv_cell_chars, and at most `max_rows` data rows (0 = no limit:
+/// only the header is checked). Throws InputError naming `what` (the flag or argument), the file,
+/// the line and the fix.
+void check_csv_file(const std::string& path, const std::string& what, std::size_t max_rows = max_csv_rows);
+
 /// Creates a folder and its parents if missing; InputError if that fails.
 void make_directories(const std::string& path);
 
