@@ -139,7 +139,8 @@ def test_to_dict_is_the_command_line_json(tmp_path):
     scene["membrane"]["thickness_m"] = 50e-6  # membrane-dominated: non-zero charges and estimates
     path = tmp_path / "scene.json"
     path.write_text(json.dumps(scene))
-    py = pvdfkit.solve(scene, samples=[[0.004, 0.0]], tolerance=0.02).to_dict()
+    result = pvdfkit.solve(scene, samples=[[0.004, 0.0]], tolerance=0.02)
+    py = result.to_dict()
     out = subprocess.run([cli, "solve", str(path), "--sample", "0.004,0", "--tolerance", "0.02", "--json"],
                          capture_output=True, text=True, check=True)
     cl = json.loads(out.stdout)
@@ -154,3 +155,11 @@ def test_to_dict_is_the_command_line_json(tmp_path):
         assert a["charge_C"] == pytest.approx(b["charge_C"], rel=1e-9) and abs(a["charge_C"]) > 0
         assert a["charge_error_C"] == pytest.approx(b["charge_error_C"], rel=1e-9, abs=1e-30)
     assert py["samples"][0]["w_m"] == pytest.approx(cl["samples"][0]["w_m"], rel=1e-9)
+    # result.summary names its keys as the command's JSON does (time_breakdown_s.assembly, not
+    # assembly_s); final_residual_norm is the one key the command does not print.
+    summary = result.summary
+    assert set(summary) - {"final_residual_norm"} <= set(cl), set(summary) - set(cl)
+    assert set(summary["time_breakdown_s"]) == set(cl["time_breakdown_s"]) == {"setup", "assembly", "linear_solve"}
+    assert not {"assembly_s", "linear_solve_s", "setup_s"} & set(summary)
+    for key in ("status", "model", "n_dofs", "n_cells", "newton_iterations", "refinement_cycles", "error_estimator"):
+        assert summary[key] == cl[key], key
