@@ -70,10 +70,15 @@ double number(py::handle value, const std::string& what, const std::string& unit
       zero_d = a.ndim() == 0 && numeric_kind(std::string(1, a.dtype().kind()));
     }
     if (!zero_d) {
-      throw pvdf::InputError(what + " = " + shown(value) + " (" + type_name(value) + ") must be a number" + tail);
+      throw pvdf::InputError(what + " = " + shown(value) + " (" + type_name(value) + ") must be a real number" + tail);
     }
   }
-  const double x = py::float_(py::reinterpret_borrow<py::object>(value)).cast<double>();
+  double x = 0;
+  try {
+    x = py::float_(py::reinterpret_borrow<py::object>(value)).cast<double>();
+  } catch (const py::error_already_set&) {  // OverflowError: an int beyond the double range
+    throw pvdf::InputError(what + " = " + shown(value) + " is too large to be a number" + tail);
+  }
   if (!std::isfinite(x)) throw pvdf::InputError(what + " = " + pvdf::format_g(x) + " must be a finite number" + tail);
   return x;
 }
@@ -98,8 +103,9 @@ long long integer_in(py::handle value, const std::string& what, long long lo, lo
     throw pvdf::InputError(what + " = " + shown(value) + " (" + type_name(value) + ") must be a whole number in " + rule);
   }
   const py::int_ as_int(py::reinterpret_borrow<py::object>(value));
-  const double approx = py::float_(as_int).cast<double>();  // no overflow for huge Python ints
-  if (!(approx >= double(lo) && approx <= double(hi))) {
+  // Compared in Python, so that an int beyond 64 bits is refused, not wrapped or overflowed.
+  const bool in_range = as_int.attr("__ge__")(py::int_(lo)).cast<bool>() && as_int.attr("__le__")(py::int_(hi)).cast<bool>();
+  if (!in_range) {
     throw pvdf::InputError(what + " = " + shown(value) + " must lie in " + rule);
   }
   return as_int.cast<long long>();
@@ -198,16 +204,17 @@ DoubleArray array(py::handle value, const std::string& what, const ArrayRule& ru
   DoubleArray out = DoubleArray::ensure(a);
   if (!out) throw pvdf::InputError(what + " = " + shown(value) + " cannot be converted to float64" + fix);
   if (out.size() == 0 && !rule.allow_empty) {
-    throw pvdf::InputError(what + " is empty (shape " + shape_text(out) + "); give at least one value" + fix);
+    throw pvdf::InputError(what + " is empty (shape " + shape_text(out) + ")" + (fix.empty() ? "; give at least one value" : fix));
   }
   if (rule.finite) {
     const double* p = out.data();
     for (py::ssize_t i = 0; i < out.size(); ++i) {
       if (!std::isfinite(p[i]) && !(rule.allow_nan && std::isnan(p[i]))) {
         const std::vector<py::ssize_t> shape(out.shape(), out.shape() + out.ndim());
-        throw pvdf::InputError(what + index_text(i, shape) + " = " + pvdf::format_g(p[i]) +
-                               (rule.allow_nan ? " is not finite; every value must be a finite number (or NaN where a value is missing)"
-                                                : " is not finite; every value must be a finite number") + fix);
+        const std::string rule_text = rule.allow_nan ? "; every value must be a finite number (or NaN where a value is missing)"
+                                                     : "; every value must be a finite number";
+        throw pvdf::InputError(what + index_text(i, shape) + " = " + pvdf::format_g(p[i]) + " is not finite" +
+                               (fix.empty() ? rule_text : fix));
       }
     }
   }
@@ -229,7 +236,7 @@ DoubleArray rows(py::handle value, const std::string& what, std::size_t n_column
   if (a.ndim() == 1 && a.shape(0) == n) return DoubleArray::ensure(a.reshape({py::ssize_t(1), n}));
   if (a.ndim() == 2 && a.shape(1) == n) return a;
   throw pvdf::InputError(what + " has shape " + shape_text(a) + "; expected n x " + std::to_string(n_columns) +
-                         " rows of " + columns + with_fix(rule.fix));
+                         " rows of " + columns);
 }
 
 std::vector<std::array<double, 2>> points(py::handle value, const std::string& what, const ArrayRule& rule) {

@@ -326,7 +326,7 @@ Thread-safe in C++; the GIL is released while locating.)doc")
                return names;
              }() + ")";
              const DoubleArray q_rows = arg::rows(charges_C, "Locator.locate: charges_C", ne, columns,
-                                                 {true, true, "give the measured " + columns + "; repair or drop rows that are not finite"});
+                                                 {true, true, "give measured charges in C (finite); repair or drop the row"});
              const std::size_t n = std::size_t(q_rows.shape(0));
              std::vector<double> forces;
              if (!known_force_N.is_none()) {
