@@ -45,11 +45,14 @@ std::string shown(py::handle value) {
   } catch (const py::error_already_set&) {
     text = "<" + type_name(value) + ">";
   }
-  text = pvdf::escape_control_bytes(text);
-  for (char& c : text) {
-    if (c == '\n') c = ' ';
+  // numpy's repr spans lines: one line, runs of blanks collapsed, other control bytes escaped.
+  std::string line;
+  for (const char c : text) {
+    const char d = c == '\n' || c == '\r' || c == '\t' ? ' ' : c;
+    if (!(d == ' ' && !line.empty() && line.back() == ' ')) line += d;
   }
-  return text.size() > 80 ? text.substr(0, 77) + "..." : text;
+  line = pvdf::escape_control_bytes(line);
+  return line.size() > 80 ? line.substr(0, 77) + "..." : line;
 }
 
 std::string type_name(py::handle value) {
@@ -171,7 +174,9 @@ pvdf::Scene scene(py::handle value, const std::string& what) {
     throw pvdf::InputError(what + " = " + shown(value) + " (" + type_name(value) +
                            ") must be a pvdfkit.Scene, a dict of scene keys or a scene file path");
   }
-  return py::module_::import("pvdfkit").attr("load_scene")(value).cast<pvdf::Scene>();
+  // A dict is named by the argument in the reader's messages ("solve: scene: membrane.thickness_m = ...").
+  const py::object source = py::isinstance<py::dict>(value) ? py::object(py::str(what)) : py::object(py::none());
+  return py::module_::import("pvdfkit").attr("load_scene")(value, source).cast<pvdf::Scene>();
 }
 
 std::vector<std::string> texts(py::handle value, const std::string& what) {

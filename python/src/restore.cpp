@@ -60,7 +60,8 @@ r::ScannerScene scanner_scene(py::handle value, const std::string& what) {
     throw pvdf::InputError(what + " = " + arg::shown(value) + " (" + arg::type_name(value) +
                            ") must be a pvdfkit.restore.ScannerScene, a dict of scanner-scene keys or a file path");
   }
-  return py::module_::import("pvdfkit.restore").attr("load_scanner_scene")(value).cast<r::ScannerScene>();
+  const py::object source = py::isinstance<py::dict>(value) ? py::object(py::str(what)) : py::object(py::none());
+  return py::module_::import("pvdfkit.restore").attr("load_scanner_scene")(value, source).cast<r::ScannerScene>();
 }
 
 /// Where the filter is not finite ("h[0][1][17] = nan"), or "".
