@@ -19,12 +19,12 @@ namespace pvdf::python {
 namespace {
 
 /// The rule of the scene key model.tolerance, as `pvdfkit solve/map --tolerance` apply it.
-std::optional<double> tolerance_arg(py::handle value, const std::string& what) {
+std::optional<double> tolerance_arg(py::object value, const std::string& what) {
   return arg::optional_number_in(value, what, 1e-8, 0.5, "(the rule of the scene key model.tolerance), e.g. 0.01");
 }
 
 /// Force levels (N) as `pvdfkit map --forces-N` takes them: each in (0, 1e4].
-std::vector<double> force_levels(py::handle value, const std::string& what) {
+std::vector<double> force_levels(py::object value, const std::string& what) {
   const std::vector<double> forces = arg::vector(value, what, {false, true, "give force levels in N, e.g. [0.5, 1.0, 2.0]"});
   for (std::size_t i = 0; i < forces.size(); ++i) {
     if (!(forces[i] > 0 && forces[i] <= 1e4)) {
@@ -37,7 +37,7 @@ std::vector<double> force_levels(py::handle value, const std::string& what) {
 
 /// `loads`: probe presses replacing the scene's, each checked with the rules of loads[] (as
 /// `pvdfkit solve --load` does): |force_N| <= 1e4, the footprint clear of the rim.
-std::vector<pvdf::Load> load_rows(py::handle value, const pvdf::Scene& scene) {
+std::vector<pvdf::Load> load_rows(py::object value, const pvdf::Scene& scene) {
   const DoubleArray a = arg::rows(value, "solve: loads", 3, "(x_m, y_m, force_N)",
                                   {false, true, "give one row [x_m, y_m, force_N] per press, or leave loads out for the scene's"});
   std::vector<pvdf::Load> loads;
@@ -59,8 +59,8 @@ std::vector<pvdf::Load> load_rows(py::handle value, const pvdf::Scene& scene) {
   return loads;
 }
 
-pvdf::fem::Result solve(py::handle scene_arg, py::handle loads, py::handle samples, py::handle model, py::handle tolerance,
-                        py::handle max_refinements, py::handle vtu_dir, py::handle check_arg) {
+pvdf::fem::Result solve(py::object scene_arg, py::object loads, py::object samples, py::object model, py::object tolerance,
+                        py::object max_refinements, py::object vtu_dir, py::object check_arg) {
   pvdf::Scene scene = arg::scene(scene_arg, "solve: scene");
   if (!loads.is_none()) scene.loads = load_rows(loads, scene);
   pvdf::fem::Options options = pvdf::fem::options_from_scene(scene);
@@ -95,7 +95,7 @@ pvdf::fem::Result solve(py::handle scene_arg, py::handle loads, py::handle sampl
 }
 
 /// Values of a scalar-or-1-D argument, repeated to length n (n = 0: its own length).
-std::vector<double> broadcast(py::handle a, std::size_t n, const std::string& what) {
+std::vector<double> broadcast(py::object a, std::size_t n, const std::string& what) {
   std::vector<double> v = arg::vector(a, "ProbeSweep.solve: " + what);
   if (v.size() == 1 && n > 1) v.assign(n, v[0]);
   if (n != 0 && v.size() != n) {
@@ -105,10 +105,10 @@ std::vector<double> broadcast(py::handle a, std::size_t n, const std::string& wh
   return v;
 }
 
-std::size_t length(py::handle a, const std::string& what) { return arg::vector(a, "ProbeSweep.solve: " + what).size(); }
+std::size_t length(py::object a, const std::string& what) { return arg::vector(a, "ProbeSweep.solve: " + what).size(); }
 
-SweepBatch sweep_solve(pvdf::fem::ProbeSweep& sweep, std::size_t n_electrodes, py::handle x, py::handle y, py::handle f,
-                       py::handle warm_start_arg) {
+SweepBatch sweep_solve(pvdf::fem::ProbeSweep& sweep, std::size_t n_electrodes, py::object x, py::object y, py::object f,
+                       py::object warm_start_arg) {
   const std::size_t n = std::max({length(x, "x_m"), length(y, "y_m"), length(f, "force_N")});
   const auto xs = broadcast(x, n, "x_m"), ys = broadcast(y, n, "y_m"), fs = broadcast(f, n, "force_N");
   for (std::size_t i = 0; i < n; ++i) {
@@ -184,11 +184,11 @@ py::dict report_dict(const pvdf::mapping::MapReport& r, const pvdf::mapping::Cha
 constexpr double max_map_points = 2e6;
 
 /// generate_map's options, each argument checked as `pvdfkit map` checks its flag.
-pvdf::mapping::MapOptions map_options(const pvdf::Scene& scene, py::handle spacing_m, py::handle forces_N,
-                                      py::handle region_m, py::handle rim_margin_m, py::handle model, py::handle tolerance,
-                                      py::handle n_setup_checks, py::handle threads, py::handle use_symmetry,
-                                      py::handle use_force_scaling, py::handle noise_C, py::handle description,
-                                      py::handle checkpoint_path) {
+pvdf::mapping::MapOptions map_options(const pvdf::Scene& scene, py::object spacing_m, py::object forces_N,
+                                      py::object region_m, py::object rim_margin_m, py::object model, py::object tolerance,
+                                      py::object n_setup_checks, py::object threads, py::object use_symmetry,
+                                      py::object use_force_scaling, py::object noise_C, py::object description,
+                                      py::object checkpoint_path) {
   const std::string f = "generate_map: ";
   pvdf::mapping::MapOptions o;
   o.spacing_m = arg::number_in(spacing_m, f + "spacing_m", 1e-5, 0.1, "m");
@@ -265,8 +265,8 @@ electrode charges meet ``tolerance`` anywhere on the film (checked against direc
 ``n_setup_checks`` positions, default 3 as ``pvdfkit map --setup-checks``:
 ``setup['estimated_relative_error']``); each press then costs a warm-started Newton solve. The
 scene's own loads are ignored; the probe radius is the scene's.)doc")
-      .def(py::init([](py::handle scene_arg, py::handle tolerance, py::handle model, py::handle forces_N,
-                       py::handle n_setup_checks, py::handle rim_margin_m) {
+      .def(py::init([](py::object scene_arg, py::object tolerance, py::object model, py::object forces_N,
+                       py::object n_setup_checks, py::object rim_margin_m) {
              const std::string f = "ProbeSweep: ";
              const pvdf::Scene scene = arg::scene(scene_arg, f + "scene");
              pvdf::fem::SweepOptions o;
@@ -309,7 +309,7 @@ scene's own loads are ignored; the probe radius is the scene's.)doc")
         d["setup_s"] = u.setup_s;
         return d;
       }, "what the setup chose: model, n_dofs, n_cells, estimated_relative_error (of the charges), setup_s (s)")
-      .def("solve", [](Sweep& s, py::handle x_m, py::handle y_m, py::handle force_N, py::handle warm_start) {
+      .def("solve", [](Sweep& s, py::object x_m, py::object y_m, py::object force_N, py::object warm_start) {
              return sweep_solve(*s.sweep, s.n_electrodes, x_m, y_m, force_N, warm_start);
            },
            py::arg("x_m"), py::arg("y_m"), py::arg("force_N") = 1.0, py::arg("warm_start") = true,
@@ -317,10 +317,10 @@ scene's own loads are ignored; the probe radius is the scene's.)doc")
            "each warm-started from the previous one when warm_start. A press outside the served region raises "
            "InputError; a numerical failure is a status (ok False, NaN values). Returns ProbeSolutions.");
 
-  m.def("generate_map", [](py::handle scene_arg, py::handle spacing_m, py::handle forces_N, py::handle region_m,
-                           py::handle rim_margin_m, py::handle model, py::handle tolerance, py::handle n_setup_checks,
-                           py::handle threads, py::handle use_symmetry, py::handle use_force_scaling, py::handle noise_C,
-                           py::handle description, py::handle checkpoint_path) {
+  m.def("generate_map", [](py::object scene_arg, py::object spacing_m, py::object forces_N, py::object region_m,
+                           py::object rim_margin_m, py::object model, py::object tolerance, py::object n_setup_checks,
+                           py::object threads, py::object use_symmetry, py::object use_force_scaling, py::object noise_C,
+                           py::object description, py::object checkpoint_path) {
           const pvdf::Scene scene = arg::scene(scene_arg, "generate_map: scene");
           const pvdf::mapping::MapOptions o =
               map_options(scene, spacing_m, forces_N, region_m, rim_margin_m, model, tolerance, n_setup_checks, threads,

@@ -42,7 +42,7 @@ void array_property(py::class_<ChargeMap>& c, const char* name, std::vector<doub
   const std::string what = std::string("ChargeMap.") + name;
   c.def_property(
       name, [=](const ChargeMap& m) { return read_only(m.*member, shape(m)); },
-      [=](ChargeMap& m, py::handle value) {
+      [=](ChargeMap& m, py::object value) {
         const DoubleArray a = arg::array(value, what, {false, true, fix, allow_nan});
         (m.*member).assign(a.data(), a.data() + a.size());
       },
@@ -56,7 +56,7 @@ void code_property(py::class_<ChargeMap>& c, const char* name, std::vector<std::
   const std::string what = std::string("ChargeMap.") + name;
   c.def_property(
       name, [=](const ChargeMap& m) { return read_only(m.*member, shape(m)); },
-      [=](ChargeMap& m, py::handle value) { m.*member = arg::small_integers(value, what, max_value, meaning); }, doc);
+      [=](ChargeMap& m, py::object value) { m.*member = arg::small_integers(value, what, max_value, meaning); }, doc);
 }
 
 /// A relative error attribute: None (unknown, stored as NaN as in the file format) or finite >= 0.
@@ -66,7 +66,7 @@ void error_property(py::class_<ChargeMap>& c, const char* name, double ChargeMap
       name, [=](const ChargeMap& m) -> py::object {
         return std::isnan(m.*member) ? py::object(py::none()) : py::object(py::float_(m.*member));
       },
-      [=](ChargeMap& m, py::handle value) {
+      [=](ChargeMap& m, py::object value) {
         m.*member = value.is_none() ? std::numeric_limits<double>::quiet_NaN()
                                     : arg::number_in(value, what, 0, 1e6, "(a relative error; None = unknown)");
       },
@@ -78,7 +78,7 @@ void text_property(py::class_<ChargeMap>& c, const char* name, std::string Charg
   const std::string what = std::string("ChargeMap.") + name;
   c.def_property(
       name, [=](const ChargeMap& m) { return m.*member; },
-      [=](ChargeMap& m, py::handle value) { m.*member = arg::text(value, what); }, doc);
+      [=](ChargeMap& m, py::object value) { m.*member = arg::text(value, what); }, doc);
 }
 
 /// "" or a JSON object: the scene the map was computed for. Checked where it is set and again
@@ -93,7 +93,7 @@ void check_scene_json(const std::string& text, const std::string& what) {
 }
 
 /// noise_C: one 1-sigma noise (C) for every electrode or one per electrode, each in `range`.
-std::vector<double> noise_list(py::handle value, const std::string& what, bool below_1e6) {
+std::vector<double> noise_list(py::object value, const std::string& what, bool below_1e6) {
   if (value.is_none()) return {};
   const auto v = arg::vector(value, what, {false, true, "give 1-sigma charge noise in C, one value or one per electrode"});
   for (std::size_t k = 0; k < v.size(); ++k) {
@@ -129,7 +129,7 @@ attribute; pvdfkit.write_map checks shapes and values as the C++ writer does.)do
       .def_property_readonly("n_electrodes", &ChargeMap::ne)
       .def_property(
           "scene_json", [](const ChargeMap& m) { return m.scene_json; },
-          [](ChargeMap& m, py::handle value) {
+          [](ChargeMap& m, py::object value) {
             std::string text = arg::text(value, "ChargeMap.scene_json");
             check_scene_json(text, "ChargeMap.scene_json");
             m.scene_json = std::move(text);
@@ -137,17 +137,17 @@ attribute; pvdfkit.write_map checks shapes and values as the C++ writer does.)do
           "the scene the map was computed for, as JSON text ('' = unknown)")
       .def_property(
           "tolerance", [](const ChargeMap& m) { return m.tolerance; },
-          [](ChargeMap& m, py::handle value) {
+          [](ChargeMap& m, py::object value) {
             m.tolerance = arg::number_in(value, "ChargeMap.tolerance", 0, 0.5, "(requested relative charge error; 0 = none)");
           },
           "requested relative error of the computed charges")
       .def_property(
           "rim_margin_m", [](const ChargeMap& m) { return m.rim_margin_m; },
-          [](ChargeMap& m, py::handle value) { m.rim_margin_m = arg::number_in(value, "ChargeMap.rim_margin_m", 0, 1, "m"); },
+          [](ChargeMap& m, py::object value) { m.rim_margin_m = arg::number_in(value, "ChargeMap.rim_margin_m", 0, 1, "m"); },
           "positions closer than this to the rim are masked out (m)")
       .def_property(
           "electrode_names", [](const ChargeMap& m) { return m.electrode_names; },
-          [](ChargeMap& m, py::handle value) { m.electrode_names = arg::texts(value, "ChargeMap.electrode_names"); },
+          [](ChargeMap& m, py::object value) { m.electrode_names = arg::texts(value, "ChargeMap.electrode_names"); },
           "electrode names, in the order of the charge columns")
       .def_property(
           "electrode_centers_m", [](const ChargeMap& m) {
@@ -155,7 +155,7 @@ attribute; pvdfkit.write_map checks shapes and values as the C++ writer does.)do
             out.attr("setflags")(py::arg("write") = false);
             return out;
           },
-          [](ChargeMap& m, py::handle a) {
+          [](ChargeMap& m, py::object a) {
             m.electrode_centers_m = arg::points(a, "ChargeMap.electrode_centers_m", {false, true, "give one [x_m, y_m] per electrode"});
           },
           "centroid of each electrode (m), shape (n_electrodes, 2)")
@@ -216,23 +216,23 @@ attribute; pvdfkit.write_map checks shapes and values as the C++ writer does.)do
                 "0 ok, 1 not_converged, 2 outside, 3 not_computed",
                 "point status, uint8 shape (nf, ny, nx): 0 ok, 1 not_converged, 2 outside, 3 not_computed");
 
-  m.def("read_map", [](py::handle path) { return pvdf::mapping::read_map(arg::path(path, "read_map: path")); },
+  m.def("read_map", [](py::object path) { return pvdf::mapping::read_map(arg::path(path, "read_map: path")); },
         py::arg("path"), "Reads and validates an HDF5 charge map (InputError naming the dataset at fault).");
-  m.def("write_map", [](py::handle path, py::handle map_arg) {
+  m.def("write_map", [](py::object path, py::object map_arg) {
           const std::string p = arg::output_file(path, "write_map: path");
           const ChargeMap& map = arg::object<ChargeMap>(map_arg, "write_map: map", map_expected);
           check_scene_json(map.scene_json, "write_map: map.scene_json");
           pvdf::mapping::write_map(p, map);
         },
         py::arg("path"), py::arg("map"), "Validates and writes a map atomically (HDF5).");
-  m.def("validate_map", [](py::handle map_arg, py::handle source) {
+  m.def("validate_map", [](py::object map_arg, py::object source) {
           const ChargeMap& map = arg::object<ChargeMap>(map_arg, "validate_map: map", map_expected);
           const std::string name = arg::text(source, "validate_map: source");
           check_scene_json(map.scene_json, name + ": scene_json");
           pvdf::mapping::validate(map, name);
         },
         py::arg("map"), py::arg("source") = "map", "Checks shapes, axes and values; InputError naming the dataset at fault.");
-  m.def("synthetic_map", [](py::handle scene, py::handle spacing_m, py::handle force_N, py::handle noise_C) {
+  m.def("synthetic_map", [](py::object scene, py::object spacing_m, py::object force_N, py::object noise_C) {
           const std::string f = "synthetic_map: ";
           const pvdf::Scene s = arg::scene(scene, f + "scene");
           const double spacing = arg::number_in(spacing_m, f + "spacing_m", 1e-4, 0.02, "m");
@@ -247,7 +247,7 @@ attribute; pvdfkit.write_map checks shapes and values as the C++ writer does.)do
 }
 
 /// A force argument of the lookup where 0 (or None) means "not given": else finite and in (0, 1e4] N.
-double optional_force(py::handle value, const std::string& what, const std::string& zero_means) {
+double optional_force(py::object value, const std::string& what, const std::string& zero_means) {
   if (value.is_none()) return 0.0;
   const double f = arg::number(value, what, "(N; 0 or None = " + zero_means + ")");
   if (f == 0.0) return 0.0;
@@ -269,7 +269,7 @@ void bind_locator(py::module_& m) {
   flags["not_converged"] = pvdf::mapping::flag::not_converged;
   flags["ill_conditioned"] = pvdf::mapping::flag::ill_conditioned;
   m.attr("FLAGS") = flags;
-  m.def("flags_text", [](py::handle flags_arg) {
+  m.def("flags_text", [](py::object flags_arg) {
           return pvdf::mapping::flags_text(std::uint32_t(arg::integer_in(flags_arg, "flags_text: flags", 0, 0xffffffffLL)));
         },
         py::arg("flags"), "'ok' or the set flag names joined by '|'.");
@@ -281,9 +281,9 @@ Built once from a ChargeMap (coarse table + smooth interpolant), then ``locate``
 values and flags). Every option is checked when the Locator is made, and every charge when it is
 located (a NaN or inf charge is refused naming its row and column, never turned into a flag).
 Thread-safe in C++; the GIL is released while locating.)doc")
-      .def(py::init([](py::handle map_arg, py::handle noise_C, py::handle use_calibration, py::handle known_force_N,
-                       py::handle min_force_N, py::handle max_force_N, py::handle chi2_limit, py::handle max_starts,
-                       py::handle max_iterations, py::handle no_press_snr) {
+      .def(py::init([](py::object map_arg, py::object noise_C, py::object use_calibration, py::object known_force_N,
+                       py::object min_force_N, py::object max_force_N, py::object chi2_limit, py::object max_starts,
+                       py::object max_iterations, py::object no_press_snr) {
              const std::string f = "Locator: ";
              const ChargeMap& map = arg::object<ChargeMap>(map_arg, f + "map", map_expected);
              pvdf::mapping::LocatorOptions o;
@@ -318,7 +318,7 @@ Thread-safe in C++; the GIL is released while locating.)doc")
            "fit (x, y) only at this force (N, in (0, 1e4]; None or 0 = unknown); min/max_force_N: plausible force range "
            "(N; None or 0 = from the map's levels); chi2_limit: >= 0, 0 = automatic; max_starts: 1..8; max_iterations: "
            "1..10000; no_press_snr: >= 0 (0 = never no_press).")
-      .def("locate", [](const Locator& loc, py::handle charges_C, py::handle known_force_N) {
+      .def("locate", [](const Locator& loc, py::object charges_C, py::object known_force_N) {
              const std::size_t ne = loc.n_electrodes();
              const std::string columns = "charges in C, one column per electrode (" + [&] {
                std::string names;
@@ -357,7 +357,7 @@ Thread-safe in C++; the GIL is released while locating.)doc")
            "Locates N presses: charges_C (C, finite) of shape (N, n_electrodes) (or (n_electrodes,) for one; (0, "
            "n_electrodes) gives an empty result); known_force_N (N): None (unknown), one value or one per row, each in "
            "(0, 1e4]. Returns Locations.")
-      .def("predict", [](const Locator& loc, py::handle x_m, py::handle y_m, py::handle force_N) {
+      .def("predict", [](const Locator& loc, py::object x_m, py::object y_m, py::object force_N) {
              const auto xs = arg::vector(x_m, "Locator.predict: x_m", {false, true, "give positions in m"});
              const auto ys = arg::vector(y_m, "Locator.predict: y_m", {false, true, "give positions in m"});
              auto fs = arg::vector(force_N, "Locator.predict: force_N", {false, true, "give forces in N"});
@@ -394,9 +394,9 @@ Thread-safe in C++; the GIL is released while locating.)doc")
 }
 
 void bind_design_and_measurements(py::module_& m) {
-  m.def("design", [](py::handle map_arg, py::handle force_N, py::handle min_force_N, py::handle max_force_N,
-                     py::handle noise_C, py::handle target_m, py::handle force_known, py::handle adc_bits,
-                     py::handle full_scale_C, py::handle check_ambiguity) {
+  m.def("design", [](py::object map_arg, py::object force_N, py::object min_force_N, py::object max_force_N,
+                     py::object noise_C, py::object target_m, py::object force_known, py::object adc_bits,
+                     py::object full_scale_C, py::object check_ambiguity) {
           const std::string f = "design: ";
           const ChargeMap& map = arg::object<ChargeMap>(map_arg, f + "map", map_expected);
           pvdf::mapping::DesignOptions o;
@@ -427,7 +427,7 @@ Cramer-Rao position and force bounds, ambiguity, dead zones and the ADC, at pres
 (m, in (0, 1]); noise_C (C, each in (0, 1e-6)): one value or one per electrode (default: the map's);
 adc_bits: 0 (ideal) or 2..32; full_scale_C: 0 (automatic) or up to 1e-3 C. Returns DesignSummary.)doc");
 
-  m.def("read_measurements", [](py::handle path_arg, py::handle names_arg) {
+  m.def("read_measurements", [](py::object path_arg, py::object names_arg) {
           const std::string path = arg::path(path_arg, "read_measurements: path");
           const std::vector<std::string> electrode_names = arg::texts(names_arg, "read_measurements: electrode_names");
           if (electrode_names.empty()) {

@@ -53,7 +53,7 @@ void check_uniform(const std::vector<double>& x, const std::string& what) {
 }
 
 /// A scanner scene: a ScannerScene, or a dict or file path read by restore.load_scanner_scene.
-r::ScannerScene scanner_scene(py::handle value, const std::string& what) {
+r::ScannerScene scanner_scene(py::object value, const std::string& what) {
   if (py::isinstance<r::ScannerScene>(value)) return value.cast<r::ScannerScene>();
   const bool path_like = py::isinstance<py::str>(value) || py::hasattr(value, "__fspath__");
   if (!py::isinstance<py::dict>(value) && !path_like) {
@@ -103,7 +103,7 @@ when known, the reference surface forces per sample fx_N and fz_N (N; empty arra
 
 Made from arrays, a scan is checked as ``pvdfkit restore`` checks a scan CSV: at least 16 samples,
 every value finite, x_m increasing in uniform steps (within 1 %). Its arrays read as read-only copies.)doc")
-      .def(py::init([](py::handle x_m, py::handle m1_V, py::handle m2_V, py::handle fx_N, py::handle fz_N) {
+      .def(py::init([](py::object x_m, py::object m1_V, py::object m2_V, py::object fx_N, py::object fz_N) {
              r::Scan s;
              s.x_m = arg::vector(x_m, "Scan: x_m", {false, true, "give scanner positions in m, increasing uniformly"});
              s.m1_V = arg::vector(m1_V, "Scan: m1_V", {false, true, "give strip 1's signal in V, one per position"});
@@ -131,7 +131,7 @@ every value finite, x_m increasing in uniform steps (within 1 %). Its arrays rea
       .def_property_readonly("sample_spacing_m", &r::Scan::sample_spacing_m)
       .def_readonly("source", &r::Scan::source)
       .def("__len__", &r::Scan::size);
-  m.def("simulate", [](py::handle scene, py::handle noise, py::handle adc, py::handle moving_average) {
+  m.def("simulate", [](py::object scene, py::object noise, py::object adc, py::object moving_average) {
           const r::ScannerScene s = scanner_scene(scene, "simulate: scene");
           r::SimulateOptions o;
           o.noise = arg::flag(noise, "simulate: noise");
@@ -141,7 +141,7 @@ every value finite, x_m increasing in uniform steps (within 1 %). Its arrays rea
         },
         py::arg("scene"), py::arg("noise") = true, py::arg("adc") = true, py::arg("moving_average") = true,
         "Simulates the two strip signals of a scan of the scene's surface (closed-form stress-rate responses, noise, ADC, moving average).");
-  m.def("read_scan", [](py::handle path, py::handle speed_m_per_s) {
+  m.def("read_scan", [](py::object path, py::object speed_m_per_s) {
           const std::string p = arg::path(path, "read_scan: path");
           const double speed = arg::number_in(speed_m_per_s, "read_scan: speed_m_per_s", 0, 100,
                                               "m/s (0 = the file has x_m; seed 000 scanned at 0.01-0.1 m/s)");
@@ -149,7 +149,7 @@ every value finite, x_m increasing in uniform steps (within 1 %). Its arrays rea
         },
         py::arg("path"), py::arg("speed_m_per_s") = 0.0,
         "Reads a scan CSV `x_m,m1_V,m2_V[,fx_ref_N,fz_ref_N]` (or `t_s,...` with speed_m_per_s in m/s).");
-  m.def("write_scan", [](py::handle path, py::handle scan, py::handle comment) {
+  m.def("write_scan", [](py::object path, py::object scan, py::object comment) {
           const std::string p = arg::output_file(path, "write_scan: path");
           const r::Scan& s = arg::object<r::Scan>(scan, "write_scan: scan", scan_expected);
           r::write_scan_csv(p, s, arg::text(comment, "write_scan: comment"));
@@ -169,9 +169,9 @@ r::BetaPolicy parse_policy(const std::string& policy) {
                          " must be constant, frequency, gcv, discrepancy, lcurve, morozov or predicted");
 }
 
-r::InverseFilter identify(py::handle scans, py::handle beta, py::handle beta_policy_arg, py::handle taps_arg,
-                          py::handle delay_arg, py::handle g_window_arg, py::handle resolution_m, py::handle low_cut_wavelength_m,
-                          py::handle corner_wavelength_m, py::handle window, py::handle regularization_arg) {
+r::InverseFilter identify(py::object scans, py::object beta, py::object beta_policy_arg, py::object taps_arg,
+                          py::object delay_arg, py::object g_window_arg, py::object resolution_m, py::object low_cut_wavelength_m,
+                          py::object corner_wavelength_m, py::object window, py::object regularization_arg) {
   const std::string f = "identify: ";
   r::DesignOptions d;
   const std::string regularization = arg::text(regularization_arg, f + "regularization");
@@ -306,9 +306,9 @@ relative regularization in (0, 1e6) (seed 000: 1e-4), or 'predicted', 'gcv', 'lc
 resolution_m: target Gaussian FWHM (m, 0 = none); low_cut_wavelength_m: damp longer wavelengths (m).
 regularization: 'isotropic' (default, as the command: f_x and f_z blurred alike, mu unbiased) or
 'tikhonov' (seed 000 eq. 4). A filter that comes out not finite raises NumericalError.)doc");
-  m.def("load_filter", [](py::handle path) { return r::load_filter(arg::path(path, "load_filter: path")); },
+  m.def("load_filter", [](py::object path) { return r::load_filter(arg::path(path, "load_filter: path")); },
         py::arg("path"), "Reads a filter JSON written by save_filter or `pvdfkit restore identify`.");
-  m.def("save_filter", [](py::handle path, py::handle filter_arg) {
+  m.def("save_filter", [](py::object path, py::object filter_arg) {
           const std::string p = arg::output_file(path, "save_filter: path");
           const r::InverseFilter& filter = arg::object<r::InverseFilter>(filter_arg, "save_filter: filter", filter_expected);
           const std::string bad = non_finite_part(filter);
@@ -316,7 +316,7 @@ regularization: 'isotropic' (default, as the command: f_x and f_z blurred alike,
           r::save_filter(p, filter);
         },
         py::arg("path"), py::arg("filter"), "Writes a filter as JSON, atomically (a filter that is not finite is refused).");
-  m.def("apply", [](py::handle filter_arg, py::handle scan_arg, py::handle mu_threshold_arg, py::handle block_arg) {
+  m.def("apply", [](py::object filter_arg, py::object scan_arg, py::object mu_threshold_arg, py::object block_arg) {
           const r::InverseFilter& filter = arg::object<r::InverseFilter>(filter_arg, "apply: filter", filter_expected);
           const r::Scan& scan = arg::object<r::Scan>(scan_arg, "apply: scan", scan_expected);
           const double mu_threshold_N = arg::number(mu_threshold_arg, "apply: mu_threshold_N",

@@ -71,7 +71,7 @@ dict from ``to_dict()`` and load it again.)doc")
       .def_property_readonly("probe_radius_m", [](const Scene& s) { return s.probe.radius_m; })
       .def_property_readonly("draw_angle_rad", [](const Scene& s) { return s.material.draw_angle_rad; })
       .def("_json_text", [](const Scene& s) { return pvdf::scene_to_json(s).dump(); })
-      .def("with_probe_load", [](const Scene& s, py::handle x_m, py::handle y_m, py::handle force_N) {
+      .def("with_probe_load", [](const Scene& s, py::object x_m, py::object y_m, py::object force_N) {
              // The rules of the scene's loads[] (as `pvdfkit solve --load` applies them).
              const std::string f = "Scene.with_probe_load: ";
              const double x = arg::number(x_m, f + "x_m", "(m)");

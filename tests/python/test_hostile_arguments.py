@@ -144,3 +144,28 @@ def test_every_argument_refuses_hostile_values(label, fx):
     print(f"{label}: {n_refused} refused, {n_accepted} accepted")
     assert not problems, f"{label}: {len(problems)} problems:\n" + "\n".join(problems)
     assert n_refused > 0
+
+
+CHARGE_MAP_FIELDS = ["scene_json", "model", "description", "tolerance", "rim_margin_m", "estimated_relative_error",
+                     "estimated_deflection_relative_error", "electrode_names", "electrode_centers_m", "x_m", "y_m",
+                     "forces_N", "noise_C", "mask", "charge_C", "deflection_at_load_m", "status"]
+
+
+@pytest.mark.parametrize("field", CHARGE_MAP_FIELDS)
+def test_every_charge_map_field_refuses_hostile_values(field):
+    """Each assignment is kept or refused naming ChargeMap.<field>; a refused one leaves the field as it was."""
+    m = analytic_map(spacing=0.004)
+    problems = []
+    for value_name, value in HOSTILE.items():
+        before = repr(getattr(m, field))
+        try:
+            setattr(m, field, value)
+        except pvdfkit.InputError as e:
+            if f"ChargeMap.{field}" not in str(e) or "\n" in str(e):
+                problems.append(f"{value_name}: {str(e)!r}")
+            if repr(getattr(m, field)) != before:
+                problems.append(f"{value_name}: refused but the field changed")
+        except Exception as e:  # noqa: BLE001
+            problems.append(f"{value_name}: {type(e).__name__}: {str(e)[:200]}")
+        m = analytic_map(spacing=0.004)
+    assert not problems, f"ChargeMap.{field}:\n" + "\n".join(problems)
