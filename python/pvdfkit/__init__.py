@@ -297,6 +297,21 @@ def _check_calls(namespace, module_label, native_module):
                 setattr(value, attr, _checked_native(member.__func__, label, True))
 
 
+def _made_elsewhere(cls, how):
+    """Result classes have no constructor: calling one raises InputError saying where they come from
+    (instead of pybind11's TypeError "No constructor defined!")."""
+    def __init__(self, *args, **kwargs):
+        raise InputError(f"{cls.__name__} cannot be made directly; it comes from {how}")
+    __init__.__doc__ = f"Not callable: a {cls.__name__} comes from {how}."
+    cls.__init__ = __init__
+
+
+_made_elsewhere(Scene, "pvdfkit.load_scene(path or dict) or pvdfkit.default_scene()")
+_made_elsewhere(Locations, "Locator.locate(charges_C)")
+_made_elsewhere(DesignSummary, "pvdfkit.design(map)")
+if has_fem:
+    _made_elsewhere(SolveResult, "pvdfkit.solve(scene)")
+    _made_elsewhere(ProbeSolutions, "ProbeSweep.solve(x_m, y_m, force_N)")
 _check_calls(globals(), "", _pvdfkit)
 if has_fem:
     _pvdfkit._solve = _checked_native(_pvdfkit._solve, "solve", False)

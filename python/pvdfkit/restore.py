@@ -51,7 +51,10 @@ def load_scanner_scene(scene, source=None):
 
 
 def _check_restore_calls():
-    from . import _check_calls, _checked_python
+    from . import _check_calls, _checked_python, _made_elsewhere
+    _made_elsewhere(InverseFilter, "restore.identify(scans) or restore.load_filter(path)")
+    _made_elsewhere(ScannerScene, "restore.load_scanner_scene(path or dict) or restore.default_scanner_scene()")
+    _made_elsewhere(RestoredForces, "restore.apply(filter, scan)")
     _check_calls(globals(), "restore.", _r)
     globals()["load_scanner_scene"] = _checked_python(load_scanner_scene, "restore.load_scanner_scene")
 

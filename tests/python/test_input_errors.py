@@ -315,6 +315,17 @@ def test_fem_arguments_refused_before_any_work(case, call, texts, ctx):
     refused(call, ctx, texts)
 
 
+@pytest.mark.parametrize("name", ["Scene", "Locations", "DesignSummary", "restore.InverseFilter", "restore.ScannerScene",
+                                  "restore.RestoredForces"] + (["SolveResult", "ProbeSolutions"] if pvdfkit.has_fem else []))
+def test_result_classes_say_where_they_come_from(name):
+    """Classes without a constructor: InputError saying which function makes them (not "No constructor defined!")."""
+    cls = pvdfkit
+    for part in name.split("."):
+        cls = getattr(cls, part)
+    with pytest.raises(pvdfkit.InputError, match=cls.__name__ + " cannot be made directly; it comes from "):
+        cls()
+
+
 def test_charge_map_arrays_are_read_only_copies():
     """An in-place edit raises instead of being discarded silently; a whole assignment is kept."""
     m = analytic_map(spacing=0.004)
