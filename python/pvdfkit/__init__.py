@@ -151,7 +151,7 @@ def grid_points(x_m, y_m):
 
 def _shown(value):
     """repr(value) for messages, at most 80 characters."""
-    text = repr(value).replace("\n", " ")
+    text = " ".join(repr(value).split())  # numpy's repr spans lines
     return text if len(text) <= 80 else text[:77] + "..."
 
 

@@ -122,7 +122,6 @@ assignment is checked (numeric dtype, finite values; NaN allowed in charge_C and
 deflection_at_load_m, where points that did not converge hold it) and raises InputError naming the
 attribute; pvdfkit.write_map checks shapes and values as the C++ writer does.)doc");
   c.def(py::init<>(), "An empty map: set the axes, electrodes and results, then write_map.")
-      .def_readonly("pvdfkit_version", &ChargeMap::pvdfkit_version)
       .def_property_readonly("nx", &ChargeMap::nx)
       .def_property_readonly("ny", &ChargeMap::ny)
       .def_property_readonly("nf", &ChargeMap::nf)
@@ -172,6 +171,7 @@ attribute; pvdfkit.write_map checks shapes and values as the C++ writer does.)do
         return "<ChargeMap " + std::to_string(m.nx()) + " x " + std::to_string(m.ny()) + " positions, " +
                std::to_string(m.nf()) + " force levels, " + std::to_string(m.ne()) + " electrodes, model " + m.model + ">";
       });
+  text_property(c, "pvdfkit_version", &ChargeMap::pvdfkit_version, "version of pvdfkit that wrote the map");
   text_property(c, "model", &ChargeMap::model, "kinematics/model used ('von-karman', 'synthetic-analytic', ...)");
   text_property(c, "description", &ChargeMap::description, "free text");
   error_property(c, "estimated_relative_error", &ChargeMap::estimated_relative_error,

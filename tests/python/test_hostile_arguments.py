@@ -146,7 +146,7 @@ def test_every_argument_refuses_hostile_values(label, fx):
     assert n_refused > 0
 
 
-CHARGE_MAP_FIELDS = ["scene_json", "model", "description", "tolerance", "rim_margin_m", "estimated_relative_error",
+CHARGE_MAP_FIELDS = ["scene_json", "pvdfkit_version", "model", "description", "tolerance", "rim_margin_m", "estimated_relative_error",
                      "estimated_deflection_relative_error", "electrode_names", "electrode_centers_m", "x_m", "y_m",
                      "forces_N", "noise_C", "mask", "charge_C", "deflection_at_load_m", "status"]
 
