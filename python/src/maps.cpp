@@ -286,6 +286,9 @@ Thread-safe in C++; the GIL is released while locating.)doc")
                        py::object max_iterations, py::object no_press_snr) {
              const std::string f = "Locator: ";
              const ChargeMap& map = arg::object<ChargeMap>(map_arg, f + "map", map_expected);
+             // A map assembled in Python may be inconsistent (sizes, axes): checked as the reader checks a
+             // file, before the Locator indexes into it.
+             pvdf::mapping::validate(map, f + "map");
              pvdf::mapping::LocatorOptions o;
              o.noise_C = noise_list(noise_C, f + "noise_C", false);
              if (!o.noise_C.empty() && o.noise_C.size() != 1 && o.noise_C.size() != map.ne()) {
@@ -399,6 +402,7 @@ void bind_design_and_measurements(py::module_& m) {
                      py::object full_scale_C, py::object check_ambiguity) {
           const std::string f = "design: ";
           const ChargeMap& map = arg::object<ChargeMap>(map_arg, f + "map", map_expected);
+          pvdf::mapping::validate(map, f + "map");  // as Locator: a map assembled in Python may be inconsistent
           pvdf::mapping::DesignOptions o;
           // The rules of `pvdfkit design`'s flags (app/src/cmd_design.cpp).
           o.force_N = arg::number_in(force_N, f + "force_N", 0, 1e4, "N (the rule of loads[].force_N, pushing)", true);

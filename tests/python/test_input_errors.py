@@ -61,11 +61,21 @@ def a_file(tmp_path):
     return str(path)
 
 
+def inconsistent_map():
+    """A map whose charge array does not match its axes (assembled in Python, never validated)."""
+    m = analytic_map(spacing=0.004)
+    m.charge_C = np.zeros(7)
+    return m
+
+
 Q_ROW = analytic_charge_C(0.001, 0.002, 1.0)[None, :]  # one press: (1, 3) C
 
 # (id, call(ctx) -> None, texts the message must contain). ctx holds the fixtures.
 MAP_CASES = [
     ("locator-map-type", lambda c: pvdfkit.Locator("map.h5"), ["Locator: map = 'map.h5' (str)", "ChargeMap"]),
+    ("locator-map-inconsistent", lambda c: pvdfkit.Locator(inconsistent_map()), ["Locator: map: /charge_C has 7 values"]),
+    ("locator-map-empty", lambda c: pvdfkit.Locator(pvdfkit.ChargeMap()), ["Locator: map: /grid/x_m"]),
+    ("design-map-inconsistent", lambda c: pvdfkit.design(inconsistent_map()), ["design: map: /charge_C has 7 values"]),
     ("locator-min-force-nan", lambda c: pvdfkit.Locator(c.amap, min_force_N=NAN), ["Locator: min_force_N = nan", "finite"]),
     ("locator-min-force-negative", lambda c: pvdfkit.Locator(c.amap, min_force_N=-1.0), ["Locator: min_force_N = -1", "(0, 1e4]"]),
     ("locator-max-force-inf", lambda c: pvdfkit.Locator(c.amap, max_force_N=INF), ["Locator: max_force_N = inf"]),
