@@ -143,7 +143,7 @@ every value finite, x_m increasing in uniform steps (within 1 %). Its arrays rea
         "Simulates the two strip signals of a scan of the scene's surface (closed-form stress-rate responses, noise, ADC, moving average).");
   m.def("read_scan", [](py::object path, py::object speed_m_per_s) {
           const std::string p = arg::path(path, "read_scan: path");
-          const double speed = arg::number_in(speed_m_per_s, "read_scan: speed_m_per_s", 0, 100,
+          const double speed = arg::number_in(speed_m_per_s, "read_scan: speed_m_per_s", 0, 10,
                                               "m/s (0 = the file has x_m; seed 000 scanned at 0.01-0.1 m/s)");
           return r::read_scan_csv(p, speed);
         },
@@ -169,6 +169,15 @@ r::BetaPolicy parse_policy(const std::string& policy) {
                          " must be constant, frequency, gcv, discrepancy, lcurve, morozov or predicted");
 }
 
+/// 'auto' (-1: the design picks it from G, as the command's default) or a length in [0, hi] m.
+double auto_or_length(py::object value, const std::string& what, double hi, const std::string& meaning) {
+  if (py::isinstance<py::str>(value)) {
+    if (value.cast<std::string>() == "auto") return -1;
+    throw pvdf::InputError(what + " = " + arg::shown(value) + " must be 'auto' or a length in m; " + meaning);
+  }
+  return arg::number_in(value, what, 0, hi, "m; " + meaning);
+}
+
 r::InverseFilter identify(py::object scans, py::object beta, py::object beta_policy_arg, py::object taps_arg,
                           py::object delay_arg, py::object g_window_arg, py::object resolution_m, py::object low_cut_wavelength_m,
                           py::object corner_wavelength_m, py::object window, py::object regularization_arg) {
@@ -180,14 +189,20 @@ r::InverseFilter identify(py::object scans, py::object beta, py::object beta_pol
   }
   d.isotropic = regularization == "isotropic";
   if (!d.isotropic) d.predicted_beta_scale = 0.25;
-  d.taps = std::size_t(arg::integer_in(taps_arg, f + "taps", 64, 4194304, "(even; the FIR length)"));
-  if (d.taps % 2 != 0) throw pvdf::InputError(f + "taps = " + std::to_string(d.taps) + " must be even, e.g. 8192");
+  // The rules and defaults of `pvdfkit restore identify` (app/src/cmd_restore.cpp).
+  d.taps = std::size_t(arg::integer_in(taps_arg, f + "taps", 64, 4194304, "(the FIR length, even, e.g. 8192)"));
+  if (d.taps % 2 != 0) throw pvdf::InputError(f + "taps = " + std::to_string(d.taps) + " must be even; give an even FIR length such as 8192");
   const long long delay = arg::integer_in(delay_arg, f + "delay_samples", -1, (long long)d.taps - 1, "(-1 = taps / 2)");
   d.delay_samples = long(delay);
-  d.g_window = std::size_t(arg::integer_in(g_window_arg, f + "g_window", 0, 4194304, "(0 = taps)"));
-  d.resolution_m = arg::number_in(resolution_m, f + "resolution_m", 0, 1, "m (a Gaussian FWHM; 0 = none)");
-  d.low_cut_wavelength_m = arg::number_in(low_cut_wavelength_m, f + "low_cut_wavelength_m", 0, 100, "m (0 = none)");
-  d.corner_wavelength_m = arg::number_in(corner_wavelength_m, f + "corner_wavelength_m", 0, 100, "m (0 = none)");
+  d.g_window = std::size_t(arg::integer_in(g_window_arg, f + "g_window", 0, 4194304, "(0 = taps; else even and >= 64)"));
+  if (d.g_window != 0 && (d.g_window < 64 || d.g_window % 2 != 0)) {
+    throw pvdf::InputError(f + "g_window = " + std::to_string(d.g_window) + " must be 0 (= taps) or even and >= 64; give an even "
+                           "number of lags or omit it");
+  }
+  d.resolution_m = auto_or_length(resolution_m, f + "resolution_m", 1, "0 = no target (seed 000), 'auto' = 1.5 x the strips' effective depth");
+  d.low_cut_wavelength_m = auto_or_length(low_cut_wavelength_m, f + "low_cut_wavelength_m", 100,
+                                          "0 = off (seed 000), 'auto' = 10 x the strips' effective depth");
+  d.corner_wavelength_m = arg::number_in(corner_wavelength_m, f + "corner_wavelength_m", 0, 1, "m (a wavelength; 0 = none)");
   d.window = arg::text(window, f + "window");
   std::string policy = arg::text(beta_policy_arg, f + "beta_policy");
   if (py::isinstance<py::str>(beta)) {
@@ -205,8 +220,7 @@ r::InverseFilter identify(py::object scans, py::object beta, py::object beta_pol
     if (!policy.empty() && policy != chosen) throw pvdf::InputError(f + "beta " + text + " contradicts beta_policy " + policy);
     policy = chosen;
   } else {
-    d.beta = arg::number_in(beta, f + "beta", 0, 1e6, "(relative, seed 000 used 1e-4), or 'auto'", true);
-    if (d.beta == 1e6) throw pvdf::InputError(f + "beta = 1e+06 must be < 1e6 (relative, seed 000 used 1e-4), or 'auto'");
+    d.beta = arg::number_in(beta, f + "beta", 1e-15, 1e6, "(relative, seed 000 used 1e-4), or 'auto'");
     if (policy.empty()) policy = d.corner_wavelength_m > 0 ? "frequency" : "constant";
   }
   d.beta_policy = parse_policy(policy);
@@ -225,9 +239,9 @@ r::InverseFilter identify(py::object scans, py::object beta, py::object beta_pol
     const py::sequence t = py::reinterpret_borrow<py::sequence>(item);
     r::IdentificationScan s;
     s.scan = arg::object<r::Scan>(t[0], at + "[0]", scan_expected);
-    s.fx_N = arg::number_in(t[1], at + "[1] (fx_N)", -1e4, 1e4, "N (the edge's shear force)");
-    s.fz_N = arg::number_in(t[2], at + "[2] (fz_N)", -1e4, 1e4, "N (the edge's normal force)");
-    s.edge_x_m = arg::number(t[3], at + "[3] (edge_x_m)", "(m, the edge's position on the scan)");
+    s.fx_N = arg::number_in(t[1], at + "[1] (fx_N)", -1e6, 1e6, "N (the edge's shear force)");
+    s.fz_N = arg::number_in(t[2], at + "[2] (fz_N)", -1e6, 1e6, "N (the edge's normal force)");
+    s.edge_x_m = arg::number_in(t[3], at + "[3] (edge_x_m)", -10, 10, "m (the edge's position on the scan's x_m axis)");
     id.push_back(std::move(s));
   }
   r::InverseFilter filter;
@@ -294,16 +308,19 @@ sample, with the modelling delay ``delay_samples``; g: the identified transfer m
       .def_property_readonly("warnings", [](const r::InverseFilter& f) { return f.transfer.warnings; });
   m.def("identify", &identify, py::arg("scans"), py::arg("beta") = "auto", py::arg("beta_policy") = "",
         py::arg("taps") = 8192, py::arg("delay_samples") = -1, py::arg("g_window") = 0,
-        py::arg("resolution_m") = 0.0, py::arg("low_cut_wavelength_m") = 0.0, py::arg("corner_wavelength_m") = 0.0,
+        py::arg("resolution_m") = "auto", py::arg("low_cut_wavelength_m") = "auto", py::arg("corner_wavelength_m") = 0.0,
         py::arg("window") = "tukey", py::arg("regularization") = "isotropic",
         R"doc(Identifies the 2x2 transfer matrix G from >= 2 scans of known forces (seed 000 eq. 6) and designs the
 regularized inverse filters (eq. 4), as ``pvdfkit restore identify`` does.
 
 scans: list of (Scan, fx_N, fz_N, edge_x_m): the forces (N) of a raised edge at world position
 edge_x_m (m). beta: 'auto' (default, as the command: the beta minimizing the predicted mu error), a
-relative regularization in (0, 1e6) (seed 000: 1e-4), or 'predicted', 'gcv', 'lcurve', 'morozov',
-'noise-floor'. taps: even, in [64, 4194304]; delay_samples: -1 (= taps / 2) or 0..taps-1.
-resolution_m: target Gaussian FWHM (m, 0 = none); low_cut_wavelength_m: damp longer wavelengths (m).
+relative regularization in [1e-15, 1e6] (seed 000: 1e-4), or 'predicted', 'gcv', 'lcurve', 'morozov',
+'noise-floor'. taps: even, in [64, 4194304]; delay_samples: -1 (= taps / 2) or 0..taps-1; g_window:
+0 (= taps) or even >= 64. resolution_m: target Gaussian FWHM (m, in [0, 1]; 0 = none as seed 000;
+default 'auto' as the command: 1.5 x the strips' effective depth); low_cut_wavelength_m: damp longer
+wavelengths (m, in [0, 100]; 0 = off; default 'auto': 10 x the effective depth). Forces in
+[-1e6, 1e6] N, edge positions in [-10, 10] m.
 regularization: 'isotropic' (default, as the command: f_x and f_z blurred alike, mu unbiased) or
 'tikhonov' (seed 000 eq. 4). A filter that comes out not finite raises NumericalError.)doc");
   m.def("load_filter", [](py::object path) { return r::load_filter(arg::path(path, "load_filter: path")); },
