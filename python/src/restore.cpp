@@ -338,6 +338,10 @@ regularization: 'isotropic' (default, as the command: f_x and f_z blurred alike,
           const r::Scan& scan = arg::object<r::Scan>(scan_arg, "apply: scan", scan_expected);
           const double mu_threshold_N = arg::number(mu_threshold_arg, "apply: mu_threshold_N",
                                                     "(N per sample; < 0 = 30 % of the largest restored f_z)");
+          if (mu_threshold_N > 1e6) {  // the rule of `pvdfkit restore apply --mu-threshold-N`
+            throw pvdf::InputError("apply: mu_threshold_N = " + pvdf::format_g(mu_threshold_N) +
+                                   " must lie in [0, 1e6] N per sample, or be < 0 for 30 % of the largest restored f_z");
+          }
           const std::size_t block_samples =
               std::size_t(arg::integer_in(block_arg, "apply: block_samples", 0, 16777216, "(0 = offline; else the streaming block)"));
           py::gil_scoped_release release;

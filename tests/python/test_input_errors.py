@@ -203,6 +203,7 @@ RESTORE_CASES = [
     ("apply-scan-type", lambda c: restore.apply(c.filt, "scan.csv"), ["apply: scan = 'scan.csv' (str)"]),
     ("apply-filter-type", lambda c: restore.apply(None, c.scan), ["apply: filter = None"]),
     ("apply-threshold-nan", lambda c: restore.apply(c.filt, c.scan, mu_threshold_N=NAN), ["apply: mu_threshold_N = nan"]),
+    ("apply-threshold-huge", lambda c: restore.apply(c.filt, c.scan, mu_threshold_N=1e7), ["apply: mu_threshold_N = 1e+07", "[0, 1e6]"]),
     ("apply-block-negative", lambda c: restore.apply(c.filt, c.scan, block_samples=-1), ["apply: block_samples = -1"]),
     ("save-filter-type", lambda c: restore.save_filter(str(c.tmp / "f.json"), {"h": []}), ["save_filter: filter = {'h': []} (dict)"]),
     ("read-scan-speed-nan", lambda c: restore.read_scan(c.file, speed_m_per_s=NAN), ["read_scan: speed_m_per_s = nan"]),
