@@ -8,7 +8,8 @@ Typical use::
     f = restore.identify([(a, 0.6, 0.9, -0.0125), (b, 0.2, 1.0, -0.0125)], beta=1e-4)
     forces = restore.apply(f, restore.read_scan("surface.csv"))   # .x_m, .fx_N, .fz_N, .mu
 
-Bad input raises pvdfkit.InputError with the command line's message.
+Bad input raises pvdfkit.InputError with the command line's message; every argument is checked
+(type, finite values, shapes), and a Scan's arrays read as read-only copies.
 """
 
 import os as _os
@@ -34,12 +35,31 @@ def load_scanner_scene(scene, source=None):
     """A validated :class:`ScannerScene` from a JSON file path or a dict with the same keys."""
     if isinstance(scene, ScannerScene):
         return scene
+    from . import InputError, _json_text, _shown
+    if source is not None and not isinstance(source, str):
+        raise InputError(f"load_scanner_scene: source = {_shown(source)} ({type(source).__name__}) must be a str naming the dict")
     if isinstance(scene, dict):
-        from . import _json_text
         source = source or "scanner scene"
         return _r._parse_scanner_scene_text(_json_text(scene, source), source)
-    return _r._load_scanner_scene_file(_os.fspath(scene))
+    if isinstance(scene, (str, _os.PathLike)):
+        path = _os.fspath(scene)
+        if not isinstance(path, str) or not path:
+            raise InputError(f"load_scanner_scene: scene = {_shown(scene)} must be a non-empty file path (str or pathlib.Path)")
+        return _r._load_scanner_scene_file(path)
+    raise InputError(f"load_scanner_scene: scene = {_shown(scene)} ({type(scene).__name__}) must be a "
+                     "pvdfkit.restore.ScannerScene, a dict of scanner-scene keys or a file path")
 
+
+def _check_restore_calls():
+    from . import _check_calls, _checked_python, _made_elsewhere
+    _made_elsewhere(InverseFilter, "restore.identify(scans) or restore.load_filter(path)")
+    _made_elsewhere(ScannerScene, "restore.load_scanner_scene(path or dict) or restore.default_scanner_scene()")
+    _made_elsewhere(RestoredForces, "restore.apply(filter, scan)")
+    _check_calls(globals(), "restore.", _r)
+    globals()["load_scanner_scene"] = _checked_python(load_scanner_scene, "restore.load_scanner_scene")
+
+
+_check_restore_calls()
 
 __all__ = ["InverseFilter", "RestoredForces", "Scan", "ScannerScene", "apply", "default_scanner_scene",
            "identify", "load_filter", "load_scanner_scene", "read_scan", "save_filter", "simulate",

@@ -41,10 +41,6 @@ using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecas
 
 /// "(3, 2)": the shape of an array as numpy prints it, for messages.
 std::string shape_text(const py::array& a);
-/// The values of a 1-D array-like, `what` naming it in the InputError for another shape.
-std::vector<double> to_vector(const DoubleArray& a, const std::string& what);
-/// The rows of an n × 2 array-like (one [x, y] also accepted as 1 × 2).
-std::vector<std::array<double, 2>> to_points(const DoubleArray& a, const std::string& what);
 
 void bind_errors(py::module_& m);
 void bind_results(py::module_& m);

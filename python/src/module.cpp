@@ -13,23 +13,6 @@ std::string shape_text(const py::array& a) {
   return text + (a.ndim() == 1 ? ",)" : ")");
 }
 
-std::vector<double> to_vector(const DoubleArray& a, const std::string& what) {
-  if (a.ndim() > 1) {
-    throw InputError(what + ": expected a 1-D array, got " + std::to_string(a.ndim()) + " dimensions");
-  }
-  return std::vector<double>(a.data(), a.data() + a.size());
-}
-
-std::vector<std::array<double, 2>> to_points(const DoubleArray& a, const std::string& what) {
-  const bool one = a.ndim() == 1 && a.shape(0) == 2;
-  if (!one && !(a.ndim() == 2 && a.shape(1) == 2)) {
-    throw InputError(what + ": expected an n x 2 array of (x_m, y_m), got shape " + shape_text(a));
-  }
-  std::vector<std::array<double, 2>> out(std::size_t(a.size() / 2));
-  for (std::size_t i = 0; i < out.size(); ++i) out[i] = {a.data()[2 * i], a.data()[2 * i + 1]};
-  return out;
-}
-
 void bind_errors(py::module_& m) {
   // Bad input: the message names the input, the value, the rule and the fix (as on the command
   // line after "error: "). A ValueError, so `except ValueError` catches it too.

@@ -173,11 +173,15 @@ order; sample arrays the ``samples`` passed to solve.)doc")
         d["estimated_model_error"] = s.estimated_model_error;
         d["error_estimator"] = s.error_estimator;
         d["wall_s"] = s.wall_s;
-        d["assembly_s"] = s.assembly_s;
-        d["linear_solve_s"] = s.linear_solve_s;
-        d["setup_s"] = s.setup_s;
+        // The keys of `pvdfkit solve --json` (pvdf::fem::result_json): time_breakdown_s.assembly, not assembly_s.
+        py::dict times;
+        times["setup"] = s.setup_s;
+        times["assembly"] = s.assembly_s;
+        times["linear_solve"] = s.linear_solve_s;
+        d["time_breakdown_s"] = times;
         return d;
-      }, "status, model, n_dofs, n_cells, iterations, estimated_relative_error, timings (s): a dict")
+      }, "status, message, model, n_dofs, n_cells, iterations, estimates, wall_s and time_breakdown_s {setup, assembly, "
+         "linear_solve} (s): the solver summary with the keys of `pvdfkit solve --json`")
       .def("to_dict", [](const Result& r) {
         return py::module_::import("json").attr("loads")(pvdf::fem::result_json(r).dump());
       }, "the object `pvdfkit solve --json` prints, as a dict (without the command's mesh keys; NaN as None)")

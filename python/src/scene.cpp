@@ -1,9 +1,12 @@
 // Scenes: read with the C++ reader (same validation, same messages), inspected from Python.
+#include "arguments.hpp"
 #include "bindings.hpp"
 
 #include "pvdf/core/constants.hpp"
+#include "pvdf/core/io.hpp"
 #include "pvdf/core/json_reader.hpp"
 #include "pvdf/core/scene.hpp"
+#include "pvdf/core/scene_geometry.hpp"
 
 #include <cmath>
 
@@ -68,8 +71,21 @@ dict from ``to_dict()`` and load it again.)doc")
       .def_property_readonly("probe_radius_m", [](const Scene& s) { return s.probe.radius_m; })
       .def_property_readonly("draw_angle_rad", [](const Scene& s) { return s.material.draw_angle_rad; })
       .def("_json_text", [](const Scene& s) { return pvdf::scene_to_json(s).dump(); })
-      .def("with_probe_load", &pvdf::with_probe_load, py::arg("x_m"), py::arg("y_m"), py::arg("force_N"),
-           "The scene with its loads replaced by one probe press of force_N (N) at (x_m, y_m) (m).")
+      .def("with_probe_load", [](const Scene& s, py::object x_m, py::object y_m, py::object force_N) {
+             // The rules of the scene's loads[] (as `pvdfkit solve --load` applies them).
+             const std::string f = "Scene.with_probe_load: ";
+             const double x = arg::number(x_m, f + "x_m", "(m)");
+             const double y = arg::number(y_m, f + "y_m", "(m)");
+             const double force = arg::number_in(force_N, f + "force_N", -1e4, 1e4, "N (the rule of loads[].force_N)");
+             const std::string problem = pvdf::probe_footprint_problem(s, {x, y}, s.probe.radius_m);
+             if (!problem.empty()) {
+               throw pvdf::InputError(f + "(x_m, y_m) = (" + pvdf::format_g(x) + ", " + pvdf::format_g(y) + "): " + problem);
+             }
+             return pvdf::with_probe_load(s, x, y, force);
+           },
+           py::arg("x_m"), py::arg("y_m"), py::arg("force_N"),
+           "The scene with its loads replaced by one probe press of force_N (N, |force_N| <= 1e4) at (x_m, y_m) (m), "
+           "its footprint clear of the rim.")
       .def("__repr__", [](const Scene& s) {
         return "<Scene " + s.source + ": " + std::to_string(s.electrodes.size()) + " electrodes, " +
                std::to_string(s.loads.size()) + " loads>";

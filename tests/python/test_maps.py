@@ -127,17 +127,19 @@ def test_noise_gives_consistent_sigmas(locator):
 
 
 def test_flags_and_known_force(locator):
-    q = np.array([[0.0, 0.0, 0.0], [np.nan, 1e-11, 1e-11]])
+    q = np.array([[0.0, 0.0, 0.0], [1e-16, -1e-16, 0.0]])  # zero and far below the noise: no press
     out = locator.locate(q)
-    assert out.flags[0] & pvdfkit.FLAGS["no_press"]
+    assert out.flags[0] & pvdfkit.FLAGS["no_press"] and out.flags[1] & pvdfkit.FLAGS["no_press"]
     assert not out.has_position.any()
     assert np.isnan(out.x_m).all()
+    with pytest.raises(pvdfkit.InputError, match=r"charges_C\[0, 0\] = nan"):  # refused, not flagged (tests/python/test_input_errors.py)
+        locator.locate([[np.nan, 1e-11, 1e-11]])
     assert out.flags_text[0] == pvdfkit.flags_text(int(out.flags[0]))
     x, y = np.array([0.002, -0.004]), np.array([0.001, 0.003])
     q = analytic_charge_C(x, y, 1.3)
     known = locator.locate(q, known_force_N=1.3)
     assert np.allclose(known.x_m, x, atol=1e-4) and np.allclose(known.force_N, 1.3)
-    with pytest.raises(pvdfkit.InputError, match=r"expected \(N, 3\)"):
+    with pytest.raises(pvdfkit.InputError, match=r"expected n x 3 rows"):
         locator.locate(np.zeros((4, 2)))
     with pytest.raises(pvdfkit.InputError, match="known_force_N has 3 values for 2 rows"):
         locator.locate(q, known_force_N=[1.0, 1.0, 1.0])

@@ -92,3 +92,28 @@ def test_regularization_choice(identified):
                            regularization="tikhonov")
     assert tik.regularization == "tikhonov"
     assert 0 < iso.lobe_force_fraction < tik.lobe_force_fraction <= 1.05
+
+
+def test_identify_defaults_equal_the_command(identified, tmp_path):
+    """restore.identify with its defaults and `pvdfkit restore identify` without options make the same
+    filter (auto beta, auto resolution and low cut, 8192 taps, isotropic): one set of defaults."""
+    import os
+    import subprocess
+    cli = os.path.join(os.environ.get("PVDF_BINARY_DIR", ""), "app", "pvdfkit")
+    if not os.path.exists(cli):
+        pytest.fail("PVDF_BINARY_DIR/app/pvdfkit not found: run through ctest (tests/python/CMakeLists.txt)")
+    a, b, _ = identified
+    restore.write_scan(str(tmp_path / "a.csv"), a)
+    restore.write_scan(str(tmp_path / "b.csv"), b)
+    run = subprocess.run([cli, "restore", "identify", "--scan", str(tmp_path / "a.csv"), "--force", "0.6,0.9",
+                          "--scan", str(tmp_path / "b.csv"), "--force", "0.2,1.0", "--edge-x-m=-0.0125",
+                          "--edge-x-m=-0.0125", "-o", str(tmp_path / "f.json")], capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr
+    cl = restore.load_filter(str(tmp_path / "f.json"))
+    py = restore.identify([(restore.read_scan(str(tmp_path / "a.csv")), 0.6, 0.9, -0.0125),
+                           (restore.read_scan(str(tmp_path / "b.csv")), 0.2, 1.0, -0.0125)])
+    assert (py.taps, py.beta_policy, py.regularization, py.window) == (cl.taps, cl.beta_policy, cl.regularization, cl.window)
+    assert py.resolution_m == pytest.approx(cl.resolution_m, rel=1e-9) and py.resolution_m > 0  # 'auto', not 0
+    assert py.low_cut_wavelength_m == pytest.approx(cl.low_cut_wavelength_m, rel=1e-9) and py.low_cut_wavelength_m > 0
+    assert py.beta == pytest.approx(cl.beta, rel=1e-9)
+    assert np.allclose(py.h, cl.h, rtol=0, atol=1e-9 * np.abs(cl.h).max())

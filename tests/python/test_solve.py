@@ -122,6 +122,27 @@ def test_generate_map_agrees_with_direct_solves(tmp_path):
     pvdfkit.write_map(str(path), cmap)
     back = pvdfkit.read_map(str(path))
     assert np.array_equal(back.charge_C, cmap.charge_C) and back.model == cmap.model
+    # `pvdfkit map` with the same settings: the report has the keys of its --json (setup_s is the one
+    # key the command does not print; output and mesh are the command's own), the same counts and charges.
+    import json
+    import os
+    import subprocess
+    cli = os.path.join(os.environ.get("PVDF_BINARY_DIR", ""), "app", "pvdfkit")
+    if not os.path.exists(cli):
+        pytest.fail("PVDF_BINARY_DIR/app/pvdfkit not found: run through ctest (tests/python/CMakeLists.txt)")
+    scene_path = tmp_path / "scene.json"
+    scene_path.write_text(json.dumps(scene.to_dict()))
+    out = subprocess.run([cli, "map", str(scene_path), "-o", str(tmp_path / "cli.h5"), "--spacing-m", "0.006",
+                          "--forces-N", "1", "--region", "-0.006,0.006,-0.006,0.006", "--tolerance", "0.02",
+                          "--setup-checks", "1", "--threads", "1", "--no-checkpoint", "--quiet", "--json"],
+                         capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0, out.stderr
+    cl = json.loads(out.stdout)
+    assert set(report) - {"setup_s"} == set(cl) - {"output", "mesh"}
+    for key in ("n_positions", "n_points", "n_solved", "n_mirrored", "n_failed", "model", "nx", "ny", "forces_N"):
+        assert report[key] == cl[key], key
+    cli_map = pvdfkit.read_map(str(tmp_path / "cli.h5"))
+    assert np.allclose(cli_map.charge_C, cmap.charge_C, rtol=1e-9, atol=0)
 
 
 def test_to_dict_is_the_command_line_json(tmp_path):
@@ -139,7 +160,8 @@ def test_to_dict_is_the_command_line_json(tmp_path):
     scene["membrane"]["thickness_m"] = 50e-6  # membrane-dominated: non-zero charges and estimates
     path = tmp_path / "scene.json"
     path.write_text(json.dumps(scene))
-    py = pvdfkit.solve(scene, samples=[[0.004, 0.0]], tolerance=0.02).to_dict()
+    result = pvdfkit.solve(scene, samples=[[0.004, 0.0]], tolerance=0.02)
+    py = result.to_dict()
     out = subprocess.run([cli, "solve", str(path), "--sample", "0.004,0", "--tolerance", "0.02", "--json"],
                          capture_output=True, text=True, check=True)
     cl = json.loads(out.stdout)
@@ -154,3 +176,11 @@ def test_to_dict_is_the_command_line_json(tmp_path):
         assert a["charge_C"] == pytest.approx(b["charge_C"], rel=1e-9) and abs(a["charge_C"]) > 0
         assert a["charge_error_C"] == pytest.approx(b["charge_error_C"], rel=1e-9, abs=1e-30)
     assert py["samples"][0]["w_m"] == pytest.approx(cl["samples"][0]["w_m"], rel=1e-9)
+    # result.summary names its keys as the command's JSON does (time_breakdown_s.assembly, not
+    # assembly_s); final_residual_norm is the one key the command does not print.
+    summary = result.summary
+    assert set(summary) - {"final_residual_norm"} <= set(cl), set(summary) - set(cl)
+    assert set(summary["time_breakdown_s"]) == set(cl["time_breakdown_s"]) == {"setup", "assembly", "linear_solve"}
+    assert not {"assembly_s", "linear_solve_s", "setup_s"} & set(summary)
+    for key in ("status", "model", "n_dofs", "n_cells", "newton_iterations", "refinement_cycles", "error_estimator"):
+        assert summary[key] == cl[key], key
