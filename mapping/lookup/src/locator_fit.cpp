@@ -4,6 +4,7 @@
 #include "pvdf/mapping/locator.hpp"
 
 #include "pvdf/core/error.hpp"
+#include "pvdf/mapping/interpolation_error.hpp"
 
 namespace pvdf::mapping {
 
@@ -258,7 +259,11 @@ PVDF_CLONES Locator::Fit Locator::levenberg_marquardt(const double* q, const dou
 }
 
 bool Locator::map_error_at(double x, double y, double l, double* error_C) const {
-  const std::size_t nx = interp_.nx(), ny = interp_.ny(), ne = ne_;
+  // Per electrode, in quadrature (independent shares, docs/lookup.md §1.10): the nodes' own
+  // estimate (bilinear), the interpolation error between nodes (bilinear in the nodes' values
+  // × the bubble 1 − (1 − 4t(1−t))(1 − 4s(1−s)): zero at the nodes, one on the cell's mid-lines),
+  // between levels (the interval's value × 4w(1−w)) and beyond them (slope × distance in ln F).
+  const std::size_t nx = interp_.nx(), ny = interp_.ny(), ne = ne_, nf = interp_.n_levels();
   const double u = (x - interp_.x0()) * interp_.inv_hx(), v = (y - interp_.y0()) * interp_.inv_hy();
   if (!(u >= 0 && v >= 0 && u <= double(nx - 1) && v <= double(ny - 1))) return false;
   const std::size_t i = std::min(std::size_t(u), nx - 2), j = std::min(std::size_t(v), ny - 2);
@@ -266,35 +271,75 @@ bool Locator::map_error_at(double x, double y, double l, double* error_C) const 
   std::size_t f0 = 0;
   double w = 0;
   interp_.level_bracket(l, f0, w);
-  const std::size_t f1 = interp_.n_levels() > 1 ? f0 + 1 : f0;
+  const std::size_t f1 = nf > 1 ? f0 + 1 : f0;
+  const double bubble = 1.0 - (1.0 - 4.0 * a * (1.0 - a)) * (1.0 - 4.0 * b * (1.0 - b));
+  // Between levels: inside them the interval's chord error; beyond, the held law's drift.
+  double level_share = 0, beyond = 0;
+  std::size_t f_level = f0, f_beyond = 0;
+  if (nf > 1) {
+    if (l < interp_.min_log_force()) {
+      beyond = interp_.min_log_force() - l;
+      f_beyond = 0;
+    } else if (l > interp_.max_log_force()) {
+      beyond = l - interp_.max_log_force();
+      f_beyond = nf - 1;
+    } else {
+      level_share = 4.0 * w * (1.0 - w);
+    }
+  }
   const double scale = std::exp(interp_.force_exponent() * l);
   for (std::size_t k = 0; k < ne; ++k) {
-    auto at = [&](std::size_t f, std::size_t ii, std::size_t jj) { return map_error_[((f * ny + jj) * nx + ii) * ne + k]; };
-    auto level = [&](std::size_t f) {
-      return (1 - a) * (1 - b) * at(f, i, j) + a * (1 - b) * at(f, i + 1, j) + (1 - a) * b * at(f, i, j + 1) +
-             a * b * at(f, i + 1, j + 1);
+    auto bilinear = [&](std::size_t f, int c) {
+      auto at = [&](std::size_t ii, std::size_t jj) { return map_error_[(((f * ny + jj) * nx + ii) * ne + k) * 4 + std::size_t(c)]; };
+      return (1 - a) * (1 - b) * at(i, j) + a * (1 - b) * at(i + 1, j) + (1 - a) * b * at(i, j + 1) + a * b * at(i + 1, j + 1);
     };
-    error_C[k] = scale * ((1 - w) * level(f0) + w * level(f1));
+    const double node = (1 - w) * bilinear(f0, 0) + w * bilinear(f1, 0);
+    const double between_nodes = bubble * ((1 - w) * bilinear(f0, 1) + w * bilinear(f1, 1));
+    const double between_levels = level_share > 0 ? level_share * bilinear(f_level, 2) : 0.0;
+    const double off_levels = beyond > 0 ? beyond * bilinear(f_beyond, 3) : 0.0;
+    error_C[k] = scale * std::sqrt(node * node + between_nodes * between_nodes + between_levels * between_levels +
+                                   off_levels * off_levels);
   }
   return true;
 }
 
+bool Locator::charge_error(double x_m, double y_m, double force_N, double* error_C) const {
+  if (!(force_N > 0) || !std::isfinite(force_N) || !interp_.inside(x_m, y_m)) return false;
+  if (map_error_.empty()) {
+    for (std::size_t k = 0; k < ne_; ++k) error_C[k] = 0.0;
+    return true;
+  }
+  if (!map_error_at(x_m, y_m, std::log(force_N), error_C)) return false;
+  for (std::size_t k = 0; k < ne_; ++k) error_C[k] *= std::abs(gain_[k]);
+  return true;
+}
+
 void Locator::set_map_error(const ChargeMap& map) {
-  // Stored reduced like the interpolant's G (error / F_f^p), so that the scaling law carries it
-  // between and beyond the levels; bilinear in position (map_error_at).
-  if (map.estimated_charge_error_C.empty()) return;
+  // Four shares per node, level and electrode (map_error_at), each reduced like the
+  // interpolant's G (÷ F_f^p), so that the scaling law carries them between and beyond levels.
   const std::size_t n = map.nf() * map.ny() * map.nx() * map.ne();
-  if (map.estimated_charge_error_C.size() != n) {
+  const bool node_estimate = !map.estimated_charge_error_C.empty();
+  if (node_estimate && map.estimated_charge_error_C.size() != n) {
     throw InputError("map estimated_charge_error_C has " + std::to_string(map.estimated_charge_error_C.size()) +
                      " values; the grid needs " + std::to_string(n) + " ([nf][ny][nx][ne])");
   }
-  map_error_.resize(n);
+  if (!node_estimate && !options_.interpolation_error) return;
+  InterpolationError between;
+  if (options_.interpolation_error) between = estimate_interpolation_error(map);
+  map_error_.assign(4 * n, 0.0);
+  const std::size_t block = map.ny() * map.nx() * map.ne();
   for (std::size_t f = 0; f < map.nf(); ++f) {
     const double scale = std::pow(map.forces_N[f], -interp_.force_exponent());
-    const std::size_t block = map.ny() * map.nx() * map.ne();
     for (std::size_t m = 0; m < block; ++m) {
-      const double e = map.estimated_charge_error_C[f * block + m];
-      map_error_[f * block + m] = std::isfinite(e) && e > 0 ? e * scale : 0.0;
+      const std::size_t at = f * block + m;
+      double* out = &map_error_[4 * at];
+      auto share = [&](double e) { return std::isfinite(e) && e > 0 ? e * scale : 0.0; };
+      if (node_estimate) out[0] = share(map.estimated_charge_error_C[at]);
+      if (options_.interpolation_error) {
+        out[1] = share(between.between_nodes_C[at]);
+        out[2] = share(between.between_levels_C[at]);
+        out[3] = share(between.beyond_levels_C[at]);
+      }
     }
   }
 }
