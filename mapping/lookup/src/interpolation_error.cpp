@@ -1,11 +1,11 @@
 // The map's interpolation error from its own charges (docs/lookup.md §1.10).
 //
-// Position: the grid of every other node (spacing 2h, four of them by their offset) is
+// Position: the grid of every other node (spacing 2h; four of them, by their offset) is
 // interpolated with the same bicubic scheme, and at the nodes it does not hold the difference
 // to the map's value — the hierarchical surplus S₁ — is that coarser interpolant's true error.
-// The same one level down (4h, from each 2h grid) gives S₂. Per node, ρ = W₂/W₁ (W: the largest
-// surplus within ±2 nodes) is the factor by which the error fell from 4h to 2h; the map's own
-// error (spacing h) is then S₁/ρ, S₁ taken as its largest value within ±1 node.
+// The same one level down (each 2h grid against its 4h grids) gives S₂. Per node, ρ₁ = W₂/W₁
+// (W: the largest surplus within ±2 nodes) is the factor by which the error fell from 4h to 2h;
+// the map's own error (spacing h) is S₁/ρ₀ with ρ₀ = min(16, ρ₁²).
 // Force: the reduced charge G = Q/F^p is interpolated linearly in ln F; its second divided
 // difference across three levels bounds the chord's error between two (|G''|·Δ²/8).
 #include "pvdf/mapping/interpolation_error.hpp"
@@ -13,6 +13,7 @@
 #include "pvdf/mapping/interpolant.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -21,6 +22,19 @@ namespace pvdf::mapping {
 namespace {
 
 constexpr double unknown = std::numeric_limits<double>::quiet_NaN();
+
+/// Per node: inside the mask and ok at every level (the interpolant's usable node).
+std::vector<std::uint8_t> usable_nodes(const ChargeMap& map) {
+  std::vector<std::uint8_t> ok(map.nx() * map.ny(), 0);
+  for (std::size_t j = 0; j < map.ny(); ++j) {
+    for (std::size_t i = 0; i < map.nx(); ++i) {
+      bool good = map.mask[j * map.nx() + i] != 0;
+      for (std::size_t f = 0; good && f < map.nf(); ++f) good = map.status[map.point(f, j, i)] == std::uint8_t(PointStatus::ok);
+      ok[j * map.nx() + i] = good ? 1 : 0;
+    }
+  }
+  return ok;
+}
 
 /// The nodes (ox + 2i, oy + 2j) of `map`: the grid of spacing 2h with that offset (all levels,
 /// electrodes, status, mask, derivatives). Fewer than two nodes on an axis: x_m or y_m short.
@@ -57,19 +71,6 @@ ChargeMap every_other_node(const ChargeMap& map, std::size_t ox, std::size_t oy)
     }
   }
   return c;
-}
-
-/// Per node: inside the mask and ok at every level (the interpolant's usable node).
-std::vector<std::uint8_t> usable_nodes(const ChargeMap& map) {
-  std::vector<std::uint8_t> ok(map.nx() * map.ny(), 0);
-  for (std::size_t j = 0; j < map.ny(); ++j) {
-    for (std::size_t i = 0; i < map.nx(); ++i) {
-      bool good = map.mask[j * map.nx() + i] != 0;
-      for (std::size_t f = 0; good && f < map.nf(); ++f) good = map.status[map.point(f, j, i)] == std::uint8_t(PointStatus::ok);
-      ok[j * map.nx() + i] = good ? 1 : 0;
-    }
-  }
-  return ok;
 }
 
 /// |hierarchical surplus| of the reduced charge G = Q/F^p per [f][j][i][k]: the largest
@@ -124,11 +125,12 @@ double window_max(const std::vector<double>& a, const ChargeMap& map, std::size_
   return best;
 }
 
-/// Between nodes, in G units, per [f][j][i][k]; fills the ratio used.
-std::vector<double> between_nodes(const ChargeMap& map, const InterpolationErrorOptions& o, std::vector<double>& ratio) {
+/// Between nodes, in G units ([f][j][i][k]): S₁(n), the error of the 2h interpolants at the
+/// node, carried to h by ρ₀ = min(16, ρ₁²), ρ₁ = max(1, W₂/W₁) the ratio measured from 4h to 2h
+/// (W: the largest surplus within ±2 nodes), ρ₁ = 2 where it cannot be measured.
+std::vector<double> between_nodes(const ChargeMap& map) {
   const std::size_t nx = map.nx(), ny = map.ny(), nf = map.nf(), ne = map.ne();
   const std::vector<double> s1 = surplus(map);
-  // S₂ at every node: the node's own 2h grid against its 4h grids.
   std::vector<double> s2(s1.size(), unknown);
   for (std::size_t oy = 0; oy < 2; ++oy) {
     for (std::size_t ox = 0; ox < 2; ++ox) {
@@ -138,33 +140,34 @@ std::vector<double> between_nodes(const ChargeMap& map, const InterpolationError
       for (std::size_t f = 0; f < nf; ++f) {
         for (std::size_t j = 0; j < c.ny(); ++j) {
           for (std::size_t i = 0; i < c.nx(); ++i) {
-            for (std::size_t k = 0; k < ne; ++k) {
-              s2[map.charge_index(f, oy + 2 * j, ox + 2 * i, k)] = sc[c.charge_index(f, j, i, k)];
-            }
+            for (std::size_t k = 0; k < ne; ++k) s2[map.charge_index(f, oy + 2 * j, ox + 2 * i, k)] = sc[c.charge_index(f, j, i, k)];
           }
         }
       }
     }
   }
   const std::vector<std::uint8_t> ok = usable_nodes(map);
+  constexpr double unmeasured_ratio = 2.0;  // first order: conservative against the 3–16 measured elsewhere
   std::vector<double> e(s1.size(), unknown);
-  ratio.assign(s1.size(), 0.0);
   for (std::size_t f = 0; f < nf; ++f) {
     for (std::size_t j = 0; j < ny; ++j) {
       for (std::size_t i = 0; i < nx; ++i) {
         if (!ok[j * nx + i]) continue;
         for (std::size_t k = 0; k < ne; ++k) {
           const double w1 = window_max(s1, map, f, i, j, k, 2), w2 = window_max(s2, map, f, i, j, k, 2);
-          const double r = w1 > 0 && w2 >= 0 ? std::clamp(w2 / w1, o.min_ratio, o.max_ratio) : o.default_ratio;
-          const std::size_t n = map.charge_index(f, j, i, k);
-          ratio[n] = r;
-          e[n] = window_max(s1, map, f, i, j, k, 1) / r;
+          // Next to under-resolved features the ratio grows from one halving to the next (an
+          // analytic feature converges exponentially until h resolves it, then like h⁴): the
+          // ratio measured one level coarser, squared, capped at the bicubic's 16.
+          const double rho1 = w1 > 0 && w2 >= 0 ? std::max(1.0, w2 / w1) : unmeasured_ratio;
+          const double rho0 = std::min(16.0, rho1 * rho1);
+          const double s = s1[map.charge_index(f, j, i, k)];
+          e[map.charge_index(f, j, i, k)] = std::isnan(s) ? unknown : s / rho0;
         }
       }
     }
   }
-  // Usable nodes no coarse cell reached (a thin strip at the mask's edge): the largest estimate
-  // of their neighbours, spread up to four nodes; beyond that the level's largest estimate.
+  // Usable nodes no 2h cell covers (a sliver at the mask's edge): the largest estimate of their
+  // neighbours, spread up to four nodes; beyond that the level's largest estimate.
   for (int pass = 0; pass < 4; ++pass) {
     std::vector<double> next = e;
     bool missing = false;
@@ -202,13 +205,13 @@ std::vector<double> between_nodes(const ChargeMap& map, const InterpolationError
 
 }  // namespace
 
-InterpolationError estimate_interpolation_error(const ChargeMap& map, const InterpolationErrorOptions& options) {
+InterpolationError estimate_interpolation_error(const ChargeMap& map) {
   const std::size_t nx = map.nx(), ny = map.ny(), nf = map.nf(), ne = map.ne();
   const std::size_t n = nf * ny * nx * ne;
   InterpolationError out;
   out.between_levels_C.assign(n, 0.0);
   out.beyond_levels_C.assign(n, 0.0);
-  out.between_nodes_C = between_nodes(map, options, out.convergence_ratio);
+  out.between_nodes_C = between_nodes(map);
   std::vector<double> force_p(nf), log_f(nf);
   for (std::size_t f = 0; f < nf; ++f) {
     force_p[f] = std::pow(map.forces_N[f], membrane_charge_exponent);
