@@ -74,11 +74,8 @@ double Locator::valley_sigma(const Query& Q, Fit& f) const {
   if (options_.valley_sigma_cells <= 0 || f.singular) return 0.0;
   // The weights of the reported σ's and χ²: the charge noise with the map's own error at the
   // solution (§1.10), held along the profile.
-  Vec w{}, error{};
-  const bool map_error = !map_error_.empty() && map_error_at(f.x, f.y, f.l, error.data());
-  for (std::size_t k = 0; k < ne_; ++k) {
-    w[k] = map_error ? 1.0 / std::sqrt(1.0 / (Q.w[k] * Q.w[k]) + error[k] * error[k]) : Q.w[k];
-  }
+  Vec w{};
+  for (std::size_t k = 0; k < ne_; ++k) w[k] = f.has_variance ? 1.0 / std::sqrt(1.0 / (Q.w[k] * Q.w[k]) + f.variance[k]) : Q.w[k];
   std::array<double, 6> m = reported_jtj(f, Q), c{};
   if (Q.fixed_force) {
     m[2] = m[4] = 0;

@@ -197,6 +197,14 @@ class Locator {
     bool vague = false;     ///< within noise, but the charges do not place it (without_position)
     bool fallback = false;  ///< started by the angular fallback (no coarse-search start fitted within noise)
     double log_widen = 0;   ///< ln(valley half-width / linearised σ) along the weak direction (valley_sigma)
+    /// The model's charges at the end point (the last evaluation, carried along the last step
+    /// taken unevaluated by its Jacobian): χ² under the map's own error needs no evaluation.
+    std::array<double, max_electrodes> model{};
+    /// The Jacobian rows at the last evaluation (not zeroed: written with the end point) and the
+    /// map's own error² at the end point (set by add_map_error when has_variance).
+    std::array<std::array<double, 3>, max_electrodes> grad;
+    std::array<double, max_electrodes> variance;
+    bool has_variance = false;
   };
   Fit levenberg_marquardt(const double* q, const double* inv_sigma, double x, double y, double l, bool fixed_force,
                           double log_lo, double log_hi, const Fit* found, int n_found) const;
@@ -224,8 +232,8 @@ class Locator {
   std::array<double, 6> reported_jtj(const Fit& fit, const Query& query) const;
   /// Replaces each fit's χ² by the one under the charge noise plus the map's own error.
   void add_map_error(const Query& query, std::array<Fit, 8>& fits, int n_fits) const;
-  /// The map's charge error (C) at (x, y, ln F); false off the grid or when none is stored.
-  bool map_error_at(double x, double y, double l, double* error_C) const;
+  /// The square of the map's charge error (C²) at (x, y, ln F), per electrode; false off the grid.
+  bool map_variance_at(double x, double y, double l, double* variance_C2) const;
   Location locate_impl(const double* charges_C, bool fixed_force, double log_known_force,
                        const std::array<double, 3>* hints = nullptr, int n_hints = 0, bool held = false) const;
   /// A query prepared for fitting: calibration undone, weights, unit direction, force bounds.
@@ -312,10 +320,11 @@ class Locator {
   std::vector<std::string> names_;
   std::vector<double> noise_;
   std::vector<double> gain_, offset_;
-  /// The map's own charge error per node, level and electrode, four shares each ([f][j][i][k][4]:
-  /// node estimate, between nodes, between level f and f + 1, beyond the end level per unit
-  /// ln F), divided by F_level^p (empty: none; map_error_at combines them).
-  std::vector<double> map_error_;
+  /// The map's own charge error per usable cell j·(nx − 1) + i, level and electrode: four shares
+  /// (node estimate, between nodes, between level f and f + 1, beyond the end level per unit
+  /// ln F) at the cell's four corners (i, j), (i+1, j), (i, j+1), (i+1, j+1); C at the level's
+  /// force, float (empty: none; map_variance_at combines them).
+  std::vector<float> map_error_;
   bool calibrated_ = false;
   LocatorOptions options_;
   double chi2_limit_ = 0, chi2_limit_free_ = 0, chi2_limit_fixed_ = 0;
