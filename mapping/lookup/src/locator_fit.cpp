@@ -619,7 +619,8 @@ double Locator::log_posterior_weight(const Query& Q, const Fit& f) const {
   // the posterior's width: A gets the precision of the uniform prior (12 / width²) added.
   const double wx = double(interp_.nx() - 1) * interp_.hx(), wy = double(interp_.ny() - 1) * interp_.hy();
   const double rx = 12.0 / (wx * wx), ry = 12.0 / (wy * wy);
-  const auto& m = f.jtj;  // 00 01 02 11 12 22
+  // A = JᵀWJ with the weights at the solution (the map's own error there, §1.10), as the σ's.
+  const std::array<double, 6> m = reported_jtj(f, Q);  // 00 01 02 11 12 22
   const double a00 = m[0] + rx, a01 = m[1], a11 = m[3] + ry;
   double det = 0, floor = rx * ry;
   if (Q.fixed_force) {
