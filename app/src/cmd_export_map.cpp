@@ -31,15 +31,19 @@ int run_export_map(const ExportMapOptions& o) {
   }
   const pvdf::mapping::ChargeMap map = pvdf::mapping::read_map(o.map_path);
   const std::size_t bytes = pvdf::mapping::encode_flat_map(map, o.map_path).size();
+  // What the deployed Locator adds to the charge noise (docs/lookup.md §1.10): the per-node
+  // estimates travel in the file; the interpolation error is estimated again from the charges.
+  const char* errors = map.estimated_charge_error_C.empty() ? "no per-node charge errors" : "per-node charge errors";
   if (header) {
     const std::string symbol = o.symbol.empty() ? pvdf::mapping::c_identifier(std::filesystem::path(o.output).stem().string()) : o.symbol;
     pvdf::mapping::write_flat_map_c_header(o.output, map, symbol, o.map_path);
-    std::printf("wrote %s (C header, array %s of %zu bytes: %zu x %zu points, %zu force levels, %zu electrodes)\n", o.output.c_str(),
-                symbol.c_str(), bytes, map.nx(), map.ny(), map.nf(), map.ne());
+    std::printf("wrote %s (C header, array %s of %zu bytes: %zu x %zu points, %zu force levels, %zu electrodes, %s; version %u)\n",
+                o.output.c_str(), symbol.c_str(), bytes, map.nx(), map.ny(), map.nf(), map.ne(), errors,
+                unsigned(pvdf::mapping::flat_map_version));
   } else {
     pvdf::mapping::write_flat_map(o.output, map, o.map_path);
-    std::printf("wrote %s (flat map, %zu bytes: %zu x %zu points, %zu force levels, %zu electrodes)\n", o.output.c_str(), bytes,
-                map.nx(), map.ny(), map.nf(), map.ne());
+    std::printf("wrote %s (flat map, %zu bytes: %zu x %zu points, %zu force levels, %zu electrodes, %s; version %u)\n",
+                o.output.c_str(), bytes, map.nx(), map.ny(), map.nf(), map.ne(), errors, unsigned(pvdf::mapping::flat_map_version));
   }
   return pvdf::exit_code::success;
 }

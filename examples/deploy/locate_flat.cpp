@@ -25,12 +25,16 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
-    // 1. The flat map: checked (size, checksum, every value) as it is read.
+    // 1. The flat map: checked (size, checksum, every value) as it is read. Version 2 carries the
+    //    map's per-node charge error estimates (version-1 files are read too, without them).
     const pvdf::mapping::ChargeMap map = pvdf::mapping::read_flat_map(argv[1]);
 
     // 2. The Locator, built once (interpolant and coarse search table); the map's charge noise,
     //    the force range half the lowest to twice the highest level, and — a stream — linearised
-    //    σ's (no valley σ's, which would halve the rate), as `pvdfkit locate --stream`.
+    //    σ's (no valley σ's, which would halve the rate), as `pvdfkit locate --stream`. Its noise
+    //    model holds the map's own error — the per-node estimates and the interpolation error
+    //    between nodes and force levels, estimated here from the map's charges (docs/lookup.md
+    //    §1.10) — so the answers, σ's and probabilities are those of `locate` on the HDF5 map.
     pvdf::mapping::LocatorOptions locator_options;
     locator_options.valley_sigma_cells = 0;
     const pvdf::mapping::Locator locator(map, locator_options);

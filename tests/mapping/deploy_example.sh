@@ -35,8 +35,12 @@ exe=$work/build/locate_flat
 if ldd "$exe" | grep -Eiq 'hdf5|png|freetype|cairo|deal'; then fail "locate_flat loads $(ldd "$exe" | grep -Ei 'hdf5|png|freetype|cairo|deal')"; fi
 
 # 3. A map, its flat export, a recorded stream.
-"$pvdfkit" synthetic-map -o "$work/map.h5" --spacing-m 0.002 --forces-N 0.5,1,2 > /dev/null
+# The map carries per-node charge error estimates (flat map version 2, content bit 2).
+"$pvdfkit" synthetic-map -o "$work/plain.h5" --spacing-m 0.002 --forces-N 0.5,1,2 > /dev/null
+"$make_stream" --with-errors "$work/plain.h5" "$work/map.h5" || fail "adding per-node errors to the map"
 "$pvdfkit" export-map "$work/map.h5" -o "$work/map.flat" || fail "export-map"
+[ "$(od -An -tu4 -j8 -N4 "$work/map.flat" | tr -d ' ')" = 2 ] || fail "the flat map is not version 2"
+[ $(($(od -An -tu4 -j32 -N4 "$work/map.flat" | tr -d ' ') & 4)) -eq 4 ] || fail "the flat map lacks the charge error section (bit 2)"
 "$make_stream" "$work/map.h5" > "$work/stream.csv"
 
 # 4. The same answers from the installed program and from pvdfkit.

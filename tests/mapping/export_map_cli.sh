@@ -13,6 +13,8 @@ mkdir -p "$work"
 "$pvdfkit" export-map "$work/map.h5" -o "$work/map.flat" > "$work/out.txt"
 grep -q "^wrote $work/map.flat (flat map, [0-9]* bytes" "$work/out.txt" || fail "binary: $(cat "$work/out.txt")"
 [ "$(head -c 8 "$work/map.flat")" = PVDFFLAT ] || fail "the binary does not start with PVDFFLAT"
+[ "$(od -An -tu4 -j8 -N4 "$work/map.flat" | tr -d ' ')" = 2 ] || fail "the binary is not flat map version 2"
+grep -q "no per-node charge errors; version 2)" "$work/out.txt" || fail "the summary does not say what errors it carries: $(cat "$work/out.txt")"
 "$pvdfkit" export-map "$work/map.h5" -o "$work/sensor_map.h" > /dev/null
 grep -q 'static const unsigned char sensor_map\[sensor_map_SIZE\]' "$work/sensor_map.h" || fail "C header lacks the array sensor_map"
 "$pvdfkit" export-map "$work/map.h5" -o "$work/other.txt" --format c-header --symbol film_a > /dev/null

@@ -25,7 +25,7 @@ double field(const std::array<double, 2>& c, double x, double y, double F) {
   return 10e-12 * std::cbrt(F * F) * (0.2 + std::exp(-r2 / (2 * s * s)));
 }
 
-ChargeMap hand_map(bool derivatives, bool calibration) {
+ChargeMap hand_map(bool derivatives, bool calibration, bool charge_error = false) {
   ChargeMap m;
   for (int i = 0; i <= 20; ++i) m.x_m.push_back(-10e-3 + 1e-3 * i);
   for (int j = 0; j <= 16; ++j) m.y_m.push_back(-8e-3 + 1e-3 * j);
@@ -63,6 +63,12 @@ ChargeMap hand_map(bool derivatives, bool calibration) {
     }
   }
   if (calibration) m.calibration = Calibration{{1.02, 0.97, 1.0}, {1e-14, -2e-14, 0.0}, "bench.csv", "{}"};
+  if (charge_error) {  // a per-node estimate that varies with node, level and electrode; NaN where not ok
+    m.estimated_charge_error_C.resize(m.charge_C.size());
+    for (std::size_t n = 0; n < m.charge_C.size(); ++n) {
+      m.estimated_charge_error_C[n] = m.status[n / m.ne()] == std::uint8_t(PointStatus::ok) ? 1e-14 * double(1 + n % 7) : std::nan("");
+    }
+  }
   return m;
 }
 
@@ -97,14 +103,18 @@ void require_one_line_naming_source(const std::string& message, const std::strin
 TEST_CASE("flat map: round trip keeps every field the lookup uses, bit for bit", "[flat_map]") {
   for (const bool derivatives : {false, true}) {
     for (const bool calibration : {false, true}) {
-      const ChargeMap m = hand_map(derivatives, calibration);
+     for (const bool errors : {false, true}) {
+      const ChargeMap m = hand_map(derivatives, calibration, errors);
       const auto bytes = encode_flat_map(m, "test");
       // Size from the documented layout: 80-byte header, doubles, status, mask, names, padding, CRC.
       const std::size_t points = m.nf() * m.ny() * m.nx(), values = points * m.ne();
-      std::size_t doubles = m.nx() + m.ny() + m.nf() + 3 * m.ne() + values * (derivatives ? 3 : 1) + (calibration ? 2 * m.ne() : 0);
+      std::size_t doubles = m.nx() + m.ny() + m.nf() + 3 * m.ne() + values * (derivatives ? 3 : 1) + (calibration ? 2 * m.ne() : 0) +
+                            (errors ? values : 0);
       const std::size_t body = 80 + 8 * doubles + points + m.nx() * m.ny() + 32 * m.ne();
       REQUIRE(bytes.size() == (body + 3) / 4 * 4 + 4);
       REQUIRE(std::memcmp(bytes.data(), "PVDFFLAT", 8) == 0);
+      REQUIRE(bytes[8] == 2);                    // version 2
+      REQUIRE(((bytes[32] & 4) != 0) == errors);  // content bit 2: the per-node charge errors
       const ChargeMap r = decode_flat_map(bytes.data(), bytes.size(), "map.flat");
       REQUIRE(r.x_m == m.x_m);
       REQUIRE(r.y_m == m.y_m);
@@ -121,6 +131,9 @@ TEST_CASE("flat map: round trip keeps every field the lookup uses, bit for bit",
       REQUIRE(r.tolerance == m.tolerance);
       REQUIRE(std::isnan(r.estimated_relative_error));
       REQUIRE(r.calibration.has_value() == calibration);
+      REQUIRE(r.estimated_charge_error_C.size() == m.estimated_charge_error_C.size());
+      REQUIRE(std::memcmp(r.estimated_charge_error_C.data(), m.estimated_charge_error_C.data(),
+                          m.estimated_charge_error_C.size() * sizeof(double)) == 0);  // bits, NaN included
       if (calibration) {
         REQUIRE(r.calibration->gain == m.calibration->gain);
         REQUIRE(r.calibration->offset_C == m.calibration->offset_C);
@@ -136,13 +149,33 @@ TEST_CASE("flat map: round trip keeps every field the lookup uses, bit for bit",
         REQUIRE(la.force_N == lb.force_N);
         REQUIRE(la.flags == lb.flags);
         REQUIRE(la.n_solutions == lb.n_solutions);
+        REQUIRE(la.sigma_x_m == lb.sigma_x_m);
+        REQUIRE(la.sigma_y_m == lb.sigma_y_m);
+        REQUIRE(la.sigma_F_N == lb.sigma_F_N);
+        REQUIRE(la.probability == lb.probability);
         if (!calibration && la.n_solutions == 1) {  // the oracle: the field the map was sampled from
           REQUIRE(std::abs(la.x_m - press[0]) < 0.1e-3);
           REQUIRE(std::abs(la.y_m - press[1]) < 0.1e-3);
         }
       }
+     }
     }
   }
+}
+
+TEST_CASE("flat map: a version-1 file (no charge error section) is still read", "[flat_map]") {
+  // Version 1 is version 2 without content bit 2: the same bytes with the version field 1.
+  const ChargeMap m = hand_map(true, true);
+  auto v1 = encode_flat_map(m, "test");
+  put_u32(v1, 8, 1, true);
+  const ChargeMap r = decode_flat_map(v1.data(), v1.size(), "map.flat");
+  REQUIRE(r.charge_C == m.charge_C);
+  REQUIRE(r.dcharge_dx_C_per_m == m.dcharge_dx_C_per_m);
+  REQUIRE(r.estimated_charge_error_C.empty());
+  // A version-1 header may not claim the charge error section.
+  auto forged = encode_flat_map(hand_map(false, false, true), "test");
+  put_u32(forged, 8, 1, true);
+  require_one_line_naming_source(decode_error(forged), "unknown bits");
 }
 
 TEST_CASE("flat map: truncated, oversized, damaged or foreign bytes are refused with one line", "[flat_map][hostile]") {
@@ -163,9 +196,15 @@ TEST_CASE("flat map: truncated, oversized, damaged or foreign bytes are refused 
   foreign[0] = 'X';
   require_one_line_naming_source(decode_error(foreign), "not a pvdfkit flat map");
 
-  auto v2 = good;
-  put_u32(v2, 8, 2, true);
-  require_one_line_naming_source(decode_error(v2), "version 2 is not supported");
+  auto v3 = good;
+  put_u32(v3, 8, 3, true);
+  require_one_line_naming_source(decode_error(v3), "version 3 is not supported");
+  auto v0 = good;
+  put_u32(v0, 8, 0, true);
+  require_one_line_naming_source(decode_error(v0), "version 0 is not supported");
+  auto bit = good;
+  put_u32(bit, 32, 1u | 8u, true);
+  require_one_line_naming_source(decode_error(bit), "unknown bits");
 
   auto huge = good;  // nx = 100000, ny = 100000: far beyond the byte limit, refused before any allocation
   put_u32(huge, 16, 100000, false);

@@ -83,12 +83,13 @@ class Reader {
 /// Sizes read from a header, and the total they imply.
 struct Layout {
   std::uint64_t nx = 0, ny = 0, nf = 0, ne = 0;
-  bool derivatives = false, calibration = false;
+  bool derivatives = false, calibration = false, charge_error = false;
   std::uint64_t points() const { return nf * ny * nx; }
   std::uint64_t body_without_padding() const {
     std::uint64_t doubles = nx + ny + nf + ne + 2 * ne + points() * ne;
     if (calibration) doubles += 2 * ne;
     if (derivatives) doubles += 2 * points() * ne;
+    if (charge_error) doubles += points() * ne;
     return flat_map_header_bytes + 8 * doubles + points() + ny * nx + ne * flat_map_name_bytes;
   }
   /// Total bytes: body, zero padding to a multiple of 4, then the CRC-32.
@@ -107,8 +108,9 @@ Layout read_header(Reader& r, std::size_t size, const std::string& source) {
   }
   r.skip(sizeof flat_map_magic);
   const std::uint32_t version = r.u32();
-  if (version != flat_map_version) {
-    bad(source, "flat map version " + text(version) + " is not supported (this pvdfkit reads version " + text(flat_map_version) + ")" + reexport);
+  if (version < flat_map_oldest_version || version > flat_map_version) {
+    bad(source, "flat map version " + text(version) + " is not supported (this pvdfkit reads versions " + text(flat_map_oldest_version) +
+                    ".." + text(flat_map_version) + ")" + reexport);
   }
   const std::uint32_t header_bytes = r.u32();
   if (header_bytes != flat_map_header_bytes) bad(source, "header size " + text(header_bytes) + " must be " + text(flat_map_header_bytes) + reexport);
@@ -123,12 +125,15 @@ Layout read_header(Reader& r, std::size_t size, const std::string& source) {
   if (l.ny < 2 || l.ny > flat_map_max_axis) bad(source, "ny = " + text(l.ny) + " must lie in 2.." + text(flat_map_max_axis) + reexport);
   if (l.nf < 1 || l.nf > flat_map_max_levels) bad(source, "nf = " + text(l.nf) + " must lie in 1.." + text(flat_map_max_levels) + reexport);
   if (l.ne < 1 || l.ne > max_electrodes) bad(source, "ne = " + text(l.ne) + " must lie in 1.." + text(max_electrodes) + reexport);
-  if ((contents & ~(flat_map_has_derivatives | flat_map_has_calibration)) != 0) {
-    bad(source, "content bits " + text(contents) + " hold unknown bits (known: 1 derivatives, 2 calibration)" + reexport);
+  const std::uint32_t known = flat_map_has_derivatives | flat_map_has_calibration | (version >= 2 ? flat_map_has_charge_error : 0u);
+  if ((contents & ~known) != 0) {
+    bad(source, "content bits " + text(contents) + " hold unknown bits (known in version " + text(version) + ": 1 derivatives, 2 calibration" +
+                    (version >= 2 ? ", 4 charge errors" : "") + ")" + reexport);
   }
   if (name_bytes != flat_map_name_bytes) bad(source, "name field size " + text(name_bytes) + " must be " + text(flat_map_name_bytes) + reexport);
   l.derivatives = (contents & flat_map_has_derivatives) != 0;
   l.calibration = (contents & flat_map_has_calibration) != 0;
+  l.charge_error = (contents & flat_map_has_charge_error) != 0;
   const std::uint64_t file_bytes = r.u64();
   const std::uint64_t need = l.total();
   if (need > flat_map_max_bytes) {
@@ -167,6 +172,7 @@ std::vector<unsigned char> encode_flat_map(const ChargeMap& map, const std::stri
   l.ne = map.ne();
   l.derivatives = !map.dcharge_dx_C_per_m.empty();
   l.calibration = map.calibration.has_value();
+  l.charge_error = !map.estimated_charge_error_C.empty();
   if (l.nx > flat_map_max_axis || l.ny > flat_map_max_axis || l.nf > flat_map_max_levels || l.ne > max_electrodes ||
       l.total() > flat_map_max_bytes) {
     bad(source, "the map (" + text(l.nx) + " x " + text(l.ny) + " points, " + text(l.nf) + " levels, " + text(l.ne) +
@@ -180,7 +186,8 @@ std::vector<unsigned char> encode_flat_map(const ChargeMap& map, const std::stri
   w.u32(std::uint32_t(l.ny));
   w.u32(std::uint32_t(l.nf));
   w.u32(std::uint32_t(l.ne));
-  w.u32((l.derivatives ? flat_map_has_derivatives : 0u) | (l.calibration ? flat_map_has_calibration : 0u));
+  w.u32((l.derivatives ? flat_map_has_derivatives : 0u) | (l.calibration ? flat_map_has_calibration : 0u) |
+        (l.charge_error ? flat_map_has_charge_error : 0u));
   w.u32(flat_map_name_bytes);
   w.u64(l.total());
   w.f64(map.rim_margin_m);
@@ -204,6 +211,7 @@ std::vector<unsigned char> encode_flat_map(const ChargeMap& map, const std::stri
     w.f64s(map.dcharge_dx_C_per_m);
     w.f64s(map.dcharge_dy_C_per_m);
   }
+  if (l.charge_error) w.f64s(map.estimated_charge_error_C);
   w.bytes(map.status.data(), map.status.size());
   w.bytes(map.mask.data(), map.mask.size());
   for (const auto& name : map.electrode_names) {
@@ -251,6 +259,7 @@ ChargeMap decode_flat_map(const unsigned char* data, std::size_t size, const std
     r.f64s(m.dcharge_dx_C_per_m, n_values);
     r.f64s(m.dcharge_dy_C_per_m, n_values);
   }
+  if (l.charge_error) r.f64s(m.estimated_charge_error_C, n_values);
   r.u8s(m.status, std::size_t(l.points()));
   r.u8s(m.mask, std::size_t(l.nx * l.ny));
   for (std::uint64_t k = 0; k < l.ne; ++k) {

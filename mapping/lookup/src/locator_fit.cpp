@@ -4,6 +4,7 @@
 #include "pvdf/mapping/locator.hpp"
 
 #include "pvdf/core/error.hpp"
+#include "pvdf/mapping/interpolation_error.hpp"
 
 namespace pvdf::mapping {
 
@@ -151,9 +152,9 @@ PVDF_CLONES Locator::Fit Locator::levenberg_marquardt(const double* q, const dou
   if (!map_error_.empty()) {
     // The map's own error joins the charge noise (σ_k² + e_k², e at the start: the weights are
     // held during the fit; finish() takes χ² with e at the end point).
-    Vec error{};
-    if (map_error_at(x, y, l, error.data())) {
-      for (std::size_t k = 0; k < ne_; ++k) w_map[k] = 1.0 / std::sqrt(1.0 / (w[k] * w[k]) + error[k] * error[k]);
+    Vec variance{};
+    if (map_variance_at(x, y, l, variance.data())) {
+      for (std::size_t k = 0; k < ne_; ++k) w_map[k] = 1.0 / std::sqrt(1.0 / (w[k] * w[k]) + variance[k]);
       w = w_map.data();
     }
   }
@@ -193,6 +194,7 @@ PVDF_CLONES Locator::Fit Locator::levenberg_marquardt(const double* q, const dou
       x += step[0];
       y += step[1];
       l += step[2];
+      for (std::size_t k = 0; k < ne_; ++k) p.model[k] += p.grad[k][0] * step[0] + p.grad[k][1] * step[1] + p.grad[k][2] * step[2];
       p.chi2 = std::max(0.0, p.chi2 + 2.0 * (p.Jtr[0] * step[0] + p.Jtr[1] * step[1] + p.Jtr[2] * step[2]) +
                                  quad_form(p.JtJ, step));
       fit.converged = true;
@@ -253,65 +255,130 @@ PVDF_CLONES Locator::Fit Locator::levenberg_marquardt(const double* q, const dou
   fit.chi2 = p.chi2;
   fit.iterations = it;
   fit.jtj = p.JtJ;
+  fit.model = p.model;
+  fit.grad = p.grad;
   fit.ok = std::isfinite(p.chi2) && std::isfinite(x) && std::isfinite(y) && std::isfinite(l);
   return fit;
 }
 
-bool Locator::map_error_at(double x, double y, double l, double* error_C) const {
-  const std::size_t nx = interp_.nx(), ny = interp_.ny(), ne = ne_;
+PVDF_CLONES bool Locator::map_variance_at(double x, double y, double l, double* variance_C2) const {
+  // Per electrode, in quadrature (independent shares, docs/lookup.md §1.10): the nodes' own
+  // estimate, the interpolation error between nodes × the bubble 1 − (1 − 4t(1−t))(1 − 4s(1−s))
+  // (zero at the nodes, one on the cell's mid-lines), between levels × 4w(1−w), and beyond them
+  // the slope × the distance in ln F. Each share bilinear in the cell's corners and linear in
+  // ln F between the levels (absolute errors; beyond the levels scaled by the F^p law).
+  const std::size_t nx = interp_.nx(), ny = interp_.ny(), ne = ne_, nf = interp_.n_levels();
   const double u = (x - interp_.x0()) * interp_.inv_hx(), v = (y - interp_.y0()) * interp_.inv_hy();
   if (!(u >= 0 && v >= 0 && u <= double(nx - 1) && v <= double(ny - 1))) return false;
   const std::size_t i = std::min(std::size_t(u), nx - 2), j = std::min(std::size_t(v), ny - 2);
   const double a = u - double(i), b = v - double(j);
+  const double wc[4] = {(1 - a) * (1 - b), a * (1 - b), (1 - a) * b, a * b};
   std::size_t f0 = 0;
   double w = 0;
   interp_.level_bracket(l, f0, w);
-  const std::size_t f1 = interp_.n_levels() > 1 ? f0 + 1 : f0;
-  const double scale = std::exp(interp_.force_exponent() * l);
-  for (std::size_t k = 0; k < ne; ++k) {
-    auto at = [&](std::size_t f, std::size_t ii, std::size_t jj) { return map_error_[((f * ny + jj) * nx + ii) * ne + k]; };
-    auto level = [&](std::size_t f) {
-      return (1 - a) * (1 - b) * at(f, i, j) + a * (1 - b) * at(f, i + 1, j) + (1 - a) * b * at(f, i, j + 1) +
-             a * b * at(f, i + 1, j + 1);
-    };
-    error_C[k] = scale * ((1 - w) * level(f0) + w * level(f1));
+  const std::size_t f1 = nf > 1 ? f0 + 1 : f0;
+  const double bubble = 1.0 - (1.0 - 4.0 * a * (1.0 - a)) * (1.0 - 4.0 * b * (1.0 - b));
+  double level_share = 0, beyond = 0, scale = 1;
+  std::size_t f_end = 0;
+  if (l < interp_.min_log_force()) {
+    beyond = nf > 1 ? interp_.min_log_force() - l : 0.0;
+    scale = std::exp(interp_.force_exponent() * (l - interp_.min_log_force()));
+  } else if (l > interp_.max_log_force()) {
+    beyond = nf > 1 ? l - interp_.max_log_force() : 0.0;
+    f_end = nf - 1;
+    scale = std::exp(interp_.force_exponent() * (l - interp_.max_log_force()));
+  } else if (nf > 1) {
+    level_share = 4.0 * w * (1.0 - w);
+  }
+  const std::size_t cell = j * (nx - 1) + i;
+  const float* c0 = &map_error_[(cell * nf + f0) * ne * 16];
+  const float* c1 = &map_error_[(cell * nf + f1) * ne * 16];
+  auto corners = [&](const float* c) { return wc[0] * c[0] + wc[1] * c[1] + wc[2] * c[2] + wc[3] * c[3]; };
+  for (std::size_t k = 0; k < ne; ++k, c0 += 16, c1 += 16) {
+    const double node = (1 - w) * corners(c0) + w * corners(c1);
+    const double between_nodes = bubble * ((1 - w) * corners(c0 + 4) + w * corners(c1 + 4));
+    variance_C2[k] = node * node + between_nodes * between_nodes;
+  }
+  if (level_share > 0) {
+    const float* c = &map_error_[(cell * nf + f0) * ne * 16];
+    for (std::size_t k = 0; k < ne; ++k, c += 16) {
+      const double between_levels = level_share * corners(c + 8);
+      variance_C2[k] += between_levels * between_levels;
+    }
+  }
+  if (beyond > 0) {
+    const float* c = &map_error_[(cell * nf + f_end) * ne * 16];
+    for (std::size_t k = 0; k < ne; ++k, c += 16) {
+      const double off_levels = beyond * corners(c + 12);
+      variance_C2[k] = scale * scale * (variance_C2[k] + off_levels * off_levels);
+    }
+  } else if (scale != 1) {
+    for (std::size_t k = 0; k < ne; ++k) variance_C2[k] *= scale * scale;
   }
   return true;
 }
 
+bool Locator::charge_error(double x_m, double y_m, double force_N, double* error_C) const {
+  if (!(force_N > 0) || !std::isfinite(force_N) || !interp_.inside(x_m, y_m)) return false;
+  if (map_error_.empty()) {
+    for (std::size_t k = 0; k < ne_; ++k) error_C[k] = 0.0;
+    return true;
+  }
+  if (!map_variance_at(x_m, y_m, std::log(force_N), error_C)) return false;
+  for (std::size_t k = 0; k < ne_; ++k) error_C[k] = std::sqrt(error_C[k]) * std::abs(gain_[k]);
+  return true;
+}
+
 void Locator::set_map_error(const ChargeMap& map) {
-  // Stored reduced like the interpolant's G (error / F_f^p), so that the scaling law carries it
-  // between and beyond the levels; bilinear in position (map_error_at).
-  if (map.estimated_charge_error_C.empty()) return;
-  const std::size_t n = map.nf() * map.ny() * map.nx() * map.ne();
-  if (map.estimated_charge_error_C.size() != n) {
+  // Per usable cell, level and electrode, four shares at the cell's four corners (map_error_at),
+  // absolute (C at the level's force), as floats: 64 bytes per electrode, next to each other for
+  // the levels of a cell.
+  const std::size_t nx = map.nx(), ny = map.ny(), nf = map.nf(), ne = map.ne();
+  const std::size_t n = nf * ny * nx * ne;
+  const bool node_estimate = !map.estimated_charge_error_C.empty();
+  if (node_estimate && map.estimated_charge_error_C.size() != n) {
     throw InputError("map estimated_charge_error_C has " + std::to_string(map.estimated_charge_error_C.size()) +
                      " values; the grid needs " + std::to_string(n) + " ([nf][ny][nx][ne])");
   }
-  map_error_.resize(n);
-  for (std::size_t f = 0; f < map.nf(); ++f) {
-    const double scale = std::pow(map.forces_N[f], -interp_.force_exponent());
-    const std::size_t block = map.ny() * map.nx() * map.ne();
-    for (std::size_t m = 0; m < block; ++m) {
-      const double e = map.estimated_charge_error_C[f * block + m];
-      map_error_[f * block + m] = std::isfinite(e) && e > 0 ? e * scale : 0.0;
+  if (!node_estimate && !options_.interpolation_error) return;
+  InterpolationError between;
+  if (options_.interpolation_error) between = estimate_interpolation_error(map);
+  auto share = [](const std::vector<double>& values, std::size_t at) {
+    if (values.empty()) return 0.0f;
+    const double e = values[at];
+    return std::isfinite(e) && e > 0 ? float(e) : 0.0f;
+  };
+  map_error_.assign((nx - 1) * (ny - 1) * nf * ne * 16, 0.0f);
+  for (std::size_t j = 0; j + 1 < ny; ++j) {
+    for (std::size_t i = 0; i + 1 < nx; ++i) {
+      if (!interp_.cell_usable(i, j)) continue;
+      const std::size_t cell = j * (nx - 1) + i;
+      for (std::size_t f = 0; f < nf; ++f) {
+        for (std::size_t k = 0; k < ne; ++k) {
+          float* out = &map_error_[((cell * nf + f) * ne + k) * 16];
+          for (std::size_t c = 0; c < 4; ++c) {
+            const std::size_t at = map.charge_index(f, j + c / 2, i + c % 2, k);
+            out[c] = node_estimate ? share(map.estimated_charge_error_C, at) : 0.0f;
+            out[4 + c] = share(between.between_nodes_C, at);
+            out[8 + c] = share(between.between_levels_C, at);
+            out[12 + c] = share(between.beyond_levels_C, at);
+          }
+        }
+      }
     }
   }
 }
 
 std::array<double, 6> Locator::reported_jtj(const Fit& fit, const Query& Q) const {
-  // JᵀWJ for the reported σ's: with the map's own error stored, each electrode's weight is
-  // 1 / (σ_k² + e_k²), e_k the map error interpolated at the solution (docs/lookup.md §1.6).
-  if (map_error_.empty()) return fit.jtj;
-  Vec model{}, error{};
-  std::array<std::array<double, 3>, max_electrodes> grad{};
-  if (!interp_.evaluate(fit.x, fit.y, fit.l, model.data(), grad.data()) || !map_error_at(fit.x, fit.y, fit.l, error.data())) {
-    return fit.jtj;
-  }
+  // JᵀWJ for the reported σ's: with the map's own error, each electrode's weight is
+  // 1 / (σ_k² + e_k²), e_k the map error at the solution (docs/lookup.md §1.10), the Jacobian
+  // the fit's last evaluated one (no evaluation here).
+  if (map_error_.empty() || !fit.has_variance) return fit.jtj;
+  const auto& grad = fit.grad;
   std::array<double, 6> m{0, 0, 0, 0, 0, 0};
   for (std::size_t k = 0; k < ne_; ++k) {
     const double sigma = 1.0 / Q.w[k];
-    const double w = 1.0 / std::sqrt(sigma * sigma + error[k] * error[k]);
+    const double w = 1.0 / std::sqrt(sigma * sigma + fit.variance[k]);
     const double g0 = grad[k][0] * w, g1 = grad[k][1] * w, g2 = Q.fixed_force ? 0.0 : grad[k][2] * w;
     m[0] += g0 * g0;
     m[1] += g0 * g1;
@@ -390,16 +457,13 @@ void Locator::add_map_error(const Query& Q, std::array<Fit, 8>& fits, int n_fits
   // fits, and a second solution is not hidden behind the first one's map error (§1.6).
   for (int s = 0; s < n_fits; ++s) {
     Fit& f = fits[std::size_t(s)];
-    Vec model{}, error{};
-    if (!f.ok || f.duplicate || !interp_.evaluate(f.x, f.y, f.l, model.data(), nullptr) ||
-        !map_error_at(f.x, f.y, f.l, error.data())) {
-      continue;
-    }
+    if (!f.ok || f.duplicate || !map_variance_at(f.x, f.y, f.l, f.variance.data())) continue;
+    f.has_variance = true;
     double chi2 = 0;
     for (std::size_t k = 0; k < ne_; ++k) {
       const double sigma = 1.0 / Q.w[k];
-      const double r = (model[k] - Q.q[k]) / std::sqrt(sigma * sigma + error[k] * error[k]);
-      chi2 += r * r;
+      const double r = f.model[k] - Q.q[k];
+      chi2 += r * r / (sigma * sigma + f.variance[k]);
     }
     f.chi2 = chi2;
   }
@@ -555,7 +619,8 @@ double Locator::log_posterior_weight(const Query& Q, const Fit& f) const {
   // the posterior's width: A gets the precision of the uniform prior (12 / width²) added.
   const double wx = double(interp_.nx() - 1) * interp_.hx(), wy = double(interp_.ny() - 1) * interp_.hy();
   const double rx = 12.0 / (wx * wx), ry = 12.0 / (wy * wy);
-  const auto& m = f.jtj;  // 00 01 02 11 12 22
+  // A = JᵀWJ with the weights at the solution (the map's own error there, §1.10), as the σ's.
+  const std::array<double, 6> m = reported_jtj(f, Q);  // 00 01 02 11 12 22
   const double a00 = m[0] + rx, a01 = m[1], a11 = m[3] + ry;
   double det = 0, floor = rx * ry;
   if (Q.fixed_force) {

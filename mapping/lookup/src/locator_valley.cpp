@@ -23,8 +23,8 @@ bool inverse_spd3(const std::array<double, 6>& m, std::array<double, 6>& c) {
 
 }  // namespace
 
-bool Locator::valley_point(const Query& Q, const Fit& f, const std::array<double, 2>& v, double t, double& s,
-                           double& l, double& chi2) const {
+bool Locator::valley_point(const Query& Q, const double* w, const Fit& f, const std::array<double, 2>& v, double t,
+                           double& s, double& l, double& chi2) const {
   // Minimises χ² over the offset s across the valley (unit vector u ⟂ v) and ln F (unless the
   // force is known) at the fixed offset t along v: three Gauss–Newton steps from (s, l).
   const std::array<double, 2> u{-v[1], v[0]};
@@ -36,9 +36,9 @@ bool Locator::valley_point(const Query& Q, const Fit& f, const std::array<double
     double a00 = 0, a01 = 0, a11 = 0, b0 = 0, b1 = 0;
     chi2 = 0;
     for (std::size_t k = 0; k < ne_; ++k) {
-      const double r = (model[k] - Q.q[k]) * Q.w[k];
-      const double js = (grad[k][0] * u[0] + grad[k][1] * u[1]) * Q.w[k];
-      const double jl = Q.fixed_force ? 0.0 : grad[k][2] * Q.w[k];
+      const double r = (model[k] - Q.q[k]) * w[k];
+      const double js = (grad[k][0] * u[0] + grad[k][1] * u[1]) * w[k];
+      const double jl = Q.fixed_force ? 0.0 : grad[k][2] * w[k];
       chi2 += r * r;
       a00 += js * js;
       a01 += js * jl;
@@ -72,7 +72,11 @@ double Locator::valley_sigma(const Query& Q, Fit& f) const {
   // and the profile point's offset in that parameter. Returns ln(profile half-width / linear
   // σ) along the direction (≥ 0), the widening of the solution's posterior volume (§1.8).
   if (options_.valley_sigma_cells <= 0 || f.singular) return 0.0;
-  std::array<double, 6> m = f.jtj, c{};
+  // The weights of the reported σ's and χ²: the charge noise with the map's own error at the
+  // solution (§1.10), held along the profile.
+  Vec w{};
+  for (std::size_t k = 0; k < ne_; ++k) w[k] = f.has_variance ? 1.0 / std::sqrt(1.0 / (Q.w[k] * Q.w[k]) + f.variance[k]) : Q.w[k];
+  std::array<double, 6> m = reported_jtj(f, Q), c{};
   if (Q.fixed_force) {
     m[2] = m[4] = 0;
     m[5] = 1;
@@ -101,7 +105,7 @@ double Locator::valley_sigma(const Query& Q, Fit& f) const {
     double s_at = 0, l_at = f.l;
     for (int step = 0; step < 6 && t <= reach; ++step) {
       double s = slope_s * t * side, l = std::clamp(f.l + slope_l * t * side, Q.log_lo, Q.log_hi), chi2 = 0;
-      if (!valley_point(Q, f, v, side * t, s, l, chi2)) break;
+      if (!valley_point(Q, w.data(), f, v, side * t, s, l, chi2)) break;
       const double d = chi2 - f.chi2;
       if (d >= 1.0) {
         // Δχ² = 1 between the last point inside and this one (linear in √Δχ²).

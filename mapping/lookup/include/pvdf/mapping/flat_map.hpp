@@ -15,13 +15,17 @@ namespace pvdf::mapping {
 
 /// The first 8 bytes of every flat map.
 inline constexpr char flat_map_magic[8] = {'P', 'V', 'D', 'F', 'F', 'L', 'A', 'T'};
-inline constexpr std::uint32_t flat_map_version = 1;
+/// The version encode_flat_map writes. Version 2 added the per-node charge error section (content
+/// bit 2); version 1 files (no such section) are still read.
+inline constexpr std::uint32_t flat_map_version = 2;
+inline constexpr std::uint32_t flat_map_oldest_version = 1;
 inline constexpr std::uint32_t flat_map_header_bytes = 80;
 /// Bytes of each electrode name field (NUL-padded; names are at most 31 bytes).
 inline constexpr std::uint32_t flat_map_name_bytes = 32;
 /// Content bits of the header.
 inline constexpr std::uint32_t flat_map_has_derivatives = 1u << 0;
 inline constexpr std::uint32_t flat_map_has_calibration = 1u << 1;
+inline constexpr std::uint32_t flat_map_has_charge_error = 1u << 2;  ///< version ≥ 2: estimated_charge_error_C
 /// Largest flat map the reader accepts (bytes): larger files are refused before anything is read.
 inline constexpr std::uint64_t flat_map_max_bytes = std::uint64_t(1) << 30;
 /// Largest grid the reader accepts per axis and in force levels.
@@ -30,9 +34,11 @@ inline constexpr std::uint32_t flat_map_max_levels = 1000;
 
 /// The flat bytes of `map` (validated first; throws InputError naming `source` when the map cannot
 /// be exported, e.g. an electrode name longer than 31 bytes). Keeps what the lookup uses: grid,
-/// mask, force levels, electrodes (names, centres, noise), charges, status, derivatives and
-/// calibration when present, rim margin, tolerance and estimated error. Not kept: the scene,
-/// provenance text, deflections.
+/// mask, force levels, electrodes (names, centres, noise), charges, status, derivatives, the
+/// per-node charge error estimates and calibration when present, rim margin, tolerance and
+/// estimated error. Not kept: the scene, provenance text, deflections. (The interpolation error
+/// the Locator adds is computed from the charges when it is built, so it is the same for the
+/// HDF5 map and its flat export.)
 std::vector<unsigned char> encode_flat_map(const ChargeMap& map, const std::string& source);
 
 /// Reads a flat map from memory (e.g. the array of an exported C header). Refuses, with

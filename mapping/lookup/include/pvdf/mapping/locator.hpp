@@ -71,6 +71,12 @@ struct LocatorOptions {
   /// direction (Δχ² = 1, the other parameters re-fitted) where that is wider, and its
   /// probability the same widening. 0 = linearised σ's only.
   double valley_sigma_cells = 0.2;
+  /// The map's error between its nodes and force levels, estimated from the map when the
+  /// Locator is built (estimate_interpolation_error, docs/lookup.md §1.10), joins the charge
+  /// noise with the map's per-node estimate (ChargeMap::estimated_charge_error_C): the fits'
+  /// weights, χ², flags, σ's and probabilities use σ_k² + e_k². false = the per-node estimate
+  /// alone (the lookup before version 5: σ's that cover the noise, not the map's error).
+  bool interpolation_error = true;
 };
 
 /// A located press. Values are SI; σ's are 1-σ from the charge-noise model, (JᵀWJ)⁻¹.
@@ -144,6 +150,11 @@ class Locator {
 
   /// The map's (calibrated, if enabled) charges for a press at (x, y) with force F; false outside.
   bool predict(double x_m, double y_m, double force_N, double* charges_C) const;
+  /// The map's error (C, one per electrode, calibrated like predict()) that the lookup adds to
+  /// the charge noise for a press at (x, y) with force F: the per-node estimate and the
+  /// interpolation error between nodes and levels in quadrature (docs/lookup.md §1.10); 0 when
+  /// the map states none and interpolation_error is off. False off the usable cells.
+  bool charge_error(double x_m, double y_m, double force_N, double* error_C) const;
 
   std::size_t n_electrodes() const { return ne_; }
   const std::vector<std::string>& electrode_names() const { return names_; }
@@ -173,7 +184,8 @@ class Locator {
   void build_model_table(const std::vector<CellLevelModel>& models);
   void mark_fold_cells(const std::vector<CellLevelModel>& models);
   void build_direction_bins(const std::vector<std::array<double, 4>>& boxes, const DirectionRanges& ranges);
-  /// The map's own charge error (ChargeMap::estimated_charge_error_C), when stored.
+  /// The map's own charge error: ChargeMap::estimated_charge_error_C when stored, and the
+  /// interpolation error estimated from the map (options.interpolation_error).
   void set_map_error(const ChargeMap& map);
 
   struct Fit {
@@ -185,6 +197,14 @@ class Locator {
     bool vague = false;     ///< within noise, but the charges do not place it (without_position)
     bool fallback = false;  ///< started by the angular fallback (no coarse-search start fitted within noise)
     double log_widen = 0;   ///< ln(valley half-width / linearised σ) along the weak direction (valley_sigma)
+    /// The model's charges at the end point (the last evaluation, carried along the last step
+    /// taken unevaluated by its Jacobian): χ² under the map's own error needs no evaluation.
+    std::array<double, max_electrodes> model{};
+    /// The Jacobian rows at the last evaluation (not zeroed: written with the end point) and the
+    /// map's own error² at the end point (set by add_map_error when has_variance).
+    std::array<std::array<double, 3>, max_electrodes> grad;
+    std::array<double, max_electrodes> variance;
+    bool has_variance = false;
   };
   Fit levenberg_marquardt(const double* q, const double* inv_sigma, double x, double y, double l, bool fixed_force,
                           double log_lo, double log_hi, const Fit* found, int n_found) const;
@@ -205,15 +225,15 @@ class Locator {
   double valley_sigma(const Query& query, Fit& fit) const;
   /// The profile point at offset t along the unit direction v from the fit: the offset s across
   /// and ln F re-fitted from (s, l); χ² there. False off the map.
-  bool valley_point(const Query& query, const Fit& fit, const std::array<double, 2>& v, double t, double& s, double& l,
-                    double& chi2) const;
+  bool valley_point(const Query& query, const double* weights, const Fit& fit, const std::array<double, 2>& v, double t,
+                    double& s, double& l, double& chi2) const;
   /// The weighted JᵀJ behind the reported σ's: fit.jtj, or with the map's own error added to
   /// the charge noise where the map stores one.
   std::array<double, 6> reported_jtj(const Fit& fit, const Query& query) const;
   /// Replaces each fit's χ² by the one under the charge noise plus the map's own error.
   void add_map_error(const Query& query, std::array<Fit, 8>& fits, int n_fits) const;
-  /// The map's charge error (C) at (x, y, ln F); false off the grid or when none is stored.
-  bool map_error_at(double x, double y, double l, double* error_C) const;
+  /// The square of the map's charge error (C²) at (x, y, ln F), per electrode; false off the grid.
+  bool map_variance_at(double x, double y, double l, double* variance_C2) const;
   Location locate_impl(const double* charges_C, bool fixed_force, double log_known_force,
                        const std::array<double, 3>* hints = nullptr, int n_hints = 0, bool held = false) const;
   /// A query prepared for fitting: calibration undone, weights, unit direction, force bounds.
@@ -300,8 +320,11 @@ class Locator {
   std::vector<std::string> names_;
   std::vector<double> noise_;
   std::vector<double> gain_, offset_;
-  /// The map's own charge error per node, level and electrode, divided by F_level^p (empty: none).
-  std::vector<double> map_error_;
+  /// The map's own charge error per usable cell j·(nx − 1) + i, level and electrode: four shares
+  /// (node estimate, between nodes, between level f and f + 1, beyond the end level per unit
+  /// ln F) at the cell's four corners (i, j), (i+1, j), (i, j+1), (i+1, j+1); C at the level's
+  /// force, float (empty: none; map_variance_at combines them).
+  std::vector<float> map_error_;
   bool calibrated_ = false;
   LocatorOptions options_;
   double chi2_limit_ = 0, chi2_limit_free_ = 0, chi2_limit_fixed_ = 0;

@@ -1,0 +1,36 @@
+// The error a charge map makes *between* its nodes and force levels, estimated from the map's own
+// numbers (docs/lookup.md §1.10): hierarchical surpluses against the grids of every other node,
+// carried to the map's spacing with a locally measured convergence ratio, and the curvature of
+// the reduced charge across the force levels. The Locator adds it to its noise model.
+#pragma once
+
+#include "pvdf/mapping/map.hpp"
+
+#include <vector>
+
+namespace pvdf::mapping {
+
+/// The estimate, per node, level and electrode ([nf][ny][nx][ne], C at the level's force; 0 at
+/// unusable nodes).
+struct InterpolationError {
+  /// The error of the bicubic interpolant in the cells around the node (largest at their centres
+  /// and edge midpoints): the node's hierarchical surplus S₁ (the error there of the interpolants
+  /// of the grids of every other node, spacing 2h) over ρ₀ = min(16, ρ₁²), ρ₁ the ratio of the
+  /// surpluses one level coarser (4h) to S₁ around the node (2 where not measurable).
+  std::vector<double> between_nodes_C;
+  /// The largest error of the interpolation in ln F between level f and f + 1 (0 at the last
+  /// level and for a one-level map): curvature of the reduced charge G = Q/F^p across the
+  /// levels × Δ²/8, or with two levels a quarter of |G₁ − G₀| (no curvature measurable).
+  std::vector<double> between_levels_C;
+  /// Beyond the first (f = 0) and the last level (f = nf − 1) the map holds G constant (the
+  /// scaling law); the error grows like this × |ln F − ln F_level| (C per unit of ln F; 0 at
+  /// the other levels and for a one-level map).
+  std::vector<double> beyond_levels_C;
+};
+
+/// Estimates the map's interpolation error from its own charges (any ChargeMap the Locator
+/// accepts; the cost is about two interpolant constructions). Deterministic: the same charges
+/// give the same bits, so an HDF5 map and its flat export give the same estimate.
+InterpolationError estimate_interpolation_error(const ChargeMap& map);
+
+}  // namespace pvdf::mapping
