@@ -143,7 +143,8 @@ struct Figure::Impl {
       double T = height, B = 0, R = 0;
       for (const auto& p : out.panels) T = std::min(T, p.T), B = std::max(B, p.B), R = std::max(R, p.R);
       ColorBar& cb = out.shared;
-      cb.L = std::round(width - reserve + kBarGap);
+      // Beside the rightmost plot (equal-aspect panels may have shrunk away from the edge).
+      cb.L = std::round(std::min(width - reserve + kBarGap, R + kBarGap + 10));
       cb.R = cb.L + kBarWidth;
       cb.T = T, cb.B = B;
       colorbar_width(text, cb, B - T);
