@@ -22,11 +22,16 @@ namespace {
 constexpr double nan_value = std::numeric_limits<double>::quiet_NaN();
 
 /// Steps of the map's own interpolant per map cell for pictures: at most 0.25 mm apart (and at
-/// least 4 per cell), so that contours follow the interpolant, not chords across the map's cells.
+/// least 4 per cell, unless that passes ~1200 samples a side), so that contours follow the
+/// interpolant, not chords across the map's cells.
 int picture_refinement(const ChargeMap& map) {
   const double h_mm = std::max(std::abs(map.x_m.back() - map.x_m.front()) / double(std::max<std::size_t>(map.nx() - 1, 1)),
                                std::abs(map.y_m.back() - map.y_m.front()) / double(std::max<std::size_t>(map.ny() - 1, 1))) * 1e3;
-  return std::clamp(int(std::ceil(h_mm / 0.25)), 4, 32);
+  // At most ~1200 samples along the longer side (a fine, large map is already smooth enough;
+  // plot refines the samples bicubically where they are still coarse on the page).
+  const std::size_t cells = std::max<std::size_t>({map.nx() - 1, map.ny() - 1, 1});
+  const int cap = std::max(1, int(1200 / cells));
+  return std::min(std::clamp(int(std::ceil(h_mm / 0.25)), 4, 32), cap);
 }
 
 /// The (calibrated) charge of electrode k for presses of force F on a grid `refine` times finer
@@ -143,7 +148,7 @@ void write_intersection_png(const Locator& locator, const ChargeMap& map, const 
   if (!result.has_position()) {
     throw InputError("intersection picture: the press has no position (" + flags_text(result.flags) + ")");
   }
-  plot::Figure fig(1100, 760);
+  plot::Figure fig(1060, 760);
   auto& ax = fig.axes();
   for (std::size_t k = 0; k < map.ne(); ++k) {
     const plot::Grid g = charge_grid_pC(locator, map, k, result.force_N, picture_refinement(map));
@@ -221,7 +226,7 @@ void write_isocharge_overlay_png(const Locator& locator, const ChargeMap& map, d
                                  double half_width_m) {
   if (!(force_N > 0)) throw InputError("isocharge picture: force " + std::to_string(force_N) + " N must be > 0");
   if (!(half_width_m >= 0)) throw InputError("isocharge picture: half width " + std::to_string(half_width_m) + " m must be >= 0");
-  plot::Figure fig(1050, 760);
+  plot::Figure fig(990, 760);
   auto& ax = fig.axes();
   double x0 = std::numeric_limits<double>::infinity(), x1 = -x0, y0 = x0, y1 = -x0;
   for (std::size_t k = 0; k < map.ne(); ++k) {
