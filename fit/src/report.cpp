@@ -175,7 +175,10 @@ void write_fit_png(const FitResult& r, const MeasuredTable& m, const pvdf::Scene
     for (const auto* v : {&dm, &ds, &df})
       for (double x : *v) top = std::max(top, x);
     for (std::size_t i = 0; i < dm.size(); ++i) top = std::max(top, dm[i] + de[i]);
-    d.ylim(0, 1.15 * top).xlim(0, double(m.n_rows()) + 1);
+    // x spans the presses that have a deflection (one row apart at the ends), not every data
+    // row: one measured deflection is one point in the middle of the panel.
+    const double first = *std::min_element(di.begin(), di.end()), last = *std::max_element(di.begin(), di.end());
+    d.ylim(0, 1.15 * top).xlim(first - 1, last + 1);
     d.integer_x().title("Deflection under the probe").xlabel("press (data row)").ylabel("deflection (mm)").grid_lines().legend("upper right");
   } else {
     std::vector<double> idx, res;

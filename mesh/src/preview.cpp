@@ -49,7 +49,7 @@ void draw(pvdf::plot::Axes& ax, const pvdf::Scene& scene, const FilmMesh& mesh, 
             pvdf::plot::LineStyle::solid, pvdf::plot::Marker::none, 2.0);
     probe_labelled = true;
   }
-  ax.xlabel("x (mm)").ylabel("y (mm)").equal_aspect().legend("upper right");
+  ax.xlabel("x (mm)").ylabel("y (mm)").equal_aspect().legend("outside below");
 }
 
 }  // namespace

@@ -81,10 +81,17 @@ Axes& Axes::contour(const Grid& grid, const std::vector<double>& levels, std::op
   Item it;
   it.kind = Kind::contour;
   it.grid = std::make_shared<const Grid>(grid);
+  // Traced on the smooth interpolant, refined to at least ~400 cells along the longer side (at
+  // most 8 times, and about 4 million nodes): marching squares then follows the curve, not the
+  // chords of the coarse cells.
+  const std::size_t cells = std::max<std::size_t>(1, std::max(grid.nx, grid.ny) - 1);
+  int factor = std::clamp(static_cast<int>((400 + cells - 1) / cells), 1, 8);
+  while (factor > 1 && static_cast<double>(grid.nx) * grid.ny * factor * factor > 4e6) --factor;
+  const Grid fine = grid.nx >= 2 && grid.ny >= 2 ? refine_grid(grid, factor) : grid;
   for (double level : levels) {
     if (!finite(level)) continue;
     it.levels.push_back(level);
-    it.contours.push_back(contour_lines(grid, level));
+    it.contours.push_back(contour_lines(fine, level));
   }
   it.color = color ? *color : impl_->has_field() ? Color{20, 20, 20} : impl_->next_color(std::nullopt);
   it.width = finite(width_px) ? std::clamp(width_px, 0.5, 50.0) : 1.5;
@@ -161,7 +168,8 @@ Axes& Axes::integer_x(bool on) { impl_->integer_x = on; return *this; }
 Axes& Axes::equal_aspect(bool on) { impl_->equal = on; return *this; }
 Axes& Axes::grid_lines(bool on) { impl_->grid = on; return *this; }
 Axes& Axes::legend(const std::string& where) {
-  static const char* const allowed[] = {"best", "upper right", "upper left", "lower right", "lower left", "none"};
+  static const char* const allowed[] = {"best",       "upper right",   "upper left",   "lower right",
+                                        "lower left", "outside right", "outside below", "none"};
   for (const char* a : allowed) {
     if (where == a) {
       impl_->legend_where = where;
@@ -169,7 +177,12 @@ Axes& Axes::legend(const std::string& where) {
     }
   }
   throw InputError("plot legend: placement \"" + where +
-                   "\" is not one of best, upper right, upper left, lower right, lower left, none");
+                   "\" is not one of best, upper right, upper left, lower right, lower left, outside right, "
+                   "outside below, none");
+}
+Axes& Axes::log_color(bool on) {
+  impl_->log_color = on;
+  return *this;
 }
 Axes& Axes::colorbar(bool on) {
   impl_->colorbar = on;

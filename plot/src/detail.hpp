@@ -64,6 +64,7 @@ struct Axes::Impl {
   std::optional<std::array<double, 2>> xlim, ylim;
   bool log_x = false, log_y = false, equal = false, grid = false, colorbar = true;
   bool integer_x = false;
+  bool log_color = false;  // field coloured by log10, colour bar a log axis in the field's units
   std::string legend_where = "best";
   std::size_t color_index = 0;
   std::optional<Color> last_color;

@@ -4,6 +4,8 @@
 // Cairo's fixed-point coordinates.
 #include "draw.hpp"
 
+#include "interpolate.hpp"
+
 #include <algorithm>
 #include <cstdio>
 
@@ -27,7 +29,7 @@ struct LegendEntry {
 std::vector<LegendEntry> legend_entries(const Axes::Impl& a) {
   std::vector<LegendEntry> out;
   for (const auto& it : a.items) {
-    if (it.label.empty()) continue;
+    if (!has_legend_entry(it)) continue;
     LegendEntry e;
     e.label = it.label;
     e.color = it.color;
@@ -312,7 +314,7 @@ void PanelPainter::draw_panel(const Axes::Impl& a, const PanelLayout& p) {
   cairo_rectangle(cr_, L, T, R - L, B - T);
   cairo_clip(cr_);
   for (const auto& it : a.items)
-    if (it.kind == Kind::field) draw_field(it, p);
+    if (it.kind == Kind::field) draw_field(it, p, a.log_color);
   if (a.grid) {
     for (const auto& t : p.xt)
       if (t.major) segment({pixel_center(p.xs.to_px(t.value)), T}, {pixel_center(p.xs.to_px(t.value)), B}, 1, kGrid);
@@ -360,14 +362,16 @@ void PanelPainter::draw_panel(const Axes::Impl& a, const PanelLayout& p) {
   draw_legend(a, p, data_points);
 }
 
-void PanelPainter::draw_field(const Item& it, const PanelLayout& p) {
+void PanelPainter::draw_field(const Item& it, const PanelLayout& p, bool log) {
   const Grid& g = *it.grid;
   if (g.nx < 2 || g.ny < 2 || !(g.x1 != g.x0) || !(g.y1 != g.y0)) return;
-  const auto range = field_range(it);
-  const double lo = range[0], inv = 1.0 / (range[1] - range[0]);
+  const auto range = field_range(it, log);
+  const double lo = log ? std::log10(range[0]) : range[0];
+  const double inv = 1.0 / ((log ? std::log10(range[1]) : range[1]) - lo);
   const int W = static_cast<int>(p.R - p.L), H = static_cast<int>(p.B - p.T);
   if (W <= 0 || H <= 0) return;
-  // One image pixel per PNG pixel of the plot rectangle, bilinear in the grid; NaN → transparent.
+  // One image pixel per PNG pixel of the plot rectangle, on the grid's smooth interpolant (the
+  // one contours are traced on); NaN → transparent.
   static constexpr int kLut = 1024;
   std::vector<std::uint32_t> lut(kLut);
   for (int k = 0; k < kLut; ++k) {
@@ -385,20 +389,10 @@ void PanelPainter::draw_field(const Item& it, const PanelLayout& p) {
     auto* row = reinterpret_cast<std::uint32_t*>(data + static_cast<std::ptrdiff_t>(j) * stride);
     const double b = (p.ys.from_px(p.T + j + 0.5) - g.y0) / (g.y1 - g.y0) * nym;
     for (int i = 0; i < W; ++i) {
-      const double a = fi[static_cast<std::size_t>(i)];
       row[i] = 0;
-      if (!(a >= -1e-9 && a <= nxm + 1e-9 && b >= -1e-9 && b <= nym + 1e-9)) continue;
-      const std::size_t i0 = std::min(static_cast<std::size_t>(std::max(a, 0.0)), g.nx - 2);
-      const std::size_t j0 = std::min(static_cast<std::size_t>(std::max(b, 0.0)), g.ny - 2);
-      const double u = std::clamp(a - static_cast<double>(i0), 0.0, 1.0), v = std::clamp(b - static_cast<double>(j0), 0.0, 1.0);
-      const double f00 = g.at(i0, j0), f10 = g.at(i0 + 1, j0), f01 = g.at(i0, j0 + 1), f11 = g.at(i0 + 1, j0 + 1);
-      double f;
-      if (finite(f00) && finite(f10) && finite(f01) && finite(f11)) {
-        f = (1 - v) * ((1 - u) * f00 + u * f10) + v * ((1 - u) * f01 + u * f11);
-      } else {
-        f = g.at(u < 0.5 ? i0 : i0 + 1, v < 0.5 ? j0 : j0 + 1);  // nearest node next to a hole
-        if (!finite(f)) continue;
-      }
+      double f = interpolate_field(g, fi[static_cast<std::size_t>(i)], b);
+      if (std::isnan(f)) continue;
+      if (log) f = f > 0 ? std::log10(f) : -std::numeric_limits<double>::infinity();
       const double t = std::clamp((f - lo) * inv, 0.0, 1.0);
       row[i] = lut[static_cast<std::size_t>(t * (kLut - 1) + 0.5)];
     }
@@ -614,36 +608,46 @@ void PanelPainter::draw_colorbar(const ColorBar& cb) {
 }
 
 void PanelPainter::draw_legend(const Axes::Impl& a, const PanelLayout& p, const std::vector<P2>& data_points) {
-  if (a.legend_where == "none") return;
+  if (p.legend == "none") return;
   const auto entries = legend_entries(a);
   if (entries.empty()) return;
-  const double row = kLegendPx * 1.5, handle = 28, pad = 7, gap = 7, inset = 8;
-  double tw = 0;
-  for (const auto& e : entries) tw = std::max(tw, text_.width(e.label, kLegendPx));
-  const double bw = pad + handle + gap + tw + pad, bh = pad + row * static_cast<double>(entries.size()) + pad - 4;
-  // "best" tries the corners first (ties keep this order), then the edge centres.
-  const char* const order[] = {"upper right",  "upper left",  "lower left",   "lower right",
-                               "center right", "center left", "upper center", "lower center"};
-  std::string where = a.legend_where;
-  auto box_at = [&](const std::string& w) {
-    const bool left = w.find("left") != std::string::npos, right = w.find("right") != std::string::npos;
-    const bool upper = w.find("upper") != std::string::npos, lower = w.find("lower") != std::string::npos;
-    const double x0 = left ? p.L + inset : right ? p.R - inset - bw : (p.L + p.R - bw) / 2;
-    const double y0 = upper ? p.T + inset : lower ? p.B - inset - bh : (p.T + p.B - bh) / 2;
-    return std::array<double, 2>{x0, y0};
-  };
-  if (where == "best") {
-    std::size_t best_count = std::numeric_limits<std::size_t>::max();
-    for (const char* w : order) {
-      const auto b = box_at(w);
-      std::size_t n = 0;
-      for (const auto& q : data_points)
-        if (q[0] >= b[0] - 4 && q[0] <= b[0] + bw + 4 && q[1] >= b[1] - 4 && q[1] <= b[1] + bh + 4) ++n;
-      if (n < best_count) best_count = n, where = w;
+  const double row = kLegendPx * 1.5, inset = 8;
+  double x0 = 0, y0 = 0, bw = 0, bh = 0;
+  std::vector<std::array<double, 2>> entry_xy;
+  if (p.legend == "outside right" || p.legend == "outside below") {
+    x0 = p.legend_x0, y0 = p.legend_y0, bw = p.legend_w, bh = p.legend_h;
+    entry_xy = p.legend_entry_xy;
+  } else {
+    double tw = 0;
+    for (const auto& e : entries) tw = std::max(tw, text_.width(e.label, kLegendPx));
+    bw = kLegendPad + kLegendHandle + kLegendGap + tw + kLegendPad;
+    bh = kLegendPad + row * static_cast<double>(entries.size()) + kLegendPad - 4;
+    for (std::size_t k = 0; k < entries.size(); ++k) entry_xy.push_back({kLegendPad, kLegendPad + row * static_cast<double>(k)});
+    // "best" tries the corners first (ties keep this order), then the edge centres.
+    const char* const order[] = {"upper right",  "upper left",  "lower left",   "lower right",
+                                 "center right", "center left", "upper center", "lower center"};
+    std::string where = p.legend;
+    auto box_at = [&](const std::string& w) {
+      const bool left = w.find("left") != std::string::npos, right = w.find("right") != std::string::npos;
+      const bool upper = w.find("upper") != std::string::npos, lower = w.find("lower") != std::string::npos;
+      const double bx = left ? p.L + inset : right ? p.R - inset - bw : (p.L + p.R - bw) / 2;
+      const double by = upper ? p.T + inset : lower ? p.B - inset - bh : (p.T + p.B - bh) / 2;
+      return std::array<double, 2>{bx, by};
+    };
+    if (where == "best") {
+      std::size_t best_count = std::numeric_limits<std::size_t>::max();
+      for (const char* w : order) {
+        const auto b = box_at(w);
+        std::size_t n = 0;
+        for (const auto& q : data_points)
+          if (q[0] >= b[0] - 4 && q[0] <= b[0] + bw + 4 && q[1] >= b[1] - 4 && q[1] <= b[1] + bh + 4) ++n;
+        if (n < best_count) best_count = n, where = w;
+      }
     }
+    const auto b = box_at(where);
+    x0 = std::round(b[0]), y0 = std::round(b[1]);
   }
-  const auto b = box_at(where);
-  const double x0 = std::round(b[0]), y0 = std::round(b[1]);
+  if (entry_xy.size() != entries.size()) return;
   cairo_rectangle(cr_, x0 + 0.5, y0 + 0.5, bw - 1, bh - 1);
   set_color(kWhite);
   cairo_fill_preserve(cr_);
@@ -652,8 +656,8 @@ void PanelPainter::draw_legend(const Axes::Impl& a, const PanelLayout& p, const 
   cairo_stroke(cr_);
   for (std::size_t k = 0; k < entries.size(); ++k) {
     const auto& e = entries[k];
-    const double cy = y0 + pad + row * (static_cast<double>(k) + 0.5) - 2;
-    const double hx0 = x0 + pad, hx1 = hx0 + handle;
+    const double cy = y0 + entry_xy[k][1] + row * 0.5 - 2;
+    const double hx0 = x0 + entry_xy[k][0], hx1 = hx0 + kLegendHandle;
     if (e.patch) {
       const std::vector<P2> box{{hx0 + 4, cy - 6}, {hx1 - 4, cy - 6}, {hx1 - 4, cy + 6}, {hx0 + 4, cy + 6}};
       if (e.fill) fill_polygon(box, *e.fill);
@@ -662,7 +666,7 @@ void PanelPainter::draw_legend(const Axes::Impl& a, const PanelLayout& p, const 
       stroke_polyline({{hx0, cy}, {hx1, cy}}, e.width, e.color, e.style);
       marker({(hx0 + hx1) / 2, cy}, e.marker, e.marker_size, e.color);
     }
-    text_.draw(hx1 + gap, cy, e.label, kLegendPx, kBlack, 0, 0, VAlign::center);
+    text_.draw(hx1 + kLegendGap, cy, e.label, kLegendPx, kBlack, 0, 0, VAlign::center);
   }
 }
 

@@ -121,11 +121,30 @@ struct Figure::Impl {
       out.panels.push_back(layout_panel(text, *panels[k], std::round(c * cw), std::round(top + r * ch),
                                         std::round((c + 1) * cw), std::round(top + (r + 1) * ch), !out.shared.on));
     }
+    // Panels stacked in a column share their plot's left and right edges (the narrowest span),
+    // so that equal x values line up from panel to panel; equal-aspect columns keep their own.
+    for (int c = 0; c < cols && rows > 1; ++c) {
+      double L = -1e300, R = 1e300;
+      bool align = true;
+      for (int r = 0; r < rows; ++r) {
+        const std::size_t k = static_cast<std::size_t>(r * cols + c);
+        if (k >= out.panels.size() || panels[k]->equal) align = false;
+        else L = std::max(L, out.panels[k].L), R = std::min(R, out.panels[k].R);
+      }
+      if (!align || !(R - L >= 20)) continue;
+      for (int r = 0; r < rows; ++r) {
+        PanelLayout& p = out.panels[static_cast<std::size_t>(r * cols + c)];
+        p.L = L, p.R = R;
+        p.xs.p0 = L, p.xs.p1 = R;
+        if (p.cbar.on) p.cbar.L = p.R + kBarGap, p.cbar.R = p.cbar.L + kBarWidth;
+      }
+    }
     if (out.shared.on) {
       double T = height, B = 0, R = 0;
       for (const auto& p : out.panels) T = std::min(T, p.T), B = std::max(B, p.B), R = std::max(R, p.R);
       ColorBar& cb = out.shared;
-      cb.L = std::round(width - reserve + kBarGap);
+      // Beside the rightmost plot (equal-aspect panels may have shrunk away from the edge).
+      cb.L = std::round(std::min(width - reserve + kBarGap, R + kBarGap + 10));
       cb.R = cb.L + kBarWidth;
       cb.T = T, cb.B = B;
       colorbar_width(text, cb, B - T);

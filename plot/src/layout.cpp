@@ -3,6 +3,7 @@
 #include "layout.hpp"
 
 #include <algorithm>
+#include <cstdio>
 
 namespace pvdf::plot::detail {
 namespace {
@@ -155,20 +156,24 @@ double max_tick_width(TextEngine& text, const std::vector<Tick>& ticks) {
 
 }  // namespace
 
-std::array<double, 2> field_range(const Item& it) {
+std::array<double, 2> field_range(const Item& it, bool log) {
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   for (double v : it.grid->values) {
-    if (!finite(v)) continue;
+    if (!finite(v) || (log && !(v > 0))) continue;
     lo = std::min(lo, v), hi = std::max(hi, v);
   }
-  if (!(lo <= hi)) lo = 0, hi = 1;
-  if (it.diverging && !it.vmin && !it.vmax) {
+  if (!(lo <= hi)) lo = log ? 0.1 : 0, hi = log ? 10 : 1;
+  if (it.diverging && !log && !it.vmin && !it.vmax) {
     const double m = std::max(std::abs(lo), std::abs(hi));
     lo = -m, hi = m;
   }
-  if (it.vmin) lo = *it.vmin;
-  if (it.vmax) hi = *it.vmax;
+  if (it.vmin && (!log || *it.vmin > 0)) lo = *it.vmin;
+  if (it.vmax && (!log || *it.vmax > 0)) hi = *it.vmax;
   if (lo > hi) std::swap(lo, hi);
+  if (log) {
+    if (!(hi > lo * (1 + 1e-9))) lo /= 2, hi *= 2;
+    return {lo, hi};
+  }
   const double mag = std::max(std::abs(lo), std::abs(hi));
   if (!(hi - lo > 1e-12 * mag) || !(hi - lo > 1e-300)) {
     const double d = mag > 0 ? 0.1 * mag : 1.0;
@@ -181,8 +186,9 @@ ColorBar panel_colorbar(const Axes::Impl& a) {
   ColorBar cb;
   for (const auto& it : a.items) {
     if (it.kind != Kind::field) continue;
-    const auto range = field_range(it);
+    const auto range = field_range(it, a.log_color);
     cb.on = true;
+    cb.log = a.log_color;
     cb.vmin = range[0];
     cb.vmax = range[1];
     cb.diverging = it.diverging;
@@ -190,7 +196,9 @@ ColorBar panel_colorbar(const Axes::Impl& a) {
     cb.panel = &a;
     double lo = std::numeric_limits<double>::infinity(), hi = -lo;
     for (double v : it.grid->values) {
-      if (finite(v)) lo = std::min(lo, v), hi = std::max(hi, v);
+      if (std::isnan(v)) continue;
+      if (cb.log && !(v > 0)) v = -std::numeric_limits<double>::infinity();  // drawn as below the scale
+      lo = std::min(lo, v), hi = std::max(hi, v);
     }
     const double tol = 1e-9 * (cb.vmax - cb.vmin);
     cb.extend_lo = lo < cb.vmin - tol;
@@ -198,13 +206,75 @@ ColorBar panel_colorbar(const Axes::Impl& a) {
   }
   cb.scale.lo = cb.vmin;
   cb.scale.hi = cb.vmax;
+  cb.scale.log = cb.log;
   return cb;
 }
 
 double colorbar_width(TextEngine& text, ColorBar& cb, double height_px) {
-  cb.ticks = linear_ticks(cb.vmin, cb.vmax, std::clamp(static_cast<int>(height_px / 50), 2, 10), &cb.mult);
+  const int target = std::clamp(static_cast<int>(height_px / 50), 2, 10);
+  if (cb.log) {
+    // In the field's own units (0.01, 0.1, 1 mm), never as exponents of 10 alone.
+    cb.mult.clear();
+    cb.ticks = log_ticks(cb.vmin, cb.vmax, target);
+    for (auto& t : cb.ticks) {
+      if (t.label.empty() || t.label.find("10$^") == std::string::npos || !(t.value >= 1e-4 && t.value < 1e5)) continue;
+      char buffer[32];
+      std::snprintf(buffer, sizeof buffer, "%g", t.value);
+      t.label = with_minus_sign(buffer);
+    }
+  } else {
+    cb.ticks = linear_ticks(cb.vmin, cb.vmax, target, &cb.mult);
+  }
   return kBarGap + kBarWidth + kTickLen + 4 + max_tick_width(text, cb.ticks) + (cb.label.empty() ? 0 : 10 + kLabelPx);
 }
+
+bool has_legend_entry(const Item& it) {
+  if (it.label.empty()) return false;
+  switch (it.kind) {
+    case Kind::line:
+    case Kind::scatter:
+    case Kind::contour:
+    case Kind::hline:
+    case Kind::vline:
+    case Kind::polygon: return true;
+    default: return false;
+  }
+}
+
+namespace {
+
+/// Where the legend's entries go for a placement (inside the box, from its top left) and the
+/// box's size; "outside below" packs entries side by side into rows no wider than `max_width`.
+void legend_box(TextEngine& text, const Axes::Impl& a, const std::string& where, double max_width, PanelLayout& p) {
+  p.legend_entry_xy.clear();
+  p.legend_w = p.legend_h = 0;
+  std::vector<double> widths;
+  for (const auto& it : a.items)
+    if (has_legend_entry(it)) widths.push_back(kLegendHandle + kLegendGap + text.width(it.label, kLegendPx));
+  if (widths.empty()) return;
+  const double row = kLegendPx * 1.5;
+  if (where == "outside below") {
+    double x = kLegendPad, y = kLegendPad, w = 0;
+    for (double ew : widths) {
+      if (x > kLegendPad && x + ew + kLegendPad > max_width) x = kLegendPad, y += row;
+      p.legend_entry_xy.push_back({x, y});
+      x += ew + kLegendSpacing;
+      w = std::max(w, x - kLegendSpacing + kLegendPad);
+    }
+    p.legend_w = w;
+    p.legend_h = y + row + kLegendPad - 4;
+    return;
+  }
+  double tw = 0;
+  for (std::size_t k = 0; k < widths.size(); ++k) {
+    tw = std::max(tw, widths[k]);
+    p.legend_entry_xy.push_back({kLegendPad, kLegendPad + row * static_cast<double>(k)});
+  }
+  p.legend_w = kLegendPad + tw + kLegendPad;
+  p.legend_h = kLegendPad + row * static_cast<double>(widths.size()) + kLegendPad - 4;
+}
+
+}  // namespace
 
 PanelLayout layout_panel(TextEngine& text, const Axes::Impl& a, double cx0, double cy0, double cx1, double cy1,
                          bool own_colorbar) {
@@ -212,29 +282,30 @@ PanelLayout layout_panel(TextEngine& text, const Axes::Impl& a, double cx0, doub
   resolve_range(a, true, p.xs);
   resolve_range(a, false, p.ys);
   if (own_colorbar && a.colorbar) p.cbar = panel_colorbar(a);
+  // A legend inside a filled field always hides data: "best" puts it under the panel.
+  p.legend = a.legend_where == "best" && a.has_field() ? "outside below" : a.legend_where;
+  const bool legend_right = p.legend == "outside right", legend_below = p.legend == "outside below";
   const double pad = 10;
   const double top = pad + (a.title.empty() ? 4 : kTitlePx + 12);
   const double bottom = kTickLen + 4 + kTickPx + (a.xlabel.empty() ? 0 : 10 + kLabelPx) + pad;
+  const bool equal = a.equal && !p.xs.log && !p.ys.log;
   double L = cx0 + 70, R = cx1 - 20, T = cy0 + top, B = cy1 - bottom;
+  // Equal aspect: the plot rectangle shrinks along the axis with fewer data units per pixel so
+  // that the data fill it (no empty bands inside the axes); only a very elongated rectangle
+  // (under a quarter of its room) widens the data range instead.
+  auto equal_lengths = [&](double w, double h, double& we, double& he) {
+    we = w, he = h;
+    if (!equal) return;
+    const double ux = (p.xs.hi - p.xs.lo) / w, uy = (p.ys.hi - p.ys.lo) / h;
+    if (ux > uy) he = std::max(0.25 * h, (p.ys.hi - p.ys.lo) / ux);
+    else we = std::max(0.25 * w, (p.xs.hi - p.xs.lo) / uy);
+  };
   for (int pass = 0; pass < 3; ++pass) {
     const double w = std::max(R - L, 10.0), h = std::max(B - T, 10.0);
-    // Equal aspect: widen the range of the axis with fewer data units per pixel.
-    if (a.equal && !p.xs.log && !p.ys.log) {
-      Scale xs, ys;
-      resolve_range(a, true, xs);
-      resolve_range(a, false, ys);
-      const double ux = (xs.hi - xs.lo) / w, uy = (ys.hi - ys.lo) / h;
-      if (ux > uy) {
-        const double c = (ys.lo + ys.hi) / 2, half = ux * h / 2;
-        ys.lo = c - half, ys.hi = c + half;
-      } else {
-        const double c = (xs.lo + xs.hi) / 2, half = uy * w / 2;
-        xs.lo = c - half, xs.hi = c + half;
-      }
-      p.xs.lo = xs.lo, p.xs.hi = xs.hi, p.ys.lo = ys.lo, p.ys.hi = ys.hi;
-    }
-    p.xt = fit_ticks(text, p.xs, w, true, &p.xmult);
-    p.yt = fit_ticks(text, p.ys, h, false, &p.ymult);
+    double we = w, he = h;
+    equal_lengths(w, h, we, he);
+    p.xt = fit_ticks(text, p.xs, we, true, &p.xmult);
+    p.yt = fit_ticks(text, p.ys, he, false, &p.ymult);
     p.ytick_w = max_tick_width(text, p.yt);
     double right = pad;
     for (const auto& t : p.xt) {
@@ -243,12 +314,21 @@ PanelLayout layout_panel(TextEngine& text, const Axes::Impl& a, double cx0, doub
       const double x = L + p.xs.t(t.value) * w;
       right = std::max(right, x + text.width(t.label, kTickPx) / 2 - R + pad);
     }
-    if (p.cbar.on) right = colorbar_width(text, p.cbar, h) + pad;
+    if (p.cbar.on) right = colorbar_width(text, p.cbar, he) + pad;
+    if (legend_right) {
+      legend_box(text, a, p.legend, 0, p);
+      if (p.legend_w > 0) right += p.legend_w + kLegendOutsideGap;
+    }
+    double below = 0;
+    if (legend_below) {
+      legend_box(text, a, p.legend, cx1 - cx0 - 2 * pad, p);
+      if (p.legend_h > 0) below = p.legend_h + kLegendOutsideGap;
+    }
     const double left = pad + (a.ylabel.empty() ? 0 : kLabelPx + 10) + p.ytick_w + 4 + kTickLen;
     // Room for a "×10^k" above the y axis or colour bar, and below the x tick labels.
     const bool mult_above = !p.ymult.empty() || (p.cbar.on && !p.cbar.mult.empty());
     const double top_now = std::max(top, mult_above ? pad + kTickPx + 8 : 0.0);
-    const double bottom_now = a.xlabel.empty() && !p.xmult.empty() ? bottom + 10 + kTickPx : bottom;
+    const double bottom_now = (a.xlabel.empty() && !p.xmult.empty() ? bottom + 10 + kTickPx : bottom) + below;
     L = cx0 + left;
     R = cx1 - right;
     T = cy0 + top_now;
@@ -256,9 +336,16 @@ PanelLayout layout_panel(TextEngine& text, const Axes::Impl& a, double cx0, doub
     if (R - L < 20) R = L + 20;
     if (B - T < 20) B = T + 20;
   }
+  if (equal) {
+    double we = R - L, he = B - T;
+    equal_lengths(R - L, B - T, we, he);
+    const double cx = (L + R) / 2, cy = (T + B) / 2;
+    L = cx - we / 2, R = cx + we / 2, T = cy - he / 2, B = cy + he / 2;
+  }
   p.L = std::round(L), p.R = std::round(R), p.T = std::round(T), p.B = std::round(B);
-  if (a.equal && !p.xs.log && !p.ys.log) {
-    // Exactly equal scales on the final (whole-pixel) rectangle.
+  if (equal) {
+    // Exactly equal scales on the final (whole-pixel) rectangle: the rounding (or a rectangle
+    // too elongated to shrink) is absorbed by widening one data range.
     const double ux = (p.xs.hi - p.xs.lo) / (p.R - p.L), uy = (p.ys.hi - p.ys.lo) / (p.B - p.T);
     if (ux > uy) {
       const double c = (p.ys.lo + p.ys.hi) / 2, half = ux * (p.B - p.T) / 2;
@@ -267,6 +354,9 @@ PanelLayout layout_panel(TextEngine& text, const Axes::Impl& a, double cx0, doub
       const double c = (p.xs.lo + p.xs.hi) / 2, half = uy * (p.R - p.L) / 2;
       p.xs.lo = c - half, p.xs.hi = c + half;
     }
+    p.xt = fit_ticks(text, p.xs, p.R - p.L, true, &p.xmult);
+    p.yt = fit_ticks(text, p.ys, p.B - p.T, false, &p.ymult);
+    p.ytick_w = max_tick_width(text, p.yt);
   }
   p.xs.p0 = p.L, p.xs.p1 = p.R;
   p.ys.p0 = p.B, p.ys.p1 = p.T;
@@ -275,6 +365,16 @@ PanelLayout layout_panel(TextEngine& text, const Axes::Impl& a, double cx0, doub
     p.cbar.R = p.cbar.L + kBarWidth;
     p.cbar.T = p.T;
     p.cbar.B = p.B;
+    colorbar_width(text, p.cbar, p.B - p.T);
+  }
+  if (legend_right && p.legend_w > 0) {
+    const double after = p.cbar.on ? p.cbar.L + colorbar_width(text, p.cbar, p.B - p.T) - kBarGap : p.R;
+    p.legend_x0 = std::round(after + kLegendOutsideGap);
+    p.legend_y0 = p.T;
+  } else if (legend_below && p.legend_h > 0) {
+    legend_box(text, a, p.legend, cx1 - cx0 - 2 * pad, p);
+    p.legend_x0 = std::round(std::clamp((p.L + p.R - p.legend_w) / 2, cx0 + pad, cx1 - pad - p.legend_w));
+    p.legend_y0 = std::round(p.B + kTickLen + 5 + kTickPx + (a.xlabel.empty() ? 0 : 9 + kLabelPx) + kLegendOutsideGap);
   }
   return p;
 }

@@ -91,6 +91,11 @@ void plot_scan(const std::string& path, const Scan& scan, const std::string& tit
         .grid_lines()
         .legend("best");
   }
+  // The scan's own x range on every panel (no padding beyond the scanned stretch).
+  if (!x.empty()) {
+    fig.axes(0, 0).xlim(x.front(), x.back());
+    if (ref) fig.axes(1, 0).xlim(x.front(), x.back());
+  }
   fig.save_png(path);
 }
 
@@ -190,8 +195,16 @@ void plot_transfer(const std::string& path, const InverseFilter& f) {
   fig.save_png(path);
 }
 
-void plot_restored(const std::string& path, const RestoredForces& r, const Scan& scan, const std::string& title,
-                   double resolution_m) {
+namespace {
+
+/// How a filter's target resolution is named in titles.
+std::string resolution_text(double resolution_m) {
+  return resolution_m > 0 ? "filter with target resolution " + fmt("%.2g", resolution_m * 1e3) + " mm"
+                          : "filter without a target resolution";
+}
+
+void plot_restored_figure(const std::string& path, const RestoredForces& r, const Scan& scan, const std::string& title,
+                          double resolution_m) {
   plot::Figure fig(1200, 900, 2, 1);
   fig.suptitle(title);
   const auto x = mm(r.x_m);
@@ -240,8 +253,29 @@ void plot_restored(const std::string& path, const RestoredForces& r, const Scan&
     m.line(x, true_mu, "μ true (where true $f_z$ > 10 % of its peak)", std::nullopt, plot::LineStyle::dashed);
   }
   m.title("Friction coefficient").xlabel("surface position x (mm)").ylabel("μ (–)").grid_lines().legend("best");
-  if (!x.empty()) m.xlim(x.front(), x.back());
+  // Stacked panels of one scan: the same x range, so that a feature lines up across them.
+  if (!x.empty()) {
+    m.xlim(x.front(), x.back());
+    ax.xlim(x.front(), x.back());
+  }
   fig.save_png(path);
+}
+
+}  // namespace
+
+void plot_restored(const std::string& path, const RestoredForces& r, const Scan& scan, const std::string& title,
+                   double resolution_m) {
+  plot_restored_figure(path, r, scan, title + " (" + resolution_text(resolution_m) + ")", resolution_m);
+}
+
+void plot_restored(const std::string& path, const RestoredForces& r, const Scan& scan, const std::string& title,
+                   const InverseFilter& filter) {
+  const std::string beta = "β (" + filter.beta_policy + ") = " + fmt("%.3g", filter.beta);
+  plot_restored_figure(path, r, scan,
+                       title + " (" + filter.regularization + " filter, " + beta + ", " +
+                           (filter.resolution_m > 0 ? "target resolution " + fmt("%.2g", filter.resolution_m * 1e3) + " mm"
+                                                    : "no target resolution") + ")",
+                       filter.resolution_m);
 }
 
 }  // namespace pvdf::restore

@@ -514,3 +514,152 @@ TEST_CASE("one shared colour bar for panels with a common scale", "[plot]") {
   const auto ts = separate.texts();
   CHECK(std::count(ts.begin(), ts.end(), "shared scale (pC)") == 3);
 }
+
+// ---------------------------------------------------------------------------------------------
+// The smooth interpolant, contours on coarse grids, fitted equal-aspect axes, legends off the
+// data, log colour scales in physical units.
+
+namespace {
+
+pvdf::plot::Grid sampled(std::size_t nx, std::size_t ny, double x0, double x1, double y0, double y1,
+                         double (*f)(double, double)) {
+  pvdf::plot::Grid g;
+  g.nx = nx, g.ny = ny, g.x0 = x0, g.x1 = x1, g.y0 = y0, g.y1 = y1;
+  for (std::size_t j = 0; j < ny; ++j)
+    for (std::size_t i = 0; i < nx; ++i)
+      g.values.push_back(f(x0 + (x1 - x0) * double(i) / double(nx - 1), y0 + (y1 - y0) * double(j) / double(ny - 1)));
+  return g;
+}
+
+double quadratic(double x, double y) { return 0.3 + x - 0.5 * y + x * x + 2 * x * y + 1.5 * y * y; }
+double radius_squared(double x, double y) { return x * x + y * y; }
+
+}  // namespace
+
+TEST_CASE("refine_grid passes through the nodes, is exact for quadratics and respects NaN holes", "[plot]") {
+  const auto g = sampled(7, 5, -1, 2, -1, 1, quadratic);
+  const auto fine = pvdf::plot::refine_grid(g, 4);
+  REQUIRE(fine.nx == 25);
+  REQUIRE(fine.ny == 17);
+  double worst = 0;
+  for (std::size_t j = 0; j < fine.ny; ++j)
+    for (std::size_t i = 0; i < fine.nx; ++i) {
+      const double x = fine.x0 + (fine.x1 - fine.x0) * double(i) / double(fine.nx - 1);
+      const double y = fine.y0 + (fine.y1 - fine.y0) * double(j) / double(fine.ny - 1);
+      worst = std::max(worst, std::abs(fine.at(i, j) - quadratic(x, y)));
+    }
+  CHECK(worst < 1e-12);  // interior and edge cells alike (quadratic ghost nodes)
+  for (std::size_t j = 0; j < g.ny; ++j)
+    for (std::size_t i = 0; i < g.nx; ++i) CHECK(fine.at(4 * i, 4 * j) == Approx(g.at(i, j)).margin(1e-14));
+  // A NaN node: the four cells around it have no value inside, the nodes of the other cells keep
+  // theirs, and a cell next to the hole (stencil, not corner) falls back to bilinear, finite.
+  auto holed = g;
+  holed.values[2 * holed.nx + 3] = std::numeric_limits<double>::quiet_NaN();
+  const auto f2 = pvdf::plot::refine_grid(holed, 4);
+  CHECK(std::isnan(f2.at(4 * 3 + 1, 4 * 2 + 1)));
+  CHECK(std::isnan(f2.at(4 * 3 - 1, 4 * 2 - 1)));
+  CHECK(std::isfinite(f2.at(4 * 1 + 2, 4 * 2 + 2)));
+  CHECK(f2.at(4 * 1, 4 * 2) == Approx(g.at(1, 2)));
+  CHECK_THROWS_AS(pvdf::plot::refine_grid(g, 0), pvdf::InputError);
+}
+
+TEST_CASE("contours of a coarse grid follow the smooth interpolant, not the cells' chords", "[plot]") {
+  // x² + y² on a 9 × 9 grid over [−1, 1]² (h = 0.25): chords of the cells would miss the circle
+  // r = 0.5 by up to h²/(8r) ≈ 0.016; the interpolant is exact for a quadratic.
+  const auto g = sampled(9, 9, -1, 1, -1, 1, radius_squared);
+  pvdf::plot::Figure fig(600, 600);
+  fig.axes().contour(g, {0.25}, Color{0, 0, 0}, 1.0).equal_aspect();
+  const auto chords = pvdf::plot::contour_lines(g, 0.25);
+  double chord_error = 0;
+  for (const auto& line : chords)
+    for (std::size_t i = 1; i < line.size(); ++i) {
+      const double mx = (line[i][0] + line[i - 1][0]) / 2, my = (line[i][1] + line[i - 1][1]) / 2;
+      chord_error = std::max(chord_error, std::abs(std::hypot(mx, my) - 0.5));
+    }
+  CHECK(chord_error > 5e-3);  // the grid-linear lines are visibly polygonal
+  const auto smooth = pvdf::plot::contour_lines(pvdf::plot::refine_grid(g, 8), 0.25);
+  REQUIRE(smooth.size() == 1);
+  double smooth_error = 0;
+  for (std::size_t i = 1; i < smooth[0].size(); ++i) {
+    const double mx = (smooth[0][i][0] + smooth[0][i - 1][0]) / 2, my = (smooth[0][i][1] + smooth[0][i - 1][1]) / 2;
+    smooth_error = std::max(smooth_error, std::abs(std::hypot(mx, my) - 0.5));
+  }
+  CHECK(smooth_error < 5e-4);
+  // What the panel draws: its pixels lie on the circle (within 1.5 px), not on the 8-sided chord polygon.
+  const auto path = (temp_dir() / "coarse_contour.png").string();
+  fig.save(path);
+  const Png png = read_png(path);
+  const auto c = fig.data_to_pixel(0, 0, 0, 0), e = fig.data_to_pixel(0, 0, 1, 0);
+  const double px_per_unit = e[0] - c[0];
+  int dark = 0, off = 0;
+  for (int y = static_cast<int>(c[1] - 0.7 * px_per_unit); y < static_cast<int>(c[1] + 0.7 * px_per_unit); ++y)
+    for (int x = static_cast<int>(c[0] - 0.7 * px_per_unit); x < static_cast<int>(c[0] + 0.7 * px_per_unit); ++x) {
+      if (colour_distance(png.at(x, y), Color{0, 0, 0}) > 60) continue;
+      ++dark;
+      const double r = std::hypot(x + 0.5 - c[0], y + 0.5 - c[1]) / px_per_unit;
+      if (std::abs(r - 0.5) * px_per_unit > 1.5) ++off;
+    }
+  CHECK(dark > 200);
+  CHECK(off == 0);
+}
+
+TEST_CASE("equal aspect fits the plot rectangle to the data: a field fills it, no empty bands", "[plot]") {
+  // A 4 × 1 field in a square-ish figure: the old layout widened y to 4 units (white bands above
+  // and below the field); now the rectangle is 4:1 and the field fills it to its frame.
+  const auto g = sampled(41, 11, 0, 4, 0, 1, quadratic);
+  pvdf::plot::Figure fig(800, 700);
+  fig.axes().field(g, "value").equal_aspect().colorbar(false);
+  const auto path = (temp_dir() / "equal_fit.png").string();
+  fig.save(path);
+  const Png png = read_png(path);
+  const auto lo = fig.data_to_pixel(0, 0, 0, 0), hi = fig.data_to_pixel(0, 0, 4, 1);
+  CHECK((hi[0] - lo[0]) == Approx(4 * (lo[1] - hi[1])).epsilon(0.01));
+  // Every corner just inside the data range is field colour, not background.
+  for (const auto& q : {fig.data_to_pixel(0, 0, 0.02, 0.02), fig.data_to_pixel(0, 0, 3.98, 0.98),
+                        fig.data_to_pixel(0, 0, 0.02, 0.98), fig.data_to_pixel(0, 0, 3.98, 0.02)})
+    CHECK(colour_distance(png.at(static_cast<int>(q[0]), static_cast<int>(q[1])), Color{255, 255, 255}) > 30);
+}
+
+TEST_CASE("outside legends sit beside or under the plot, never on the data", "[plot]") {
+  const auto g = sampled(21, 21, -1, 1, -1, 1, radius_squared);
+  for (const char* where : {"outside right", "outside below", "best"}) {
+    pvdf::plot::Figure fig(800, 700);
+    fig.axes().field(g, "r² (–)").contour(g, {0.25}, Color{255, 255, 255}, 1.0, "", 1.0, "r = 0.5")
+        .scatter({0.2}, {0.1}, "a point", Color{255, 0, 0}).equal_aspect().legend(where);
+    const auto path = (temp_dir() / "outside_legend.png").string();
+    fig.save(path);
+    const Png png = read_png(path);
+    const auto lo = fig.data_to_pixel(0, 0, -1, -1), hi = fig.data_to_pixel(0, 0, 1, 1);
+    int inside = 0, right = 0, below = 0;
+    for (int y = 0; y < png.h; ++y)
+      for (int x = 0; x < png.w; ++x) {
+        if (colour_distance(png.at(x, y), Color{200, 200, 200}) > 2) continue;
+        if (x >= lo[0] && x <= hi[0] && y >= hi[1] && y <= lo[1]) ++inside;
+        else if (x > hi[0]) ++right;
+        else if (y > lo[1]) ++below;
+      }
+    INFO(where);
+    CHECK(inside == 0);
+    CHECK((std::string(where) == "outside right" ? right : below) > 50);  // "best" with a field: below
+  }
+}
+
+TEST_CASE("a log colour scale is labelled in the field's own units", "[plot]") {
+  // Values 0.01 … 100 (say mm) coloured by log10: the bar reads 0.01, 0.1, 1, 10, 100, and the
+  // value 1 (the middle decade) takes the middle colour.
+  pvdf::plot::Grid g;
+  g.nx = 41, g.ny = 2, g.x0 = -2, g.x1 = 2, g.y0 = 0, g.y1 = 1;
+  for (std::size_t j = 0; j < g.ny; ++j)
+    for (std::size_t i = 0; i < g.nx; ++i) g.values.push_back(std::pow(10.0, -2 + 4.0 * double(i) / double(g.nx - 1)));
+  pvdf::plot::Figure fig(900, 400);
+  fig.axes().field(g, "σ (mm)").log_color().xlim(-2, 2).ylim(0, 1);
+  const auto texts = fig.texts();
+  for (const char* label : {"0.01", "0.1", "1", "10", "100"})
+    CHECK(std::find(texts.begin(), texts.end(), std::string(label)) != texts.end());
+  for (const auto& t : texts) CHECK(t.find("10−") == std::string::npos);  // no bare exponents
+  const auto path = (temp_dir() / "log_color.png").string();
+  fig.save(path);
+  const Png png = read_png(path);
+  const auto q = fig.data_to_pixel(0, 0, 0, 0.5);  // log10 value 0: t = 0.5
+  CHECK(colour_distance(png.at(static_cast<int>(q[0]), static_cast<int>(q[1])), pvdf::plot::colormap(0.5)) <= 12);
+}

@@ -21,9 +21,23 @@ namespace {
 
 constexpr double nan_value = std::numeric_limits<double>::quiet_NaN();
 
+/// Steps of the map's own interpolant per map cell for pictures: at most 0.25 mm apart (and at
+/// least 4 per cell, unless that passes ~1200 samples a side), so that contours follow the
+/// interpolant, not chords across the map's cells.
+int picture_refinement(const ChargeMap& map) {
+  const double h_mm = std::max(std::abs(map.x_m.back() - map.x_m.front()) / double(std::max<std::size_t>(map.nx() - 1, 1)),
+                               std::abs(map.y_m.back() - map.y_m.front()) / double(std::max<std::size_t>(map.ny() - 1, 1))) * 1e3;
+  // At most ~1200 samples along the longer side (a fine, large map is already smooth enough;
+  // plot refines the samples bicubically where they are still coarse on the page).
+  const std::size_t cells = std::max<std::size_t>({map.nx() - 1, map.ny() - 1, 1});
+  const int cap = std::max(1, int(1200 / cells));
+  return std::min(std::clamp(int(std::ceil(h_mm / 0.25)), 4, 32), cap);
+}
+
 /// The (calibrated) charge of electrode k for presses of force F on a grid `refine` times finer
-/// than the map's, in pC; NaN where the map has no value.
-/// With half_width_m > 0 the grid covers [−w, w]² (clipped to the map) at the same resolution.
+/// than the map's, in pC, sampled on the map's own interpolant (Locator::predict); NaN where the
+/// map has no value. With half_width_m > 0 the grid covers [−w, w]² (clipped to the map) at the
+/// same resolution.
 plot::Grid charge_grid_pC(const Locator& locator, const ChargeMap& map, std::size_t k, double force_N, int refine,
                           double half_width_m = 0.0) {
   plot::Grid g;
@@ -102,7 +116,7 @@ void write_isocharge_png(const Locator& locator, const ChargeMap& map, std::size
   if (electrode >= map.ne()) throw InputError("isocharge picture: electrode index " + std::to_string(electrode) + " out of range");
   if (!(force_N > 0)) throw InputError("isocharge picture: force " + std::to_string(force_N) + " N must be > 0");
   if (!(half_width_m >= 0)) throw InputError("isocharge picture: half width " + std::to_string(half_width_m) + " m must be >= 0");
-  const plot::Grid g = charge_grid_pC(locator, map, electrode, force_N, half_width_m > 0 ? 4 : 2, half_width_m);
+  const plot::Grid g = charge_grid_pC(locator, map, electrode, force_N, picture_refinement(map), half_width_m);
   // Contours between the 5th and 95th percentile of the field: the peak at the electrode
   // would otherwise take all the levels.
   std::vector<double> v;
@@ -134,10 +148,10 @@ void write_intersection_png(const Locator& locator, const ChargeMap& map, const 
   if (!result.has_position()) {
     throw InputError("intersection picture: the press has no position (" + flags_text(result.flags) + ")");
   }
-  plot::Figure fig(900, 800);
+  plot::Figure fig(1060, 760);
   auto& ax = fig.axes();
   for (std::size_t k = 0; k < map.ne(); ++k) {
-    const plot::Grid g = charge_grid_pC(locator, map, k, result.force_N, 2);
+    const plot::Grid g = charge_grid_pC(locator, map, k, result.force_N, picture_refinement(map));
     ax.contour(g, {charges_C[k] * 1e12}, plot::cycle_color(k), 2.5, "%.3g pC", 1.0,
                map.electrode_names[k] + ": " + format_number("%.3g", charges_C[k] * 1e12) + " pC");
   }
@@ -151,15 +165,15 @@ void write_intersection_png(const Locator& locator, const ChargeMap& map, const 
                plot::Color{200, 0, 0}, plot::Marker::plus, 14);
   }
   mark_electrodes(ax, map);
-  const double R = std::max(std::abs(map.x_m.front()), std::abs(map.x_m.back())) * 1e3;
+  // The axes span the map (where contours can be), the legend sits beside the panel, off the data.
   ax.title("Isocharge contours Q$_k$ = q$_k$ of the given charges, at the located force")
       .xlabel("probe x (mm)")
       .ylabel("probe y (mm)")
-      .xlim(-R, R)
-      .ylim(-R, R)
+      .xlim(map.x_m.front() * 1e3, map.x_m.back() * 1e3)
+      .ylim(map.y_m.front() * 1e3, map.y_m.back() * 1e3)
       .equal_aspect()
       .grid_lines()
-      .legend("lower right");
+      .legend("outside right");
   fig.save(path);
 }
 
@@ -212,10 +226,12 @@ void write_isocharge_overlay_png(const Locator& locator, const ChargeMap& map, d
                                  double half_width_m) {
   if (!(force_N > 0)) throw InputError("isocharge picture: force " + std::to_string(force_N) + " N must be > 0");
   if (!(half_width_m >= 0)) throw InputError("isocharge picture: half width " + std::to_string(half_width_m) + " m must be >= 0");
-  plot::Figure fig(900, 800);
+  plot::Figure fig(990, 760);
   auto& ax = fig.axes();
+  double x0 = std::numeric_limits<double>::infinity(), x1 = -x0, y0 = x0, y1 = -x0;
   for (std::size_t k = 0; k < map.ne(); ++k) {
-    const plot::Grid g = charge_grid_pC(locator, map, k, force_N, half_width_m > 0 ? 4 : 2, half_width_m);
+    const plot::Grid g = charge_grid_pC(locator, map, k, force_N, picture_refinement(map), half_width_m);
+    x0 = std::min(x0, g.x0), x1 = std::max(x1, g.x1), y0 = std::min(y0, g.y0), y1 = std::max(y1, g.y1);
     std::vector<double> v;
     for (double x : g.values) {
       if (std::isfinite(x)) v.push_back(x);
@@ -233,10 +249,9 @@ void write_isocharge_overlay_png(const Locator& locator, const ChargeMap& map, d
       .ylabel("probe y (mm)")
       .equal_aspect()
       .grid_lines()
-      .legend("lower right");
-  if (half_width_m > 0) {
-    ax.xlim(-half_width_m * 1e3, half_width_m * 1e3).ylim(-half_width_m * 1e3, half_width_m * 1e3);
-  }
+      .legend("outside right")
+      .xlim(x0, x1)  // the drawn window (the zoom clipped to the map): no empty bands
+      .ylim(y0, y1);
   fig.save(path);
 }
 

@@ -40,6 +40,13 @@ struct Grid {
 /// repeats its first point at the end. Throws InputError if values.size() != nx * ny.
 std::vector<std::vector<std::array<double, 2>>> contour_lines(const Grid& grid, double level);
 
+/// The grid sampled `factor` times finer ((nx − 1)·factor + 1 nodes along x, likewise y) on its
+/// smooth interpolant: Keys' bicubic convolution (passes through the nodes, continuous gradient,
+/// exact for quadratics; ghost nodes extrapolated quadratically at the edges), bilinear in cells
+/// whose 4 × 4 stencil holds a NaN, NaN in cells with a NaN corner. Throws InputError if
+/// values.size() != nx * ny or factor is not in 1..64.
+Grid refine_grid(const Grid& grid, int factor);
+
 /// One panel of a figure: data coordinates, axes, ticks, labels, legend.
 /// Every label and text is UTF-8 ("µm", "β", "ν") and may hold math between dollars: "$E_x$",
 /// "$\\nu_{xy}$", "m$^2$", "$d^{C_2}$", "$\\sigma$ (MPa)" give (nested) sub/superscripts and Greek
@@ -56,13 +63,16 @@ class Axes {
   /// Error bars (vertical, ± err).
   Axes& error_bars(const std::vector<double>& x, const std::vector<double>& y, const std::vector<double>& err,
                    std::optional<Color> color = std::nullopt);
-  /// Filled field (colour map) with a colour bar labelled `colorbar_label`. Values outside
-  /// [vmin, vmax] take the end colours, and the colour bar then ends in a triangle on that side
-  /// (the usual mark of a clipped scale).
+  /// Filled field (colour map) with a colour bar labelled `colorbar_label`, coloured by its smooth
+  /// interpolant (see refine_grid); next to NaN nodes the field ends halfway between valid and
+  /// missing nodes along a smooth edge. Values outside [vmin, vmax] take the end colours, and the
+  /// colour bar then ends in a triangle on that side (the usual mark of a clipped scale).
   Axes& field(const Grid& grid, const std::string& colorbar_label, bool diverging = false,
               std::optional<double> vmin = std::nullopt, std::optional<double> vmax = std::nullopt);
   /// Contour lines of a grid at `levels`, optionally labelled with their value (`label_format`
-  /// is a printf format such as "%.0f pC", values multiplied by `label_scale` first).
+  /// is a printf format such as "%.0f pC", values multiplied by `label_scale` first). The lines
+  /// are traced on the grid's smooth interpolant (refine_grid, to at least ~400 cells a side),
+  /// the same interpolant field() colours with, so coarse grids give smooth curves.
   Axes& contour(const Grid& grid, const std::vector<double>& levels, std::optional<Color> color = std::nullopt,
                 double width_px = 1.5, const std::string& label_format = "", double label_scale = 1.0,
                 const std::string& legend_label = "");
@@ -87,10 +97,18 @@ class Axes {
   /// Same scale on both axes (maps, meshes).
   Axes& equal_aspect(bool on = true);
   Axes& grid_lines(bool on = true);
-  /// Legend placement: "best", "upper right", "upper left", "lower right", "lower left", "none".
+  /// Legend placement: "best", "upper right", "upper left", "lower right", "lower left", "none",
+  /// or off the data: "outside right" (beside the plot and its colour bar) or "outside below"
+  /// (under the x label, entries side by side where they fit). "best" picks the corner covering
+  /// the fewest data points, and "outside below" for a panel with a filled field, which a legend
+  /// inside would always hide.
   Axes& legend(const std::string& where = "best");
   /// Show (default) or hide this panel's colour bar.
   Axes& colorbar(bool on = true);
+  /// Colour the field by log10 of its values (which stay in physical units, e.g. mm): the colour
+  /// bar is a log axis labelled in those units (0.01, 0.1, 1 mm), vmin/vmax are in those units,
+  /// values <= 0 are drawn as below the scale and +inf as above it.
+  Axes& log_color(bool on = true);
 
   struct Impl;
   Impl* impl() const { return impl_; }

@@ -16,7 +16,13 @@ void plot_filters(const std::string& path, const InverseFilter& filter);
 void plot_transfer(const std::string& path, const InverseFilter& filter);
 /// Fig. 14: restored f_x, f_z (and mu) against x, with the reference forces when `scan` has them
 /// (blurred by the filter's target Gaussian when resolution_m > 0, so both are on the same scale).
+/// Both panels share one x range (the scan's); the title names the filter by its target
+/// resolution (or its absence).
 void plot_restored(const std::string& path, const RestoredForces& forces, const Scan& scan, const std::string& title,
                    double resolution_m = 0);
+/// The same, with the title naming the filter in full: regularization, β and its rule, target
+/// resolution (figures of two filters restoring one scan can then be told apart).
+void plot_restored(const std::string& path, const RestoredForces& forces, const Scan& scan, const std::string& title,
+                   const InverseFilter& filter);
 
 }  // namespace pvdf::restore
