@@ -61,10 +61,7 @@ TEST_CASE("a ramp cannot separate the exact solutions of a membrane map", "[mapp
     CHECK(r.nodes > 500);
     CHECK(r.dof == 58);
     CHECK(r.ambiguous_at_peak > 0.5);
-    // Lower forces average less. (One node of slack: ramp_ambiguity_share's Locator now carries
-    // the map's interpolation error in σ (docs/lookup.md §1.10) although its charges are the
-    // map's own, and one of 1161 nodes then counts the other way: 0.86305 vs 0.86391.)
-    CHECK(r.ambiguous_after_ramp >= r.ambiguous_after_hold - 1.5 / double(r.nodes));
+    CHECK(r.ambiguous_after_ramp >= r.ambiguous_after_hold);  // lower forces average less
     CHECK(r.ambiguous_after_hold > 0.95 * r.ambiguous_at_peak);
     CHECK(r.own_rejected == 0);
     CHECK(r.median_separation < 1e-3);

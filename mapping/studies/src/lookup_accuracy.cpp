@@ -103,7 +103,8 @@ LookupAccuracy lookup_accuracy(const ChargeMap& map, const LookupAccuracyOptions
     if (!(s > 0)) throw InputError("lookup accuracy: noise level " + format_g(s) + " C must be > 0");
   }
   LocatorOptions base;
-  base.use_calibration = false;  // truth and lookup both use the raw map
+  base.use_calibration = false;     // truth and lookup both use the raw map
+  base.interpolation_error = false;  // the truth is the map's own interpolant: no interpolation error
   const Locator truth(map, base);
   const Triangulation tri(truth, map);
   LookupAccuracy study;

@@ -152,6 +152,7 @@ RampAmbiguity ramp_ambiguity_share(const ChargeMap& map, const RampOptions& o) {
   LocatorOptions lo;
   lo.noise_C = o.noise_C;
   lo.use_calibration = false;  // the ramp is the map's own charges
+  lo.interpolation_error = false;  // ... read at its nodes: no interpolation error to add to σ
   const Locator locator(map, lo);
   const MapInterpolant& in = locator.interpolant();
   const std::size_t ne = map.ne();
