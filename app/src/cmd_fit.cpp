@@ -106,6 +106,7 @@ int run_fit(const FitCliOptions& o) {
     double scale = 0;
     for (const double v : column.value) scale = std::max(scale, std::abs(v));
     for (std::size_t i = 0; i < column.sigma.size(); ++i) {
+      if (i < column.value.size() && std::isnan(column.value[i])) continue;  // not observed in this row
       if (!(column.sigma[i] >= 1e-6 * scale) || !(column.sigma[i] >= 1e-300)) {
         throw pvdf::InputError(o.measured_path + ":" + std::to_string(measured.line[i]) + ": sigma_" + column.name + " = " +
                                pvdf::format_g(column.sigma[i]) + " is below 1e-6 of the column's largest value (" +
