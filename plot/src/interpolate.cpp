@@ -64,16 +64,23 @@ void locate(double a, std::size_t n, std::size_t& i0, double& u) {
   u = std::clamp(a - static_cast<double>(i0), 0.0, 1.0);
 }
 
+/// The cell (i0, j0) and local coordinates (u, v) of fractional node position (a, b); false when
+/// the grid has no cell or the position lies outside it.
+bool find_cell(const Grid& g, double a, double b, std::size_t& i0, std::size_t& j0, double& u, double& v) {
+  if (g.nx < 2 || g.ny < 2) return false;
+  if (!(a >= -1e-9 && a <= static_cast<double>(g.nx - 1) + 1e-9 && b >= -1e-9 && b <= static_cast<double>(g.ny - 1) + 1e-9))
+    return false;
+  locate(a, g.nx, i0, u);
+  locate(b, g.ny, j0, v);
+  return true;
+}
+
 }  // namespace
 
 double interpolate(const Grid& g, double a, double b) {
-  if (g.nx < 2 || g.ny < 2) return kNaN;
-  if (!(a >= -1e-9 && a <= static_cast<double>(g.nx - 1) + 1e-9 && b >= -1e-9 && b <= static_cast<double>(g.ny - 1) + 1e-9))
-    return kNaN;
   std::size_t i0 = 0, j0 = 0;
   double u = 0, v = 0;
-  locate(a, g.nx, i0, u);
-  locate(b, g.ny, j0, v);
+  if (!find_cell(g, a, b, i0, j0, u, v)) return kNaN;
   double f = in_cell(g, i0, j0, u, v);
   // On a cell edge the neighbouring cell holds the same value: try it when this cell has a hole.
   if (!finite(f) && u == 0 && i0 > 0) f = in_cell(g, i0 - 1, j0, 1, v);
@@ -84,13 +91,10 @@ double interpolate(const Grid& g, double a, double b) {
 
 double interpolate_field(const Grid& g, double a, double b) {
   const double f = interpolate(g, a, b);
-  if (finite(f) || g.nx < 2 || g.ny < 2) return f;
-  if (!(a >= -1e-9 && a <= static_cast<double>(g.nx - 1) + 1e-9 && b >= -1e-9 && b <= static_cast<double>(g.ny - 1) + 1e-9))
-    return kNaN;
+  if (finite(f)) return f;
   std::size_t i0 = 0, j0 = 0;
   double u = 0, v = 0;
-  locate(a, g.nx, i0, u);
-  locate(b, g.ny, j0, v);
+  if (!find_cell(g, a, b, i0, j0, u, v)) return kNaN;
   const double w[4] = {(1 - u) * (1 - v), u * (1 - v), (1 - u) * v, u * v};
   const double fk[4] = {g.at(i0, j0), g.at(i0 + 1, j0), g.at(i0, j0 + 1), g.at(i0 + 1, j0 + 1)};
   double weight = 0, sum = 0;
