@@ -76,18 +76,24 @@ def load_scene(scene, source=None):
     """
     if isinstance(scene, Scene):
         return scene
+    return _load_json_object("load_scene", scene, source, "scene", _pvdfkit._parse_scene_text,
+                             _pvdfkit._load_scene_file, "a pvdfkit.Scene, a dict of scene keys or a scene file path")
+
+
+def _load_json_object(function, scene, source, default_source, parse_text, load_file, accepted):
+    """The shared body of load_scene and load_scanner_scene: a dict is parsed as JSON text named
+    ``source``, a path is read by ``load_file``; anything else raises InputError naming ``accepted``."""
     if source is not None and not isinstance(source, str):
-        raise InputError(f"load_scene: source = {_shown(source)} ({type(source).__name__}) must be a str naming the dict")
+        raise InputError(f"{function}: source = {_shown(source)} ({type(source).__name__}) must be a str naming the dict")
     if isinstance(scene, dict):
-        source = source or "scene"
-        return _pvdfkit._parse_scene_text(_json_text(scene, source), source)
+        source = source or default_source
+        return parse_text(_json_text(scene, source), source)
     if isinstance(scene, (str, _os.PathLike)):
         path = _os.fspath(scene)
         if not isinstance(path, str) or not path:
-            raise InputError(f"load_scene: scene = {_shown(scene)} must be a non-empty file path (str or pathlib.Path)")
-        return _pvdfkit._load_scene_file(path)
-    raise InputError(f"load_scene: scene = {_shown(scene)} ({type(scene).__name__}) must be a pvdfkit.Scene, "
-                     "a dict of scene keys or a scene file path")
+            raise InputError(f"{function}: scene = {_shown(scene)} must be a non-empty file path (str or pathlib.Path)")
+        return load_file(path)
+    raise InputError(f"{function}: scene = {_shown(scene)} ({type(scene).__name__}) must be {accepted}")
 
 
 def scene_to_dict(scene):

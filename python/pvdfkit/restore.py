@@ -12,7 +12,6 @@ Bad input raises pvdfkit.InputError with the command line's message; every argum
 (type, finite values, shapes), and a Scan's arrays read as read-only copies.
 """
 
-import os as _os
 
 from ._pvdfkit import restore as _r
 from ._pvdfkit import RestoredForces  # noqa: F401
@@ -35,19 +34,10 @@ def load_scanner_scene(scene, source=None):
     """A validated :class:`ScannerScene` from a JSON file path or a dict with the same keys."""
     if isinstance(scene, ScannerScene):
         return scene
-    from . import InputError, _json_text, _shown
-    if source is not None and not isinstance(source, str):
-        raise InputError(f"load_scanner_scene: source = {_shown(source)} ({type(source).__name__}) must be a str naming the dict")
-    if isinstance(scene, dict):
-        source = source or "scanner scene"
-        return _r._parse_scanner_scene_text(_json_text(scene, source), source)
-    if isinstance(scene, (str, _os.PathLike)):
-        path = _os.fspath(scene)
-        if not isinstance(path, str) or not path:
-            raise InputError(f"load_scanner_scene: scene = {_shown(scene)} must be a non-empty file path (str or pathlib.Path)")
-        return _r._load_scanner_scene_file(path)
-    raise InputError(f"load_scanner_scene: scene = {_shown(scene)} ({type(scene).__name__}) must be a "
-                     "pvdfkit.restore.ScannerScene, a dict of scanner-scene keys or a file path")
+    from . import _load_json_object
+    return _load_json_object("load_scanner_scene", scene, source, "scanner scene", _r._parse_scanner_scene_text,
+                             _r._load_scanner_scene_file,
+                             "a pvdfkit.restore.ScannerScene, a dict of scanner-scene keys or a file path")
 
 
 def _check_restore_calls():
