@@ -41,10 +41,18 @@ struct TangentFactorization::Impl {
 //
 // PVDF_FACTORIZATION=simplicial-ldlt in the environment selects the method used before CHOLMOD,
 // so that benchmarks can compare both in one run on one machine (docs/bench-fem.md).
+// Both are settled once per process (a map builds a factorization for every probe mesh).
+static bool simplicial_requested() {
+  static const bool requested = [] {
+    omp_set_max_active_levels(0);
+    const char* env = std::getenv("PVDF_FACTORIZATION");
+    return env && std::string(env) == "simplicial-ldlt";
+  }();
+  return requested;
+}
+
 TangentFactorization::TangentFactorization(Method method) : method_(method), impl_(std::make_unique<Impl>()) {
-  omp_set_max_active_levels(0);
-  const char* env = std::getenv("PVDF_FACTORIZATION");
-  if (env && std::string(env) == "simplicial-ldlt") method_ = Method::simplicial_ldlt;
+  if (simplicial_requested()) method_ = Method::simplicial_ldlt;
 }
 TangentFactorization::~TangentFactorization() = default;
 
