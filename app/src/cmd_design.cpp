@@ -23,8 +23,10 @@
 #include <cctype>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <cstdio>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -55,6 +57,49 @@ struct DesignCommandOptions {
   std::string out_dir = "design-out";
   bool no_plots = false;
   bool include_map_error = false;
+  bool quiet = false;
+};
+
+/// One progress report over the FEM maps of a phase (the previews, or the refined winners), so
+/// that its ETA is the phase's: the total is the positions of the maps done plus, for each map
+/// still to come, as many as the map in progress (layouts of one film and spacing have about the
+/// same number of positions).
+class MapsProgress {
+ public:
+  MapsProgress(std::string label, std::size_t n_maps, bool quiet) : label_(std::move(label)), n_maps_(n_maps), quiet_(quiet) {}
+  /// The callback of MapOptions::progress for map number `index` (0-based) of the phase.
+  std::function<void(std::size_t, std::size_t)> for_map(std::size_t index) {
+    if (quiet_) return {};
+    return [this, index](std::size_t done, std::size_t total) {
+      if (index != current_) {  // the previous map ended: its positions are done
+        done_before_ += current_total_;
+        current_ = index;
+      }
+      current_total_ = total;
+      const std::size_t still_to_come = n_maps_ > index + 1 ? n_maps_ - index - 1 : 0;
+      const std::size_t all = done_before_ + total * (1 + still_to_come);
+      if (!bar_) bar_ = std::make_unique<pvdf::Progress>(label_, all);
+      bar_->set_total(all);
+      bar_->update(done_before_ + done);
+    };
+  }
+  void finish() {
+    if (bar_) bar_->finish();
+  }
+  /// A line of its own on stderr (the terminal bar continues below it); nothing when quiet.
+  void note(const std::string& text) {
+    if (quiet_) return;
+    if (bar_ && bar_->on_terminal()) std::fputc('\n', stderr);
+    std::fputs((text + "\n").c_str(), stderr);
+    std::fflush(stderr);
+  }
+
+ private:
+  std::string label_;
+  std::size_t n_maps_;
+  bool quiet_;
+  std::size_t current_ = 0, current_total_ = 0, done_before_ = 0;
+  std::unique_ptr<pvdf::Progress> bar_;
 };
 
 /// One candidate layout and what the analysis found.
@@ -98,7 +143,7 @@ std::string pct(double f) { return std::isfinite(f) ? fmt("%.1f %%", 100 * f) : 
 // Maps
 
 ChargeMap make_map(const Candidate& c, const DesignCommandOptions& o, double spacing, std::string& map_file,
-                   std::string& map_source) {
+                   std::string& map_source, MapsProgress& progress, std::size_t map_index) {
   const pvdf::Scene scene = pvdf::parse_scene(*c.scene, c.source);
   if (o.synthetic) {
     map_source = "synthetic";
@@ -111,20 +156,15 @@ ChargeMap make_map(const Candidate& c, const DesignCommandOptions& o, double spa
   mo.tolerance = o.tolerance;
   mo.threads = o.threads;
   mo.description = "pvdfkit design preview of " + c.label;
-  std::unique_ptr<pvdf::Progress> bar;
-  mo.progress = [&bar, &c](std::size_t done, std::size_t total) {
-    if (!bar) bar = std::make_unique<pvdf::Progress>("map " + c.label, total);
-    bar->update(done);
-  };
+  mo.progress = progress.for_map(map_index);
   MapReport report;
   ChargeMap map = generate_map(scene, mo, &report);
-  if (bar) bar->finish();
   pvdf::make_directories(o.out_dir + "/maps");
   map_file = o.out_dir + "/maps/" + slug(c.label) + "_" + fmt("%.2gmm", spacing * 1e3) + ".h5";
   write_generated_map(map_file, map, report.provenance);
-  std::cerr << "map " << c.label << ": " << report.n_solved << " FEM solves in " << pvdf::format_duration(report.wall_s)
-            << " (model " << report.model << ", estimated charge error " << fmt("%.2g", report.estimated_relative_error)
-            << "), written to " << map_file << "\n";
+  progress.note("map " + c.label + ": " + std::to_string(report.n_solved) + " FEM solves in " +
+                pvdf::format_duration(report.wall_s) + " (model " + report.model + ", estimated charge error " +
+                fmt("%.2g", report.estimated_relative_error) + "), written to " + map_file);
   if (report.n_failed > 0) {
     pvdf::app::warn(c.label + ": " + std::to_string(report.n_failed) + " map points did not converge (left out)");
   }
@@ -132,6 +172,8 @@ ChargeMap make_map(const Candidate& c, const DesignCommandOptions& o, double spa
   return map;
 #else
   (void)spacing;
+  (void)progress;
+  (void)map_index;
   (void)map_file;
   (void)map_source;
   throw pvdf::InputError("this pvdfkit was built without FEM map generation (PVDF_WITH_FEM=OFF): use --synthetic for "
@@ -235,8 +277,9 @@ std::vector<std::array<double, 2>> outline_mm(const pvdf::FilmOutline& o) {
   return v;
 }
 
-/// One panel: log10 of `values` (m → mm, or a fraction → %) over the map, the target contour,
-/// ambiguous (red ×) and dead (grey) nodes, the electrodes and the film outline.
+/// One panel: `values` × `scale` (m → mm, or a fraction → %) over the map on a log colour scale
+/// labelled in those units, the target contour, ambiguous (red ×) and dead (grey) nodes, the
+/// electrodes and the film outline; the legend below the panel, off the data.
 void map_panel(pvdf::plot::Axes& ax, const Candidate& c, const std::vector<double>& values, double scale, double vmin,
                double vmax, double contour_at, const std::string& bar_label) {
   const DesignMaps& m = c.summary.maps;
@@ -248,13 +291,16 @@ void map_panel(pvdf::plot::Axes& ax, const Candidate& c, const std::vector<doubl
   g.y0 = m.y_m.front() * 1e3;
   g.y1 = m.y_m.back() * 1e3;
   g.values.assign(g.nx * g.ny, std::nan(""));
+  pvdf::plot::Grid for_contour = g;
   std::vector<double> ax_x, ax_y, dx, dy;
   for (std::size_t p = 0; p < g.values.size(); ++p) {
     if (!m.evaluated[p]) continue;
     const double v = values[p] * scale;
     // Not clamped: values beyond [vmin, vmax] take the end colours and the colour bar marks that
     // with a triangle. Unbounded (no finite bound) is drawn as beyond the top.
-    g.values[p] = std::isfinite(v) && v > 0 ? std::log10(v) : vmax + 1;
+    g.values[p] = std::isfinite(v) && v > 0 ? v : std::numeric_limits<double>::infinity();
+    // The contour's interpolant needs finite values: unbounded stands 100 × above the scale.
+    for_contour.values[p] = std::isfinite(v) && v > 0 ? v : 100 * vmax;
     const double x = m.x_m[p % g.nx] * 1e3, y = m.y_m[p / g.nx] * 1e3;
     if (m.ambiguous[p]) {
       ax_x.push_back(x);
@@ -265,11 +311,11 @@ void map_panel(pvdf::plot::Axes& ax, const Candidate& c, const std::vector<doubl
       dy.push_back(y);
     }
   }
-  ax.field(g, bar_label, false, vmin, vmax);
+  ax.field(g, bar_label, false, vmin, vmax).log_color();
   if (!ax_x.empty()) ax.scatter(ax_x, ax_y, "ambiguous", pvdf::plot::Color{220, 30, 30}, pvdf::plot::Marker::cross, 2.0);
   if (!dx.empty()) ax.scatter(dx, dy, "dead zone", pvdf::plot::Color{150, 150, 150}, pvdf::plot::Marker::square, 2.0);
   // The target line last, so that the markers do not hide it.
-  if (contour_at > vmin && contour_at < vmax) ax.contour(g, {contour_at}, pvdf::plot::Color{255, 255, 255}, 2.0);
+  if (contour_at > vmin && contour_at < vmax) ax.contour(for_contour, {contour_at}, pvdf::plot::Color{255, 255, 255}, 2.0);
   try {
     const pvdf::Scene scene = pvdf::parse_scene(nlohmann::json::parse(c.map.scene_json), c.source);
     ax.polygon(outline_mm(scene.membrane.outline), std::nullopt, pvdf::plot::Color{0, 0, 0}, 1.5);
@@ -286,7 +332,7 @@ void map_panel(pvdf::plot::Axes& ax, const Candidate& c, const std::vector<doubl
     }
     ax.scatter(ex, ey, "electrodes", pvdf::plot::Color{255, 255, 255}, pvdf::plot::Marker::square, 7.0);
   }
-  ax.xlabel("x (mm)").ylabel("y (mm)").equal_aspect().legend(ax_x.empty() && dx.empty() ? "none" : "lower right");
+  ax.xlabel("x (mm)").ylabel("y (mm)").equal_aspect().legend(ax_x.empty() && dx.empty() ? "none" : "outside below");
 }
 
 void write_map_figures(const std::vector<const Candidate*>& ranked, const DesignCommandOptions& o,
@@ -304,11 +350,10 @@ void write_map_figures(const std::vector<const Candidate*>& ranked, const Design
       const Candidate& c = *ranked[i];
       auto& ax = fig.axes(int(i) / 4, int(i) % 4);
       if (which == 0) {
-        map_panel(ax, c, c.summary.maps.sigma_pos_m, 1e3, std::log10(target / 100), std::log10(target * 20),
-                  std::log10(target), "log$_{10}$ σ$_{pos}$ (mm)");
+        map_panel(ax, c, c.summary.maps.sigma_pos_m, 1e3, target / 100, target * 20, target, "σ$_{pos}$ (mm)");
         ax.title("#" + std::to_string(i + 1) + " " + c.label + ": usable " + pct(c.summary.usable_fraction));
       } else {
-        map_panel(ax, c, c.summary.maps.sigma_force_rel, 100, -2, 2, 0, "log$_{10}$ σ$_F$/F (%)");
+        map_panel(ax, c, c.summary.maps.sigma_force_rel, 100, 0.01, 100, 1, "σ$_F$/F (%)");
         ax.title("#" + std::to_string(i + 1) + " " + c.label + ": median " + pct(c.summary.median_sigma_force_rel));
       }
     }
@@ -502,15 +547,19 @@ std::vector<Candidate> refine_winners(const std::vector<const Candidate*>& ranke
   std::vector<Candidate> refined;
   if (o.refine_best > 0) {
     const double fine = o.refine_spacing_m > 0 ? o.refine_spacing_m : spacing / 2;
+    std::size_t n_maps = 0;
+    for (const Candidate* c : ranked) n_maps += c->scene && !o.synthetic ? 1 : 0;
+    MapsProgress progress("design: refined maps, positions", std::min<std::size_t>(n_maps, std::size_t(o.refine_best)), o.quiet);
     for (const Candidate* c : ranked) {
       if (int(refined.size()) >= o.refine_best) break;
       if (!c->scene) continue;  // a ready map cannot be refined here
       Candidate r = *c;
       r.refined = true;
-      r.map = make_map(r, o, fine, r.map_file, r.map_source);
+      r.map = make_map(r, o, fine, r.map_file, r.map_source, progress, refined.size());
       evaluate(r, d);
       refined.push_back(std::move(r));
     }
+    progress.finish();
   }
   return refined;
 }
@@ -589,10 +638,15 @@ int run_design(const DesignCommandOptions& o) {
   }
 
   // Step 2: maps (coarse previews) and their evaluation.
+  std::size_t n_maps = 0;
+  for (const auto& c : all) n_maps += c.scene && !o.synthetic ? 1 : 0;
+  MapsProgress progress("design: preview maps, positions", n_maps, o.quiet);
+  std::size_t map_index = 0;
   for (auto& c : all) {
-    if (c.scene) c.map = make_map(c, o, spacing, c.map_file, c.map_source);
+    if (c.scene) c.map = make_map(c, o, spacing, c.map_file, c.map_source, progress, map_index++);
     evaluate(c, d);
   }
+  progress.finish();
 
   // Step 3: rank; refine the winners at a finer spacing and rank again.
   const std::vector<const Candidate*> ranked = rank(all);
@@ -681,5 +735,6 @@ PVDF_COMMAND(75, [](CLI::App& root) {
       ->capture_default_str()
       ->check(pvdf::app::output_folder());
   sub->add_flag("--no-plots", o->no_plots, "Write no files (ranking on stdout only)");
+  sub->add_flag("--quiet", o->quiet, "No progress on stderr (warnings and errors are still reported)");
   return pvdf::app::Subcommand{sub, [o] { return run_design(*o); }};
 });

@@ -203,11 +203,9 @@ int run_identify(const IdentifyOptions& o) {
     pvdf::app::warn("more than 10 % of the inverse filter's energy lies outside its taps; raise --taps or beta");
   }
   if (!o.plot_dir.empty()) {
+    // What identify computes, not its inputs: the scans' signals are drawn once, by whoever made
+    // them (`restore simulate --plot`), not again by every identification from them.
     pvdf::make_directories(o.plot_dir);
-    for (std::size_t i = 0; i < scans.size(); ++i) {
-      r::plot_scan(o.plot_dir + "/fig11_12_scan" + std::to_string(i + 1) + ".png", scans[i].scan,
-                   "Identification scan " + std::to_string(i + 1) + ": " + file_name(o.scans[i]) + ", force (" + o.forces[i] + ") N");
-    }
     r::plot_filters(o.plot_dir + "/fig13_inverse_filters.png", f);
     r::plot_transfer(o.plot_dir + "/transfer_G.png", f);
     for (std::size_t i = 0; i < scans.size(); ++i) {
@@ -335,7 +333,8 @@ PVDF_COMMAND(60, [](CLI::App& root) {
   id->add_option("--g-window", io->g_window, "Lags of G kept by identification (default = --taps)");
   id->add_option("--beta-corner-m", io->corner, "Wavelength in m for beta(k) = beta (1 + (k L/2pi)^2)");
   id->add_option("--window", io->window, "Taper of the FIR taps: tukey, hann, none")->capture_default_str();
-  id->add_option("--plot-dir", io->plot_dir, "Write Fig 11-14 analogues (signals, filters, |G|, restored) as PNG here")
+  id->add_option("--plot-dir", io->plot_dir, "Write Fig 13-14 analogues (inverse filters, |G|, the identification scans restored) as PNG here; "
+                 "the scans' signals (Figs 11-12) are drawn by `restore simulate --plot`")
       ->check(pvdf::app::output_folder());
 
   auto ao = std::make_shared<ApplyOptions>();
