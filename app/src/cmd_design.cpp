@@ -66,7 +66,10 @@ struct DesignCommandOptions {
 /// same number of positions).
 class MapsProgress {
  public:
-  MapsProgress(std::string label, std::size_t n_maps, bool quiet) : label_(std::move(label)), n_maps_(n_maps), quiet_(quiet) {}
+  /// The clock starts now: setting up each map (before its first position) is part of the rate.
+  MapsProgress(std::string label, std::size_t n_maps, bool quiet) : label_(std::move(label)), n_maps_(n_maps), quiet_(quiet) {
+    if (!quiet_ && n_maps_ > 0) bar_ = std::make_unique<pvdf::Progress>(label_, 0);
+  }
   /// The callback of MapOptions::progress for map number `index` (0-based) of the phase.
   std::function<void(std::size_t, std::size_t)> for_map(std::size_t index) {
     if (quiet_) return {};
@@ -78,7 +81,6 @@ class MapsProgress {
       current_total_ = total;
       const std::size_t still_to_come = n_maps_ > index + 1 ? n_maps_ - index - 1 : 0;
       const std::size_t all = done_before_ + total * (1 + still_to_come);
-      if (!bar_) bar_ = std::make_unique<pvdf::Progress>(label_, all);
       bar_->set_total(all);
       bar_->update(done_before_ + done);
     };
@@ -692,47 +694,42 @@ PVDF_COMMAND(75, [](CLI::App& root) {
       "Compare candidate sensor layouts before fabrication: Cramer-Rao error maps, coverage, ambiguity, "
       "sensitivity, dynamic range, dead zones; ranking and PNG maps (docs/design.md)");
   auto o = std::make_shared<DesignCommandOptions>();
-  sub->add_option("SCENE", o->scenes, "Scene file(s) of the candidate layouts");
+  sub->add_option("SCENE", o->scenes, "Scene file(s) (JSON, docs/scene.md) of the candidate layouts");
   sub->add_option("--vary", o->vary,
                   "Sweep one scene key, KEY=START:STEP:STOP, e.g. material.draw_angle_deg=0:15:90, "
                   "electrodes[0].center_m[1]=0.008:0.002:0.016, @layout_radius_m=0.006:0.002:0.02, @rotation_deg, "
                   "@layout_scale, @electrode_size_m (docs/design.md)");
-  sub->add_option("--noise-C", o->noise, "1-sigma charge noise per electrode before quantization, one value or one per electrode (C)")
-      ->capture_default_str();
-  sub->add_option("--target-mm", o->target_mm, "Coverage target for the position bound (mm)")
-      ->capture_default_str()
+  sub->add_option("--noise-C", o->noise, "1-sigma charge noise per electrode before quantization, one value or one per electrode (C) (default 5e-14)");
+  sub->add_option("--target-mm", o->target_mm, "Coverage target for the position bound (mm) (default 0.5)")
       ->check(pvdf::app::number_in(0, 1000, "mm", true));
-  sub->add_option("--force-N", o->force_N, "Force of the evaluated presses (N)")
-      ->capture_default_str()
+  sub->add_option("--force-N", o->force_N, "Force of the evaluated presses (N), the force level of FEM maps (default 1)")
       ->check(pvdf::app::number_in(0, 1e4, "N (the rule of loads[].force_N, pushing)", true));
-  sub->add_option("--force-range-N", o->force_range, "Forces the sensor must serve MIN,MAX (N): ADC full scale at MAX, 1-LSB check at MIN")
-      ->capture_default_str();
+  sub->add_option("--force-range-N", o->force_range, "Forces the sensor must serve MIN,MAX (N): ADC full scale at MAX, 1-LSB check at MIN (default 0.25,4)");
   sub->add_flag("--include-map-error", o->include_map_error,
-                "Add each map node's estimated charge error to the noise (the bound of a lookup on this map; "
-                "default: the sensor's noise alone)");
+                "Add each map node's estimated charge error to the noise (the bound of a lookup on this map) (default "
+                "the sensor's noise alone)");
   sub->add_flag("--force-known", o->force_known, "Figure of merit with the force measured separately (fit x, y only)");
-  sub->add_option("--spacing-m", o->spacing_m, "Preview map spacing (m); default 0.003 (FEM) or 0.001 (--synthetic)")
+  sub->add_option("--spacing-m", o->spacing_m, "Grid spacing of the preview maps (m) (default 0.003 for FEM maps: a preview, coarser than `map`'s 0.002; 0.001 "
+                  "with --synthetic)")
       ->check(pvdf::app::number_in(1e-4, 0.02, "m (the range of synthetic-map)"));
   sub->add_flag("--synthetic", o->synthetic, "Instant previews on the analytic stand-in instead of FEM maps (labelled synthetic)");
   sub->add_option("--map", o->maps, "Evaluate a ready charge map (HDF5) as one more layout (repeatable)");
-  sub->add_option("--refine-best", o->refine_best, "Recompute the best N layouts at --refine-spacing-m and rank them again")
+  sub->add_option("--refine-best", o->refine_best, "Recompute the best N layouts at --refine-spacing-m and rank them again (default 0)")
       ->check(pvdf::app::integer_in(0, 1000));
-  sub->add_option("--refine-spacing-m", o->refine_spacing_m, "Spacing of the refined maps (m); default half the preview spacing")
+  sub->add_option("--refine-spacing-m", o->refine_spacing_m, "Grid spacing of the refined maps (m) (default half the preview spacing)")
       ->check(pvdf::app::number_in(1e-4, 0.02, "m (the range of synthetic-map)"));
-  sub->add_option("--tolerance", o->tolerance, "FEM maps: requested relative charge error (default: the scene's model.tolerance)")
+  sub->add_option("--tolerance", o->tolerance, "FEM maps: requested relative charge error (default the scene's model.tolerance)")
       ->check(pvdf::app::number_in(1e-8, 0.5, "(the rule of the scene key model.tolerance), e.g. 0.01"));
-  sub->add_option("--threads", o->threads, "FEM maps: worker threads (0 = all cores)")->check(pvdf::app::integer_in(0, 1024));
-  sub->add_option("--adc-bits", o->adc_bits, "ADC resolution (bits, bipolar); 0 = ideal")
-      ->capture_default_str()
+  sub->add_option("--threads", o->threads, "FEM maps: worker threads, 0 = all cores (default 0)")->check(pvdf::app::integer_in(0, 1024));
+  sub->add_option("--adc-bits", o->adc_bits, "ADC resolution (bits, bipolar); 0 = ideal (default 12)")
       ->check(pvdf::app::integer_in(0, 32));
-  sub->add_option("--full-scale-C", o->full_scale_C, "ADC full scale (C); default 1.25 x the largest charge at the top of the force range")
+  sub->add_option("--full-scale-C", o->full_scale_C, "ADC full scale (C) (default 1.25 x the largest charge at the top of the force range)")
       ->check(pvdf::app::number_in(0, 1e-3, "C", true));
   sub->add_option("--ambiguity-distance-m", o->ambiguity_min_distance_m,
-                  "Another accepted solution farther than max(this, 3 sigma) is a distinct press (default: the target)")
+                  "Another accepted solution farther than max(this, 3 sigma) is a distinct press (m) (default the target)")
       ->check(pvdf::app::number_in(0, 1, "m"));
   sub->add_flag("--json", o->json, "Print the ranking as JSON");
-  sub->add_option("--out-dir", o->out_dir, "Folder for design_position.png, design_force.png, design_sweep.png, design.json, maps/")
-      ->capture_default_str()
+  sub->add_option("--out-dir", o->out_dir, "Folder for design_position.png, design_force.png, design_sweep.png, design.json, maps/ (default design-out)")
       ->check(pvdf::app::output_folder());
   sub->add_flag("--no-plots", o->no_plots, "Write no files (ranking on stdout only)");
   sub->add_flag("--quiet", o->quiet, "No progress on stderr (warnings and errors are still reported)");

@@ -218,13 +218,13 @@ PVDF_COMMAND(67, [](CLI::App& root) {
       "fit", "Fit the film's pre-tension, stiffness scale, piezo constants and electrode gains to bench data on FEM "
              "predictions, with 1-sigma intervals and identifiability (docs/fem-vs-experiment.md)");
   auto o = std::make_shared<FitCliOptions>();
-  sub->add_option("SCENE", o->scene_path, "Scene JSON of the sensor (the starting values)")->required();
+  sub->add_option("SCENE", o->scene_path, "Scene file (JSON, docs/scene.md) of the sensor: the starting values")->required();
   sub->add_option("MEASURED", o->measured_path,
                   "CSV: x_m,y_m,force_N and any of deflection_m, charge_<electrode>_C, with optional sigma_<column>")
       ->required();
   sub->add_option("--params", o->params,
                   "Parameters to fit, comma-separated: pretension_N_per_m, E_scale, d31_C_per_N, d32_C_per_N, "
-                  "gain_<electrode> (default: E_scale if deflections are given, d31_C_per_N if charges are)")
+                  "gain_<electrode> (default E_scale if deflections are given, d31_C_per_N if charges are)")
       ->each([o](const std::string&) { o->params_given = true; });
   sub->add_option("-o,--output", o->output_path, "Fitted scene (JSON, same format as SCENE)")
       ->required()
@@ -232,16 +232,15 @@ PVDF_COMMAND(67, [](CLI::App& root) {
   sub->add_flag("--json", o->json, "Print the result as JSON (keys in docs/fem-vs-experiment.md)");
   sub->add_option("--plot", o->plot_path, "Figure (.png, .svg or .pdf): measured against FEM before and after the fit")
       ->check(pvdf::app::figure_file());
-  sub->add_option("--start", o->start, "Starting values NAME=VALUE,... (default: the scene's, E_scale 1, gains 1)");
-  sub->add_option("--tolerance", o->tolerance, "FEM relative tolerance of the sweep mesh (default: the scene's)")
+  sub->add_option("--start", o->start, "Starting values NAME=VALUE,... (default the scene's, E_scale 1, gains 1)");
+  sub->add_option("--tolerance", o->tolerance, "Requested relative error of the FEM predictions on the sweep mesh (default the scene's model.tolerance)")
       ->check(pvdf::app::number_in(1e-8, 0.5, "(the rule of the scene key model.tolerance), e.g. 0.01"));
   sub->add_option("--max-iterations", o->max_iterations, "Levenberg-Marquardt iterations (default 40)")
       ->check(pvdf::app::integer_in(1, 10000));
   sub->add_option("--residual-stiffness", o->residual_stiffness,
                   "Tension-field residual stiffness EPS in [0, 1) for slack films (negative pretension_N_per_m): the "
                   "membrane energy (1-EPS) W_relaxed + EPS W_elastic, with bending kept; 1e-3 lets strongly slack films "
-                  "converge, biasing their membrane forces by about EPS x |N0| (default 0: the exact relaxed law, "
-                  "docs/fem.md 3.3)")
+                  "converge, biasing their membrane forces by about EPS x |N0|; docs/fem.md 3.3 (default 0: the exact relaxed law)")
       ->type_name("EPS");
   sub->add_flag("--verbose", o->verbose, "One line per iteration on stderr even when it is not a terminal "
                                          "(otherwise at most one each 10 s there)");

@@ -391,22 +391,25 @@ PVDF_COMMAND(60, [](CLI::App& root) {
       "Locate a press (position, force, 1-sigma, flags) from electrode charges with a charge map; "
       "one press, a CSV stream, or pictures of the map (docs/lookup.md)");
   auto o = std::make_shared<LocateOptions>();
-  sub->add_option("MAP", o->map_path, "Charge map (HDF5 from `pvdfkit map` or `pvdfkit calibrate`)")->required();
+  sub->add_option("MAP", o->map_path, "Charge map (HDF5 from `pvdfkit map`, `synthetic-map` or `calibrate`)")->required();
   sub->add_option("--charges-C", o->charges,
                   "One press: one charge per electrode (C), e.g. 4e-11,2e-11,1.5e-11; the order follows the map's "
                   "electrode names (stored in the map; printed as `electrodes` by locate, text and JSON)");
   sub->add_flag("--json", o->json, "Print the single result as JSON");
-  sub->add_option("--noise-C", o->noise, "1-sigma charge noise, one value or one per electrode (C); default: the map's");
-  sub->add_option("--force-N", o->force_N, "Known force (N): fit the position only (and the force of --pictures)")
+  sub->add_option("--noise-C", o->noise, "1-sigma charge noise per electrode, one value or one per electrode in the map's electrode order (C) (default the map's)");
+  sub->add_option("--force-N", o->force_N, "Known force of the press (N): fit the position only (and the force of --pictures) (default unknown: fitted with the "
+                  "position)")
       ->each([o](const std::string&) { o->force_N_given = true; });
-  sub->add_option("--force-range-N", o->force_range, "Plausible forces MIN,MAX (N), also the prior of the solutions' probabilities; default: half the lowest to twice the highest map level");
+  sub->add_option("--force-range-N", o->force_range, "Plausible forces MIN,MAX (N), also the prior of the solutions' probabilities (default half the lowest to twice the "
+                  "highest force level of the map)");
   sub->add_flag("--no-calibration", o->no_calibration, "Ignore the map's calibration group");
-  sub->add_flag("--stream", o->stream, "Read CSV rows (t_s,charge_<name>_C,...) on stdin, write located rows on stdout");
+  sub->add_flag("--stream", o->stream, "Read CSV rows (t_s,charge_<name>_C,...) on stdin, write located rows on stdout; malformed rows are skipped with a "
+                "warning, a line over 64 KiB refuses the stream (docs/lookup.md)");
   sub->add_option("--input", o->input, "Read the CSV rows from this file instead of stdin (implies --stream)");
   sub->add_flag("--strict", o->strict, "Stream: refuse a malformed row (exit 2) instead of skipping it with a warning");
   sub->add_option("--plot", o->plot_path, "Single press: figure (.png, .svg or .pdf) of the isocharge contours of the charges and their intersection")
       ->check(pvdf::app::figure_file());
-  sub->add_option("--pictures", o->pictures_dir, "Write isocharge_<name>.png per electrode and charges.vtk of the map here")
+  sub->add_option("--pictures", o->pictures_dir, "Folder for isocharge_<name>.png per electrode and charges.vtk of the map")
       ->check(pvdf::app::output_folder());
   return pvdf::app::Subcommand{sub, [o] { return run_locate(*o); }};
 });

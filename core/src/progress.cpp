@@ -32,17 +32,40 @@ double Progress::line_interval_s() {
 
 Progress::Progress(std::string label, std::size_t total, bool force)
     : label_(std::move(label)), total_(total), terminal_(force || ::isatty(STDERR_FILENO) == 1),
-      interval_s_(line_interval_s()), start_(std::chrono::steady_clock::now()), last_draw_(start_) {}
+      interval_s_(line_interval_s()), start_(std::chrono::steady_clock::now()), last_draw_(start_) {
+  if (!terminal_) heartbeat_ = std::thread([this] { heartbeat(); });
+}
 
+// Without finish() the work did not end well (an exception unwinds): no "done" line.
 Progress::~Progress() {
-  if (terminal_ && !finished_) std::fputc('\n', stderr);
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (terminal_ && !finished_) std::fputc('\n', stderr);
+    finished_ = true;
+  }
+  stop_.notify_all();
+  if (heartbeat_.joinable()) heartbeat_.join();
 }
 
 double Progress::elapsed_s() const {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
 }
 
+// A line whenever one interval passed without one: the log shows the job is alive.
+void Progress::heartbeat() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  while (!finished_) {
+    const auto due = last_draw_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                      std::chrono::duration<double>(interval_s_));
+    if (stop_.wait_until(lock, due, [this] { return finished_; })) break;
+    if (std::chrono::steady_clock::now() < due) continue;  // a line was printed meanwhile
+    last_draw_ = std::chrono::steady_clock::now();
+    print_line(false);
+  }
+}
+
 void Progress::update(std::size_t done) {
+  std::lock_guard<std::mutex> lock(mutex_);
   done_ = done;
   if (finished_) return;
   const auto now = std::chrono::steady_clock::now();
@@ -57,14 +80,23 @@ void Progress::update(std::size_t done) {
   }
 }
 
+void Progress::set_total(std::size_t total) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  total_ = total;
+}
+
 void Progress::finish() {
-  if (finished_) return;
-  finished_ = true;
-  if (terminal_) {
-    draw_bar(true);
-  } else if (printed_) {
-    print_line(true);
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (finished_) return;
+    finished_ = true;
+    if (terminal_) {
+      draw_bar(true);
+    } else if (printed_) {
+      print_line(true);
+    }
   }
+  stop_.notify_all();
 }
 
 void Progress::draw_bar(bool final_line) {
@@ -92,9 +124,16 @@ void Progress::draw_bar(bool final_line) {
 void Progress::print_line(bool final_line) {
   const double elapsed = elapsed_s();
   const double rate = elapsed > 0 ? done_ / elapsed : 0.0;
-  const double eta = rate > 0 ? (static_cast<double>(total_) - done_) / rate : NAN;
+  const double eta = rate > 0 && total_ >= done_ ? (static_cast<double>(total_) - done_) / rate : NAN;
   std::ostringstream os;
   os.precision(3);
+  if (total_ == 0 && !final_line) {
+    os << label_ << ": starting, elapsed " << format_duration(elapsed) << '\n';
+    std::fputs(os.str().c_str(), stderr);
+    std::fflush(stderr);
+    printed_ = true;
+    return;
+  }
   os << label_ << ": " << done_ << '/' << total_;
   if (final_line) {
     os << " done in " << format_duration(elapsed) << " (" << rate << "/s)\n";

@@ -3,17 +3,22 @@
 #pragma once
 
 #include <chrono>
+#include <condition_variable>
 #include <cstddef>
+#include <mutex>
 #include <string>
+#include <thread>
 
 namespace pvdf {
 
 /// Reports `done` of `total` items on stderr. On a terminal: `label [#####.....] 42/100
 /// 3.1/s  ETA 0:19`, redrawn at most five times a second. Otherwise (stderr a file or a pipe):
 /// one line `label: 42/100 (42 %), 3.1/s, elapsed 0:13, ETA 0:19` every line_interval_s()
-/// seconds, and `label: 100/100 done in 0:32 (3.1/s)` at the end when a line was printed before
-/// (a job shorter than the interval stays silent). Callers honour `--quiet` by not making one.
-/// Thread-compatible: call `update` from one thread (or under the caller's lock).
+/// seconds — from a heartbeat thread, so also while no item completes (a setup phase, a long
+/// item) — and `label: 100/100 done in 0:32 (3.1/s)` at the end when a line was printed before
+/// (a job shorter than the interval stays silent). A total of 0 means "not known yet": the line
+/// then says `starting`. Rate and ETA count from construction, so time spent before the first
+/// item is part of them. Callers honour `--quiet` by not making one. Thread-safe.
 class Progress {
  public:
   /// `force`: draw the terminal bar even when stderr is not a terminal.
@@ -24,8 +29,8 @@ class Progress {
   /// Sets the number of items done so far.
   void update(std::size_t done);
   /// Changes the total (work whose size is learnt on the way, e.g. several maps in turn).
-  void set_total(std::size_t total) { total_ = total; }
-  /// Final line (see the class comment); idempotent.
+  void set_total(std::size_t total);
+  /// Final line (see the class comment); idempotent. Stops the heartbeat.
   void finish();
   /// True when stderr is a terminal (or forced): the bar; false: plain lines.
   bool on_terminal() const { return terminal_; }
@@ -37,6 +42,7 @@ class Progress {
  private:
   void draw_bar(bool final_line);
   void print_line(bool final_line);
+  void heartbeat();
   double elapsed_s() const;
   std::string label_;
   std::size_t total_;
@@ -47,6 +53,9 @@ class Progress {
   double interval_s_;
   std::chrono::steady_clock::time_point start_;
   std::chrono::steady_clock::time_point last_draw_;
+  std::mutex mutex_;  ///< guards the counts, the clocks and stderr writes
+  std::condition_variable stop_;
+  std::thread heartbeat_;  ///< non-terminal only
 };
 
 /// Formats seconds as h:mm:ss or m:ss ("?" when not finite or negative).
