@@ -24,6 +24,8 @@
 #include <cmath>
 #include <filesystem>
 #include <functional>
+#include <mutex>
+#include <chrono>
 #include <cstdio>
 #include <iostream>
 #include <limits>
@@ -61,18 +63,92 @@ struct DesignCommandOptions {
 };
 
 /// One progress report over the FEM maps of a phase (the previews, or the refined winners), so
-/// that its ETA is the phase's: the total is the positions of the maps done plus, for each map
-/// still to come, as many as the map in progress (layouts of one film and spacing have about the
-/// same number of positions).
+/// that its ETA is the phase's. Each map has a setup (mesh sizing, checks) before its first
+/// position, then positions at a steady rate; layouts of one film and spacing have about the same
+/// number of positions. ETA = the current map's rest (its setup left, then its positions) + for
+/// each map to come the first map's setup and its positions at the measured rate.
 class MapsProgress {
  public:
-  /// The clock starts now: setting up each map (before its first position) is part of the rate.
+  using Clock = std::chrono::steady_clock;
+  /// The clock starts now: setting up each map (before its first position) is part of the ETA.
   MapsProgress(std::string label, std::size_t n_maps, bool quiet) : label_(std::move(label)), n_maps_(n_maps), quiet_(quiet) {
-    if (!quiet_ && n_maps_ > 0) bar_ = std::make_unique<pvdf::Progress>(label_, 0);
+    if (quiet_ || n_maps_ == 0) return;
+    bar_ = std::make_unique<pvdf::Progress>(label_, 0);
+    bar_->set_eta([this] { return eta_s(); });
   }
-  /// The callback of MapOptions::progress for map number `index` (0-based) of the phase.
+  /// The callback of MapOptions::progress for map number `index` (0-based) of the phase; call it
+  /// right before that map starts.
   std::function<void(std::size_t, std::size_t)> for_map(std::size_t index) {
-    if (quiet_) return {};
+    if (!bar_) return {};
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (index > 0) done_before_ += map_total_;
+      index_ = index;
+      map_start_ = Clock::now();
+      in_setup_ = true;
+      done_in_map_ = 0;
+    }
+    return [this](std::size_t done, std::size_t total) {
+      std::size_t all = 0, done_all = 0;
+      {
+        std::lock_guard<std::mutex> lock(mutex_);
+        const auto now = Clock::now();
+        if (in_setup_) {  // the map's first report: its setup ends here
+          in_setup_ = false;
+          first_report_ = now;
+          done_at_first_ = done;
+          if (!(setup_s_ >= 0)) {  // the first map's setup stands for every map's
+            setup_s_ = seconds(now - map_start_);
+            first_map_first_done_ = done;
+          }
+        } else if (done > done_at_first_) {
+          rate_ = double(done - done_at_first_) / seconds(now - first_report_);
+        }
+        done_in_map_ = done;
+        map_total_ = total;
+        all = done_before_ + total * (n_maps_ - index_);
+        done_all = done_before_ + done;
+      }
+      bar_->set_total(all);
+      bar_->update(done_all);
+    };
+  }
+  void finish() {
+    if (bar_) bar_->finish();
+  }
+  /// A line of its own on stderr (the terminal bar continues below it); nothing when quiet.
+  void note(const std::string& text) {
+    if (quiet_) return;
+    if (bar_ && bar_->on_terminal()) std::fputc('\n', stderr);
+    std::fputs((text + "\n").c_str(), stderr);
+    std::fflush(stderr);
+  }
+
+ private:
+  static double seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
+
+  double eta_s() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!(rate_ > 0) || !(setup_s_ >= 0)) return std::nan("");
+    // The first report came after the setup and the first positions: count those as positions.
+    const double setup_s = std::max(0.0, setup_s_ - double(first_map_first_done_) / rate_);
+    const double per_map_s = setup_s + double(map_total_) / rate_;
+    const double here_s = in_setup_ ? std::max(0.0, setup_s - seconds(Clock::now() - map_start_)) + double(map_total_) / rate_
+                                    : double(map_total_ - std::min(map_total_, done_in_map_)) / rate_;
+    return here_s + double(n_maps_ - index_ - 1) * per_map_s;
+  }
+
+  std::string label_;
+  std::size_t n_maps_;
+  bool quiet_;
+  std::mutex mutex_;  ///< the map callbacks (solver threads) and the heartbeat's ETA read the state below
+  std::size_t index_ = 0, done_before_ = 0, map_total_ = 0, done_in_map_ = 0, done_at_first_ = 0;
+  std::size_t first_map_first_done_ = 0;
+  bool in_setup_ = true;
+  double setup_s_ = -1, rate_ = 0;
+  Clock::time_point map_start_, first_report_;
+  std::unique_ptr<pvdf::Progress> bar_;
+};
     return [this, index](std::size_t done, std::size_t total) {
       if (index != current_) {  // the previous map ended: its positions are done
         done_before_ += current_total_;

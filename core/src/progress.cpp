@@ -66,9 +66,13 @@ void Progress::heartbeat() {
 
 void Progress::update(std::size_t done) {
   std::lock_guard<std::mutex> lock(mutex_);
+  const auto now = std::chrono::steady_clock::now();
+  if (done_ == 0 && done > 0) {
+    first_item_ = now;
+    done_at_first_ = done;
+  }
   done_ = done;
   if (finished_) return;
-  const auto now = std::chrono::steady_clock::now();
   const double since = std::chrono::duration<double>(now - last_draw_).count();
   if (terminal_) {
     if (since < 0.2 && done_ < total_) return;
@@ -78,6 +82,19 @@ void Progress::update(std::size_t done) {
     last_draw_ = now;
     print_line(false);
   }
+}
+
+void Progress::set_eta(std::function<double()> eta_s) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  eta_s_ = std::move(eta_s);
+}
+
+double Progress::eta_s() const {
+  if (eta_s_) return eta_s_();
+  if (done_ <= done_at_first_ || total_ < done_) return NAN;
+  const double since_first = std::chrono::duration<double>(std::chrono::steady_clock::now() - first_item_).count();
+  const double rate = since_first > 0 ? static_cast<double>(done_ - done_at_first_) / since_first : 0.0;
+  return rate > 0 ? static_cast<double>(total_ - done_) / rate : NAN;
 }
 
 void Progress::set_total(std::size_t total) {
@@ -102,7 +119,7 @@ void Progress::finish() {
 void Progress::draw_bar(bool final_line) {
   const double elapsed = elapsed_s();
   const double rate = elapsed > 0 ? done_ / elapsed : 0.0;
-  const double eta = rate > 0 ? (static_cast<double>(total_) - done_) / rate : NAN;
+  const double eta = eta_s();
   const int width = 30;
   const int filled = total_ ? static_cast<int>(width * static_cast<double>(done_) / total_) : width;
   std::ostringstream os;
@@ -124,7 +141,7 @@ void Progress::draw_bar(bool final_line) {
 void Progress::print_line(bool final_line) {
   const double elapsed = elapsed_s();
   const double rate = elapsed > 0 ? done_ / elapsed : 0.0;
-  const double eta = rate > 0 && total_ >= done_ ? (static_cast<double>(total_) - done_) / rate : NAN;
+  const double eta = eta_s();
   std::ostringstream os;
   os.precision(3);
   if (total_ == 0 && !final_line) {
