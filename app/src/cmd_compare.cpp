@@ -28,7 +28,7 @@ namespace {
 struct CompareCliOptions {
   std::string map_path;
   std::string measured_path;
-  bool json = false;
+  bool json = false, quiet = false;
   std::string plot_path;
   std::string report_path;
   double min_map_charge_C = 0;
@@ -42,7 +42,7 @@ int run_compare(const CompareCliOptions& o) {
   pvdf::check_csv_file(o.measured_path, "MEASURED");
 #ifdef PVDF_HAVE_FIT
   if (pvdf::app::is_scene_file(o.map_path))  // a scene: FEM solves at the presses (compare_scene.cpp)
-    return pvdf::app::run_compare_scene(o.map_path, o.measured_path, o.json, o.plot_path, o.report_path);
+    return pvdf::app::run_compare_scene(o.map_path, o.measured_path, o.json, o.plot_path, o.report_path, o.quiet);
 #endif
   const ChargeMap map = read_map(o.map_path);
   const MapInterpolant interpolant(map);
@@ -169,5 +169,6 @@ PVDF_COMMAND(66, [](CLI::App& root) {
   sub->add_option("--min-map-charge-C", o->min_map_charge_C,
                   "Map charges smaller than this are not compared as a percentage (C) (default 3 x the map's 1-sigma charge noise)")
       ->check(pvdf::app::number_in(0, 1e-3, "C"));
+  sub->add_flag("--quiet", o->quiet, "A scene: no progress of its FEM solves on stderr (warnings and errors are still reported)");
   return pvdf::app::Subcommand{sub, [o] { return run_compare(*o); }};
 });
