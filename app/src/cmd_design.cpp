@@ -63,92 +63,20 @@ struct DesignCommandOptions {
 };
 
 /// One progress report over the FEM maps of a phase (the previews, or the refined winners), so
-/// that its ETA is the phase's. Each map has a setup (mesh sizing, checks) before its first
-/// position, then positions at a steady rate; layouts of one film and spacing have about the same
-/// number of positions. ETA = the current map's rest (its setup left, then its positions) + for
-/// each map to come the first map's setup and its positions at the measured rate.
+/// that its ETA is the phase's: the total is the positions of the maps done plus, for each map
+/// still to come, as many as the map in progress (layouts of one film and spacing have about the
+/// same number of positions). Its ETA divides the positions left by the rate since the first
+/// position (pvdf::Progress), so the first map's setup does not count and later maps' setups are
+/// spread over their positions.
 class MapsProgress {
  public:
-  using Clock = std::chrono::steady_clock;
-  /// The clock starts now: setting up each map (before its first position) is part of the ETA.
+  /// The clock (and a heartbeat line every 10 s off a terminal) starts now, before the first setup.
   MapsProgress(std::string label, std::size_t n_maps, bool quiet) : label_(std::move(label)), n_maps_(n_maps), quiet_(quiet) {
-    if (quiet_ || n_maps_ == 0) return;
-    bar_ = std::make_unique<pvdf::Progress>(label_, 0);
-    bar_->set_eta([this] { return eta_s(); });
+    if (!quiet_ && n_maps_ > 0) bar_ = std::make_unique<pvdf::Progress>(label_, 0);
   }
-  /// The callback of MapOptions::progress for map number `index` (0-based) of the phase; call it
-  /// right before that map starts.
+  /// The callback of MapOptions::progress for map number `index` (0-based) of the phase.
   std::function<void(std::size_t, std::size_t)> for_map(std::size_t index) {
-    if (!bar_) return {};
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      if (index > 0) done_before_ += map_total_;
-      index_ = index;
-      map_start_ = Clock::now();
-      in_setup_ = true;
-      done_in_map_ = 0;
-    }
-    return [this](std::size_t done, std::size_t total) {
-      std::size_t all = 0, done_all = 0;
-      {
-        std::lock_guard<std::mutex> lock(mutex_);
-        const auto now = Clock::now();
-        if (in_setup_) {  // the map's first report: its setup ends here
-          in_setup_ = false;
-          first_report_ = now;
-          done_at_first_ = done;
-          if (!(setup_s_ >= 0)) {  // the first map's setup stands for every map's
-            setup_s_ = seconds(now - map_start_);
-            first_map_first_done_ = done;
-          }
-        } else if (done > done_at_first_) {
-          rate_ = double(done - done_at_first_) / seconds(now - first_report_);
-        }
-        done_in_map_ = done;
-        map_total_ = total;
-        all = done_before_ + total * (n_maps_ - index_);
-        done_all = done_before_ + done;
-      }
-      bar_->set_total(all);
-      bar_->update(done_all);
-    };
-  }
-  void finish() {
-    if (bar_) bar_->finish();
-  }
-  /// A line of its own on stderr (the terminal bar continues below it); nothing when quiet.
-  void note(const std::string& text) {
-    if (quiet_) return;
-    if (bar_ && bar_->on_terminal()) std::fputc('\n', stderr);
-    std::fputs((text + "\n").c_str(), stderr);
-    std::fflush(stderr);
-  }
-
- private:
-  static double seconds(Clock::duration d) { return std::chrono::duration<double>(d).count(); }
-
-  double eta_s() {
-    std::lock_guard<std::mutex> lock(mutex_);
-    if (!(rate_ > 0) || !(setup_s_ >= 0)) return std::nan("");
-    // The first report came after the setup and the first positions: count those as positions.
-    const double setup_s = std::max(0.0, setup_s_ - double(first_map_first_done_) / rate_);
-    const double per_map_s = setup_s + double(map_total_) / rate_;
-    const double here_s = in_setup_ ? std::max(0.0, setup_s - seconds(Clock::now() - map_start_)) + double(map_total_) / rate_
-                                    : double(map_total_ - std::min(map_total_, done_in_map_)) / rate_;
-    return here_s + double(n_maps_ - index_ - 1) * per_map_s;
-  }
-
-  std::string label_;
-  std::size_t n_maps_;
-  bool quiet_;
-  std::mutex mutex_;  ///< the map callbacks (solver threads) and the heartbeat's ETA read the state below
-  std::size_t index_ = 0, done_before_ = 0, map_total_ = 0, done_in_map_ = 0, done_at_first_ = 0;
-  std::size_t first_map_first_done_ = 0;
-  bool in_setup_ = true;
-  double setup_s_ = -1, rate_ = 0;
-  Clock::time_point map_start_, first_report_;
-  std::unique_ptr<pvdf::Progress> bar_;
-};
+    if (quiet_) return {};
     return [this, index](std::size_t done, std::size_t total) {
       if (index != current_) {  // the previous map ended: its positions are done
         done_before_ += current_total_;
@@ -355,6 +283,53 @@ std::vector<std::array<double, 2>> outline_mm(const pvdf::FilmOutline& o) {
   return v;
 }
 
+/// A smooth edge for the mapped area of a round film: that area is the film's disc (or ellipse)
+/// inset by the rim margin, which the square grid of the map can only follow in steps of its
+/// spacing. Each missing node next to an evaluated one takes the mean of its evaluated neighbours
+/// (half a cell of extrapolation), and the returned polygon — a box around film and grid with a hole
+/// the shape of the film's outline scaled through the outermost evaluated nodes plus half a cell —
+/// masks the field outside that curve when filled in the background colour. Empty when nothing is
+/// evaluated.
+std::vector<std::array<double, 2>> smooth_round_edge(pvdf::plot::Grid& g, const DesignMaps& m, const pvdf::FilmOutline& o) {
+  const bool circle = o.shape == pvdf::FilmOutline::Shape::circle;
+  const double a = 1e3 * (circle ? o.radius_m : o.semi_axes_m[0]), b = 1e3 * (circle ? o.radius_m : o.semi_axes_m[1]);
+  const double h = g.nx > 1 ? (g.x1 - g.x0) / double(g.nx - 1) : 1.0;
+  double rho_max = 0;
+  for (std::size_t p = 0; p < g.values.size(); ++p) {
+    if (!m.evaluated[p]) continue;
+    const double x = g.x0 + h * double(p % g.nx), y = g.y0 + h * double(p / g.nx);
+    rho_max = std::max(rho_max, std::hypot(x / a, y / b));
+  }
+  if (!(rho_max > 0)) return {};
+  const std::vector<double> original = g.values;
+  for (std::size_t j = 0; j < g.ny; ++j) {
+    for (std::size_t i = 0; i < g.nx; ++i) {
+      if (m.evaluated[j * g.nx + i]) continue;
+      double sum = 0;
+      int n = 0;
+      for (int dj = -1; dj <= 1; ++dj) {
+        for (int di = -1; di <= 1; ++di) {
+          const long ii = long(i) + di, jj = long(j) + dj;
+          if (ii < 0 || jj < 0 || ii >= long(g.nx) || jj >= long(g.ny)) continue;
+          const std::size_t q = std::size_t(jj) * g.nx + std::size_t(ii);
+          if (m.evaluated[q] && std::isfinite(original[q])) sum += original[q], ++n;
+        }
+      }
+      if (n > 0) g.values[j * g.nx + i] = sum / n;
+    }
+  }
+  const double rho_edge = std::min(1.0, rho_max + 0.5 * h / std::min(a, b));
+  // The box covers the film and the grid (the field ends at the grid's last nodes at most).
+  const double x0 = std::min(-a, g.x0), x1 = std::max(a, g.x1), y0 = std::min(-b, g.y0), y1 = std::max(b, g.y1);
+  std::vector<std::array<double, 2>> mask = {{x1, 0}, {x1, y1}, {x0, y1}, {x0, y0}, {x1, y0}, {x1, 0}};
+  const int n = 256;
+  for (int k = 0; k <= n; ++k) {  // the hole, traced the other way round
+    const double t = -2 * pvdf::pi * k / n;
+    mask.push_back({rho_edge * a * std::cos(t), rho_edge * b * std::sin(t)});
+  }
+  return mask;
+}
+
 /// One panel: `values` × `scale` (m → mm, or a fraction → %) over the map on a log colour scale
 /// labelled in those units, the target contour, ambiguous (red ×) and dead (grey) nodes, the
 /// electrodes and the film outline; the legend below the panel, off the data.
@@ -389,20 +364,30 @@ void map_panel(pvdf::plot::Axes& ax, const Candidate& c, const std::vector<doubl
       dy.push_back(y);
     }
   }
+  std::optional<pvdf::Scene> scene;
+  try {
+    scene = pvdf::parse_scene(nlohmann::json::parse(c.map.scene_json), c.source);
+  } catch (const std::exception&) {
+    // a map without a readable scene: no outline, electrodes as squares (below)
+  }
+  const bool round = scene && (scene->membrane.outline.shape == pvdf::FilmOutline::Shape::circle ||
+                               scene->membrane.outline.shape == pvdf::FilmOutline::Shape::ellipse);
+  std::vector<std::array<double, 2>> mask;
+  if (round) mask = smooth_round_edge(g, m, scene->membrane.outline);
   ax.field(g, bar_label, false, vmin, vmax).log_color();
+  if (!mask.empty()) ax.polygon(mask, pvdf::plot::Color{255, 255, 255}, std::nullopt);
   if (!ax_x.empty()) ax.scatter(ax_x, ax_y, "ambiguous", pvdf::plot::Color{220, 30, 30}, pvdf::plot::Marker::cross, 2.0);
   if (!dx.empty()) ax.scatter(dx, dy, "dead zone", pvdf::plot::Color{150, 150, 150}, pvdf::plot::Marker::square, 2.0);
   // The target line last, so that the markers do not hide it.
   if (contour_at > vmin && contour_at < vmax) ax.contour(for_contour, {contour_at}, pvdf::plot::Color{255, 255, 255}, 2.0);
-  try {
-    const pvdf::Scene scene = pvdf::parse_scene(nlohmann::json::parse(c.map.scene_json), c.source);
-    ax.polygon(outline_mm(scene.membrane.outline), std::nullopt, pvdf::plot::Color{0, 0, 0}, 1.5);
-    for (const auto& e : scene.electrodes) {
+  if (scene) {
+    ax.polygon(outline_mm(scene->membrane.outline), std::nullopt, pvdf::plot::Color{0, 0, 0}, 1.5);
+    for (const auto& e : scene->electrodes) {
       std::vector<std::array<double, 2>> v;
       for (const auto& p : e.outline()) v.push_back({p[0] * 1e3, p[1] * 1e3});
       ax.polygon(v, pvdf::plot::Color{255, 255, 255}, pvdf::plot::Color{0, 0, 0}, 1.0);
     }
-  } catch (const std::exception&) {
+  } else {
     std::vector<double> ex, ey;
     for (const auto& e : c.map.electrode_centers_m) {
       ex.push_back(e[0] * 1e3);

@@ -84,13 +84,7 @@ void Progress::update(std::size_t done) {
   }
 }
 
-void Progress::set_eta(std::function<double()> eta_s) {
-  std::lock_guard<std::mutex> lock(mutex_);
-  eta_s_ = std::move(eta_s);
-}
-
 double Progress::eta_s() const {
-  if (eta_s_) return eta_s_();
   if (done_ <= done_at_first_ || total_ < done_) return NAN;
   const double since_first = std::chrono::duration<double>(std::chrono::steady_clock::now() - first_item_).count();
   const double rate = since_first > 0 ? static_cast<double>(done_ - done_at_first_) / since_first : 0.0;

@@ -5,7 +5,6 @@
 #include <chrono>
 #include <condition_variable>
 #include <cstddef>
-#include <functional>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -20,8 +19,7 @@ namespace pvdf {
 /// (a job shorter than the interval stays silent). A total of 0 means "not known yet": the line
 /// then says `starting`. The rate shown counts from construction; the ETA divides the items left
 /// by the rate since the first item was reported (a setup phase before it does not make every
-/// item look slow), unless set_eta() gives a better model. Callers honour `--quiet` by not making
-/// one. Thread-safe.
+/// item look slow). Callers honour `--quiet` by not making one. Thread-safe.
 class Progress {
  public:
   /// `force`: draw the terminal bar even when stderr is not a terminal.
@@ -33,10 +31,6 @@ class Progress {
   void update(std::size_t done);
   /// Changes the total (work whose size is learnt on the way, e.g. several maps in turn).
   void set_total(std::size_t total);
-  /// Replaces the rate-based ETA by `eta_s()`, seconds left (NaN: unknown), for work whose parts
-  /// are not alike (a setup phase per map). Called with the progress lock held, from update()'s
-  /// thread or the heartbeat: it must guard what it reads.
-  void set_eta(std::function<double()> eta_s);
   /// Final line (see the class comment); idempotent. Stops the heartbeat.
   void finish();
   /// True when stderr is a terminal (or forced): the bar; false: plain lines.
@@ -63,7 +57,6 @@ class Progress {
   std::chrono::steady_clock::time_point last_draw_;
   std::chrono::steady_clock::time_point first_item_;  ///< when done first became > 0
   std::size_t done_at_first_ = 0;
-  std::function<double()> eta_s_;
   std::mutex mutex_;  ///< guards the counts, the clocks and stderr writes
   std::condition_variable stop_;
   std::thread heartbeat_;  ///< non-terminal only
