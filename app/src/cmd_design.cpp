@@ -352,8 +352,9 @@ void map_panel(pvdf::plot::Axes& ax, const Candidate& c, const std::vector<doubl
     // Not clamped: values beyond [vmin, vmax] take the end colours and the colour bar marks that
     // with a triangle. Unbounded (no finite bound) is drawn as beyond the top.
     g.values[p] = std::isfinite(v) && v > 0 ? v : std::numeric_limits<double>::infinity();
-    // The contour's interpolant needs finite values: unbounded stands 100 × above the scale.
-    for_contour.values[p] = std::isfinite(v) && v > 0 ? v : 100 * vmax;
+    // The contour is traced on log10 of the values (the colours' interpolant, pvdf::plot), with
+    // finite values: unbounded stands 100 × above the scale.
+    for_contour.values[p] = std::log10(std::isfinite(v) && v > 0 ? v : 100 * vmax);
     const double x = m.x_m[p % g.nx] * 1e3, y = m.y_m[p / g.nx] * 1e3;
     if (m.ambiguous[p]) {
       ax_x.push_back(x);
@@ -379,7 +380,7 @@ void map_panel(pvdf::plot::Axes& ax, const Candidate& c, const std::vector<doubl
   if (!ax_x.empty()) ax.scatter(ax_x, ax_y, "ambiguous", pvdf::plot::Color{220, 30, 30}, pvdf::plot::Marker::cross, 2.0);
   if (!dx.empty()) ax.scatter(dx, dy, "dead zone", pvdf::plot::Color{150, 150, 150}, pvdf::plot::Marker::square, 2.0);
   // The target line last, so that the markers do not hide it.
-  if (contour_at > vmin && contour_at < vmax) ax.contour(for_contour, {contour_at}, pvdf::plot::Color{255, 255, 255}, 2.0);
+  if (contour_at > vmin && contour_at < vmax) ax.contour(for_contour, {std::log10(contour_at)}, pvdf::plot::Color{255, 255, 255}, 2.0);
   if (scene) {
     ax.polygon(outline_mm(scene->membrane.outline), std::nullopt, pvdf::plot::Color{0, 0, 0}, 1.5);
     for (const auto& e : scene->electrodes) {
