@@ -66,14 +66,14 @@ PVDF_COMMAND(61, [](CLI::App& root) {
                                   "Fit per-electrode gain and offset of a charge map to measured presses "
                                   "(leave-one-out validated) and write the calibrated map (docs/lookup.md)");
   auto o = std::make_shared<CalibrateOptions>();
-  sub->add_option("MAP", o->map_path, "Charge map (HDF5)")->required();
+  sub->add_option("MAP", o->map_path, "Charge map (HDF5 from `pvdfkit map`, `synthetic-map` or `calibrate`)")->required();
   sub->add_option("MEASURED", o->measured_path,
                   "CSV of presses at known places: x_m,y_m,force_N,charge_<name>_C for every electrode")
       ->required();
   sub->add_option("-o,--output", o->output_path, "Calibrated map to write (the map plus a /calibration group)")
       ->required()
       ->check(pvdf::app::output_file());
-  sub->add_option("--noise-C", o->noise, "1-sigma charge noise used when locating for the report (C)");
+  sub->add_option("--noise-C", o->noise, "1-sigma charge noise per electrode used when locating for the report (C) (default the map's)");
   sub->add_flag("--json", o->json, "Print the report as JSON");
   return pvdf::app::Subcommand{sub, [o] { return run_calibrate(*o); }};
 });

@@ -28,7 +28,7 @@ namespace {
 struct CompareCliOptions {
   std::string map_path;
   std::string measured_path;
-  bool json = false;
+  bool json = false, quiet = false;
   std::string plot_path;
   std::string report_path;
   double min_map_charge_C = 0;
@@ -42,7 +42,7 @@ int run_compare(const CompareCliOptions& o) {
   pvdf::check_csv_file(o.measured_path, "MEASURED");
 #ifdef PVDF_HAVE_FIT
   if (pvdf::app::is_scene_file(o.map_path))  // a scene: FEM solves at the presses (compare_scene.cpp)
-    return pvdf::app::run_compare_scene(o.map_path, o.measured_path, o.json, o.plot_path, o.report_path);
+    return pvdf::app::run_compare_scene(o.map_path, o.measured_path, o.json, o.plot_path, o.report_path, o.quiet);
 #endif
   const ChargeMap map = read_map(o.map_path);
   const MapInterpolant interpolant(map);
@@ -157,7 +157,8 @@ PVDF_COMMAND(66, [](CLI::App& root) {
       "compare",
       "FEM charge map against measured charges: per-press and mean % difference per electrode (seed 001 Fig. 12)");
   auto o = std::make_shared<CompareCliOptions>();
-  sub->add_option("MAP", o->map_path, "Charge map (HDF5 from `pvdfkit map`); its calibration is not applied")->required();
+  sub->add_option("MAP", o->map_path, "Charge map (HDF5 from `pvdfkit map`, `synthetic-map` or `calibrate`; its calibration is not "
+                                       "applied), or a scene file (JSON: FEM solves at the measured presses)")->required();
   sub->add_option("MEASURED", o->measured_path,
                   "CSV with columns x_m,y_m,force_N and charge_<name>_C per electrode of the map (docs/seed001-reproduction.md)")
       ->required();
@@ -166,7 +167,8 @@ PVDF_COMMAND(66, [](CLI::App& root) {
       ->check(pvdf::app::figure_file());
   sub->add_option("-o,--report", o->report_path, "Write the per-press report as CSV")->check(pvdf::app::output_file());
   sub->add_option("--min-map-charge-C", o->min_map_charge_C,
-                  "Map charges smaller than this are not compared as a percentage (C); default 3x the map's noise_C")
+                  "Map charges smaller than this are not compared as a percentage (C) (default 3 x the map's 1-sigma charge noise)")
       ->check(pvdf::app::number_in(0, 1e-3, "C"));
+  sub->add_flag("--quiet", o->quiet, "A scene: no progress of its FEM solves on stderr (warnings and errors are still reported)");
   return pvdf::app::Subcommand{sub, [o] { return run_compare(*o); }};
 });

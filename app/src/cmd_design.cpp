@@ -23,8 +23,12 @@
 #include <cctype>
 #include <cmath>
 #include <filesystem>
+#include <functional>
+#include <mutex>
+#include <chrono>
 #include <cstdio>
 #include <iostream>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -55,6 +59,53 @@ struct DesignCommandOptions {
   std::string out_dir = "design-out";
   bool no_plots = false;
   bool include_map_error = false;
+  bool quiet = false;
+};
+
+/// One progress report over the FEM maps of a phase (the previews, or the refined winners), so
+/// that its ETA is the phase's: the total is the positions of the maps done plus, for each map
+/// still to come, as many as the map in progress (layouts of one film and spacing have about the
+/// same number of positions). Its ETA divides the positions left by the rate since the first
+/// position (pvdf::Progress), so the first map's setup does not count and later maps' setups are
+/// spread over their positions.
+class MapsProgress {
+ public:
+  /// The clock (and a heartbeat line every 10 s off a terminal) starts now, before the first setup.
+  MapsProgress(std::string label, std::size_t n_maps, bool quiet) : label_(std::move(label)), n_maps_(n_maps), quiet_(quiet) {
+    if (!quiet_ && n_maps_ > 0) bar_ = std::make_unique<pvdf::Progress>(label_, 0);
+  }
+  /// The callback of MapOptions::progress for map number `index` (0-based) of the phase.
+  std::function<void(std::size_t, std::size_t)> for_map(std::size_t index) {
+    if (quiet_) return {};
+    return [this, index](std::size_t done, std::size_t total) {
+      if (index != current_) {  // the previous map ended: its positions are done
+        done_before_ += current_total_;
+        current_ = index;
+      }
+      current_total_ = total;
+      const std::size_t still_to_come = n_maps_ > index + 1 ? n_maps_ - index - 1 : 0;
+      const std::size_t all = done_before_ + total * (1 + still_to_come);
+      bar_->set_total(all);
+      bar_->update(done_before_ + done);
+    };
+  }
+  void finish() {
+    if (bar_) bar_->finish();
+  }
+  /// A line of its own on stderr (the terminal bar continues below it); nothing when quiet.
+  void note(const std::string& text) {
+    if (quiet_) return;
+    if (bar_ && bar_->on_terminal()) std::fputc('\n', stderr);
+    std::fputs((text + "\n").c_str(), stderr);
+    std::fflush(stderr);
+  }
+
+ private:
+  std::string label_;
+  std::size_t n_maps_;
+  bool quiet_;
+  std::size_t current_ = 0, current_total_ = 0, done_before_ = 0;
+  std::unique_ptr<pvdf::Progress> bar_;
 };
 
 /// One candidate layout and what the analysis found.
@@ -98,7 +149,7 @@ std::string pct(double f) { return std::isfinite(f) ? fmt("%.1f %%", 100 * f) : 
 // Maps
 
 ChargeMap make_map(const Candidate& c, const DesignCommandOptions& o, double spacing, std::string& map_file,
-                   std::string& map_source) {
+                   std::string& map_source, MapsProgress& progress, std::size_t map_index) {
   const pvdf::Scene scene = pvdf::parse_scene(*c.scene, c.source);
   if (o.synthetic) {
     map_source = "synthetic";
@@ -111,20 +162,15 @@ ChargeMap make_map(const Candidate& c, const DesignCommandOptions& o, double spa
   mo.tolerance = o.tolerance;
   mo.threads = o.threads;
   mo.description = "pvdfkit design preview of " + c.label;
-  std::unique_ptr<pvdf::Progress> bar;
-  mo.progress = [&bar, &c](std::size_t done, std::size_t total) {
-    if (!bar) bar = std::make_unique<pvdf::Progress>("map " + c.label, total);
-    bar->update(done);
-  };
+  mo.progress = progress.for_map(map_index);
   MapReport report;
   ChargeMap map = generate_map(scene, mo, &report);
-  if (bar) bar->finish();
   pvdf::make_directories(o.out_dir + "/maps");
   map_file = o.out_dir + "/maps/" + slug(c.label) + "_" + fmt("%.2gmm", spacing * 1e3) + ".h5";
   write_generated_map(map_file, map, report.provenance);
-  std::cerr << "map " << c.label << ": " << report.n_solved << " FEM solves in " << pvdf::format_duration(report.wall_s)
-            << " (model " << report.model << ", estimated charge error " << fmt("%.2g", report.estimated_relative_error)
-            << "), written to " << map_file << "\n";
+  progress.note("map " + c.label + ": " + std::to_string(report.n_solved) + " FEM solves in " +
+                pvdf::format_duration(report.wall_s) + " (model " + report.model + ", estimated charge error " +
+                fmt("%.2g", report.estimated_relative_error) + "), written to " + map_file);
   if (report.n_failed > 0) {
     pvdf::app::warn(c.label + ": " + std::to_string(report.n_failed) + " map points did not converge (left out)");
   }
@@ -132,6 +178,8 @@ ChargeMap make_map(const Candidate& c, const DesignCommandOptions& o, double spa
   return map;
 #else
   (void)spacing;
+  (void)progress;
+  (void)map_index;
   (void)map_file;
   (void)map_source;
   throw pvdf::InputError("this pvdfkit was built without FEM map generation (PVDF_WITH_FEM=OFF): use --synthetic for "
@@ -235,8 +283,56 @@ std::vector<std::array<double, 2>> outline_mm(const pvdf::FilmOutline& o) {
   return v;
 }
 
-/// One panel: log10 of `values` (m → mm, or a fraction → %) over the map, the target contour,
-/// ambiguous (red ×) and dead (grey) nodes, the electrodes and the film outline.
+/// A smooth edge for the mapped area of a round film: that area is the film's disc (or ellipse)
+/// inset by the rim margin, which the square grid of the map can only follow in steps of its
+/// spacing. Each missing node next to an evaluated one takes the mean of its evaluated neighbours
+/// (half a cell of extrapolation), and the returned polygon — a box around film and grid with a hole
+/// the shape of the film's outline scaled through the outermost evaluated nodes plus half a cell —
+/// masks the field outside that curve when filled in the background colour. Empty when nothing is
+/// evaluated.
+std::vector<std::array<double, 2>> smooth_round_edge(pvdf::plot::Grid& g, const DesignMaps& m, const pvdf::FilmOutline& o) {
+  const bool circle = o.shape == pvdf::FilmOutline::Shape::circle;
+  const double a = 1e3 * (circle ? o.radius_m : o.semi_axes_m[0]), b = 1e3 * (circle ? o.radius_m : o.semi_axes_m[1]);
+  const double h = g.nx > 1 ? (g.x1 - g.x0) / double(g.nx - 1) : 1.0;
+  double rho_max = 0;
+  for (std::size_t p = 0; p < g.values.size(); ++p) {
+    if (!m.evaluated[p]) continue;
+    const double x = g.x0 + h * double(p % g.nx), y = g.y0 + h * double(p / g.nx);
+    rho_max = std::max(rho_max, std::hypot(x / a, y / b));
+  }
+  if (!(rho_max > 0)) return {};
+  const std::vector<double> original = g.values;
+  for (std::size_t j = 0; j < g.ny; ++j) {
+    for (std::size_t i = 0; i < g.nx; ++i) {
+      if (m.evaluated[j * g.nx + i]) continue;
+      double sum = 0;
+      int n = 0;
+      for (int dj = -1; dj <= 1; ++dj) {
+        for (int di = -1; di <= 1; ++di) {
+          const long ii = long(i) + di, jj = long(j) + dj;
+          if (ii < 0 || jj < 0 || ii >= long(g.nx) || jj >= long(g.ny)) continue;
+          const std::size_t q = std::size_t(jj) * g.nx + std::size_t(ii);
+          if (m.evaluated[q] && std::isfinite(original[q])) sum += original[q], ++n;
+        }
+      }
+      if (n > 0) g.values[j * g.nx + i] = sum / n;
+    }
+  }
+  const double rho_edge = std::min(1.0, rho_max + 0.5 * h / std::min(a, b));
+  // The box covers the film and the grid (the field ends at the grid's last nodes at most).
+  const double x0 = std::min(-a, g.x0), x1 = std::max(a, g.x1), y0 = std::min(-b, g.y0), y1 = std::max(b, g.y1);
+  std::vector<std::array<double, 2>> mask = {{x1, 0}, {x1, y1}, {x0, y1}, {x0, y0}, {x1, y0}, {x1, 0}};
+  const int n = 256;
+  for (int k = 0; k <= n; ++k) {  // the hole, traced the other way round
+    const double t = -2 * pvdf::pi * k / n;
+    mask.push_back({rho_edge * a * std::cos(t), rho_edge * b * std::sin(t)});
+  }
+  return mask;
+}
+
+/// One panel: `values` × `scale` (m → mm, or a fraction → %) over the map on a log colour scale
+/// labelled in those units, the target contour, ambiguous (red ×) and dead (grey) nodes, the
+/// electrodes and the film outline; the legend below the panel, off the data.
 void map_panel(pvdf::plot::Axes& ax, const Candidate& c, const std::vector<double>& values, double scale, double vmin,
                double vmax, double contour_at, const std::string& bar_label) {
   const DesignMaps& m = c.summary.maps;
@@ -248,13 +344,17 @@ void map_panel(pvdf::plot::Axes& ax, const Candidate& c, const std::vector<doubl
   g.y0 = m.y_m.front() * 1e3;
   g.y1 = m.y_m.back() * 1e3;
   g.values.assign(g.nx * g.ny, std::nan(""));
+  pvdf::plot::Grid for_contour = g;
   std::vector<double> ax_x, ax_y, dx, dy;
   for (std::size_t p = 0; p < g.values.size(); ++p) {
     if (!m.evaluated[p]) continue;
     const double v = values[p] * scale;
     // Not clamped: values beyond [vmin, vmax] take the end colours and the colour bar marks that
     // with a triangle. Unbounded (no finite bound) is drawn as beyond the top.
-    g.values[p] = std::isfinite(v) && v > 0 ? std::log10(v) : vmax + 1;
+    g.values[p] = std::isfinite(v) && v > 0 ? v : std::numeric_limits<double>::infinity();
+    // The contour is traced on log10 of the values (the colours' interpolant, pvdf::plot), with
+    // finite values: unbounded stands 100 × above the scale.
+    for_contour.values[p] = std::log10(std::isfinite(v) && v > 0 ? v : 100 * vmax);
     const double x = m.x_m[p % g.nx] * 1e3, y = m.y_m[p / g.nx] * 1e3;
     if (m.ambiguous[p]) {
       ax_x.push_back(x);
@@ -265,20 +365,30 @@ void map_panel(pvdf::plot::Axes& ax, const Candidate& c, const std::vector<doubl
       dy.push_back(y);
     }
   }
-  ax.field(g, bar_label, false, vmin, vmax);
+  std::optional<pvdf::Scene> scene;
+  try {
+    scene = pvdf::parse_scene(nlohmann::json::parse(c.map.scene_json), c.source);
+  } catch (const std::exception&) {
+    // a map without a readable scene: no outline, electrodes as squares (below)
+  }
+  const bool round = scene && (scene->membrane.outline.shape == pvdf::FilmOutline::Shape::circle ||
+                               scene->membrane.outline.shape == pvdf::FilmOutline::Shape::ellipse);
+  std::vector<std::array<double, 2>> mask;
+  if (round) mask = smooth_round_edge(g, m, scene->membrane.outline);
+  ax.field(g, bar_label, false, vmin, vmax).log_color();
+  if (!mask.empty()) ax.polygon(mask, pvdf::plot::Color{255, 255, 255}, std::nullopt);
   if (!ax_x.empty()) ax.scatter(ax_x, ax_y, "ambiguous", pvdf::plot::Color{220, 30, 30}, pvdf::plot::Marker::cross, 2.0);
   if (!dx.empty()) ax.scatter(dx, dy, "dead zone", pvdf::plot::Color{150, 150, 150}, pvdf::plot::Marker::square, 2.0);
   // The target line last, so that the markers do not hide it.
-  if (contour_at > vmin && contour_at < vmax) ax.contour(g, {contour_at}, pvdf::plot::Color{255, 255, 255}, 2.0);
-  try {
-    const pvdf::Scene scene = pvdf::parse_scene(nlohmann::json::parse(c.map.scene_json), c.source);
-    ax.polygon(outline_mm(scene.membrane.outline), std::nullopt, pvdf::plot::Color{0, 0, 0}, 1.5);
-    for (const auto& e : scene.electrodes) {
+  if (contour_at > vmin && contour_at < vmax) ax.contour(for_contour, {std::log10(contour_at)}, pvdf::plot::Color{255, 255, 255}, 2.0);
+  if (scene) {
+    ax.polygon(outline_mm(scene->membrane.outline), std::nullopt, pvdf::plot::Color{0, 0, 0}, 1.5);
+    for (const auto& e : scene->electrodes) {
       std::vector<std::array<double, 2>> v;
       for (const auto& p : e.outline()) v.push_back({p[0] * 1e3, p[1] * 1e3});
       ax.polygon(v, pvdf::plot::Color{255, 255, 255}, pvdf::plot::Color{0, 0, 0}, 1.0);
     }
-  } catch (const std::exception&) {
+  } else {
     std::vector<double> ex, ey;
     for (const auto& e : c.map.electrode_centers_m) {
       ex.push_back(e[0] * 1e3);
@@ -286,7 +396,7 @@ void map_panel(pvdf::plot::Axes& ax, const Candidate& c, const std::vector<doubl
     }
     ax.scatter(ex, ey, "electrodes", pvdf::plot::Color{255, 255, 255}, pvdf::plot::Marker::square, 7.0);
   }
-  ax.xlabel("x (mm)").ylabel("y (mm)").equal_aspect().legend(ax_x.empty() && dx.empty() ? "none" : "lower right");
+  ax.xlabel("x (mm)").ylabel("y (mm)").equal_aspect().legend(ax_x.empty() && dx.empty() ? "none" : "outside below");
 }
 
 void write_map_figures(const std::vector<const Candidate*>& ranked, const DesignCommandOptions& o,
@@ -304,11 +414,10 @@ void write_map_figures(const std::vector<const Candidate*>& ranked, const Design
       const Candidate& c = *ranked[i];
       auto& ax = fig.axes(int(i) / 4, int(i) % 4);
       if (which == 0) {
-        map_panel(ax, c, c.summary.maps.sigma_pos_m, 1e3, std::log10(target / 100), std::log10(target * 20),
-                  std::log10(target), "log$_{10}$ σ$_{pos}$ (mm)");
+        map_panel(ax, c, c.summary.maps.sigma_pos_m, 1e3, target / 100, target * 20, target, "σ$_{pos}$ (mm)");
         ax.title("#" + std::to_string(i + 1) + " " + c.label + ": usable " + pct(c.summary.usable_fraction));
       } else {
-        map_panel(ax, c, c.summary.maps.sigma_force_rel, 100, -2, 2, 0, "log$_{10}$ σ$_F$/F (%)");
+        map_panel(ax, c, c.summary.maps.sigma_force_rel, 100, 0.01, 100, 1, "σ$_F$/F (%)");
         ax.title("#" + std::to_string(i + 1) + " " + c.label + ": median " + pct(c.summary.median_sigma_force_rel));
       }
     }
@@ -502,15 +611,19 @@ std::vector<Candidate> refine_winners(const std::vector<const Candidate*>& ranke
   std::vector<Candidate> refined;
   if (o.refine_best > 0) {
     const double fine = o.refine_spacing_m > 0 ? o.refine_spacing_m : spacing / 2;
+    std::size_t n_maps = 0;
+    for (const Candidate* c : ranked) n_maps += c->scene && !o.synthetic ? 1 : 0;
+    MapsProgress progress("design: refined maps, positions", std::min<std::size_t>(n_maps, std::size_t(o.refine_best)), o.quiet);
     for (const Candidate* c : ranked) {
       if (int(refined.size()) >= o.refine_best) break;
       if (!c->scene) continue;  // a ready map cannot be refined here
       Candidate r = *c;
       r.refined = true;
-      r.map = make_map(r, o, fine, r.map_file, r.map_source);
+      r.map = make_map(r, o, fine, r.map_file, r.map_source, progress, refined.size());
       evaluate(r, d);
       refined.push_back(std::move(r));
     }
+    progress.finish();
   }
   return refined;
 }
@@ -589,10 +702,15 @@ int run_design(const DesignCommandOptions& o) {
   }
 
   // Step 2: maps (coarse previews) and their evaluation.
+  std::size_t n_maps = 0;
+  for (const auto& c : all) n_maps += c.scene && !o.synthetic ? 1 : 0;
+  MapsProgress progress("design: preview maps, positions", n_maps, o.quiet);
+  std::size_t map_index = 0;
   for (auto& c : all) {
-    if (c.scene) c.map = make_map(c, o, spacing, c.map_file, c.map_source);
+    if (c.scene) c.map = make_map(c, o, spacing, c.map_file, c.map_source, progress, map_index++);
     evaluate(c, d);
   }
+  progress.finish();
 
   // Step 3: rank; refine the winners at a finer spacing and rank again.
   const std::vector<const Candidate*> ranked = rank(all);
@@ -638,48 +756,44 @@ PVDF_COMMAND(75, [](CLI::App& root) {
       "Compare candidate sensor layouts before fabrication: Cramer-Rao error maps, coverage, ambiguity, "
       "sensitivity, dynamic range, dead zones; ranking and PNG maps (docs/design.md)");
   auto o = std::make_shared<DesignCommandOptions>();
-  sub->add_option("SCENE", o->scenes, "Scene file(s) of the candidate layouts");
+  sub->add_option("SCENE", o->scenes, "Scene file(s) (JSON, docs/scene.md) of the candidate layouts");
   sub->add_option("--vary", o->vary,
                   "Sweep one scene key, KEY=START:STEP:STOP, e.g. material.draw_angle_deg=0:15:90, "
                   "electrodes[0].center_m[1]=0.008:0.002:0.016, @layout_radius_m=0.006:0.002:0.02, @rotation_deg, "
                   "@layout_scale, @electrode_size_m (docs/design.md)");
-  sub->add_option("--noise-C", o->noise, "1-sigma charge noise per electrode before quantization, one value or one per electrode (C)")
-      ->capture_default_str();
-  sub->add_option("--target-mm", o->target_mm, "Coverage target for the position bound (mm)")
-      ->capture_default_str()
+  sub->add_option("--noise-C", o->noise, "1-sigma charge noise per electrode before quantization, one value or one per electrode (C) (default 5e-14)");
+  sub->add_option("--target-mm", o->target_mm, "Coverage target for the position bound (mm) (default 0.5)")
       ->check(pvdf::app::number_in(0, 1000, "mm", true));
-  sub->add_option("--force-N", o->force_N, "Force of the evaluated presses (N)")
-      ->capture_default_str()
+  sub->add_option("--force-N", o->force_N, "Force of the evaluated presses (N), the force level of FEM maps (default 1)")
       ->check(pvdf::app::number_in(0, 1e4, "N (the rule of loads[].force_N, pushing)", true));
-  sub->add_option("--force-range-N", o->force_range, "Forces the sensor must serve MIN,MAX (N): ADC full scale at MAX, 1-LSB check at MIN")
-      ->capture_default_str();
+  sub->add_option("--force-range-N", o->force_range, "Forces the sensor must serve MIN,MAX (N): ADC full scale at MAX, 1-LSB check at MIN (default 0.25,4)");
   sub->add_flag("--include-map-error", o->include_map_error,
-                "Add each map node's estimated charge error to the noise (the bound of a lookup on this map; "
-                "default: the sensor's noise alone)");
+                "Add each map node's estimated charge error to the noise (the bound of a lookup on this map) (default "
+                "the sensor's noise alone)");
   sub->add_flag("--force-known", o->force_known, "Figure of merit with the force measured separately (fit x, y only)");
-  sub->add_option("--spacing-m", o->spacing_m, "Preview map spacing (m); default 0.003 (FEM) or 0.001 (--synthetic)")
+  sub->add_option("--spacing-m", o->spacing_m, "Grid spacing of the preview maps (m) (default 0.003 for FEM maps: a preview, coarser than `map`'s 0.002; 0.001 "
+                  "with --synthetic)")
       ->check(pvdf::app::number_in(1e-4, 0.02, "m (the range of synthetic-map)"));
   sub->add_flag("--synthetic", o->synthetic, "Instant previews on the analytic stand-in instead of FEM maps (labelled synthetic)");
   sub->add_option("--map", o->maps, "Evaluate a ready charge map (HDF5) as one more layout (repeatable)");
-  sub->add_option("--refine-best", o->refine_best, "Recompute the best N layouts at --refine-spacing-m and rank them again")
+  sub->add_option("--refine-best", o->refine_best, "Recompute the best N layouts at --refine-spacing-m and rank them again (default 0)")
       ->check(pvdf::app::integer_in(0, 1000));
-  sub->add_option("--refine-spacing-m", o->refine_spacing_m, "Spacing of the refined maps (m); default half the preview spacing")
+  sub->add_option("--refine-spacing-m", o->refine_spacing_m, "Grid spacing of the refined maps (m) (default half the preview spacing)")
       ->check(pvdf::app::number_in(1e-4, 0.02, "m (the range of synthetic-map)"));
-  sub->add_option("--tolerance", o->tolerance, "FEM maps: requested relative charge error (default: the scene's model.tolerance)")
+  sub->add_option("--tolerance", o->tolerance, "FEM maps: requested relative charge error (default the scene's model.tolerance)")
       ->check(pvdf::app::number_in(1e-8, 0.5, "(the rule of the scene key model.tolerance), e.g. 0.01"));
-  sub->add_option("--threads", o->threads, "FEM maps: worker threads (0 = all cores)")->check(pvdf::app::integer_in(0, 1024));
-  sub->add_option("--adc-bits", o->adc_bits, "ADC resolution (bits, bipolar); 0 = ideal")
-      ->capture_default_str()
+  sub->add_option("--threads", o->threads, "FEM maps: worker threads, 0 = all cores (default 0)")->check(pvdf::app::integer_in(0, 1024));
+  sub->add_option("--adc-bits", o->adc_bits, "ADC resolution (bits, bipolar); 0 = ideal (default 12)")
       ->check(pvdf::app::integer_in(0, 32));
-  sub->add_option("--full-scale-C", o->full_scale_C, "ADC full scale (C); default 1.25 x the largest charge at the top of the force range")
+  sub->add_option("--full-scale-C", o->full_scale_C, "ADC full scale (C) (default 1.25 x the largest charge at the top of the force range)")
       ->check(pvdf::app::number_in(0, 1e-3, "C", true));
   sub->add_option("--ambiguity-distance-m", o->ambiguity_min_distance_m,
-                  "Another accepted solution farther than max(this, 3 sigma) is a distinct press (default: the target)")
+                  "Another accepted solution farther than max(this, 3 sigma) is a distinct press (m) (default the target)")
       ->check(pvdf::app::number_in(0, 1, "m"));
   sub->add_flag("--json", o->json, "Print the ranking as JSON");
-  sub->add_option("--out-dir", o->out_dir, "Folder for design_position.png, design_force.png, design_sweep.png, design.json, maps/")
-      ->capture_default_str()
+  sub->add_option("--out-dir", o->out_dir, "Folder for design_position.png, design_force.png, design_sweep.png, design.json, maps/ (default design-out)")
       ->check(pvdf::app::output_folder());
   sub->add_flag("--no-plots", o->no_plots, "Write no files (ranking on stdout only)");
+  sub->add_flag("--quiet", o->quiet, "No progress on stderr (warnings and errors are still reported)");
   return pvdf::app::Subcommand{sub, [o] { return run_design(*o); }};
 });

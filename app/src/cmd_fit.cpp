@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -24,7 +25,7 @@ namespace {
 
 struct FitCliOptions {
   std::string scene_path, measured_path, output_path, plot_path, params, start, residual_stiffness;
-  bool json = false, verbose = false, params_given = false;
+  bool json = false, verbose = false, quiet = false, params_given = false;
   double tolerance = 0;
   int max_iterations = 40;
 };
@@ -151,19 +152,33 @@ int run_fit(const FitCliOptions& o) {
     }
     fo.predictor.sweep.solver.tension_field_residual_stiffness = eps;
   }
-  // Progress on stderr: a bar with ETA per batch of FEM solves on a terminal, a line per iteration.
+  // Progress on stderr (none with --quiet): per batch of FEM solves a bar with ETA on a terminal,
+  // plain lines with ETA in a log (pvdf::Progress); the line of each Levenberg-Marquardt
+  // iteration on a terminal or with --verbose, and in a log at most one per
+  // Progress::line_interval_s() (an iteration line is the fit's pulse when batches are short).
   const bool tty = isatty(STDERR_FILENO) != 0;
   std::shared_ptr<pvdf::Progress> bar;
-  fo.predictor.progress = [&bar, tty](std::size_t done, std::size_t total) {
-    if (!tty) return;
-    if (done == 1) bar = std::make_shared<pvdf::Progress>("fit: FEM solves", total);
-    if (bar) bar->update(done);
-    if (bar && done == total) {
-      bar->finish();
-      bar.reset();
-    }
-  };
-  if (tty || o.verbose) fo.log = [](const std::string& line) { std::cerr << line << '\n'; };
+  if (!o.quiet) {
+    fo.predictor.progress = [&bar](std::size_t done, std::size_t total) {
+      if (done == 1) bar = std::make_shared<pvdf::Progress>("fit: FEM solves", total);
+      if (bar) bar->update(done);
+      if (bar && done == total) {
+        bar->finish();
+        bar.reset();
+      }
+    };
+  }
+  if (!o.quiet || o.verbose) {
+    const bool every_line = tty || o.verbose;
+    const double interval_s = pvdf::Progress::line_interval_s();
+    auto last_line = std::make_shared<std::chrono::steady_clock::time_point>(std::chrono::steady_clock::now());
+    fo.log = [every_line, interval_s, last_line](const std::string& line) {
+      const auto now = std::chrono::steady_clock::now();
+      if (!every_line && std::chrono::duration<double>(now - *last_line).count() < interval_s) return;
+      *last_line = now;
+      std::cerr << line << '\n';
+    };
+  }
 
   const pvdf::fit::FitResult r = pvdf::fit::fit_film(scene, measured, fo);
   const bool usable = r.status == pvdf::fit::FitStatus::converged;
@@ -203,13 +218,13 @@ PVDF_COMMAND(67, [](CLI::App& root) {
       "fit", "Fit the film's pre-tension, stiffness scale, piezo constants and electrode gains to bench data on FEM "
              "predictions, with 1-sigma intervals and identifiability (docs/fem-vs-experiment.md)");
   auto o = std::make_shared<FitCliOptions>();
-  sub->add_option("SCENE", o->scene_path, "Scene JSON of the sensor (the starting values)")->required();
+  sub->add_option("SCENE", o->scene_path, "Scene file (JSON, docs/scene.md) of the sensor: the starting values")->required();
   sub->add_option("MEASURED", o->measured_path,
                   "CSV: x_m,y_m,force_N and any of deflection_m, charge_<electrode>_C, with optional sigma_<column>")
       ->required();
   sub->add_option("--params", o->params,
                   "Parameters to fit, comma-separated: pretension_N_per_m, E_scale, d31_C_per_N, d32_C_per_N, "
-                  "gain_<electrode> (default: E_scale if deflections are given, d31_C_per_N if charges are)")
+                  "gain_<electrode> (default E_scale if deflections are given, d31_C_per_N if charges are)")
       ->each([o](const std::string&) { o->params_given = true; });
   sub->add_option("-o,--output", o->output_path, "Fitted scene (JSON, same format as SCENE)")
       ->required()
@@ -217,17 +232,18 @@ PVDF_COMMAND(67, [](CLI::App& root) {
   sub->add_flag("--json", o->json, "Print the result as JSON (keys in docs/fem-vs-experiment.md)");
   sub->add_option("--plot", o->plot_path, "Figure (.png, .svg or .pdf): measured against FEM before and after the fit")
       ->check(pvdf::app::figure_file());
-  sub->add_option("--start", o->start, "Starting values NAME=VALUE,... (default: the scene's, E_scale 1, gains 1)");
-  sub->add_option("--tolerance", o->tolerance, "FEM relative tolerance of the sweep mesh (default: the scene's)")
+  sub->add_option("--start", o->start, "Starting values NAME=VALUE,... (default the scene's, E_scale 1, gains 1)");
+  sub->add_option("--tolerance", o->tolerance, "Requested relative error of the FEM predictions on the sweep mesh (default the scene's model.tolerance)")
       ->check(pvdf::app::number_in(1e-8, 0.5, "(the rule of the scene key model.tolerance), e.g. 0.01"));
   sub->add_option("--max-iterations", o->max_iterations, "Levenberg-Marquardt iterations (default 40)")
       ->check(pvdf::app::integer_in(1, 10000));
   sub->add_option("--residual-stiffness", o->residual_stiffness,
                   "Tension-field residual stiffness EPS in [0, 1) for slack films (negative pretension_N_per_m): the "
                   "membrane energy (1-EPS) W_relaxed + EPS W_elastic, with bending kept; 1e-3 lets strongly slack films "
-                  "converge, biasing their membrane forces by about EPS x |N0| (default 0: the exact relaxed law, "
-                  "docs/fem.md 3.3)")
+                  "converge, biasing their membrane forces by about EPS x |N0|; docs/fem.md 3.3 (default 0: the exact relaxed law)")
       ->type_name("EPS");
-  sub->add_flag("--verbose", o->verbose, "One line per iteration on stderr even when it is not a terminal");
+  sub->add_flag("--verbose", o->verbose, "One line per iteration on stderr even when it is not a terminal "
+                                         "(otherwise at most one each 10 s there)");
+  sub->add_flag("--quiet", o->quiet, "No progress on stderr (warnings and errors are still reported)");
   return pvdf::app::Subcommand{sub, [o] { return run_fit(*o); }};
 });

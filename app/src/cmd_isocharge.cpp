@@ -90,13 +90,13 @@ PVDF_COMMAND(62, [](CLI::App& root) {
       "Isocharge pictures of a charge map: contour PNG per electrode and all together (seed 001 Figs 6, 8), VTK image "
       "data, and a charge triple's contours with their intersection");
   auto o = std::make_shared<IsochargeOptions>();
-  sub->add_option("MAP", o->map_path, "Charge map (HDF5 from `pvdfkit map`)")->required();
+  sub->add_option("MAP", o->map_path, "Charge map (HDF5 from `pvdfkit map`, `synthetic-map` or `calibrate`)")->required();
   sub->add_option("--out-dir", o->out_dir, "Folder for isocharge_<name>.png, isocharge_all.png, charges.vtk")
       ->required()
       ->check(pvdf::app::output_folder());
-  sub->add_option("--force-N", o->force_N, "Press force of the pictures (N); default: the map level nearest 1 N")
+  sub->add_option("--force-N", o->force_N, "Force of the press drawn (N) (default the force level nearest 1 N)")
       ->check(pvdf::app::number_in(0, 1e4, "N", true));
-  sub->add_option("--zoom-m", o->zoom_m, "Draw only [-W, W] x [-W, W] around the film centre (m), e.g. 0.015; default: all")
+  sub->add_option("--zoom-m", o->zoom_m, "Draw only [-W, W] x [-W, W] around the film centre (m), e.g. 0.015 (default the whole map)")
       ->check(pvdf::app::number_in(0, 10, "m (0 = the whole map)"));
   sub->add_option("--charges-C", o->charges,
                   "A charge triple (C, map electrode order): also write intersection.png with its isocharge contours");

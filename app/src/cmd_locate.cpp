@@ -18,6 +18,7 @@
 #include <fstream>
 #include <iostream>
 #include <memory>
+#include <streambuf>
 
 namespace {
 
@@ -232,6 +233,116 @@ int locate_one(const LocateOptions& o, const ChargeMap& map, const Locator& loca
   return r.has_position() ? pvdf::exit_code::success : pvdf::exit_code::numerical;
 }
 
+/// The rows of `--stream`/`--input` on their way to the lookup, one line at a time within the
+/// limits of a text stream of charges (docs/lookup.md §4): a line longer than max_line_bytes
+/// refuses the stream (InputError naming the line: not a CSV of charges, and no line is read
+/// whole into memory); a header naming a column twice is refused (the last would win silently);
+/// control bytes (NUL included) become visible `\xHH` text and a data cell longer than
+/// max_csv_cell_chars becomes `<cell of N characters>`, so such a row fails as malformed (skipped
+/// with a warning, or refused with --strict) and its message quotes a short cell. The number of
+/// rows is not limited: a stream holds one row at a time (memory does not grow with rows).
+class BoundedLines : public std::streambuf {
+ public:
+  static constexpr std::size_t max_line_bytes = 65536;
+
+  BoundedLines(std::istream& source, std::string name) : source_(source), name_(std::move(name)) {}
+
+ protected:
+  int_type underflow() override {
+    if (gptr() < egptr()) return traits_type::to_int_type(*gptr());
+    if (!next_line()) return traits_type::eof();
+    setg(&line_[0], &line_[0], &line_[0] + line_.size());
+    return traits_type::to_int_type(*gptr());
+  }
+
+ private:
+  bool next_line() {
+    std::string raw;
+    std::streambuf* in = source_.rdbuf();
+    bool ended = false;
+    while (true) {
+      const int_type c = in->sbumpc();
+      if (traits_type::eq_int_type(c, traits_type::eof())) break;
+      if (c == '\n') {
+        ended = true;
+        break;
+      }
+      if (raw.size() >= max_line_bytes) {
+        throw pvdf::InputError(name_ + ":" + std::to_string(line_no_ + 1) + ": a line longer than " +
+                               std::to_string(max_line_bytes) + " bytes; a row of charges is a few hundred: is this the " +
+                               "right input (CSV rows t_s,charge_<name>_C,...)?");
+      }
+      raw += traits_type::to_char_type(c);
+    }
+    if (raw.empty() && !ended) return false;
+    ++line_no_;
+    line_ = visible(raw);
+    const bool data = !line_.empty() && line_[0] != '#' && !(line_.size() == 1 && line_[0] == '\r');
+    if (data && !header_seen_) {
+      header_seen_ = true;
+      check_header();
+    } else if (data) {
+      shorten_cells();
+    }
+    line_ += '\n';
+    return true;
+  }
+
+  /// Control bytes (other than tab and a carriage return) as `\xHH`: no number contains them.
+  static std::string visible(const std::string& raw) {
+    std::string out;
+    for (const char ch : raw) {
+      const auto b = static_cast<unsigned char>(ch);
+      if ((b < 0x20 && ch != '\t' && ch != '\r') || b == 0x7f) {
+        char hex[8];
+        std::snprintf(hex, sizeof hex, "\\x%02x", b);
+        out += hex;
+      } else {
+        out += ch;
+      }
+    }
+    return out;
+  }
+
+  void check_header() const {
+    const auto names = pvdf::split_csv_line(line_);
+    for (std::size_t i = 0; i < names.size(); ++i) {
+      for (std::size_t j = 0; j < i; ++j) {
+        if (!names[i].empty() && names[i] == names[j]) {
+          throw pvdf::InputError(name_ + ":" + std::to_string(line_no_) + ": column '" + pvdf::quote_cell(names[i]) +
+                                 "' appears twice in the header (columns " + std::to_string(j + 1) + " and " +
+                                 std::to_string(i + 1) + "); keep one of them");
+        }
+      }
+    }
+  }
+
+  void shorten_cells() {
+    auto cells = pvdf::split_csv_line(line_);
+    bool long_cell = false;
+    for (auto& cell : cells) {
+      if (cell.size() <= pvdf::max_csv_cell_chars) continue;
+      cell = "<cell of " + std::to_string(cell.size()) + " characters>";
+      long_cell = true;
+    }
+    if (!long_cell) return;
+    std::string joined;
+    for (std::size_t i = 0; i < cells.size(); ++i) {
+      const bool quote = cells[i].find_first_of(",\"") != std::string::npos;
+      std::string cell = cells[i];
+      for (std::size_t at = cell.find('"'); quote && at != std::string::npos; at = cell.find('"', at + 2)) cell.insert(at, 1, '"');
+      joined += (i ? "," : "") + (quote ? "\"" + cell + "\"" : cell);
+    }
+    line_ = joined;
+  }
+
+  std::istream& source_;
+  std::string name_;
+  std::string line_;
+  std::size_t line_no_ = 0;
+  bool header_seen_ = false;
+};
+
 /// `--stream` / `--input`: one located row per CSV row.
 int locate_rows(const LocateOptions& o, const Locator& locator) {
   if (!o.plot_path.empty() || o.json) throw pvdf::InputError("--plot and --json apply to a single press (--charges-C), not to a stream");
@@ -246,7 +357,10 @@ int locate_rows(const LocateOptions& o, const Locator& locator) {
     in = &file;
     so.source = o.input;
   }
-  const StreamSummary s = locate_stream(locator, *in, std::cout, std::cerr, so);
+  BoundedLines bounded(*in, so.source);
+  std::istream rows(&bounded);
+  rows.exceptions(std::ios::badbit);  // a refusal inside BoundedLines reaches main as the InputError it is
+  const StreamSummary s = locate_stream(locator, rows, std::cout, std::cerr, so);
   std::cerr << "located " << s.located << " of " << s.rows << " rows (" << s.flagged << " flagged, " << s.skipped
             << " malformed rows skipped)\n";
   return pvdf::exit_code::success;
@@ -277,22 +391,25 @@ PVDF_COMMAND(60, [](CLI::App& root) {
       "Locate a press (position, force, 1-sigma, flags) from electrode charges with a charge map; "
       "one press, a CSV stream, or pictures of the map (docs/lookup.md)");
   auto o = std::make_shared<LocateOptions>();
-  sub->add_option("MAP", o->map_path, "Charge map (HDF5 from `pvdfkit map` or `pvdfkit calibrate`)")->required();
+  sub->add_option("MAP", o->map_path, "Charge map (HDF5 from `pvdfkit map`, `synthetic-map` or `calibrate`)")->required();
   sub->add_option("--charges-C", o->charges,
                   "One press: one charge per electrode (C), e.g. 4e-11,2e-11,1.5e-11; the order follows the map's "
                   "electrode names (stored in the map; printed as `electrodes` by locate, text and JSON)");
   sub->add_flag("--json", o->json, "Print the single result as JSON");
-  sub->add_option("--noise-C", o->noise, "1-sigma charge noise, one value or one per electrode (C); default: the map's");
-  sub->add_option("--force-N", o->force_N, "Known force (N): fit the position only (and the force of --pictures)")
+  sub->add_option("--noise-C", o->noise, "1-sigma charge noise per electrode, one value or one per electrode in the map's electrode order (C) (default the map's)");
+  sub->add_option("--force-N", o->force_N, "Known force of the press (N): fit the position only (and the force of --pictures) (default unknown: fitted with the "
+                  "position)")
       ->each([o](const std::string&) { o->force_N_given = true; });
-  sub->add_option("--force-range-N", o->force_range, "Plausible forces MIN,MAX (N), also the prior of the solutions' probabilities; default: half the lowest to twice the highest map level");
+  sub->add_option("--force-range-N", o->force_range, "Plausible forces MIN,MAX (N), also the prior of the solutions' probabilities (default half the lowest to twice the "
+                  "highest force level of the map)");
   sub->add_flag("--no-calibration", o->no_calibration, "Ignore the map's calibration group");
-  sub->add_flag("--stream", o->stream, "Read CSV rows (t_s,charge_<name>_C,...) on stdin, write located rows on stdout");
+  sub->add_flag("--stream", o->stream, "Read CSV rows (t_s,charge_<name>_C,...) on stdin, write located rows on stdout; malformed rows are skipped with a "
+                "warning, a line over 64 KiB refuses the stream (docs/lookup.md)");
   sub->add_option("--input", o->input, "Read the CSV rows from this file instead of stdin (implies --stream)");
   sub->add_flag("--strict", o->strict, "Stream: refuse a malformed row (exit 2) instead of skipping it with a warning");
   sub->add_option("--plot", o->plot_path, "Single press: figure (.png, .svg or .pdf) of the isocharge contours of the charges and their intersection")
       ->check(pvdf::app::figure_file());
-  sub->add_option("--pictures", o->pictures_dir, "Write isocharge_<name>.png per electrode and charges.vtk of the map here")
+  sub->add_option("--pictures", o->pictures_dir, "Folder for isocharge_<name>.png per electrode and charges.vtk of the map")
       ->check(pvdf::app::output_folder());
   return pvdf::app::Subcommand{sub, [o] { return run_locate(*o); }};
 });

@@ -116,15 +116,13 @@ PVDF_COMMAND(62, [](CLI::App& root) {
                                   "On a charge map: lookup against the seed-001 triangulation, position error "
                                   "against charge noise and speed (Monte Carlo; docs/lookup.md)");
   auto o = std::make_shared<CompareOptions>();
-  sub->add_option("MAP", o->map_path, "Charge map (HDF5)")->required();
-  sub->add_option("--presses", o->presses, "Random presses per noise level")
-      ->capture_default_str()
+  sub->add_option("MAP", o->map_path, "Charge map (HDF5 from `pvdfkit map`, `synthetic-map` or `calibrate`)")->required();
+  sub->add_option("--presses", o->presses, "Random presses per noise level (default 500)")
       ->check(pvdf::app::integer_in(10, 1000000));
-  sub->add_option("--radius-m", o->radius_m, "Presses within this distance of the centre (m)")
-      ->capture_default_str()
+  sub->add_option("--radius-m", o->radius_m, "Presses within this distance of the film centre (m) (default 0.015)")
       ->check(pvdf::app::number_in(0, 10, "m", true));
-  sub->add_option("--noise-C", o->noise, "Charge-noise levels, 1-sigma per electrode (C)")->capture_default_str();
-  sub->add_option("--seed", o->seed, "Random seed")->capture_default_str();
+  sub->add_option("--noise-C", o->noise, "1-sigma charge noise levels per electrode N1,N2,... (C) (default 1e-14,3e-14,1e-13,3e-13,1e-12)");
+  sub->add_option("--seed", o->seed, "Random seed (default 1)");
   sub->add_option("--plot", o->plot_path, "Figure of median position error against noise (.png, .svg or .pdf)")
       ->check(pvdf::app::figure_file());
   sub->add_flag("--json", o->json, "Print the table as JSON");

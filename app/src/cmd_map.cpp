@@ -335,7 +335,7 @@ PVDF_COMMAND(35, [](CLI::App& root) {
   auto* sub = root.add_subcommand("map", "Charge map: the charge of every electrode for a probe pressed at every grid "
                                          "position and force level (FEM; runs under mpirun -np N)");
   auto o = std::make_shared<MapCommandOptions>();
-  sub->add_option("scene", o->scene_path, "Scene file (JSON)")->required();
+  sub->add_option("SCENE", o->scene_path, "Scene file (JSON, docs/scene.md)")->required();
   sub->add_option("-o,--output", o->output, "Map file to write (HDF5, docs/mapping.md)")
       ->required()
       ->check(pvdf::app::output_file());

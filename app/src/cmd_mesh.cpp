@@ -90,15 +90,13 @@ PVDF_COMMAND(20, [](CLI::App& root) {
   auto* sub = root.add_subcommand(
       "mesh", "Mesh a scene's film with Gmsh: quads, electrodes and probe footprints as mesh edges; writes .msh + PNG");
   auto o = std::make_shared<MeshCommandOptions>();
-  sub->add_option("scene", o->scene_path, "Scene file (default: the built-in seed-001 scene)");
-  sub->add_option("-o,--output", o->output_path, "Gmsh .msh file to write (format 4.1, metres)")
-      ->capture_default_str()
+  sub->add_option("SCENE", o->scene_path, "Scene file (JSON, docs/scene.md) (default the built-in seed-001 scene)");
+  sub->add_option("-o,--output", o->output_path, "Gmsh .msh file to write (format 4.1, metres) (default film.msh)")
       ->check(pvdf::app::output_file());
-  sub->add_option("--preview", o->preview_path, "Preview figure (.png, .svg or .pdf; default: the output with .png)")
+  sub->add_option("--preview", o->preview_path, "Preview figure (.png, .svg or .pdf) (default the output with .png)")
       ->check(pvdf::app::figure_file());
   sub->add_flag("--no-preview", o->no_preview, "Do not write the PNG preview");
-  sub->add_option("--size-factor", o->size_factor, "Multiply the scene's mesh sizes (0.5 = about 4x the cells)")
-      ->capture_default_str()
+  sub->add_option("--size-factor", o->size_factor, "Multiply the scene's mesh sizes (0.5 = about 4x the cells) (default 1)")
       ->check(pvdf::app::number_in(pvdf::mesh::size_factor_min, pvdf::mesh::size_factor_max));
   sub->add_flag("--json", o->json, "Print the quality report as JSON");
   sub->add_flag("--verbose", o->verbose, "Show Gmsh's own log");

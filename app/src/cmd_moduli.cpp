@@ -124,8 +124,8 @@ PVDF_COMMAND(10, [](CLI::App& root) {
   auto* sub = root.add_subcommand("moduli", "Off-axis moduli E_x, E_y, G_xy, nu_xy, nu_yx of the film against angle "
                                             "from the draw direction (seed 001 eqs 3-5, Fig. 2)");
   auto o = std::make_shared<ModuliOptions>();
-  sub->add_option("--scene", o->scene_path, "Scene file whose material to use (default: built-in seed-001 PVDF)");
-  sub->add_option("--angles-deg", o->angles, "Angles as START:STEP:STOP in degrees")->capture_default_str();
+  sub->add_option("--scene", o->scene_path, "Scene file (JSON) whose material to use (default the built-in seed-001 PVDF)");
+  sub->add_option("--angles-deg", o->angles, "Angles from the draw direction START:STEP:STOP (deg) (default 0:5:90)");
   sub->add_flag("--json", o->json, "Print a JSON array of {angle_deg, Ex_Pa, Ey_Pa, Gxy_Pa, nuxy, nuyx}");
   sub->add_flag("--csv", o->csv, "Print CSV with the same columns");
   sub->add_option("--plot", o->plot_path, "Write the moduli against angle (seed 001 Fig. 2) as .png, .svg or .pdf")

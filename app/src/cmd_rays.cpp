@@ -232,18 +232,18 @@ PVDF_COMMAND(64, [](CLI::App& root) {
       "Charge against distance along rays from each electrode of a map, with the power-law fit Q = C1*d^C2 per "
       "angle (seed 001 eq. 6, Fig. 7)");
   auto o = std::make_shared<RaysOptions>();
-  sub->add_option("MAP", o->map_path, "Charge map (HDF5 from `pvdfkit map`)")->required();
-  sub->add_option("--force-N", o->force_N, "Press force (N); default 1 (seed 001)")
+  sub->add_option("MAP", o->map_path, "Charge map (HDF5 from `pvdfkit map`, `synthetic-map` or `calibrate`)")->required();
+  sub->add_option("--force-N", o->force_N, "Force of the press (N) (default 1, seed 001)")
       ->check(pvdf::app::number_in(0, 1e4, "N", true));
-  sub->add_option("--angle-step-deg", o->angle_step_deg, "Angle between rays (deg); default 10 (seed 001 Fig. 3)")
+  sub->add_option("--angle-step-deg", o->angle_step_deg, "Angle between rays (deg) (default 10, seed 001 Fig. 3)")
       ->check(pvdf::app::number_in(0.01, 360, "deg"));
-  sub->add_option("--d-min-m", o->d_min_m, "First sample distance from the electrode centre (m); default 0.003")
+  sub->add_option("--d-min-m", o->d_min_m, "First sample distance from the electrode centre (m) (default 0.003)")
       ->check(pvdf::app::number_in(0, 10, "m", true));
-  sub->add_option("--d-max-m", o->d_max_m, "Last sample distance (m); default 0.02 (rays leaving the map stop earlier)")
+  sub->add_option("--d-max-m", o->d_max_m, "Last sample distance (m); rays leaving the map stop earlier (default 0.02)")
       ->check(pvdf::app::number_in(0, 10, "m", true));
-  sub->add_option("--n-samples", o->n_samples, "Samples per ray, equally spaced in ln d; default 24")
+  sub->add_option("--n-samples", o->n_samples, "Samples per ray, equally spaced in ln d (default 24)")
       ->check(pvdf::app::integer_in(2, 100000));
-  sub->add_option("--min-points", o->min_points, "Fewer usable samples (in the map, Q > 0) and the ray is not fitted; default 6")
+  sub->add_option("--min-points", o->min_points, "Fewer usable samples (in the map, charge > 0) and the ray is not fitted (default 6)")
       ->check(pvdf::app::integer_in(2, 100000, "(a power-law fit needs two points)"));
   sub->add_flag("--json", o->json, "Print the fit table and the per-electrode summary as JSON");
   sub->add_option("--csv", o->csv_path, "Write the fit table as CSV (electrode,beta_deg,fitted,C1_C,C2,...)")
@@ -253,7 +253,7 @@ PVDF_COMMAND(64, [](CLI::App& root) {
   sub->add_option("--electrode", o->electrode, "Electrode drawn by --plot (default B if the map has one, else the first)");
   sub->add_option("--plot-angles-deg", o->plot_angles, "Rays drawn by --plot, e.g. 45,65,85 (default 0,10,...,90)");
   sub->add_option("--measured", o->measured_path, "Add measured presses on the drawn rays to --plot (CSV as for `compare`; Fig. 12)");
-  sub->add_option("--angle-tolerance-deg", o->angle_tolerance_deg, "A measured press is on a ray within this bearing (deg); default 2")
+  sub->add_option("--angle-tolerance-deg", o->angle_tolerance_deg, "A measured press is on a ray within this bearing (deg) (default 2)")
       ->check(pvdf::app::number_in(0, 180, "deg", true));
   return pvdf::app::Subcommand{sub, [o] { return run_rays(*o); }};
 });

@@ -203,11 +203,9 @@ int run_identify(const IdentifyOptions& o) {
     pvdf::app::warn("more than 10 % of the inverse filter's energy lies outside its taps; raise --taps or beta");
   }
   if (!o.plot_dir.empty()) {
+    // What identify computes, not its inputs: the scans' signals are drawn once, by whoever made
+    // them (`restore simulate --plot`), not again by every identification from them.
     pvdf::make_directories(o.plot_dir);
-    for (std::size_t i = 0; i < scans.size(); ++i) {
-      r::plot_scan(o.plot_dir + "/fig11_12_scan" + std::to_string(i + 1) + ".png", scans[i].scan,
-                   "Identification scan " + std::to_string(i + 1) + ": " + file_name(o.scans[i]) + ", force (" + o.forces[i] + ") N");
-    }
     r::plot_filters(o.plot_dir + "/fig13_inverse_filters.png", f);
     r::plot_transfer(o.plot_dir + "/transfer_G.png", f);
     for (std::size_t i = 0; i < scans.size(); ++i) {
@@ -310,32 +308,31 @@ PVDF_COMMAND(60, [](CLI::App& root) {
   auto* id = sub->add_subcommand("identify", "Identify G from scans of known forces (eq. 6) and design the inverse "
                                               "filters H = (G^H G + beta I)^-1 G^H (eq. 4)");
   id->add_option("--scan", io->scans, "Scan CSV of one raised edge (repeat: at least 2)")->required();
-  id->add_option("--force", io->forces, "Known force FX,FZ in N of the preceding --scan (seed 000: 0.6,0.9 and 0.2,1.0)")->required();
-  id->add_option("--edge-x-m", io->edges, "Edge position in m for each --scan, in order (default 0 for all)");
-  id->add_option("--speed-m-per-s", io->speed, "Scan speed, needed for scans given in t_s");
+  id->add_option("--force-N,--force", io->forces, "Known forces FX,FZ (N) of the preceding --scan (seed 000: 0.6,0.9 and 0.2,1.0)")->required();
+  id->add_option("--edge-x-m", io->edges, "Edge position (m) of each --scan, in order (default 0 for all)");
+  id->add_option("--speed-m-per-s", io->speed, "Scan speed (m/s), needed for scans given in t_s");
   id->add_option("-o,--output", io->output, "Filter file to write (JSON)")->required()->check(pvdf::app::output_file());
-  id->add_option("--taps", io->taps, "FIR length N of h11..h22 and of the G window")->capture_default_str();
+  id->add_option("--taps", io->taps, "FIR length N of h11..h22 and of the G window (default 8192)");
   io->delay_flag = id->add_option("--delay-samples", io->delay, "Modelling delay D in samples (default taps/2)");
   id->add_option("--beta", io->beta, "Regularization: auto (= predicted: the beta minimizing the predicted mu error; "
                                      "docs/restore.md), a relative beta (seed 000: 1e-4), gcv, lcurve, morozov or "
-                                     "noise-floor")->capture_default_str();
+                                     "noise-floor (default auto)");
   id->add_option("--beta-policy", io->policy, "constant | frequency | gcv | discrepancy | lcurve | morozov | predicted "
-                                              "(default: from --beta)");
+                                              "(default from --beta)");
   id->add_option("--resolution-m", io->resolution, "Target resolution (Gaussian FWHM, m) applied to both forces; 0 = none "
-                                                   "(seed 000); auto = 1.5 x the strips' effective depth")->capture_default_str();
+                                                   "(seed 000); auto = 1.5 x the strips' effective depth (default auto)");
   id->add_option("--low-cut-m", io->low_cut, "Damp wavelengths beyond this (m): beta(k) *= 1 + (k_low/k)^2; the sensor "
-                                            "cannot see the mean load. 0 = off (seed 000); auto = 10 x the effective depth")
-      ->capture_default_str();
+                                            "cannot see the mean load. 0 = off (seed 000); auto = 10 x the effective depth (default auto)");
   id->add_option("--regularization", io->regularization,
                  "isotropic (default): both singular directions of G get the weak one's gain, so f_x and f_z are "
                  "blurred alike and mu is unbiased, at the price of the long-wavelength part of the forces (the lowest "
                  "mu error on the randomized scanner study); tikhonov: (G^H G + beta I)^-1 G^H as in seed 000 eq. 4, "
-                 "keeps more of an isolated feature's force but biases mu (docs/restore.md section 4)")
-      ->capture_default_str();
-  id->add_option("--g-window", io->g_window, "Lags of G kept by identification (default = --taps)");
-  id->add_option("--beta-corner-m", io->corner, "Wavelength in m for beta(k) = beta (1 + (k L/2pi)^2)");
-  id->add_option("--window", io->window, "Taper of the FIR taps: tukey, hann, none")->capture_default_str();
-  id->add_option("--plot-dir", io->plot_dir, "Write Fig 11-14 analogues (signals, filters, |G|, restored) as PNG here")
+                 "keeps more of an isolated feature's force but biases mu (docs/restore.md section 4)");
+  id->add_option("--g-window", io->g_window, "Lags of G kept by identification (default --taps)");
+  id->add_option("--beta-corner-m", io->corner, "Wavelength L (m) of beta(k) = beta (1 + (k L/2pi)^2)");
+  id->add_option("--window", io->window, "Taper of the FIR taps: tukey, hann, none (default tukey)");
+  id->add_option("--plot-dir", io->plot_dir, "Write Fig 13-14 analogues (inverse filters, |G|, the identification scans restored) as PNG here; "
+                 "the scans' signals (Figs 11-12) are drawn by `restore simulate --plot`")
       ->check(pvdf::app::output_folder());
 
   auto ao = std::make_shared<ApplyOptions>();
@@ -343,11 +340,11 @@ PVDF_COMMAND(60, [](CLI::App& root) {
   ap->add_option("FILTER", ao->filter, "Filter file from 'restore identify'")->required();
   ap->add_option("SCAN", ao->scan, "Scan CSV x_m,m1_V,m2_V (or t_s with --speed-m-per-s)")->required();
   ap->add_option("-o,--output", ao->output, "Forces CSV to write")->required()->check(pvdf::app::output_file());
-  ap->add_option("--speed-m-per-s", ao->speed, "Scan speed, needed for scans given in t_s");
-  ao->threshold_flag = ap->add_option("--mu-threshold-N", ao->mu_threshold, "mu where f_z exceeds this (N per sample; default 30 % of max f_z)");
-  ao->block_flag = ap->add_option("--block", ao->block, "Use the streaming restorer with blocks of this many samples (same result)");
+  ap->add_option("--speed-m-per-s", ao->speed, "Scan speed (m/s), needed for scans given in t_s");
+  ao->threshold_flag = ap->add_option("--mu-threshold-N", ao->mu_threshold, "mu where f_z exceeds this (N per sample) (default 30 % of the largest f_z)");
+  ao->block_flag = ap->add_option("--block", ao->block, "Use the streaming restorer with blocks of this many samples (same result) (default: offline, one block)");
   ap->add_flag("--no-baseline", ao->no_baseline, "Do not fix the zero level where the surface is flat (docs/restore.md)");
-  ao->scale_flag = ap->add_option("--baseline-scale-m", ao->baseline_scale, "Gaussian scale of the flat-surface level (m; default low cut / 2 pi)");
+  ao->scale_flag = ap->add_option("--baseline-scale-m", ao->baseline_scale, "Gaussian scale of the flat-surface level (m) (default the low cut / 2 pi)");
   ap->add_flag("--resample", ao->resample, "Resample a scan taken at another speed onto the filter's grid (amplitude scaled "
                                           "by the speed ratio, same sample rate assumed)");
   ap->add_option("--plot", ao->plot, "Also write the restored forces as PNG (seed 000 Fig. 14)")

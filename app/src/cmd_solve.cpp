@@ -195,7 +195,7 @@ PVDF_COMMAND(30, [](CLI::App& root) {
   auto* sub = root.add_subcommand("solve", "Deflection, membrane forces and electrode charges of the clamped film "
                                            "under probe loads (nonlinear membrane-plate FEM)");
   auto o = std::make_shared<SolveOptions>();
-  sub->add_option("scene", o->scene_path, "Scene file (JSON)")->required();
+  sub->add_option("SCENE", o->scene_path, "Scene file (JSON, docs/scene.md)")->required();
   sub->add_option("--load", o->loads, "Probe load X_M,Y_M,F_N (repeatable; replaces the scene's loads)");
   sub->add_option("--sample", o->samples, "Evaluate the fields at X_M,Y_M (repeatable)");
   sub->add_option("--model", o->model, "Kinematics: auto|linear|von-karman|large-rotation (default: scene)");

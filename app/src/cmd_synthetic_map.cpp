@@ -35,10 +35,10 @@ PVDF_COMMAND(990, [](CLI::App& root) {
   auto* sub = root.add_subcommand("synthetic-map", "Write a map of the analytic stand-in model (tests, examples)");
   sub->group("");  // hidden from `pvdfkit --help`
   auto o = std::make_shared<SyntheticMapOptions>();
-  sub->add_option("-o,--output", o->output, "Map file to write (HDF5)")->required()->check(pvdf::app::output_file());
-  sub->add_option("--spacing-m", o->spacing_m, "Grid spacing (m); default 0.001")->check(pvdf::app::number_in(1e-4, 0.02, "m"));
-  sub->add_option("--rim-margin-m", o->rim_margin_m, "Unmapped margin at the rim (m); default 0.003")->check(pvdf::app::number_in(0, 1, "m"));
-  sub->add_option("--forces-N", o->forces, "Force levels F1,F2,... (N, ascending); default 1");
-  sub->add_option("--noise-C", o->noise_C, "1-sigma charge noise per electrode (C); default 5e-14")->check(pvdf::app::number_in(0, 1e-6, "C", true));
+  sub->add_option("-o,--output", o->output, "Charge map to write (HDF5)")->required()->check(pvdf::app::output_file());
+  sub->add_option("--spacing-m", o->spacing_m, "Grid spacing (m) (default 0.001)")->check(pvdf::app::number_in(1e-4, 0.02, "m"));
+  sub->add_option("--rim-margin-m", o->rim_margin_m, "No presses closer than this to the rim (m) (default 0.003)")->check(pvdf::app::number_in(0, 1, "m"));
+  sub->add_option("--forces-N", o->forces, "Force levels F1,F2,... (N, in [1e-9, 1e4], distinct) (default 1)");
+  sub->add_option("--noise-C", o->noise_C, "1-sigma charge noise per electrode (C) (default 5e-14)")->check(pvdf::app::number_in(0, 1e-6, "C", true));
   return pvdf::app::Subcommand{sub, [o] { return run_synthetic_map(*o); }};
 });

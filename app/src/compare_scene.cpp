@@ -7,6 +7,7 @@
 
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
+#include "pvdf/core/progress.hpp"
 #include "pvdf/core/scene.hpp"
 #include "pvdf/fit/measured.hpp"
 #include "pvdf/fit/predictor.hpp"
@@ -19,6 +20,7 @@
 #include <fstream>
 #include <iostream>
 #include <limits>
+#include <memory>
 
 namespace pvdf::app {
 
@@ -41,7 +43,7 @@ struct SceneComparison {
   pvdf::fem::SweepSetup setup;
 };
 
-SceneComparison compare_with_fem(const pvdf::Scene& scene, const std::string& measured_path) {
+SceneComparison compare_with_fem(const pvdf::Scene& scene, const std::string& measured_path, bool quiet) {
   SceneComparison out;
   std::vector<std::string>& names = out.names;
   for (const auto& e : scene.electrodes) names.push_back(e.name);
@@ -55,8 +57,19 @@ SceneComparison compare_with_fem(const pvdf::Scene& scene, const std::string& me
     }
     presses.push_back({m.x_m[i], m.y_m[i], m.force_N[i]});
   }
-  fit::Predictor predictor(scene, presses);
+  // Progress on stderr (none with --quiet): the sweep setup ("starting"), then the solves.
+  std::unique_ptr<pvdf::Progress> bar;
+  fit::PredictorOptions options;
+  if (!quiet) {
+    bar = std::make_unique<pvdf::Progress>("compare: FEM solves", 0);
+    options.progress = [&bar](std::size_t done, std::size_t total) {
+      bar->set_total(total);
+      bar->update(done);
+    };
+  }
+  fit::Predictor predictor(scene, presses, options);
   const auto responses = predictor.predict({scene.membrane.pretension_N_per_m, 1.0});
+  if (bar) bar->finish();
   const std::vector<double> gains(ne, 1.0);
 
   // The same record as `compare MAP`, so the same summary, plot and report follow.
@@ -212,9 +225,9 @@ void print_comparison_text(const SceneComparison& r, const std::string& scene_pa
 }  // namespace
 
 int run_compare_scene(const std::string& scene_path, const std::string& measured_path, bool json,
-                      const std::string& plot_path, const std::string& report_path) {
+                      const std::string& plot_path, const std::string& report_path, bool quiet) {
   const pvdf::Scene scene = pvdf::load_scene(scene_path);
-  const SceneComparison r = compare_with_fem(scene, measured_path);
+  const SceneComparison r = compare_with_fem(scene, measured_path, quiet);
   if (!report_path.empty()) write_comparison_csv(r, report_path);
   if (json) {
     print_comparison_json(r, scene_path, measured_path);

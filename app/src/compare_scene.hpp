@@ -10,8 +10,8 @@ namespace pvdf::app {
 
 /// Compares measured presses with direct FEM solves of the scene at the same positions and
 /// forces (warm-started probe sweep, no interpolation). Same outputs as `compare MAP`, plus the
-/// deflection when the CSV has `deflection_m`. Returns the exit code.
+/// deflection when the CSV has `deflection_m`. Progress on stderr unless `quiet`. Returns the exit code.
 int run_compare_scene(const std::string& scene_path, const std::string& measured_path, bool json,
-                      const std::string& plot_path, const std::string& report_path);
+                      const std::string& plot_path, const std::string& report_path, bool quiet = false);
 
 }  // namespace pvdf::app

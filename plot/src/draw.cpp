@@ -382,6 +382,21 @@ void PanelPainter::draw_field(const Item& it, const PanelLayout& p, bool log) {
   cairo_surface_flush(img);
   unsigned char* data = cairo_image_surface_get_data(img);
   const int stride = cairo_image_surface_get_stride(img);
+  // A log colour scale interpolates log10 of the values: a smooth interpolant of values spanning
+  // decades overshoots below zero next to large ones (dark blots), its logarithm does not. Values
+  // <= 0 and +inf stand one decade beyond the scale (the end colours).
+  Grid logged;
+  const Grid* source = &g;
+  if (log) {
+    logged = g;
+    const double hi = std::log10(range[1]);
+    for (double& v : logged.values) {
+      if (std::isnan(v)) continue;
+      v = v > 0 ? std::log10(v) : lo - 1;
+      if (!std::isfinite(v)) v = hi + 1;
+    }
+    source = &logged;
+  }
   const double nxm = static_cast<double>(g.nx - 1), nym = static_cast<double>(g.ny - 1);
   std::vector<double> fi(static_cast<std::size_t>(W));
   for (int i = 0; i < W; ++i) fi[static_cast<std::size_t>(i)] = (p.xs.from_px(p.L + i + 0.5) - g.x0) / (g.x1 - g.x0) * nxm;
@@ -390,9 +405,8 @@ void PanelPainter::draw_field(const Item& it, const PanelLayout& p, bool log) {
     const double b = (p.ys.from_px(p.T + j + 0.5) - g.y0) / (g.y1 - g.y0) * nym;
     for (int i = 0; i < W; ++i) {
       row[i] = 0;
-      double f = interpolate_field(g, fi[static_cast<std::size_t>(i)], b);
+      const double f = interpolate_field(*source, fi[static_cast<std::size_t>(i)], b);
       if (std::isnan(f)) continue;
-      if (log) f = f > 0 ? std::log10(f) : -std::numeric_limits<double>::infinity();
       const double t = std::clamp((f - lo) * inv, 0.0, 1.0);
       row[i] = lut[static_cast<std::size_t>(t * (kLut - 1) + 0.5)];
     }

@@ -124,6 +124,17 @@ void write_hostile_fixtures(const std::filesystem::path& d) {
   write(d / "fit_sigma_denormal.csv", "x_m,y_m,force_N,deflection_m,sigma_deflection_m\n0,0,1,0.003,1e-320\n0.002,0,1,0.003,1e-4\n");
   write(d / "fit_ok.csv", "x_m,y_m,force_N,deflection_m\n0,0,1,0.003\n0.002,0,1,0.003\n");
   write(d / "stream_dup.csv", "t_s,charge_A_C,charge_B_C,charge_C_C,charge_B_C\n0,4e-11,2e-11,1.5e-11,2e-11\n");
+  // locate --stream: a good row, then one malformed row of each kind (and all of them together).
+  const std::string stream_head = "t_s,charge_A_C,charge_B_C,charge_C_C\n";
+  const std::string good_row = "0,2.4925e-12,1.87487e-11,1.87487e-11\n";
+  write(d / "stream_long_line.csv", stream_head + good_row + std::string(100000, '1') + "\n" + good_row);
+  write(d / "stream_inf.csv", stream_head + "1,1e-11,-inf,1e-11\n" + good_row);
+  write(d / "stream_fields.csv", stream_head + "1,1e-11\n" + good_row);
+  write(d / "stream_nul.csv", stream_head + bytes("1,1e-11,1e-11,1e-\x00" "11\n") + good_row);
+  write(d / "stream_big_cell.csv", stream_head + "1,1e-11," + std::string(20000, '7') + ",1e-11\n" + good_row);
+  write(d / "stream_rows.csv", stream_head + good_row + "1,nan,1e-11,1e-11\n" + "2,1e-11,inf,1e-11\n" + "3,1e-11\n" +
+                                   bytes("4,1e-11,1e-11,1e-\x00" "11\n") + "5,1e-11," + std::string(20000, '7') +
+                                   ",1e-11\n" + bytes("6,\x1b[31m,1e-11,1e-11\n") + good_row);
   // Scenes the parser reads but no real film is (docs/scene.md "Physical bounds").
   write(d / "E_tiny.json", seed001_with(R"({"material": {"E1_Pa": 1e-30, "E2_Pa": 1e-30, "G12_Pa": 1e-30}})"));
   write(d / "E2_milli.json", seed001_with(R"({"material": {"E2_Pa": 2.2e-3}})"));
@@ -138,6 +149,49 @@ void write_hostile_fixtures(const std::filesystem::path& d) {
   write(d / "force_tiny.json", seed001_with(R"({"loads": [{"position_m": [0, 0], "force_N": 1e-300}]})"));
   write(d / "force_zero.json", seed001_with(R"({"loads": [{"position_m": [0, 0], "force_N": 0}]})"));
   write(d / "force_neg.json", seed001_with(R"({"loads": [{"position_m": [0, 0], "force_N": -1}]})"));
+  // A 10 mm film whose 5 x 3 map (2 mm, x -> -x symmetric) takes about two seconds: the
+  // checkpoint rows interrupt it after one row and damage the checkpoint it leaves.
+  write(d / "small_film.json", R"({
+    "membrane": {"shape": "circle", "radius_m": 0.010, "thickness_m": 25e-6},
+    "material": {"E1_Pa": 2.2e9, "E2_Pa": 1.8e9, "G12_Pa": 0.58e9, "nu12": 0.35,
+                 "draw_angle_deg": 0.0, "d31_C_per_N": 6.5e-12, "d32_C_per_N": 0.65e-12},
+    "electrodes": [
+      {"name": "A", "center_m": [0.0, 0.004], "size_m": [0.0015, 0.0015]},
+      {"name": "B", "center_m": [-0.0035, -0.002], "size_m": [0.0015, 0.0015]},
+      {"name": "C", "center_m": [0.0035, -0.002], "size_m": [0.0015, 0.0015]}
+    ],
+    "probe": {"radius_m": 0.001},
+    "model": {"kinematics": "auto", "tolerance": 0.02, "max_refinements": 0}
+  })");
+  // Damages a map checkpoint as a disk, an editor or an attacker would (docs/map-generation.md
+  // §7: text header, a `checksum` line, then float64 records). `fix` recomputes the checksum
+  // with its own FNV-1a 64, so a NaN charge arrives with a valid checksum.
+  write(d / "ckpt_edit.py", R"(import struct, sys
+src, dst, mode = sys.argv[1:4]
+d = bytearray(open(src, "rb").read())
+start = d.index(b"\nchecksum ") + 1
+data = d.index(b"\n", start) + 1
+charge_A = data + 8 * 6  # record 0: grid index, status, provenance, deflection, model, its error, charges
+if mode == "flip":
+    d[-5] ^= 1
+elif mode == "truncate":
+    d = d[:-9]
+elif mode == "one-coulomb":
+    d[charge_A:charge_A + 8] = struct.pack("d", 1.0)
+elif mode == "huge-count":
+    d = d.replace(b"\nrecords 3\n", b"\nrecords 10000000000\n")
+elif mode == "no-newline":
+    d = d[:10] + b"x" * 1000000
+elif mode == "format-2":
+    d = d.replace(b"pvdfkit-map-checkpoint 3", b"pvdfkit-map-checkpoint 2")
+elif mode == "nan-with-checksum":
+    d[charge_A:charge_A + 8] = struct.pack("d", float("nan"))
+    h = 0xcbf29ce484222325
+    for b in bytes(d[:start]) + bytes(d[data:]):
+        h = ((h ^ b) * 0x100000001b3) & 0xFFFFFFFFFFFFFFFF
+    d = d[:start] + b"checksum %016x\n" % h + d[data:]
+open(dst, "wb").write(d)
+)");
 }
 
 }  // namespace pvdf::test

@@ -37,6 +37,12 @@ struct Row {
   double max_wall_s = 20;
 };
 
+// The checkpoint rows: make ck0 once (a map of small_film.json stopped after its first row), then
+// resume the same map from a damaged copy.
+#define CKPT_ARGS "small_film.json -o ck.h5 --spacing-m 0.002 --region -0.004,0.004,-0.002,0.002 --setup-checks 0 " \
+                  "--threads 1 --quiet"
+#define CKPT_MAKE "test -s ck0 || $X map " CKPT_ARGS " --checkpoint ck0 --stop-after-positions 4 2>/dev/null; "
+
 // clang-format off
 const std::vector<Row> rows = {
   // ---- scene files: syntax, nesting, garbage, duplicates (read by every command)
@@ -310,6 +316,39 @@ const std::vector<Row> rows = {
   {"fit-too-many-rows", "fit good.json measured_many.csv -o f.json", 2, "100000", "f.json"},
   {"locate-input-dup-column", "locate $M --input stream_dup.csv", 2, "appears twice"},
   {"locate-charges-huge-cell", "$X locate $M --charges-C $(head -c 20000 /dev/zero | tr '\\0' 7) 2>.err", 2, "20000 characters"},
+  // ---- map checkpoints with integrity (issue 30 item 3): a damaged, truncated, edited or
+  // implausible checkpoint is refused naming it and the way to start afresh, never resumed;
+  // the header's record count allocates nothing. The first row makes the checkpoint (a run
+  // stopped after one row of three positions); the others damage copies of it.
+  {"map-checkpoint-flipped-bit", CKPT_MAKE "python3 ckpt_edit.py ck0 ck1 flip; $X map " CKPT_ARGS " --checkpoint ck1 2>.err",
+   2, "ck1: checkpoint checksum", "ck.h5", 30},
+  {"map-checkpoint-truncated", CKPT_MAKE "python3 ckpt_edit.py ck0 ck2 truncate; $X map " CKPT_ARGS " --checkpoint ck2 2>.err",
+   2, "ck2: checkpoint truncated or damaged", "ck.h5", 30},
+  {"map-checkpoint-one-coulomb", CKPT_MAKE "python3 ckpt_edit.py ck0 ck3 one-coulomb; $X map " CKPT_ARGS
+   " --checkpoint ck3 2>.err", 2, "ck3: checkpoint checksum", "ck.h5", 30},
+  {"map-checkpoint-1e10-records", CKPT_MAKE "python3 ckpt_edit.py ck0 ck4 huge-count; ulimit -v 3000000; $X map " CKPT_ARGS
+   " --checkpoint ck4 2>.err", 2, "announces 10000000000 records", "ck.h5", 30},
+  {"map-checkpoint-no-newline", CKPT_MAKE "python3 ckpt_edit.py ck0 ck5 no-newline; $X map " CKPT_ARGS " --checkpoint ck5 2>.err",
+   2, "ck5: not a pvdfkit map checkpoint", "ck.h5", 30},
+  {"map-checkpoint-format-2", CKPT_MAKE "python3 ckpt_edit.py ck0 ck6 format-2; $X map " CKPT_ARGS " --checkpoint ck6 2>.err",
+   2, "ck6: a checkpoint of an older pvdfkit", "ck.h5", 30},
+  {"map-checkpoint-nan-resummed", CKPT_MAKE "python3 ckpt_edit.py ck0 ck7 nan-with-checksum; $X map " CKPT_ARGS
+   " --checkpoint ck7 2>.err", 2, "ck7: checkpoint record 0 is invalid", "ck.h5", 30},
+  // ---- locate --stream limits (issue 30 item 5): a line beyond 64 KiB refuses the stream; NaN,
+  // inf, a wrong field count, control bytes and long cells are malformed rows, refused by --strict
+  // with the line named (without it skipped with a warning: "stream rows" case below)
+  {"locate-stream-long-line", "$X locate $M --stream < stream_long_line.csv >/dev/null 2>.err", 2,
+   "<stdin>:3: a line longer than 65536 bytes"},
+  {"locate-stream-dup-column-stdin", "$X locate $M --stream < stream_dup.csv >/dev/null 2>.err", 2, "appears twice"},
+  {"locate-stream-strict-nan", "locate $M --input stream_rows.csv --strict", 2, "stream_rows.csv:3: column charge_A_C = 'nan'"},
+  {"locate-stream-strict-inf", "$X locate $M --stream --strict < stream_inf.csv >/dev/null 2>.err", 2,
+   "<stdin>:2: column charge_B_C = '-inf'"},
+  {"locate-stream-strict-fields", "$X locate $M --stream --strict < stream_fields.csv >/dev/null 2>.err", 2,
+   "<stdin>:2: has 2 fields but the header has 4"},
+  {"locate-stream-strict-nul", "$X locate $M --stream --strict < stream_nul.csv >/dev/null 2>.err", 2,
+   "<stdin>:2: column charge_C_C = '1e-\\x0011'"},
+  {"locate-stream-strict-big-cell", "$X locate $M --stream --strict < stream_big_cell.csv >/dev/null 2>.err", 2,
+   "'<cell of 20000 characters>'"},
   // ---- unit and order mistakes get a hint (issue 31 item 2)
   {"locate-charges-pC", "locate $M --charges-C 146.1,165.1,160.2", 2, "look like pC"},
   {"locate-charges-count", "locate $M --charges-C 1e-11,2e-11", 2, "order A,B,C"},
@@ -320,7 +359,7 @@ const std::vector<Row> rows = {
   {"unknown-command-ctl", "$X $'fro\\x1bbnicate' 2>.err", 2, "fro\\x1bbnicate"},
   {"no-command", "", 2, "command"},
   {"unknown-flag", "solve good.json --bogus", 2, "--bogus"},
-  {"missing-scene-arg", "solve", 2, "scene"},
+  {"missing-scene-arg", "solve", 2, "SCENE is required"},
 };
 // clang-format on
 
@@ -466,5 +505,39 @@ TEST_CASE("outputs never destroy files: /dev/full, a symbolic link and an input 
       CHECK_FALSE(has_temporary(dir));
     }
   }
+  fs::remove_all(dir);
+}
+
+// Issue 30 item 5, the lenient side of the stream rows above: without --strict each malformed
+// row is skipped with one warning that names its line and quotes at most a short cell (no raw
+// control byte, no 20000-character echo), the good rows are located, and the summary counts both.
+TEST_CASE("locate --stream skips malformed rows with short, clean warnings and locates the rest", "[hostile][cli][stream]") {
+  const fs::path dir = make_fixture_dir("stream");
+  const std::string cmd = "cd " + quote(dir.string()) + " && " + quote(PVDFKIT_EXE) +
+                          " locate map.h5 --stream < stream_rows.csv >.out 2>.err";
+  const int status = std::system(cmd.c_str());
+  const std::string out = slurp(dir / ".out"), err = slurp(dir / ".err");
+  INFO("stderr: " << err);
+  REQUIRE(WIFEXITED(status));
+  CHECK(WEXITSTATUS(status) == 0);
+  std::vector<std::string> warnings;
+  std::istringstream lines(err);
+  for (std::string line; std::getline(lines, line);) {
+    CHECK(line.size() <= 200);
+    if (line.rfind("warning: ", 0) == 0) warnings.push_back(line);
+  }
+  REQUIRE(warnings.size() == 6);
+  CHECK_THAT(warnings[0], Catch::Contains("<stdin>:3: column charge_A_C = 'nan' is not a finite number"));
+  CHECK_THAT(warnings[1], Catch::Contains("<stdin>:4: column charge_B_C = 'inf'"));
+  CHECK_THAT(warnings[2], Catch::Contains("<stdin>:5: has 2 fields but the header has 4"));
+  CHECK_THAT(warnings[3], Catch::Contains("<stdin>:6: column charge_C_C = '1e-\\x0011'"));
+  CHECK_THAT(warnings[4], Catch::Contains("<stdin>:7: column charge_B_C = '<cell of 20000 characters>'"));
+  CHECK_THAT(warnings[5], Catch::Contains("<stdin>:8: column charge_A_C = '\\x1b[31m'"));
+  CHECK_THAT(err, Catch::Contains("located 2 of 8 rows"));
+  CHECK_THAT(err, Catch::Contains("6 malformed rows skipped"));
+  bool clean = true;
+  for (const char c : err) clean = clean && !((static_cast<unsigned char>(c) < 0x20 && c != '\n') || c == 0x7f);
+  CHECK(clean);
+  CHECK(std::count(out.begin(), out.end(), '\n') == 3);  // the header and the two good rows
   fs::remove_all(dir);
 }

@@ -663,3 +663,30 @@ TEST_CASE("a log colour scale is labelled in the field's own units", "[plot]") {
   const auto q = fig.data_to_pixel(0, 0, 0, 0.5);  // log10 value 0: t = 0.5
   CHECK(colour_distance(png.at(static_cast<int>(q[0]), static_cast<int>(q[1])), pvdf::plot::colormap(0.5)) <= 12);
 }
+
+TEST_CASE("a log colour scale interpolates the logarithm: no dark blots between decades", "[plot]") {
+  // A step from 0.01 to 100 (four decades) between two grid columns: a smooth interpolant of the
+  // values undershoots below zero beside the step (drawn as below the scale: the darkest colour),
+  // one of their logarithms stays between -2 and 2. Every pixel of the field must lie between the
+  // colours of 0.01 and 100, and halfway between the two columns the colour is that of 1 (log 0).
+  pvdf::plot::Grid g;
+  g.nx = 9, g.ny = 2, g.x0 = -4, g.x1 = 4, g.y0 = 0, g.y1 = 1;
+  for (std::size_t j = 0; j < g.ny; ++j)
+    for (std::size_t i = 0; i < g.nx; ++i) g.values.push_back(i < 4 ? 0.01 : 100.0);
+  pvdf::plot::Figure fig(900, 400);
+  fig.axes().field(g, "σ (mm)", false, 1e-3, 1e3).log_color().xlim(-4, 4).ylim(0, 1);
+  const auto path = (temp_dir() / "log_color_step.png").string();
+  fig.save(path);
+  const Png png = read_png(path);
+  const auto bottom = pvdf::plot::colormap(0.0);  // 1e-3, below 0.01 (t = 1/6)
+  int darkest = 0, sampled = 0;
+  for (double x = -3.9; x <= 3.9; x += 0.05) {
+    const auto q = fig.data_to_pixel(0, 0, x, 0.5);
+    ++sampled;
+    if (colour_distance(png.at(static_cast<int>(q[0]), static_cast<int>(q[1])), bottom) <= 12) ++darkest;
+  }
+  CHECK(sampled > 100);
+  CHECK(darkest == 0);
+  const auto mid = fig.data_to_pixel(0, 0, -0.5, 0.5);  // halfway between the columns at x = -1 and 0
+  CHECK(colour_distance(png.at(static_cast<int>(mid[0]), static_cast<int>(mid[1])), pvdf::plot::colormap(0.5)) <= 12);
+}

@@ -34,47 +34,126 @@ std::string hex(std::uint64_t v) {
 
 // ---------------------------------------------------------------------------------------------
 // Checkpoint files: a text header, then `records` × `record_doubles` float64 (native order).
+// The header's last line is a checksum (FNV-1a 64) over the header lines before it and every
+// record byte, so a damaged, truncated or edited file is refused instead of resumed.
 
-constexpr const char* checkpoint_magic = "pvdfkit-map-checkpoint 2";
+constexpr const char* checkpoint_magic = "pvdfkit-map-checkpoint 3";
+constexpr const char* checkpoint_magic_v2 = "pvdfkit-map-checkpoint 2";  // before checksums
+
+/// FNV-1a 64 continued over raw bytes.
+std::uint64_t fnv1a_bytes(std::uint64_t h, const char* data, std::size_t n) {
+  for (std::size_t i = 0; i < n; ++i) {
+    h ^= static_cast<unsigned char>(data[i]);
+    h *= 1099511628211ull;
+  }
+  return h;
+}
+
+std::string checkpoint_header(const std::string& hash, std::size_t record_doubles, std::size_t n_records) {
+  return std::string(checkpoint_magic) + "\nhash " + hash + "\nrecord_doubles " + std::to_string(record_doubles) +
+         "\nrecords " + std::to_string(n_records) + "\n";
+}
+
+std::uint64_t checkpoint_checksum(const std::string& header, const std::vector<double>& records) {
+  // The standard FNV-1a 64 offset basis (the run hash above starts from a constant one digit
+  // short of it; kept, as it names existing checkpoints).
+  const std::uint64_t h = fnv1a_bytes(14695981039346656037ull, header.data(), header.size());
+  return fnv1a_bytes(h, reinterpret_cast<const char*>(records.data()), records.size() * sizeof(double));
+}
 
 void write_checkpoint(const std::string& path, const std::string& hash, const Layout& layout,
                       const std::vector<double>& records) {
+  const std::string header = checkpoint_header(hash, layout.size(), records.size() / layout.size());
+  const std::string checksum = hex(checkpoint_checksum(header, records));
   write_file_atomically(path, [&](std::ostream& out) {
-    out << checkpoint_magic << "\nhash " << hash << "\nrecord_doubles " << layout.size() << "\nrecords "
-        << records.size() / layout.size() << "\n";
+    out << header << "checksum " << checksum << "\n";
     out.write(reinterpret_cast<const char*>(records.data()), std::streamsize(records.size() * sizeof(double)));
   });
 }
 
+namespace {
+
+/// One header line of at most 200 bytes (a hostile file without newlines is not read whole).
+bool read_header_line(std::istream& in, std::string& line) {
+  line.clear();
+  for (char c; in.get(c);) {
+    if (c == '\n') return true;
+    if (line.size() >= 200) return false;
+    line += c;
+  }
+  return false;
+}
+
+/// "KEY VALUE" with VALUE all decimal digits (at most 18: no overflow), else false.
+bool parse_count_line(const std::string& line, const std::string& key, std::size_t& value) {
+  if (line.compare(0, key.size() + 1, key + " ") != 0) return false;
+  const std::string digits = line.substr(key.size() + 1);
+  if (digits.empty() || digits.size() > 18) return false;
+  for (const char c : digits) {
+    if (c < '0' || c > '9') return false;
+  }
+  value = static_cast<std::size_t>(std::stoull(digits));
+  return true;
+}
+
+}  // namespace
+
 std::vector<double> read_checkpoint(const std::string& path, const std::string& hash, const Layout& layout) {
+  // Every refusal names the file and says how to start afresh.
+  const std::string afresh = "; delete it (or pass --no-resume) to start the map afresh";
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path + ": cannot open the checkpoint; check permissions or delete it");
-  std::string magic, key, file_hash;
-  std::size_t record_doubles = 0, n_records = 0;
-  std::getline(in, magic);
-  if (magic != checkpoint_magic) {
-    throw InputError(path + ": not a pvdfkit map checkpoint (first line '" + magic.substr(0, 40) +
-                     "'); delete it or choose another checkpoint file");
+  if (!in) throw InputError(path + ": cannot open the checkpoint; check permissions, or delete it");
+  std::string magic, hash_line, doubles_line, records_line, checksum_line;
+  const bool header_read = read_header_line(in, magic);
+  if (magic == checkpoint_magic_v2) {
+    throw InputError(path + ": a checkpoint of an older pvdfkit (format 2, without a checksum), not resumed" + afresh);
   }
-  in >> key >> file_hash;
-  if (key != "hash") throw InputError(path + ": damaged checkpoint header; delete it");
+  if (!header_read || magic != checkpoint_magic) {
+    throw InputError(path + ": not a pvdfkit map checkpoint (first line '" + quote_cell(magic.substr(0, 40)) + "')" +
+                     afresh + ", or choose another --checkpoint file");
+  }
+  if (!read_header_line(in, hash_line) || hash_line.compare(0, 5, "hash ") != 0) {
+    throw InputError(path + ": damaged checkpoint header (line 2 is not 'hash ...')" + afresh);
+  }
+  const std::string file_hash = hash_line.substr(5);
   if (file_hash != hash) {
-    throw InputError(path + ": checkpoint hash " + file_hash + " was written for a different scene or map options (this run: " +
-                     hash + "); delete it, start afresh without resuming, or choose another checkpoint file");
+    throw InputError(path + ": checkpoint hash " + quote_cell(file_hash) +
+                     " was written for a different scene or map options (this run: " + hash +
+                     "); delete it, start afresh without resuming, or choose another checkpoint file");
   }
-  in >> key >> record_doubles;
-  if (key != "record_doubles" || record_doubles != layout.size()) {
+  std::size_t record_doubles = 0, n_records = 0;
+  if (!read_header_line(in, doubles_line) || !parse_count_line(doubles_line, "record_doubles", record_doubles) ||
+      !read_header_line(in, records_line) || !parse_count_line(records_line, "records", n_records) ||
+      !read_header_line(in, checksum_line) || checksum_line.compare(0, 9, "checksum ") != 0) {
+    throw InputError(path + ": damaged checkpoint header (record_doubles, records and checksum lines expected)" + afresh);
+  }
+  if (record_doubles != layout.size()) {
     throw InputError(path + ": checkpoint record size " + std::to_string(record_doubles) + " does not match " +
-                     std::to_string(layout.size()) + "; delete it");
+                     std::to_string(layout.size()) + afresh);
   }
-  in >> key >> n_records;
-  if (key != "records") throw InputError(path + ": damaged checkpoint header; delete it");
-  in.get();  // the newline
-  std::vector<double> data(n_records * layout.size());
+  // The allocation follows the bytes the file holds, never the header's count alone.
+  const std::streamoff data_start = in.tellg();
+  in.seekg(0, std::ios::end);
+  const std::streamoff file_end = in.tellg();
+  in.seekg(data_start);
+  const std::size_t record_bytes = record_doubles * sizeof(double);
+  const std::size_t held_bytes = file_end > data_start ? std::size_t(file_end - data_start) : 0;
+  if (n_records > held_bytes / record_bytes || n_records * record_bytes != held_bytes) {
+    throw InputError(path + ": checkpoint truncated or damaged (header announces " + std::to_string(n_records) +
+                     " records, the file holds " + std::to_string(held_bytes) + " bytes of records, " +
+                     std::to_string(held_bytes / record_bytes) + " records and " + std::to_string(held_bytes % record_bytes) +
+                     " bytes)" + afresh);
+  }
+  std::vector<double> data(n_records * record_doubles);
   in.read(reinterpret_cast<char*>(data.data()), std::streamsize(data.size() * sizeof(double)));
   if (!in || std::size_t(in.gcount()) != data.size() * sizeof(double)) {
-    throw InputError(path + ": checkpoint truncated (" + std::to_string(n_records) +
-                     " records announced); delete it and start again");
+    throw InputError(path + ": checkpoint could not be read whole (" + std::to_string(n_records) + " records announced)" + afresh);
+  }
+  const std::string expected = hex(checkpoint_checksum(checkpoint_header(file_hash, record_doubles, n_records), data));
+  if (checksum_line.substr(9) != expected) {
+    throw InputError(path + ": checkpoint checksum " + quote_cell(checksum_line.substr(9, 40)) +
+                     " does not match its content (" + expected + "): the file is damaged or was edited, not resumed" +
+                     afresh);
   }
   return data;
 }
@@ -184,10 +263,19 @@ void Generator::resume() {
       const bool index_ok = pd >= 0 && pd < double(n) && pd == std::floor(pd);
       bool values_ok = index_ok && map_.mask[std::size_t(pd)] != 0;
       for (std::size_t f = 0; values_ok && f < nf; ++f) {
-        const double st = layout_.level(rec, f)[Layout::status];
+        const double* level = layout_.level(rec, f);
+        const double st = level[Layout::status];
         values_ok = st == double(PointStatus::ok) || st == double(PointStatus::not_converged);
+        // A solved point has finite values (a checksum does not vouch for what was written).
+        for (std::size_t k = 0; values_ok && st == double(PointStatus::ok) && k < layout_.ne; ++k) {
+          values_ok = std::isfinite(level[Layout::charges + k]);
+        }
       }
-      if (!values_ok) throw InputError(file + ": checkpoint record " + std::to_string(r / layout_.size()) + " is invalid; delete the checkpoint");
+      if (!values_ok) {
+        throw InputError(file + ": checkpoint record " + std::to_string(r / layout_.size()) +
+                         " is invalid (grid index, status or a solved charge); delete the checkpoint (or pass "
+                         "--no-resume) to start the map afresh");
+      }
       if (known_[std::size_t(pd)]) continue;  // duplicates across rank files hold the same values
       store_record(rec, true);
     }
