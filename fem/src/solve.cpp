@@ -76,6 +76,14 @@ Result FilmSolver::run() {
     if (o.status != Status::converged) return failure_result(o, model_name(model) + " solve", t_start);
   }
   s.model = model;
+  // Bending kept from the start: the clamp's layer as a boundary condition instead of a rim graded
+  // to it (clamp_layer.cpp; the estimate may still send it to the graded rim, adaptivity.cpp).
+  if (options_.include_bending && clamp_layer_wanted()) {
+    const NewtonOutcome o = switch_to_clamp_layer(model, u);
+    if (o.status != Status::converged) return failure_result(o, "solve with the clamp-layer condition", t_start);
+    clamp_reason_ = "clamp's bending layer as a boundary condition: it changed the charges by " + fmt(clamp_correction_) +
+                    " (l_b up to " + fmt(summary_.clamp_layer_width_m * 1e3, 3) + " mm)";
+  }
   solution_ = u;
   if (!options_.vtu_directory.empty()) vtu_files_.push_back(write_vtu(0, model));
 
@@ -83,6 +91,7 @@ Result FilmSolver::run() {
   std::string where;
   const NewtonOutcome refined = refine_until_tolerance(model, where);
   if (refined.status != Status::converged) return failure_result(refined, where, t_start);
+  if (!clamp_reason_.empty()) s.model_reason += "; " + clamp_reason_;
   if (!bending_reason_.empty()) s.model_reason += "; " + bending_reason_;
   set_final_status();
 
@@ -178,6 +187,10 @@ void FilmSolver::add_error_estimates(Result& result) const {
   for (std::size_t k = 0; k < result.electrodes.size(); ++k) {
     ElectrodeResult& e = result.electrodes[k];
     e.charge_error_C = bar(goal_.charge_discretization_C, goal_.charge_model_C, k, e.charge_C);
+    if (clamp_layer_ && k < clamp_correction_C_.size()) {  // the clamp-layer condition's estimate (clamp_layer.cpp)
+      const double c = clamp_layer_estimate();
+      e.charge_error_C += c >= 1.0 ? std::abs(e.charge_C) : clamp_ratio_ * std::abs(clamp_correction_C_[k]);
+    }
     e.charge_discretization_error_C = at(goal_.charge_discretization_C, k);
     e.charge_model_error_C = at(goal_.charge_model_C, k);
   }
