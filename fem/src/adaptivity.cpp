@@ -201,15 +201,21 @@ NewtonOutcome FilmSolver::refine_until_tolerance(Model model, std::string& where
         continue;
       }
     }
-    // The clamp-layer condition's own estimate: beyond a quarter of the tolerance (or a layer too wide
-    // for the rim cells) the reference path takes over: plain clamp, bending kept, rim graded to l_b.
+    // The clamp-layer condition's own estimate against its share of the tolerance: what bending's
+    // remaining effect and the kinematics leave of 3/4 of it (a quarter is kept for the
+    // discretization). Beyond it the reference path takes over: plain clamp, bending kept, rim
+    // graded to l_b.
     const double clamp_estimate = clamp_layer_estimate();
-    if (clamp_layer_ && clamp_estimate > 0.25 * options_.tolerance) {
-      clamp_reason_ += "; its estimated error " + fmt(clamp_estimate) + " > tolerance/4 = " +
-                       fmt(0.25 * options_.tolerance) + ": bending kept, rim graded to l_b instead";
+    const double other_model =
+        (goal_.model_estimated && std::isfinite(goal_.relative_model) ? goal_.relative_model : 0.0) + kinematics_model_error_;
+    const double clamp_share = 0.75 * options_.tolerance - other_model;
+    if (clamp_layer_ && clamp_estimate > clamp_share) {
+      clamp_reason_ += "; its estimated error " + fmt(clamp_estimate) + " > its share of the tolerance " +
+                       fmt(clamp_share) + ": bending kept, rim graded to l_b instead";
       set_clamp_layer(false, solution_);
       enable_bending();
-      grade_toward_rim(&solution_);
+      s.clamp_layer = "none";
+      grade_toward_rim(&solution_);  // "rim-graded" when it grades
       NewtonOutcome o = newton(model, 0.0, solution_);
       ++s.load_steps;
       s.newton_iterations += o.iterations;
@@ -218,10 +224,10 @@ NewtonOutcome FilmSolver::refine_until_tolerance(Model model, std::string& where
         where = "solve with bending on the rim-graded mesh";
         return o;
       }
-      s.clamp_layer = "rim-graded";
       continue;
     }
     s.estimated_clamp_layer_error = clamp_estimate;
+    if (clamp_layer_) clamp_share_reason_ = "clamp-layer estimate " + fmt(clamp_estimate) + " <= its share " + fmt(clamp_share);
     const double disc = std::isfinite(goal_.relative_discretization) ? goal_.relative_discretization : 1.0;
     const double bending_model = goal_.model_estimated && std::isfinite(goal_.relative_model) ? goal_.relative_model : 0.0;
     s.estimated_discretization_error = disc;

@@ -21,7 +21,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
+#include <limits>
 #include <map>
 
 namespace pvdf::fem::detail {
@@ -148,7 +148,11 @@ void FilmSolver::update_clamp_layer(const Vector<double>& u, Model model) {
       }
     }
   clamp_ratio_ = den > 0 ? num / den : 0.0;
-  if (!(n_max > 0)) clamp_l_over_h_ = 1e300;  // no tension at the rim: no layer to speak of
+  if (!(n_max > 0)) {  // no tension at the rim: no layer; the estimate sends the solve to the graded rim
+    clamp_shift_.clear();
+    clamp_ratio_ = std::numeric_limits<double>::infinity();
+    return;
+  }
   const double n_floor = n_max > 0 ? floor_fraction * n_max : 1e-300;
 
   // 2. The slope ∂_n w of the converged state from the rim's nodal reaction (variationally
@@ -181,7 +185,7 @@ void FilmSolver::update_clamp_layer(const Vector<double>& u, Model model) {
     slopes[d] = s;
     clamp_shift_.emplace_back(d, s.l * s.slope);
   }
-  if (options_.clamp_layer_inplane_shift && !std::getenv("PVDF_CLAMP_NOSHIFT")) {
+  if (options_.clamp_layer_inplane_shift) {
     for (const auto& [d, wd] : partner) {
       if (hanging_constraints_.is_constrained(d) || !constraints_.is_constrained(d)) continue;
       const auto it = slopes.find(wd.first);
@@ -217,6 +221,7 @@ NewtonOutcome FilmSolver::solve_with_clamp_layer(Model model, Vector<double>& u)
   if (o.status != Status::converged) return o;
   OutputVector previous;
   summary_.clamp_layer_passes = 0;
+  clamp_settled_ = false;
   for (int pass = 0; pass < 8; ++pass) {
     update_clamp_layer(u, model);
     o = newton(model, 0.0, u);
@@ -225,14 +230,17 @@ NewtonOutcome FilmSolver::solve_with_clamp_layer(Model model, Vector<double>& u)
     ++summary_.clamp_layer_passes;
     if (o.status != Status::converged) return o;
     const OutputVector q = outputs(u, model);
-    if (std::getenv("PVDF_CLAMP_DEBUG")) {
+    if (options_.verbose) {
       const auto c = electrode_charges(u, model);
-      std::fprintf(stderr, "clamp pass %d: newton %d, l/h %.3g, ratio %.3g, shift dofs %zu, charges", pass, o.iterations,
+      std::fprintf(stdout, "clamp pass %d: newton %d, l/h %.3g, ratio %.3g, shift dofs %zu, charges", pass, o.iterations,
                    clamp_l_over_h_, clamp_ratio_, clamp_shift_.size());
-      for (double x : c) std::fprintf(stderr, " %.5e", x);
-      std::fprintf(stderr, "\n");
+      for (double x : c) std::fprintf(stdout, " %.5e", x);
+      std::fprintf(stdout, "\n");
     }
-    if (pass > 0 && relative_difference(q, previous) <= 0.01 * options_.tolerance) break;
+    if (pass > 0 && relative_difference(q, previous) <= 0.01 * options_.tolerance) {
+      clamp_settled_ = true;
+      break;
+    }
     previous = q;
   }
   return o;
@@ -276,13 +284,17 @@ NewtonOutcome FilmSolver::switch_to_clamp_layer(Model model, Vector<double>& u) 
 }
 
 // What the condition leaves out is of higher order in l_b over the outer field's length scale
-// near the clamp: the correction it made times clamp_ratio_ (docs/fem.md §3.4, effectivity there).
-// A layer not narrow against the rim cells (l_b > h/4: the lagged values then need not contract,
-// and the mesh resolves the layer anyway) counts as not estimated (1).
+// near the clamp: the correction it made times clamp_ratio_ times a constant. The constant is
+// calibrated on one case only (the 50 µm, 1 N, 15 mm film of test_fem_clamp_layer against the
+// axisymmetric oracle with bending: remaining error / (ratio × correction) = 23.1) and checked on
+// the others (docs/fem.md §3.4: 0.93–0.96 on two more oracle films, 0.55–1.1 near seed 001's clamp).
+constexpr double clamp_estimate_constant = 23.0;
+
+// Lagged values that did not settle within the passes count as not estimated (1).
 double FilmSolver::clamp_layer_estimate() const {
   if (!clamp_layer_) return 0.0;
-  if (!(clamp_l_over_h_ <= 0.25)) return 1.0;
-  const double e = clamp_ratio_ * clamp_correction_;
+  if (!clamp_settled_) return 1.0;
+  const double e = clamp_estimate_constant * clamp_ratio_ * clamp_correction_;
   return std::isfinite(e) ? e : 1.0;
 }
 

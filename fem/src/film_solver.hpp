@@ -398,10 +398,12 @@ class FilmSolver {
   std::vector<std::pair<dealii::types::global_dof_index, double>> clamp_shift_;  // rim values of u (m)
   double clamp_ratio_ = 0;          // weighted l_b |∂_nn w| / |∂_n w| along the rim (the estimate's factor)
   double clamp_l_over_h_ = 0;       // largest l_b / (rim cell size)
+  bool clamp_settled_ = false;      // the lagged rim values settled (solve_with_clamp_layer)
   std::vector<double> clamp_correction_C_;  // per electrode: Q(condition) − Q(plain clamp), where switched on
   double clamp_correction_ = 0;     // the same, largest relative to the largest |charge| (and w at the loads)
   std::vector<double> electrode_charges(const Vector<double>& u, Model model) const;
   std::string clamp_reason_;        // for model_reason
+  std::string clamp_share_reason_;  // the last estimate against its share (model_reason)
   // outputs.cpp: electrode_cells() per electrode; declared last, so destroyed before the mapping,
   // the finite element and the DoF handler its FEValues refer to.
   mutable std::vector<std::vector<ElectrodeCell>> electrode_cells_;

@@ -63,8 +63,12 @@ pvdf::fem::Options options(bool condition) {
   o.include_bending = condition;  // the condition with bending kept; the plain clamp without
   o.clamp_layer_condition = condition;
   o.grade_rim_for_bending = false;
-  o.tolerance = 0.002;
-  o.max_refinements = 3;
+  // One uniform refinement of the a-priori mesh and no adaptive cycles: the same mesh for both, its
+  // discretization error (~2e-4) well below the layer's effect; a tolerance that lets the condition's
+  // estimate be measured rather than acted on (tolerance/4 = 1.25e-2).
+  o.initial_global_refinements = 1;
+  o.tolerance = 0.05;
+  o.max_refinements = 0;
   return o;
 }
 
@@ -74,7 +78,7 @@ TEST_CASE("clamp-layer condition against the axisymmetric oracle with bending", 
   struct Case {
     double h_m, force_N;
   };
-  for (const Case c : {Case{50e-6, 1.0}, Case{100e-6, 1.0}, Case{100e-6, 0.2}}) {
+  for (const Case c : {Case{50e-6, 1.0}, Case{50e-6, 0.3}, Case{75e-6, 1.0}}) {
     const pvdf::Scene s = clamp_scene(c.h_m, c.force_N);
     const auto bent = oracles::solve_axisymmetric(oracle_problem(s, true, oracles::Kinematics::green_lagrange));
     const auto flat = oracles::solve_axisymmetric(oracle_problem(s, false, oracles::Kinematics::green_lagrange));
@@ -87,6 +91,7 @@ TEST_CASE("clamp-layer condition against the axisymmetric oracle with bending", 
     }
     const auto plain = pvdf::fem::solve(s, options(false));
     const auto layer = pvdf::fem::solve(s, options(true));
+    INFO(plain.summary.message << " / " << layer.summary.message);
     REQUIRE(pvdf::fem::usable(plain.summary.status));
     REQUIRE(pvdf::fem::usable(layer.summary.status));
     const double e_plain = relative_error(charges(plain), q_bent);
@@ -104,5 +109,11 @@ TEST_CASE("clamp-layer condition against the axisymmetric oracle with bending", 
     CHECK(layer.summary.clamp_layer == "boundary-condition");
     CHECK(std::abs(layer.rim_reaction_N - c.force_N) <= 1e-6 * c.force_N);
     CHECK(e_layer <= e_plain / 3);
+    // The estimate's constant was calibrated on the first case (clamp_layer.cpp); the others are
+    // checks: estimate / true error in [0.5, 3].
+    if (c.force_N != 1.0 || c.h_m != 50e-6) {
+      CHECK(estimate / e_layer >= 0.5);
+      CHECK(estimate / e_layer <= 3.0);
+    }
   }
 }
