@@ -19,7 +19,10 @@ printf '%-14s %-11s %8s %8s %8s %8s %9s %9s %9s  %s\n' press mode dofs wall_s cp
 for load in 0,-0.040,1 0.028,0.028,1; do
   for mode in $modes; do
     if [[ $mode == default ]]; then env_args=(env -u PVDF_CLAMP_LAYER); else env_args=(env PVDF_CLAMP_LAYER=$mode); fi
-    "${env_args[@]}" /usr/bin/time -f '%e %U %S %M' "$pvdfkit" solve "$scene" --load "$load" --json > "$tmp/solve.json" 2> "$tmp/time.txt"
+    if ! "${env_args[@]}" /usr/bin/time -f '%e %U %S %M' "$pvdfkit" solve "$scene" --load "$load" --json > "$tmp/solve.json" 2> "$tmp/time.txt"; then
+      printf '%-14s %-11s failed: %s\n' "$load" "$mode" "$(grep -v '^[0-9. ]*$' "$tmp/time.txt" | head -1)"
+      continue
+    fi
     read -r wall user sys rss_kb < <(tail -1 "$tmp/time.txt")
     python3 - "$tmp/solve.json" "$reference" "$load" "$mode" "$wall" "$user" "$sys" "$rss_kb" <<'PY'
 import json, sys

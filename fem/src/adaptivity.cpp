@@ -174,18 +174,24 @@ NewtonOutcome FilmSolver::refine_until_tolerance(Model model, std::string& where
     goal_ = estimate_goal_errors(solution_, model, true);
     if (goal_.model_estimated && bending_switchable_) {
       const bool leave_out = bending_may_be_left_out(goal_.relative_model, options_.tolerance, bending_reason_);
-      if (!leave_out && !clamp_layer_ && !rim_graded_ && clamp_layer_wanted()) {
+      if (!leave_out && !clamp_layer_ && !rim_graded_ && !clamp_failed_ && clamp_layer_wanted()) {
         // Most of bending's effect near the clamp is its layer there: first as a boundary condition
         // (clamp_layer.cpp), then bending's remaining effect is estimated again (rim terms dropped).
+        const Vector<double> clamped = solution_;
         NewtonOutcome o = switch_to_clamp_layer(model, solution_);
-        if (o.status != Status::converged) {
-          where = "solve with the clamp-layer condition";
-          return o;
+        if (o.status != Status::converged) {  // the reference path instead (below, on this same loop)
+          solution_ = clamped;
+          set_clamp_layer(false, solution_);
+          clamp_correction_ = 0;
+          summary_.clamp_layer = "none";
+          clamp_reason_ = "the clamp-layer condition did not converge (" + o.message + "): rim graded instead";
+          clamp_failed_ = true;
+        } else {
+          clamp_reason_ = bending_reason_ + " with the plain clamp; the clamp's layer as a boundary condition "
+                          "changed the charges by " + fmt(clamp_correction_) + " (l_b up to " +
+                          fmt(summary_.clamp_layer_width_m * 1e3, 3) + " mm)";
+          continue;
         }
-        clamp_reason_ = bending_reason_ + " with the plain clamp; the clamp's layer as a boundary condition changed "
-                        "the charges by " + fmt(clamp_correction_) + " (l_b up to " +
-                        fmt(summary_.clamp_layer_width_m * 1e3, 3) + " mm)";
-        continue;
       }
       if (!leave_out) {  // the richer model, from the membrane solution on this mesh
         enable_bending();

@@ -399,6 +399,7 @@ class FilmSolver {
   double clamp_ratio_ = 0;          // weighted l_b |∂_nn w| / |∂_n w| along the rim (the estimate's factor)
   double clamp_l_over_h_ = 0;       // largest l_b / (rim cell size)
   bool clamp_settled_ = false;      // the lagged rim values settled (solve_with_clamp_layer)
+  bool clamp_failed_ = false;       // the condition's Newton failed once: the reference path
   std::vector<double> clamp_correction_C_;  // per electrode: Q(condition) − Q(plain clamp), where switched on
   double clamp_correction_ = 0;     // the same, largest relative to the largest |charge| (and w at the loads)
   std::vector<double> electrode_charges(const Vector<double>& u, Model model) const;

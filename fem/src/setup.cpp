@@ -250,8 +250,10 @@ void FilmSolver::refine_initial_mesh() {
     triangulation_.execute_coarsening_and_refinement();
   }
   if (options_.initial_global_refinements > 0) triangulation_.refine_global(options_.initial_global_refinements);
-  // With the clamp-layer condition the rim is graded only if its estimate asks (adaptivity.cpp).
-  if (options_.include_bending && !clamp_layer_wanted()) grade_toward_rim(nullptr);
+  // Bending kept from the start (requested, or `auto` a priori): the full plate, rim graded. The
+  // clamp-layer condition replaces the grading where `auto` switches bending on by its estimate
+  // (adaptivity.cpp, clamp_layer.cpp).
+  if (options_.include_bending) grade_toward_rim(nullptr);
   set_material_ids();
 }
 

@@ -77,14 +77,6 @@ Result FilmSolver::run() {
     if (o.status != Status::converged) return failure_result(o, model_name(model) + " solve", t_start);
   }
   s.model = model;
-  // Bending kept from the start: the clamp's layer as a boundary condition instead of a rim graded
-  // to it (clamp_layer.cpp; the estimate may still send it to the graded rim, adaptivity.cpp).
-  if (options_.include_bending && clamp_layer_wanted()) {
-    const NewtonOutcome o = switch_to_clamp_layer(model, u);
-    if (o.status != Status::converged) return failure_result(o, "solve with the clamp-layer condition", t_start);
-    clamp_reason_ = "clamp's bending layer as a boundary condition: it changed the charges by " + fmt(clamp_correction_) +
-                    " (l_b up to " + fmt(summary_.clamp_layer_width_m * 1e3, 3) + " mm)";
-  }
   solution_ = u;
   if (!options_.vtu_directory.empty()) vtu_files_.push_back(write_vtu(0, model));
 
