@@ -146,6 +146,7 @@ void FilmSolver::grade_toward_rim(Vector<double>* u) {
   // tolerance it is left unresolved; cells are never made smaller than a/1000 (films of ~1 µm).
   const double layer = std::max(rim_boundary_layer_m(scene_, total_force_), a / 1000);
   if (rim_boundary_layer_m(scene_, total_force_) / a <= 0.1 * options_.tolerance) return;
+  summary_.clamp_layer = "rim-graded";
   const bool refined = refine_toward_rim(layer, 0.5, 0.0, 4.0, u);
   if (refined && u) {
     set_material_ids();
@@ -173,10 +174,29 @@ NewtonOutcome FilmSolver::refine_until_tolerance(Model model, std::string& where
     goal_ = estimate_goal_errors(solution_, model, true);
     if (goal_.model_estimated && bending_switchable_) {
       const bool leave_out = bending_may_be_left_out(goal_.relative_model, options_.tolerance, bending_reason_);
+      if (!leave_out && !clamp_layer_ && !rim_graded_ && !clamp_failed_ && clamp_layer_wanted()) {
+        // Most of bending's effect near the clamp is its layer there: first as a boundary condition
+        // (clamp_layer.cpp), then bending's remaining effect is estimated again (rim terms dropped).
+        const Vector<double> clamped = solution_;
+        NewtonOutcome o = switch_to_clamp_layer(model, solution_);
+        if (o.status != Status::converged) {  // the reference path instead (below, on this same loop)
+          solution_ = clamped;
+          set_clamp_layer(false, solution_);
+          clamp_correction_ = 0;
+          summary_.clamp_layer = "none";
+          clamp_reason_ = "the clamp-layer condition did not converge (" + o.message + "): rim graded instead";
+          clamp_failed_ = true;
+        } else {
+          clamp_reason_ = bending_reason_ + " with the plain clamp; the clamp's layer as a boundary condition "
+                          "changed the charges by " + fmt(clamp_correction_) + " (l_b up to " +
+                          fmt(summary_.clamp_layer_width_m * 1e3, 3) + " mm)";
+          continue;
+        }
+      }
       if (!leave_out) {  // the richer model, from the membrane solution on this mesh
         enable_bending();
-        grade_toward_rim(&solution_);
-        NewtonOutcome o = newton(model, 0.0, solution_);
+        if (!clamp_layer_) grade_toward_rim(&solution_);
+        NewtonOutcome o = clamp_layer_ ? solve_with_clamp_layer(model, solution_) : newton(model, 0.0, solution_);
         ++s.load_steps;
         s.newton_iterations += o.iterations;
         if (o.status != Status::converged) o = solve_from_flat(model, solution_);
@@ -187,10 +207,37 @@ NewtonOutcome FilmSolver::refine_until_tolerance(Model model, std::string& where
         continue;
       }
     }
+    // The clamp-layer condition's own estimate against its share of the tolerance: what bending's
+    // remaining effect and the kinematics leave of 3/4 of it (a quarter is kept for the
+    // discretization). Beyond it the reference path takes over: plain clamp, bending kept, rim
+    // graded to l_b.
+    const double clamp_estimate = clamp_layer_estimate();
+    const double other_model =
+        (goal_.model_estimated && std::isfinite(goal_.relative_model) ? goal_.relative_model : 0.0) + kinematics_model_error_;
+    const double clamp_share = 0.75 * options_.tolerance - other_model;
+    if (clamp_layer_ && clamp_estimate > clamp_share) {
+      clamp_reason_ += "; its estimated error " + fmt(clamp_estimate) + " > its share of the tolerance " +
+                       fmt(clamp_share) + ": bending kept, rim graded to l_b instead";
+      set_clamp_layer(false, solution_);
+      enable_bending();
+      s.clamp_layer = "none";
+      grade_toward_rim(&solution_);  // "rim-graded" when it grades
+      NewtonOutcome o = newton(model, 0.0, solution_);
+      ++s.load_steps;
+      s.newton_iterations += o.iterations;
+      if (o.status != Status::converged) o = solve_from_flat(model, solution_);
+      if (o.status != Status::converged) {
+        where = "solve with bending on the rim-graded mesh";
+        return o;
+      }
+      continue;
+    }
+    s.estimated_clamp_layer_error = clamp_estimate;
+    if (clamp_layer_) clamp_share_reason_ = "clamp-layer estimate " + fmt(clamp_estimate) + " <= its share " + fmt(clamp_share);
     const double disc = std::isfinite(goal_.relative_discretization) ? goal_.relative_discretization : 1.0;
     const double bending_model = goal_.model_estimated && std::isfinite(goal_.relative_model) ? goal_.relative_model : 0.0;
     s.estimated_discretization_error = disc;
-    s.estimated_model_error = bending_model + kinematics_model_error_;
+    s.estimated_model_error = bending_model + kinematics_model_error_ + clamp_estimate;
     s.estimated_relative_error = disc + s.estimated_model_error;
     if (options_.verbose)
       std::printf("  mesh %d: %u dofs, estimated discretization error %.3e, model error %.3e\n", s.refinement_cycles,
@@ -201,7 +248,7 @@ NewtonOutcome FilmSolver::refine_until_tolerance(Model model, std::string& where
       break;
     }
     refine_mesh(solution_, options_.refinement == Refinement::goal ? &goal_.indicators : nullptr);
-    NewtonOutcome o = newton(model, 0.0, solution_);
+    NewtonOutcome o = clamp_layer_ ? solve_with_clamp_layer(model, solution_) : newton(model, 0.0, solution_);
     ++s.load_steps;
     s.newton_iterations += o.iterations;
     if (o.status != Status::converged) {

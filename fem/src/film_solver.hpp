@@ -229,6 +229,24 @@ class FilmSolver {
   void mark_rim_w_dofs();
   void add_bending_face_couplings(DynamicSparsityPattern& dsp) const;
 
+  // clamp_layer.cpp: the clamp's bending layer as a boundary condition (docs/fem.md §3.4).
+  /// Is the layer wide enough to matter (l_b/a > tolerance/10) and the model one that has it?
+  bool clamp_layer_wanted() const;
+  /// Switch the condition on or off (rim bending terms dropped when on); DOFs unchanged, u kept.
+  void set_clamp_layer(bool on, Vector<double>& u);
+  /// The rim values of the condition from the converged state u (w from the rim's reaction, the
+  /// in-plane shift) and the estimate's ratio.
+  void update_clamp_layer(const Vector<double>& u, Model model);
+  /// The rim's Dirichlet values of the condition, hanging nodes after them.
+  void apply_clamp_shift(Vector<double>& u) const;
+  /// Lagged: solve, update the rim values, until the outputs stop changing.
+  NewtonOutcome solve_with_clamp_layer(Model model, Vector<double>& u);
+  /// From a converged plain-clamp state u: the condition switched on and solved (bending-free
+  /// first, for the size of the correction; then with bending again if the model has it).
+  NewtonOutcome switch_to_clamp_layer(Model model, Vector<double>& u);
+  /// Its estimated remaining error, relative (largest charge change × clamp_ratio_).
+  double clamp_layer_estimate() const;
+
   // assembly.cpp
   void assemble_bending_matrix();
   void assemble_load_vector();
@@ -375,6 +393,18 @@ class FilmSolver {
   std::string bending_reason_;    // the bending part of `auto` decided by its estimate
   double kinematics_model_error_ = 0;  // relative, from the `auto` trial solves
   bool dof_cap_reached_ = false;
+  // clamp_layer.cpp
+  bool clamp_layer_ = false;
+  std::vector<std::pair<dealii::types::global_dof_index, double>> clamp_shift_;  // rim values of u (m)
+  double clamp_ratio_ = 0;          // weighted l_b |∂_nn w| / |∂_n w| along the rim (the estimate's factor)
+  double clamp_l_over_h_ = 0;       // largest l_b / (rim cell size)
+  bool clamp_settled_ = false;      // the lagged rim values settled (solve_with_clamp_layer)
+  bool clamp_failed_ = false;       // the condition's Newton failed once: the reference path
+  std::vector<double> clamp_correction_C_;  // per electrode: Q(condition) − Q(plain clamp), where switched on
+  double clamp_correction_ = 0;     // the same, largest relative to the largest |charge| (and w at the loads)
+  std::vector<double> electrode_charges(const Vector<double>& u, Model model) const;
+  std::string clamp_reason_;        // for model_reason
+  std::string clamp_share_reason_;  // the last estimate against its share (model_reason)
   // outputs.cpp: electrode_cells() per electrode; declared last, so destroyed before the mapping,
   // the finite element and the DoF handler its FEValues refer to.
   mutable std::vector<std::vector<ElectrodeCell>> electrode_cells_;

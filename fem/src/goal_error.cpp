@@ -90,7 +90,8 @@ Vector<double> FilmSolver::deflection_derivative(const Point<dim>& x) const {
 // per mesh (and again when bending is switched on). Only residuals are assembled there.
 void FilmSolver::prepare_enriched(bool with_tangent) {
   if (enriched_ && enriched_->dof_handler_.get_triangulation().n_active_cells() == triangulation_.n_active_cells() &&
-      enriched_->options_.include_bending == options_.include_bending && (!with_tangent || !enriched_->residual_only_))
+      enriched_->options_.include_bending == options_.include_bending && enriched_->clamp_layer_ == clamp_layer_ &&
+      (!with_tangent || !enriched_->residual_only_))
     return;
   Options o = options_;
   o.adaptive = false;
@@ -104,6 +105,8 @@ void FilmSolver::prepare_enriched(bool with_tangent) {
   e.options_.fe_degree = options_.fe_degree + 1;
   e.form_degree_ = options_.fe_degree;
   e.residual_only_ = !with_tangent;
+  e.clamp_layer_ = clamp_layer_;  // the same rim condition (clamp_layer.cpp)
+  e.bending_rim_terms_ = bending_rim_terms_;
   e.setup_system();
 }
 
@@ -217,7 +220,8 @@ FilmSolver::GoalErrors FilmSolver::estimate_goal_errors(const Vector<double>& u,
   e.current_model_ = model;
   e.assemble_load_vector();
   Vector<double> ue(e.n_dofs()), re(e.n_dofs()), zplus(e.n_dofs()), zi(e.n_dofs());
-  FETools::interpolate(dof_handler_, u, e.dof_handler_, e.constraints_, ue);
+  // Hanging nodes only: u's rim values (0, or the clamp-layer condition's) are kept exactly.
+  FETools::interpolate(dof_handler_, u, e.dof_handler_, e.hanging_constraints_, ue);
   e.assemble(ue, model, 0.0, any_richer, re);
   const auto e_multiplicity = cell_multiplicity(e.dof_handler_);
   bool richer_factorized = false;

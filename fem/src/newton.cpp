@@ -76,6 +76,7 @@ NewtonOutcome FilmSolver::newton(Model model, double artificial_tension, Vector<
   const double r_tol = options_.residual_rtol * f_norm + options_.residual_atol;
   Vector<double> r(u.size()), du(u.size()), trial(u.size()), r_trial(u.size()), rhs(u.size());
   constraints_.distribute(u);
+  if (clamp_layer_) apply_clamp_shift(u);  // the rim's in-plane values (clamp_layer.cpp)
   double last_increment = std::numeric_limits<double>::max();
   // Chord steps (reuse_factorization_, probe sweeps): while a step contracts the residual by 10x or
   // more, the next step reuses the factorized tangent (one back substitution instead of assembly

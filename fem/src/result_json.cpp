@@ -55,6 +55,11 @@ nlohmann::json result_json(const Result& r) {
   j["estimated_discretization_error"] = s.estimated_discretization_error;
   j["estimated_model_error"] = s.estimated_model_error;
   j["error_estimator"] = s.error_estimator;
+  j["clamp_layer"] = {{"treatment", s.clamp_layer},
+                      {"estimated_error", s.estimated_clamp_layer_error},
+                      {"correction", s.clamp_layer_correction},
+                      {"width_m", s.clamp_layer_width_m},
+                      {"passes", s.clamp_layer_passes}};
   j["stress_measure"] = "second Piola-Kirchhoff membrane resultant (N/m), undeformed axes";
   if (!usable(s.status)) return j;
   j["max_deflection_m"] = r.max_deflection_m;

@@ -250,6 +250,9 @@ void FilmSolver::refine_initial_mesh() {
     triangulation_.execute_coarsening_and_refinement();
   }
   if (options_.initial_global_refinements > 0) triangulation_.refine_global(options_.initial_global_refinements);
+  // Bending kept from the start (requested, or `auto` a priori): the full plate, rim graded. The
+  // clamp-layer condition replaces the grading where `auto` switches bending on by its estimate
+  // (adaptivity.cpp, clamp_layer.cpp).
   if (options_.include_bending) grade_toward_rim(nullptr);
   set_material_ids();
 }
@@ -270,6 +273,7 @@ void FilmSolver::set_material_ids() {
 void FilmSolver::setup_system() {
   const auto t0 = Clock::now();
   electrode_cells_.clear();  // every change of the mesh passes here before its next output
+  clamp_shift_.clear();      // rim values of the clamp-layer condition belong to the old DOFs
   if (!fe_) {
     fe_ = std::make_unique<FESystem<dim>>(FE_Q<dim>(options_.fe_degree), 3);
     mapping_ = std::make_unique<MappingQ<dim>>(2);
@@ -280,6 +284,8 @@ void FilmSolver::setup_system() {
   DoFTools::make_hanging_node_constraints(dof_handler_, hanging_constraints_);
   hanging_constraints_.close();
   DoFTools::make_hanging_node_constraints(dof_handler_, constraints_);
+  // Clamped rim: u = 0 and w = 0 (the clamp-layer condition sets other rim values in u itself,
+  // clamp_layer.cpp; Newton increments keep them).
   VectorTools::interpolate_boundary_values(*mapping_, dof_handler_, pvdf::mesh::rim_boundary_id,
                                            Functions::ZeroFunction<dim>(3), constraints_);
   constraints_.close();

@@ -7,6 +7,7 @@
 #include "pvdf/core/error.hpp"
 
 #include <cmath>
+#include <cstdlib>
 #include <functional>
 
 namespace pvdf::fem {
@@ -83,7 +84,9 @@ Result FilmSolver::run() {
   std::string where;
   const NewtonOutcome refined = refine_until_tolerance(model, where);
   if (refined.status != Status::converged) return failure_result(refined, where, t_start);
+  if (!clamp_reason_.empty()) s.model_reason += "; " + clamp_reason_;
   if (!bending_reason_.empty()) s.model_reason += "; " + bending_reason_;
+  if (clamp_layer_ && !clamp_share_reason_.empty()) s.model_reason += "; " + clamp_share_reason_;
   set_final_status();
 
   // 3. Outputs. Never NaN: a non-finite output is a numerical failure.
@@ -178,6 +181,11 @@ void FilmSolver::add_error_estimates(Result& result) const {
   for (std::size_t k = 0; k < result.electrodes.size(); ++k) {
     ElectrodeResult& e = result.electrodes[k];
     e.charge_error_C = bar(goal_.charge_discretization_C, goal_.charge_model_C, k, e.charge_C);
+    if (clamp_layer_ && k < clamp_correction_C_.size()) {  // the clamp-layer condition's estimate (clamp_layer.cpp)
+      const double c = clamp_layer_estimate();
+      e.charge_error_C += c >= 1.0 ? std::abs(e.charge_C)
+                                   : (clamp_correction_ > 0 ? c / clamp_correction_ : 0.0) * std::abs(clamp_correction_C_[k]);
+    }
     e.charge_discretization_error_C = at(goal_.charge_discretization_C, k);
     e.charge_model_error_C = at(goal_.charge_model_C, k);
   }
@@ -197,6 +205,15 @@ Result run_with_model_choice(const pvdf::Scene& scene, const Options& options,
                              const std::function<void(FilmSolver&)>& make_grid) {
   const ModelChoice choice = choose_model(scene, options);
   Options used = options;
+  // Bench switch for the clamp's layer (docs/bench-fem.md, bench/fem/bench_clamp_layer.sh), read like
+  // PVDF_FACTORIZATION: "rim-graded" = the reference path, "no-shift" = the condition without its
+  // in-plane shift. Unset (the default): Options as given.
+  if (const char* v = std::getenv("PVDF_CLAMP_LAYER")) {
+    const std::string mode = v;
+    if (mode == "rim-graded") used.clamp_layer_condition = false;
+    else if (mode == "no-shift") used.clamp_layer_inplane_shift = false;
+    else if (!mode.empty()) throw InputError("PVDF_CLAMP_LAYER = '" + mode + "' is not a mode; use rim-graded or no-shift, or unset it");
+  }
   used.model = choice.model;
   used.include_bending = choice.include_bending;
   FilmSolver solver(scene, used);

@@ -68,6 +68,16 @@ struct Options {
   /// mesh or when `auto` switches bending on (docs/fem.md §6). The goal-oriented loop cannot find
   /// that layer from a coarse rim (its estimate is blind there).
   bool grade_rim_for_bending = true;
+  /// The clamp's bending layer as a boundary condition (docs/fem.md §3.4): where bending would be
+  /// kept near the clamp, the rim's w is not clamped but satisfies w = l_b ∂w/∂n (l_b = sqrt(D_nn/N_nn),
+  /// Nitsche form, N_nn lagged between Newton solves) and the rim's bending terms are dropped, so
+  /// the rim is not graded to l_b; the rim is graded (grade_rim_for_bending) only when the
+  /// condition's own error estimate exceeds a quarter of the tolerance. false = the rim-graded
+  /// reference path.
+  bool clamp_layer_condition = true;
+  /// With the clamp-layer condition: also shift the rim's in-plane displacement inward by
+  /// ¾ l_b (∂w/∂n)² (the stretch the layer does not take, docs/fem.md §3.4).
+  bool clamp_layer_inplane_shift = true;
   /// Initial-mesh grading: away from probes and electrodes the cell size is at most
   /// grading × distance (smaller = finer far field).
   double grading = 0.8;
@@ -131,6 +141,17 @@ struct Summary {
   /// Same normalisation, for what the model leaves out: bending (adjoint-weighted bending residual
   /// when `auto` left it out) plus the kinematics difference measured by the `auto` trial solves.
   double estimated_model_error = 0;
+  /// How the clamp's bending layer was treated: "none" (bending-free model, layer ignored, or no
+  /// layer), "boundary-condition" (w = l_b ∂w/∂n at the rim, docs/fem.md §3.4) or "rim-graded".
+  std::string clamp_layer = "none";
+  /// With the boundary condition: its estimated remaining error (same normalisation as
+  /// estimated_model_error, and included there), the size of the correction it made (relative, the
+  /// largest output change against the plain clamp on the mesh where it was switched on), the
+  /// largest l_b along the rim (m) and the outer (lagged-N_nn) passes of the last solve.
+  double estimated_clamp_layer_error = 0;
+  double clamp_layer_correction = 0;
+  double clamp_layer_width_m = 0;
+  int clamp_layer_passes = 0;
   std::string error_estimator;          ///< how the estimates were obtained
   double wall_s = 0;                    ///< total
   double assembly_s = 0;                ///< residual + tangent assembly

@@ -1,0 +1,301 @@
+// The clamp's bending layer as a boundary condition (docs/fem.md §3.4). Near a clamped edge a taut
+// film bends only in a layer of width l_b = sqrt(D_nn/N_nn); across it the 1-D equation
+// D_nn w'''' − N_nn w'' = 0 gives w = w_out(s) + C e^(−s/l_b) (s inward), and w = w' = 0 at the clamp
+// leave the outer, bending-free field the Robin condition w_out = l_b ∂w_out/∂n (n outward): the
+// membrane sees a clamp moved inward by l_b. The in-plane field: the layer stretches less (½ w'²
+// with w' → 0 at the clamp) than the outer field assumes; over the layer the difference is
+// ¾ l_b (∂_n w)², an inward shift of the outer field's rim displacement.
+// Both are imposed as Dirichlet values of the rim DOFs, lagged: from a converged state, ∂_n w at each
+// rim node from its nodal reaction (internal − external force = ∮ N_nn ∂_n w φ_i ds, variationally
+// consistent; the FE gradient at the rim is a poor slope), N_nn and l_b there; then Newton with those
+// values held (an SPD tangent, Newton increments zero on the rim), and again until the outputs stop
+// changing. With bending kept, the rim's C0IP terms (∂_n w = 0) are dropped: a simply supported rim
+// leaves no layer to resolve.
+#include "film_solver.hpp"
+
+#include "pvdf/core/material.hpp"
+
+#include <deal.II/base/quadrature_lib.h>
+#include <deal.II/fe/fe_values.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <map>
+
+namespace pvdf::fem::detail {
+
+using namespace dealii;
+
+namespace {
+
+// Bending stiffness for cylindrical bending across an edge of normal n: κ = w'' (n_x², n_y², 2n_x n_y)
+// (Voigt, engineering shear), D_nn = κ̂·D κ̂.
+double bending_nn(const Stiffness3& D, const Tensor<1, 2>& n) {
+  const std::array<double, 3> k{n[0] * n[0], n[1] * n[1], 2 * n[0] * n[1]};
+  const std::array<double, 3> m = D.apply(k);
+  return k[0] * m[0] + k[1] * m[1] + k[2] * m[2];
+}
+
+// Normal membrane force n·S·n (S the 2nd Piola–Kirchhoff resultant with the pretension).
+double normal_force(const Stiffness3& C, const Kinematics& k, Model model, double pretension, const Tensor<1, 2>& n) {
+  std::array<double, 3> S = C.apply(membrane_strain(k, model));
+  S[0] += pretension;
+  S[1] += pretension;
+  return n[0] * n[0] * S[0] + n[1] * n[1] * S[1] + 2 * n[0] * n[1] * S[2];
+}
+
+Kinematics kinematics_from(const Tensor<2, 2>& grad_u, const Tensor<1, 2>& grad_w) {
+  Kinematics k;
+  for (int a = 0; a < 2; ++a) {
+    k.g[a] = grad_w[a];
+    for (int b = 0; b < 2; ++b) k.H[a][b] = grad_u[a][b];
+  }
+  return k;
+}
+
+constexpr double floor_fraction = 1e-3;  // N_nn floor, of the rim's largest (a slack stretch of rim)
+
+}  // namespace
+
+bool FilmSolver::clamp_layer_wanted() const {
+  if (!options_.clamp_layer_condition || tension_field_ || !(total_force_ > 0)) return false;
+  if (options_.model == Model::linear && !(pretension_ > 0)) return false;  // no membrane force: no layer
+  const double a = scene_.membrane.outline.characteristic_radius_m();
+  return rim_boundary_layer_m(scene_, total_force_) / a > 0.1 * options_.tolerance;  // as grade_toward_rim
+}
+
+void FilmSolver::set_clamp_layer(bool on, Vector<double>& u) {
+  const Vector<double> kept = u;
+  clamp_layer_ = on;
+  bending_rim_terms_ = !on;
+  enriched_.reset();
+  setup_system();  // same mesh and DOFs: the bending operator changes (rim terms)
+  u = kept;
+  if (!on) clamp_shift_.clear();
+  constraints_.distribute(u);
+  if (on) apply_clamp_shift(u);
+}
+
+void FilmSolver::update_clamp_layer(const Vector<double>& u, Model model) {
+  const FEValuesExtractors::Vector inplane(0);
+  const FEValuesExtractors::Scalar w(2);
+  const unsigned int p = form_degree();
+  // 1. At the rim's support points: N_nn and the normal per w DOF (a vertex's two faces averaged),
+  // the in-plane DOFs at the same points, and the lumped rim mass ∮ φ_i ds of each w DOF.
+  const Quadrature<dim - 1> sq(fe_->get_unit_face_support_points());
+  FEFaceValues<dim> sv(*mapping_, *fe_, sq, update_gradients | update_normal_vectors);
+  const QGauss<dim - 1> fq(p + 1);
+  FEFaceValues<dim> fv(*mapping_, *fe_, fq, update_values | update_gradients | update_hessians | update_normal_vectors |
+                                                update_JxW_values);
+  std::vector<Tensor<2, dim>> su(sq.size()), gu(fq.size()), hw(fq.size());
+  std::vector<Tensor<1, dim>> sw(sq.size()), gw(fq.size());
+  std::vector<types::global_dof_index> face_dofs(fe_->n_dofs_per_face()), cell_dofs(fe_->n_dofs_per_cell());
+  struct Node {
+    double N = 0, n[2] = {0, 0};
+    int count = 0;
+  };
+  std::map<types::global_dof_index, Node> nodes;                                          // rim w DOFs
+  std::map<types::global_dof_index, std::pair<types::global_dof_index, unsigned int>> partner;  // in-plane → (w DOF, component)
+  Vector<double> mass(dof_handler_.n_dofs());
+  double num = 0, den = 0, n_max = 0;
+  clamp_l_over_h_ = 0;
+  summary_.clamp_layer_width_m = 0;
+  for (const auto& cell : dof_handler_.active_cell_iterators())
+    for (const unsigned int f : cell->face_indices()) {
+      if (!cell->face(f)->at_boundary()) continue;
+      sv.reinit(cell, f);
+      sv[inplane].get_function_gradients(u, su);
+      sv[w].get_function_gradients(u, sw);
+      cell->face(f)->get_dof_indices(face_dofs);
+      for (unsigned int i = 0; i < face_dofs.size(); ++i) {
+        const unsigned int c = fe_->face_system_to_component_index(i).first;
+        if (c == 2) {
+          const Tensor<1, dim>& n = sv.normal_vector(i);
+          Node& node = nodes[face_dofs[i]];
+          node.N += normal_force(membrane_C_, kinematics_from(su[i], sw[i]), model, pretension_, n);
+          node.n[0] += n[0];
+          node.n[1] += n[1];
+          ++node.count;
+          continue;
+        }
+        for (unsigned int j = 0; j < face_dofs.size(); ++j)
+          if (fe_->face_system_to_component_index(j).first == 2 && sq.point(j).distance(sq.point(i)) < 1e-12)
+            partner[face_dofs[i]] = {face_dofs[j], c};
+      }
+      // Rim mass, and the estimate's ratio: the N_nn l_b (∂_n w)²-weighted mean of
+      // l_b |∂_nn w| / |∂_n w| (the outer field's normal curvature over its slope, in layer units).
+      fv.reinit(cell, f);
+      fv[inplane].get_function_gradients(u, gu);
+      fv[w].get_function_gradients(u, gw);
+      fv[w].get_function_hessians(u, hw);
+      cell->get_dof_indices(cell_dofs);
+      const double h = cell->extent_in_direction(GeometryInfo<dim>::unit_normal_direction[f]);
+      for (unsigned int q = 0; q < fq.size(); ++q) {
+        for (unsigned int i = 0; i < cell_dofs.size(); ++i)
+          if (fe_->system_to_component_index(i).first == 2) mass(cell_dofs[i]) += fv.shape_value(i, q) * fv.JxW(q);
+        const Tensor<1, dim>& n = fv.normal_vector(q);
+        const double N = normal_force(membrane_C_, kinematics_from(gu[q], gw[q]), model, pretension_, n);
+        n_max = std::max(n_max, N);
+        if (!(N > 0)) continue;
+        const double l = std::sqrt(bending_nn(bending_D_, n) / N);
+        const double wn = gw[q] * n, wnn = n * (hw[q] * n);
+        num += N * l * l * std::abs(wn * wnn) * fv.JxW(q);
+        den += N * l * wn * wn * fv.JxW(q);
+        clamp_l_over_h_ = std::max(clamp_l_over_h_, l / h);
+        summary_.clamp_layer_width_m = std::max(summary_.clamp_layer_width_m, l);
+      }
+    }
+  clamp_ratio_ = den > 0 ? num / den : 0.0;
+  if (!(n_max > 0)) {  // no tension at the rim: no layer; the estimate sends the solve to the graded rim
+    clamp_shift_.clear();
+    clamp_ratio_ = std::numeric_limits<double>::infinity();
+    return;
+  }
+  const double n_floor = n_max > 0 ? floor_fraction * n_max : 1e-300;
+
+  // 2. The slope ∂_n w of the converged state from the rim's nodal reaction (variationally
+  // consistent: internal − external force of a rim w DOF = ∮ N_nn ∂_n w φ_i ds), the w values
+  // l_b ∂_n w and the in-plane shift −¾ l_b (∂_n w)² n.
+  Vector<double> r;
+  assemble(u, model, 0.0, false, r);
+  Vector<double> force = membrane_raw_;
+  if (options_.include_bending) bending_raw_.vmult_add(force, u);
+  force -= load_raw_;
+  hanging_constraints_.condense(force);
+  hanging_constraints_.condense(mass);
+  struct Slope {
+    double slope = 0, l = 0, n[2] = {0, 0};
+  };
+  std::map<types::global_dof_index, Slope> slopes;
+  clamp_shift_.clear();
+  for (const auto& [d, node] : nodes) {
+    if (hanging_constraints_.is_constrained(d) || !constraints_.is_constrained(d) || !(mass(d) > 0)) continue;
+    const double N = std::max(node.N / node.count, n_floor);
+    Tensor<1, dim> n;
+    n[0] = node.n[0];
+    n[1] = node.n[1];
+    n /= n.norm();
+    Slope s;
+    s.l = std::sqrt(bending_nn(bending_D_, n) / N);
+    s.slope = force(d) / (N * mass(d));
+    s.n[0] = n[0];
+    s.n[1] = n[1];
+    slopes[d] = s;
+    clamp_shift_.emplace_back(d, s.l * s.slope);
+  }
+  if (options_.clamp_layer_inplane_shift) {
+    for (const auto& [d, wd] : partner) {
+      if (hanging_constraints_.is_constrained(d) || !constraints_.is_constrained(d)) continue;
+      const auto it = slopes.find(wd.first);
+      if (it == slopes.end()) continue;
+      const Slope& s = it->second;
+      clamp_shift_.emplace_back(d, -0.75 * s.l * s.slope * s.slope * s.n[wd.second]);
+    }
+  }
+}
+
+void FilmSolver::apply_clamp_shift(Vector<double>& u) const {
+  if (clamp_shift_.empty()) return;
+  for (const auto& [d, v] : clamp_shift_) u(d) = v;
+  hanging_constraints_.distribute(u);
+}
+
+std::vector<double> FilmSolver::electrode_charges(const Vector<double>& u, Model model) const {
+  std::vector<double> q;
+  for (std::size_t k = 0; k < electrode_polygons_.size(); ++k) {
+    const auto g = electrode_mean_force(u, model, k);
+    const Eigen::Vector3d m = pvdf::stress_to_material(draw_angle_) * Eigen::Vector3d(g[0], g[1], g[2]);
+    q.push_back(electrode_charge(k, {m[0], m[1], m[2]}));
+  }
+  return q;
+}
+
+// N_nn (and the shift) lagged: each pass is a Newton solve with them fixed (exact tangent of that
+// problem); passes stop when the outputs change by less than tolerance/100 (measured: 2–3 passes).
+NewtonOutcome FilmSolver::solve_with_clamp_layer(Model model, Vector<double>& u) {
+  NewtonOutcome o = newton(model, 0.0, u);  // with the rim values held (none after a mesh change)
+  ++summary_.load_steps;
+  summary_.newton_iterations += o.iterations;
+  if (o.status != Status::converged) return o;
+  OutputVector previous;
+  summary_.clamp_layer_passes = 0;
+  clamp_settled_ = false;
+  for (int pass = 0; pass < 8; ++pass) {
+    update_clamp_layer(u, model);
+    o = newton(model, 0.0, u);
+    ++summary_.load_steps;
+    summary_.newton_iterations += o.iterations;
+    ++summary_.clamp_layer_passes;
+    if (o.status != Status::converged) return o;
+    const OutputVector q = outputs(u, model);
+    if (options_.verbose) {
+      const auto c = electrode_charges(u, model);
+      std::fprintf(stdout, "clamp pass %d: newton %d, l/h %.3g, ratio %.3g, shift dofs %zu, charges", pass, o.iterations,
+                   clamp_l_over_h_, clamp_ratio_, clamp_shift_.size());
+      for (double x : c) std::fprintf(stdout, " %.5e", x);
+      std::fprintf(stdout, "\n");
+    }
+    if (pass > 0 && relative_difference(q, previous) <= 0.01 * options_.tolerance) {
+      clamp_settled_ = true;
+      break;
+    }
+    previous = q;
+  }
+  return o;
+}
+
+NewtonOutcome FilmSolver::switch_to_clamp_layer(Model model, Vector<double>& u) {
+  const bool bending = options_.include_bending;
+  if (bending) {  // the plain clamp without bending: the correction's reference
+    options_.include_bending = false;
+    const NewtonOutcome o = newton(model, 0.0, u);
+    summary_.newton_iterations += o.iterations;
+    ++summary_.load_steps;
+    if (o.status != Status::converged) {
+      options_.include_bending = true;
+      return o;
+    }
+  }
+  const std::vector<double> clamped = electrode_charges(u, model);
+  set_clamp_layer(true, u);
+  NewtonOutcome o = solve_with_clamp_layer(model, u);
+  if (o.status != Status::converged) {
+    options_.include_bending = bending;
+    return o;
+  }
+  const std::vector<double> layered = electrode_charges(u, model);
+  double scale = 0, change = 0;
+  clamp_correction_C_.assign(layered.size(), 0.0);
+  for (std::size_t k = 0; k < layered.size(); ++k) {
+    clamp_correction_C_[k] = layered[k] - clamped[k];
+    scale = std::max(scale, std::abs(layered[k]));
+    change = std::max(change, std::abs(clamp_correction_C_[k]));
+  }
+  clamp_correction_ = scale > 0 ? change / scale : 0.0;
+  summary_.clamp_layer_correction = clamp_correction_;
+  summary_.clamp_layer = "boundary-condition";
+  if (bending) {
+    options_.include_bending = true;
+    o = solve_with_clamp_layer(model, u);
+  }
+  return o;
+}
+
+// What the condition leaves out is of higher order in l_b over the outer field's length scale
+// near the clamp: the correction it made times clamp_ratio_ times a constant. The constant is
+// calibrated on one case only (the 50 µm, 1 N, 15 mm film of test_fem_clamp_layer against the
+// axisymmetric oracle with bending: remaining error / (ratio × correction) = 23.1) and checked on
+// the others (docs/fem.md §3.4: 0.93–0.96 on two more oracle films, 0.55–1.1 near seed 001's clamp).
+constexpr double clamp_estimate_constant = 23.0;
+
+// Lagged values that did not settle within the passes count as not estimated (1).
+double FilmSolver::clamp_layer_estimate() const {
+  if (!clamp_layer_) return 0.0;
+  if (!clamp_settled_) return 1.0;
+  const double e = clamp_estimate_constant * clamp_ratio_ * clamp_correction_;
+  return std::isfinite(e) ? e : 1.0;
+}
+
+}  // namespace pvdf::fem::detail
