@@ -217,7 +217,7 @@ void print_map_json(const MapCommandOptions& o, const ChargeMap& map, const MapR
   const double total_error = map.estimated_total_relative_error;
   j["estimated_total_relative_error"] = std::isfinite(total_error) ? nlohmann::json(total_error) : nlohmann::json(nullptr);
   j["solve_cpu_s"] = report.solve_cpu_s;
-  const std::size_t solves = report.n_solved > report.n_resumed ? report.n_solved : 0;
+  const std::size_t solves = report.n_solved;  // FEM solves of this run (resumed points are not counted)
   j["cpu_s_per_solve"] = solves > 0 ? nlohmann::json(report.solve_cpu_s / double(solves)) : nlohmann::json(nullptr);
   j["estimate_share"] = report.solve_cpu_s > 0 ? nlohmann::json(report.estimate_s / report.solve_cpu_s) : nlohmann::json(nullptr);
   j["wall_s"] = report.wall_s;

@@ -2,7 +2,7 @@
 """Audit charge maps between their nodes: off-node presses against direct probe solves.
 
     PYTHONPATH=build/python bench/mapping/audit_off_node.py SCENE MAP1.h5 [MAP2.h5 ...]
-        [--center X,Y] [--radius R] [--box XMIN,XMAX,YMIN,YMAX] [--n N] [--force F]
+        [--center=X,Y] [--radius R] [--box=XMIN,XMAX,YMIN,YMAX] [--n N] [--force F]
         [--tolerance T] [--seed S] [--json OUT]
 
 Draws N presses (default 24) uniformly in the disc of radius R (m, default 0.006) around
@@ -19,7 +19,7 @@ median stated error and the effectivity (stated / true where true > 1e-3): media
 [0.5, 3], share below 0.5. docs/map-generation.md §10.3 (seed 001, the region around electrode B):
 
     PYTHONPATH=build/python bench/mapping/audit_off_node.py examples/scenes/seed001.json adaptive.h5 uniform2.h5 \\
-        --box -0.015,-0.001,-0.011,0.003
+        --box=-0.015,-0.001,-0.011,0.003
 
 Reads the stored errors with h5dump (hdf5-tools).
 """
