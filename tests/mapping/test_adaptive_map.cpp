@@ -8,6 +8,7 @@
 // the tolerance the true error is within it. The effectivity (stated / true) is printed; its
 // upper bound is not asserted (measured in docs/map-generation.md §10.3: far above 3 at many
 // presses, the prediction being a cell's largest).
+#include "pvdf/core/constants.hpp"
 #include "pvdf/fem/probe_sweep.hpp"
 #include "pvdf/mapping/generate.hpp"
 #include "pvdf/mapping/locator.hpp"
@@ -77,7 +78,7 @@ TEST_CASE("adaptive map: the stated total error holds between nodes and force le
   std::vector<Press> presses;
   int n_edge = 0, n_inner = 0;
   for (int attempt = 0; attempt < 20000 && (n_edge < 10 || n_inner < 20); ++attempt) {
-    const double r = served_m * std::sqrt(u(rng)), t = 2 * M_PI * u(rng);
+    const double r = served_m * std::sqrt(u(rng)), t = 2 * pvdf::pi * u(rng);
     const Press p{r * std::cos(t), r * std::sin(t), 0.5 * std::pow(4.0, u(rng)), served_m - r};
     std::array<double, max_electrodes> on_map{};
     if (!locator.predict(p.x_m, p.y_m, p.force_N, on_map.data())) continue;  // not in a usable cell
