@@ -8,6 +8,7 @@
 #include "pvdf/mapping/map.hpp"
 #include "pvdf/mapping/map_io.hpp"
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -30,20 +31,25 @@ int run_export_map(const ExportMapOptions& o) {
                            pvdf::mapping::c_identifier(o.symbol));
   }
   const pvdf::mapping::ChargeMap map = pvdf::mapping::read_map(o.map_path);
-  const std::size_t bytes = pvdf::mapping::encode_flat_map(map, o.map_path).size();
+  const std::vector<unsigned char> flat = pvdf::mapping::encode_flat_map(map, o.map_path);
+  const std::size_t bytes = flat.size();
+  // The version written: the oldest that holds the map (2; 3 when its errors are totals).
+  const unsigned version = unsigned(flat[8]) | unsigned(flat[9]) << 8 | unsigned(flat[10]) << 16 | unsigned(flat[11]) << 24;
   // What the deployed Locator adds to the charge noise (docs/lookup.md §1.10): the per-node
   // estimates travel in the file; the interpolation error is estimated again from the charges.
-  const char* errors = map.estimated_charge_error_C.empty() ? "no per-node charge errors" : "per-node charge errors";
+  const char* errors = map.estimated_charge_error_C.empty()                 ? "no per-node charge errors"
+                       : std::isnan(map.estimated_total_relative_error) ? "per-node charge errors"
+                                                                          : "per-node total charge errors (between nodes and levels included)";
   if (header) {
     const std::string symbol = o.symbol.empty() ? pvdf::mapping::c_identifier(std::filesystem::path(o.output).stem().string()) : o.symbol;
     pvdf::mapping::write_flat_map_c_header(o.output, map, symbol, o.map_path);
     std::printf("wrote %s (C header, array %s of %zu bytes: %zu x %zu points, %zu force levels, %zu electrodes, %s; version %u)\n",
                 o.output.c_str(), symbol.c_str(), bytes, map.nx(), map.ny(), map.nf(), map.ne(), errors,
-                unsigned(pvdf::mapping::flat_map_version));
+                version);
   } else {
     pvdf::mapping::write_flat_map(o.output, map, o.map_path);
     std::printf("wrote %s (flat map, %zu bytes: %zu x %zu points, %zu force levels, %zu electrodes, %s; version %u)\n",
-                o.output.c_str(), bytes, map.nx(), map.ny(), map.nf(), map.ne(), errors, unsigned(pvdf::mapping::flat_map_version));
+                o.output.c_str(), bytes, map.nx(), map.ny(), map.nf(), map.ne(), errors, version);
   }
   return pvdf::exit_code::success;
 }

@@ -40,6 +40,8 @@ struct MapCommandOptions {
   std::string scene_path;
   std::string output;
   double spacing_m = 0.002;
+  std::string placement = "adaptive";
+  int adaptive_levels = 2;
   std::string forces = "1";
   std::string region;
   double rim_margin_m = 0;
@@ -69,6 +71,14 @@ struct MapCommandOptions {
 MapOptions map_options(const MapCommandOptions& o, const pvdf::Scene& scene) {
   MapOptions options;
   options.spacing_m = o.spacing_m;
+  if (o.placement == "adaptive") options.placement = pvdf::mapping::Placement::adaptive;
+  else if (o.placement == "uniform") options.placement = pvdf::mapping::Placement::uniform;
+  else throw pvdf::InputError("--placement " + pvdf::escape_control_bytes(o.placement) + ": use adaptive or uniform");
+  if (o.adaptive_levels < 1 || o.adaptive_levels > 5) {
+    throw pvdf::InputError("--adaptive-levels " + std::to_string(o.adaptive_levels) +
+                           " must lie in 1..5 (the coarse level is 2^levels x --spacing-m)");
+  }
+  options.adaptive_levels = o.adaptive_levels;
   options.forces_N = pvdf::app::parse_force_levels(o.forces, "--forces-N");
   double area_m2 = scene.membrane.outline.area_m2();
   if (!o.region.empty()) {
@@ -193,6 +203,23 @@ void print_map_json(const MapCommandOptions& o, const ChargeMap& map, const MapR
   j["mesh"] = o.mesh_path.empty() ? std::string("built-in") : o.mesh_path;
   j["ranks"] = report.ranks;
   j["threads"] = report.threads;
+  j["placement"] = report.placement;
+  if (report.placement == "adaptive") {
+    nlohmann::json levels = nlohmann::json::array();
+    for (std::size_t l = 0; l < report.level_solves.size(); ++l) {
+      levels.push_back({{"spacing_m", report.level_spacing_m[l]}, {"positions", report.level_positions[l]},
+                        {"solves", report.level_solves[l]}});
+    }
+    j["levels"] = levels;
+    j["n_interpolated"] = report.n_interpolated;
+    j["placement_s"] = report.placement_s;
+  }
+  const double total_error = map.estimated_total_relative_error;
+  j["estimated_total_relative_error"] = std::isfinite(total_error) ? nlohmann::json(total_error) : nlohmann::json(nullptr);
+  j["solve_cpu_s"] = report.solve_cpu_s;
+  const std::size_t solves = report.n_solved;  // FEM solves of this run (resumed points are not counted)
+  j["cpu_s_per_solve"] = solves > 0 ? nlohmann::json(report.solve_cpu_s / double(solves)) : nlohmann::json(nullptr);
+  j["estimate_share"] = report.solve_cpu_s > 0 ? nlohmann::json(report.estimate_s / report.solve_cpu_s) : nlohmann::json(nullptr);
   j["wall_s"] = report.wall_s;
   j["per_position_s"] = report.per_position_s;
   j["nx"] = map.nx();
@@ -217,6 +244,14 @@ void print_map_text(const MapCommandOptions& o, const ChargeMap& map, const MapR
               "%zu points above the tolerance (tolerance_not_met)\n",
               100 * map.estimated_relative_error, 100 * map.estimated_deflection_relative_error,
               report.n_tolerance_not_met);
+  if (report.placement == "adaptive") {
+    std::printf("adaptive placement:");
+    for (std::size_t l = 0; l < report.level_solves.size(); ++l) {
+      std::printf(" %g mm: %zu positions, %zu solves;", 1e3 * report.level_spacing_m[l], report.level_positions[l], report.level_solves[l]);
+    }
+    std::printf(" %zu points interpolated; stated total error (node + between nodes + between levels) at most %.2g %%\n",
+                report.n_interpolated, 100 * map.estimated_total_relative_error);
+  }
   std::printf("rim model (bending, rim-graded mesh, %zu DOFs): %zu points\n", report.rim_n_dofs, report.n_rim_model);
   std::printf("direct adaptive solves (own mesh, bending kept) where the sweep missed the tolerance: %zu points "
               "(%zu solves, %.1f s)\n", report.n_direct, report.direct_solves, report.direct_s);
@@ -341,6 +376,11 @@ PVDF_COMMAND(35, [](CLI::App& root) {
       ->check(pvdf::app::output_file());
   sub->add_option("--spacing-m", o->spacing_m, "Grid spacing (m); nodes at multiples of it (default 0.002)")
       ->check(pvdf::app::number_in(1e-5, 0.1, "m (the unit is metres: 2 mm is 0.002)"));
+  sub->add_option("--placement", o->placement,
+                  "adaptive (default): solves placed where the interpolant's estimated error needs them, down to "
+                  "--spacing-m; uniform: every node solved (docs/map-generation.md section 10)");
+  sub->add_option("--adaptive-levels", o->adaptive_levels,
+                  "Adaptive placement: the coarse level is 2^N x --spacing-m (N in 1..5, default 2)");
   sub->add_option("--forces-N", o->forces, "Force levels F1,F2,... (N, in [1e-9, 1e4], distinct; default 1)");
   sub->add_option("--region", o->region, "Map only XMIN,XMAX,YMIN,YMAX (m; default: the whole film)");
   sub->add_option("--rim-margin-m", o->rim_margin_m, "No probe centres closer than this to the rim (m; 0 = 2 x probe radius)")

@@ -186,6 +186,7 @@ int main(int argc, char** argv) {
   // The real pipeline on a strip of two rows (y = 4, 5 mm), all threads.
   pvdf::mapping::MapOptions mo;
   mo.spacing_m = spacing;
+  mo.placement = pvdf::mapping::Placement::uniform;  // its strip and full-map figures (docs/map-generation.md §9) are of uniform maps
   mo.forces_N = {force};
   mo.tolerance = tolerance;
   mo.region_m = std::array<double, 4>{-R, R, 0.004, 0.005};

@@ -168,6 +168,26 @@ py::dict report_dict(const pvdf::mapping::MapReport& r, const pvdf::mapping::Cha
   d["n_dofs"] = r.n_dofs;
   d["ranks"] = r.ranks;
   d["threads"] = r.threads;
+  d["placement"] = r.placement;
+  if (r.placement == "adaptive") {  // as `pvdfkit map --json`
+    py::list levels;
+    for (std::size_t l = 0; l < r.level_solves.size(); ++l) {
+      py::dict level;
+      level["spacing_m"] = r.level_spacing_m[l];
+      level["positions"] = r.level_positions[l];
+      level["solves"] = r.level_solves[l];
+      levels.append(level);
+    }
+    d["levels"] = levels;
+    d["n_interpolated"] = r.n_interpolated;
+    d["placement_s"] = r.placement_s;
+  }
+  const double total_error = map.estimated_total_relative_error;
+  d["estimated_total_relative_error"] = std::isfinite(total_error) ? py::object(py::float_(total_error)) : py::object(py::none());
+  d["solve_cpu_s"] = r.solve_cpu_s;
+  const std::size_t solves = r.n_solved;  // FEM solves of this run (resumed points are not counted)
+  d["cpu_s_per_solve"] = solves > 0 ? py::object(py::float_(r.solve_cpu_s / double(solves))) : py::object(py::none());
+  d["estimate_share"] = r.solve_cpu_s > 0 ? py::object(py::float_(r.estimate_s / r.solve_cpu_s)) : py::object(py::none());
   d["wall_s"] = r.wall_s;
   d["per_position_s"] = r.per_position_s;
   d["nx"] = map.nx();

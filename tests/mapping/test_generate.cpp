@@ -40,8 +40,12 @@ pvdf::Scene small_scene(double pretension_N_per_m = 0.0, double draw_angle_deg =
   return pvdf::parse_scene(j, "small-map-scene");
 }
 
+// Uniform placement: these cases test the machinery every placement shares (rows, warm starts,
+// mirror images, force scaling, checkpoints, direct solves) node by node; adaptive placement is
+// audited in test_adaptive_map.cpp.
 MapOptions cheap_options(std::array<double, 4> region, std::vector<double> forces = {1.0}) {
   MapOptions o;
+  o.placement = Placement::uniform;
   o.spacing_m = 0.002;
   o.forces_N = std::move(forces);
   o.region_m = region;

@@ -197,9 +197,9 @@ TEST_CASE("flat map: truncated, oversized, damaged or foreign bytes are refused 
   foreign[0] = 'X';
   require_one_line_naming_source(decode_error(foreign), "not a pvdfkit flat map");
 
-  auto v3 = good;
-  put_u32(v3, 8, 3, true);
-  require_one_line_naming_source(decode_error(v3), "version 3 is not supported");
+  auto v4 = good;
+  put_u32(v4, 8, 4, true);
+  require_one_line_naming_source(decode_error(v4), "version 4 is not supported");
   auto v0 = good;
   put_u32(v0, 8, 0, true);
   require_one_line_naming_source(decode_error(v0), "version 0 is not supported");

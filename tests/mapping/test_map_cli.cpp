@@ -47,9 +47,11 @@ const std::string& scene_path() {
 }
 
 // 5 x 3 grid (x = -4..4 mm, y = -2..2 mm); x -> -x symmetry leaves 3 x 3 to solve.
+// Uniform placement: the row counts of the kill-and-resume case follow its work order (adaptive
+// placement is audited in test_adaptive_map.cpp).
 std::string map_args(const std::string& out) {
   return "map " + scene_path() + " -o " + out +
-         " --spacing-m 0.002 --region -0.004,0.004,-0.002,0.002 --setup-checks 0 --threads 1 --quiet";
+         " --spacing-m 0.002 --region -0.004,0.004,-0.002,0.002 --setup-checks 0 --threads 1 --quiet --placement uniform";
 }
 
 void require_same_map(const ChargeMap& a, const ChargeMap& b) {

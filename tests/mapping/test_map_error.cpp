@@ -242,3 +242,68 @@ TEST_CASE("the flat export answers bit for bit as the HDF5 map, per-node errors 
   CHECK(differ == 0);
   CHECK(with_map_error > compared / 2);
 }
+
+TEST_CASE("a map that stores its total error: counted once by the lookup, the same through HDF5 and the flat v3 export",
+          "[mapping][map_error][flat_map]") {
+  // The total stored at the nodes (adaptive generation, docs/map-generation.md §10) is the
+  // Locator's map error at a press — bilinear in the cell, linear in ln F — with no interpolation
+  // estimate added between nodes and levels; the same map marked as node estimates only gets it.
+  const SyntheticModel model = skewed_model();
+  ChargeMap map = build_synthetic_map(model, 2e-3, 3e-3, {0.5, 1.0, 2.0}, 0.05e-12);
+  map.estimated_charge_error_C.assign(map.charge_C.size(), 0.0);
+  for (std::size_t n = 0; n < map.charge_C.size(); ++n) {
+    map.estimated_charge_error_C[n] = std::abs(map.charge_C[n]) * (2e-3 + 1e-3 * double(n % 3));
+  }
+  ChargeMap total = map;
+  total.estimated_total_relative_error = 0.004;
+  const Locator node_only(map), with_total(total);
+  int compared = 0, added = 0;
+  for (std::size_t j = 2; j + 3 < map.ny(); j += 3) {
+    for (std::size_t i = 2; i + 3 < map.nx(); i += 3) {
+      const double x = 0.5 * (map.x_m[i] + map.x_m[i + 1]), y = 0.5 * (map.y_m[j] + map.y_m[j + 1]);
+      const double F = std::sqrt(map.forces_N[0] * map.forces_N[1]);  // mid-way in ln F
+      std::array<double, max_electrodes> e_total{}, e_node{}, q{};
+      if (!with_total.predict(x, y, F, q.data()) || !with_total.charge_error(x, y, F, e_total.data())) continue;
+      REQUIRE(node_only.charge_error(x, y, F, e_node.data()));
+      for (std::size_t k = 0; k < map.ne(); ++k) {
+        // The closed form of what is stored: bilinear at the cell centre, linear in ln F.
+        double expected = 0;
+        for (std::size_t f = 0; f < 2; ++f) {
+          for (std::size_t c = 0; c < 4; ++c) {
+            expected += 0.125 * total.estimated_charge_error_C[total.charge_index(f, j + c / 2, i + c % 2, k)];
+          }
+        }
+        // The Locator keeps its map errors as floats: agreement to float precision.
+        CHECK(std::abs(e_total[k] - expected) <= 1e-6 * expected);
+        ++compared;
+        added += e_node[k] > e_total[k] * (1 + 1e-6);
+      }
+    }
+  }
+  CHECK(compared >= 30);
+  CHECK(added >= compared / 2);  // node estimates only: the lookup's own interpolation estimate joins them
+
+  const std::vector<unsigned char> bytes = encode_flat_map(total, "total.h5");
+  std::uint32_t version = 0, contents = 0;
+  std::memcpy(&version, bytes.data() + 8, 4);
+  std::memcpy(&contents, bytes.data() + 32, 4);
+  CHECK(version == 3);
+  CHECK((contents & flat_map_charge_error_is_total) != 0);
+  const ChargeMap back = decode_flat_map(bytes.data(), bytes.size(), "total.flat");
+  CHECK(back.estimated_total_relative_error == total.estimated_total_relative_error);
+  const std::vector<unsigned char> node_bytes = encode_flat_map(map, "map.h5");
+  std::memcpy(&version, node_bytes.data() + 8, 4);
+  CHECK(version == 2);  // node estimates only: still readable by version-2 runtimes
+  const Locator from_flat(back);
+  const std::vector<Press> presses = pvdf_test::random_presses(40, 0.03, 0.4, 3.0, 29);
+  int differ = 0, located = 0;
+  for (const Press& p : presses) {
+    const std::vector<double> q = pvdf_test::charges(model, p);
+    const Location a = with_total.locate(q), b = from_flat.locate(q);
+    located += a.has_position();
+    differ += !(a.flags == b.flags && same_bits(a.x_m, b.x_m) && same_bits(a.y_m, b.y_m) && same_bits(a.sigma_x_m, b.sigma_x_m) &&
+                same_bits(a.probability, b.probability));
+  }
+  CHECK(located >= 30);
+  CHECK(differ == 0);
+}

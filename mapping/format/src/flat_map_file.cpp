@@ -37,7 +37,8 @@ std::string flat_map_c_header(const std::vector<unsigned char>& bytes, const Cha
   std::string names;
   for (const auto& n : map.electrode_names) names += (names.empty() ? "" : ", ") + comment_safe(n);
   char line[256];
-  std::string h = "/* pvdfkit flat lookup map (format version " + std::to_string(flat_map_version) +
+  const unsigned version = unsigned(bytes[8]) | unsigned(bytes[9]) << 8 | unsigned(bytes[10]) << 16 | unsigned(bytes[11]) << 24;
+  std::string h = "/* pvdfkit flat lookup map (format version " + std::to_string(version) +
                   ", little-endian; layout: pvdfkit docs/lookup.md).\n";
   h += " * Exported from " + comment_safe(source) + " by `pvdfkit export-map`.\n";
   std::snprintf(line, sizeof line, " * Grid %zu x %zu points, %zu force levels, %zu electrodes: ", map.nx(), map.ny(), map.nf(), map.ne());

@@ -38,7 +38,10 @@ ChargeMap Generator::run(MapReport& report) {
 
   scaling_ = o_.use_force_scaling && layout_.nf > 1;
   bool stopped_anywhere = run_scaling_checks(report);      // phase A
-  if (!stopped_anywhere) stopped_anywhere = run_other_positions();  // phase B
+  if (!stopped_anywhere) {
+    // phase B: every other position, or level by level where the interpolant needs them
+    stopped_anywhere = adaptive_ ? run_adaptive_levels() : run_other_positions();
+  }
   {
     std::lock_guard<std::mutex> lock(mutex_);
     maybe_checkpoint(true);
@@ -50,6 +53,7 @@ ChargeMap Generator::run(MapReport& report) {
   const fem::SweepSetup& setup = sweeps_[0]->setup();
   map_.model = fem::model_name(setup.model);
   report = MapReport{};
+  if (adaptive_) finish_adaptive(report);
   summarize_estimates(report);
   for (const auto& sw : sweeps_) {
     if (!sw) continue;
@@ -59,6 +63,13 @@ ChargeMap Generator::run(MapReport& report) {
     report.estimate_s += t.estimate_s;
     report.probe_mesh_s += t.probe_mesh_s;
     report.probe_mesh_dofs = std::max(report.probe_mesh_dofs, t.probe_mesh_dofs);
+  }
+  report.solve_cpu_s = solve_cpu_s_;
+  if (use_mpi_ && size_ > 1) {  // all ranks' CPU time, for the per-solve figure over all ranks' solves
+    double t[2] = {report.solve_cpu_s, report.estimate_s};
+    MPI_Allreduce(MPI_IN_PLACE, t, 2, MPI_DOUBLE, MPI_SUM, MPI_COMM_WORLD);
+    report.solve_cpu_s = t[0];
+    report.estimate_s = t[1];
   }
   report.probe_size_m = setup.probe_size_m;
   report.direct_solves = direct_solves_;
@@ -83,6 +94,8 @@ ChargeMap Generator::run(MapReport& report) {
   count_points(report);
   report.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   report.per_position_s = counters[1] > 0 ? report.wall_s * size_ / double(counters[1]) : 0.0;
+  report.placement_s = placement_s_;
+  report.placement = adaptive_ ? "adaptive" : "uniform";
   report.provenance = provenance_;
   report.node_model = node_model_;
   return std::move(map_);
@@ -114,6 +127,10 @@ void Generator::init_map() {
     }
   }
   provenance_.assign(nf * n, provenance::solved);
+  interpolated_.assign(n, 0);
+  surplus_level_.assign(n, -1);
+  surplus_G_.assign(nf * n * ne, nan);
+  interp_err_G_.assign(adaptive_ ? nf * n * ne : 0, 0.0);
   known_.assign(n, 0);
   this_run_.assign(n, 0);
 }
@@ -192,7 +209,7 @@ bool Generator::run_scaling_checks(MapReport& report) {
 
 // Phase B: every other position; scaled only where all lattice corners of its cell passed.
 // Returns whether any rank stopped early.
-bool Generator::run_other_positions() {
+bool Generator::run_other_positions(const std::vector<std::uint8_t>* want) {
   const long k = o_.scaling_check_stride;
   auto decide = [&](std::size_t i, std::size_t j, double& worst) {
     worst = 0;
@@ -221,6 +238,7 @@ bool Generator::run_other_positions() {
     for (std::size_t i = 0; i < grid_.nx; ++i) {
       const std::size_t p = j * grid_.nx + i;
       if (!map_.mask[p] || !canonical(i, j) || (scaling_ && is_lattice(i, j))) continue;
+      if (want && (!(*want)[p] || known_[p])) continue;
       double worst = 0;
       const bool all_levels = decide(i, j, worst);
       b.push_back(Task{i, j, all_levels, worst});
@@ -284,7 +302,14 @@ void Generator::summarize_estimates(MapReport& report) {
     if (node_model_[pt] == std::uint8_t(direct_model)) ++report.n_direct;
     if (provenance_[pt] & provenance::tolerance_not_met) ++report.n_tolerance_not_met;
   }
-  map_.estimated_relative_error = charge;
+  if (adaptive_) {
+    // The stored errors are totals; the node estimates' own largest share is kept separately.
+    map_.estimated_total_relative_error = charge;
+    report.estimated_total_relative_error = charge;
+  } else {
+    map_.estimated_relative_error = charge;
+    report.estimated_total_relative_error = charge;
+  }
   map_.estimated_deflection_relative_error = deflection;
 }
 

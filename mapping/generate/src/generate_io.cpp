@@ -80,7 +80,8 @@ void write_generated_map(const std::string& path, const ChargeMap& map, const st
         put_bytes(file, provenance_path, map, provenance,
                   "per point [nf][ny][nx]: bit flags, 0 = solved by the FEM, 1 = scaled from the largest force "
                   "level (Q ~ F^(2/3), w ~ F^(1/3)), 2 = copied from the mirror-image position, 4 = tolerance_not_met "
-                  "(estimated charge error above the tolerance)");
+                  "(estimated charge error above the tolerance), 8 = interpolated (adaptive placement: not solved, "
+                  "filled from the coarser level's interpolant; its stored error is the total error there)");
       }
       if (!node_model.empty()) {
         put_bytes(file, model_path, map, node_model,

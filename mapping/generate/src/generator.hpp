@@ -6,6 +6,8 @@
 //   checkpoint.cpp     the run's hash, checkpoint files, records in and out of the map, resume
 //   solve_blocks.cpp   row blocks on the threads and ranks, force scaling, mirror images
 //   direct_solve.cpp   nodes the sweep leaves above the tolerance, solved on their own adaptive mesh
+//   adaptive_placement.cpp  levels of solves placed by the interpolant's estimated error, the fill
+//                      of the other nodes, every node's total error
 //   generate.cpp       Generator::run step by step, the report, generate_map, MpiSession
 #pragma once
 
@@ -121,10 +123,17 @@ class Generator {
   void resume();  // with run_hash: checkpoint.cpp
   void count_progress_total();
   bool run_scaling_checks(MapReport& report);
-  bool run_other_positions();
+  /// Phase B over the canonical positions not yet known (want: [ny][nx] 1 = solve; null = all).
+  bool run_other_positions(const std::vector<std::uint8_t>* want = nullptr);
   std::array<std::size_t, 2> gather_on_rank0();
   void summarize_estimates(MapReport& report);
   void count_points(MapReport& report) const;
+  // adaptive placement (adaptive_placement.cpp)
+  bool run_adaptive_levels();
+  void finish_adaptive(MapReport& report);
+  int node_level(std::size_t i, std::size_t j) const;
+  bool node_solved(std::size_t p) const;
+  void share_records();
   // setup (symmetry_grid.cpp)
   void validate_options();
   void build_grid();
@@ -187,6 +196,17 @@ class Generator {
   std::string first_failure_;
   std::size_t direct_solves_ = 0;        // direct adaptive solves (this process), under mutex_
   double direct_s_ = 0;                  // their thread-seconds
+
+  // adaptive placement
+  bool adaptive_ = false;
+  int levels_ = 0;                        // refinement levels below the coarse level
+  std::vector<std::uint8_t> interpolated_;  // [ny][nx] 1 = filled from a coarser level
+  std::vector<double> surplus_G_;         // [nf][ny][nx][ne] |G − I G| against the next coarser level (C/N^p), NaN = not measured
+  std::vector<std::int8_t> surplus_level_;  // [ny][nx] level at which surplus_G_ was measured (−1 none)
+  std::vector<double> interp_err_G_;      // [nf][ny][nx][ne] interpolation error of the governing cells (C/N^p)
+  std::vector<std::size_t> level_positions_, level_solves_;
+  double solve_cpu_s_ = 0;                // CPU-seconds of the FEM solves (this process), under mutex_
+  double placement_s_ = 0;
 
   // force-scaling check (phase A), read when choosing scaled positions (phase B) and reporting
   bool scaling_ = false;

@@ -12,7 +12,19 @@
 #include <limits>
 #include <thread>
 
+#include <time.h>
+
 namespace pvdf::mapping::detail {
+namespace {
+
+// CPU time of the calling thread (s): what a solve costs, whatever else shares the cores.
+double thread_cpu_s() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+}
+
+}  // namespace
 
 // Contiguous ranges of blocks, balanced by the number of solves, independent of threads.
 std::vector<Block> Generator::split_for_rank(const std::vector<Block>& all) const {
@@ -76,6 +88,7 @@ void Generator::solve_block(fem::ProbeSweep& sweep, const Block& block, std::vec
     };
     auto solve = [&](std::size_t f, const fem::SweepState* warm, fem::SweepState* out) {
       fem::ProbeSolution s;
+      const double cpu0 = thread_cpu_s();
       try {
         s = sweep.solve(x, y, o_.forces_N[f], warm, out);
       } catch (const NumericalError& e) {
@@ -83,9 +96,11 @@ void Generator::solve_block(fem::ProbeSweep& sweep, const Block& block, std::vec
         s.status = fem::Status::no_convergence;
         s.force_N = o_.forces_N[f];
         s.message = e.what();
-        return s;
       }
       if (s.status == fem::Status::tolerance_not_met && o_.direct_solves == "by-estimate") improve_by_direct_solve(x, y, s);
+      const double cpu = thread_cpu_s() - cpu0;
+      std::lock_guard<std::mutex> lock(mutex_);
+      solve_cpu_s_ += cpu;
       return s;
     };
     std::vector<fem::SweepState> next(nf);

@@ -119,6 +119,15 @@ void Generator::validate_options() {
     throw InputError("map: rim margin " + num(o_.rim_margin_m) + " m must be >= 0; 0 = twice the probe radius (MapOptions::rim_margin_m)");
   }
   margin_ = o_.rim_margin_m > 0 ? o_.rim_margin_m : 2 * scene_.probe.radius_m;
+  adaptive_ = o_.placement == Placement::adaptive;
+  if (adaptive_) {
+    if (o_.adaptive_levels < 1 || o_.adaptive_levels > 5) {
+      throw InputError("map: " + std::to_string(o_.adaptive_levels) +
+                       " adaptive levels must lie in 1..5 (coarse spacing = 2^levels x the spacing; MapOptions::adaptive_levels)");
+    }
+    levels_ = o_.adaptive_levels;
+    o_.scaling_check_stride = 1 << levels_;  // the force-scaling check positions are the coarse level
+  }
   if (o_.scaling_check_stride < 1) {
     throw InputError("scaling check stride " + std::to_string(o_.scaling_check_stride) + " must be >= 1");
   }

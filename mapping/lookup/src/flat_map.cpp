@@ -83,7 +83,7 @@ class Reader {
 /// Sizes read from a header, and the total they imply.
 struct Layout {
   std::uint64_t nx = 0, ny = 0, nf = 0, ne = 0;
-  bool derivatives = false, calibration = false, charge_error = false;
+  bool derivatives = false, calibration = false, charge_error = false, total_error = false;
   std::uint64_t points() const { return nf * ny * nx; }
   std::uint64_t body_without_padding() const {
     std::uint64_t doubles = nx + ny + nf + ne + 2 * ne + points() * ne;
@@ -125,15 +125,20 @@ Layout read_header(Reader& r, std::size_t size, const std::string& source) {
   if (l.ny < 2 || l.ny > flat_map_max_axis) bad(source, "ny = " + text(l.ny) + " must lie in 2.." + text(flat_map_max_axis) + reexport);
   if (l.nf < 1 || l.nf > flat_map_max_levels) bad(source, "nf = " + text(l.nf) + " must lie in 1.." + text(flat_map_max_levels) + reexport);
   if (l.ne < 1 || l.ne > max_electrodes) bad(source, "ne = " + text(l.ne) + " must lie in 1.." + text(max_electrodes) + reexport);
-  const std::uint32_t known = flat_map_has_derivatives | flat_map_has_calibration | (version >= 2 ? flat_map_has_charge_error : 0u);
+  const std::uint32_t known = flat_map_has_derivatives | flat_map_has_calibration | (version >= 2 ? flat_map_has_charge_error : 0u) |
+                              (version >= 3 ? flat_map_charge_error_is_total : 0u);
   if ((contents & ~known) != 0) {
     bad(source, "content bits " + text(contents) + " hold unknown bits (known in version " + text(version) + ": 1 derivatives, 2 calibration" +
-                    (version >= 2 ? ", 4 charge errors" : "") + ")" + reexport);
+                    (version >= 2 ? ", 4 charge errors" : "") + (version >= 3 ? ", 8 total errors" : "") + ")" + reexport);
+  }
+  if ((contents & flat_map_charge_error_is_total) && !(contents & flat_map_has_charge_error)) {
+    bad(source, "content bit 8 (total errors) is set without bit 4 (charge errors)" + reexport);
   }
   if (name_bytes != flat_map_name_bytes) bad(source, "name field size " + text(name_bytes) + " must be " + text(flat_map_name_bytes) + reexport);
   l.derivatives = (contents & flat_map_has_derivatives) != 0;
   l.calibration = (contents & flat_map_has_calibration) != 0;
   l.charge_error = (contents & flat_map_has_charge_error) != 0;
+  l.total_error = (contents & flat_map_charge_error_is_total) != 0;
   const std::uint64_t file_bytes = r.u64();
   const std::uint64_t need = l.total();
   if (need > flat_map_max_bytes) {
@@ -173,6 +178,7 @@ std::vector<unsigned char> encode_flat_map(const ChargeMap& map, const std::stri
   l.derivatives = !map.dcharge_dx_C_per_m.empty();
   l.calibration = map.calibration.has_value();
   l.charge_error = !map.estimated_charge_error_C.empty();
+  l.total_error = l.charge_error && !std::isnan(map.estimated_total_relative_error);
   if (l.nx > flat_map_max_axis || l.ny > flat_map_max_axis || l.nf > flat_map_max_levels || l.ne > max_electrodes ||
       l.total() > flat_map_max_bytes) {
     bad(source, "the map (" + text(l.nx) + " x " + text(l.ny) + " points, " + text(l.nf) + " levels, " + text(l.ne) +
@@ -180,20 +186,21 @@ std::vector<unsigned char> encode_flat_map(const ChargeMap& map, const std::stri
   }
   Writer w;
   w.bytes(reinterpret_cast<const unsigned char*>(flat_map_magic), sizeof flat_map_magic);
-  w.u32(flat_map_version);
+  w.u32(l.total_error ? 3u : 2u);
   w.u32(flat_map_header_bytes);
   w.u32(std::uint32_t(l.nx));
   w.u32(std::uint32_t(l.ny));
   w.u32(std::uint32_t(l.nf));
   w.u32(std::uint32_t(l.ne));
   w.u32((l.derivatives ? flat_map_has_derivatives : 0u) | (l.calibration ? flat_map_has_calibration : 0u) |
-        (l.charge_error ? flat_map_has_charge_error : 0u));
+        (l.charge_error ? flat_map_has_charge_error : 0u) | (l.total_error ? flat_map_charge_error_is_total : 0u));
   w.u32(flat_map_name_bytes);
   w.u64(l.total());
   w.f64(map.rim_margin_m);
   w.f64(map.tolerance);
   w.f64(map.estimated_relative_error);
-  w.u64(0);  // reserved
+  if (l.total_error) w.f64(map.estimated_total_relative_error);
+  else w.u64(0);  // reserved
   w.f64s(map.x_m);
   w.f64s(map.y_m);
   w.f64s(map.forces_N);
@@ -236,7 +243,8 @@ ChargeMap decode_flat_map(const unsigned char* data, std::size_t size, const std
   m.rim_margin_m = r.f64();
   m.tolerance = r.f64();
   m.estimated_relative_error = r.f64();
-  if (r.u64() != 0) bad(source, "the reserved header field is not zero" + reexport);
+  if (l.total_error) m.estimated_total_relative_error = r.f64();
+  else if (r.u64() != 0) bad(source, "the reserved header field is not zero" + reexport);
   const std::size_t n_values = std::size_t(l.points() * l.ne);
   r.f64s(m.x_m, std::size_t(l.nx));
   r.f64s(m.y_m, std::size_t(l.ny));

@@ -36,12 +36,12 @@ std::vector<std::uint8_t> usable_nodes(const ChargeMap& map) {
   return ok;
 }
 
-/// The nodes (ox + 2i, oy + 2j) of `map`: the grid of spacing 2h with that offset (all levels,
-/// electrodes, status, mask, derivatives). Fewer than two nodes on an axis: x_m or y_m short.
-ChargeMap every_other_node(const ChargeMap& map, std::size_t ox, std::size_t oy) {
+}  // namespace
+
+ChargeMap every_nth_node(const ChargeMap& map, std::size_t n, std::size_t ox, std::size_t oy) {
   ChargeMap c;
-  for (std::size_t i = ox; i < map.nx(); i += 2) c.x_m.push_back(map.x_m[i]);
-  for (std::size_t j = oy; j < map.ny(); j += 2) c.y_m.push_back(map.y_m[j]);
+  for (std::size_t i = ox; i < map.nx(); i += n) c.x_m.push_back(map.x_m[i]);
+  for (std::size_t j = oy; j < map.ny(); j += n) c.y_m.push_back(map.y_m[j]);
   c.forces_N = map.forces_N;
   c.electrode_names = map.electrode_names;
   if (c.nx() < 2 || c.ny() < 2) return c;
@@ -56,7 +56,7 @@ ChargeMap every_other_node(const ChargeMap& map, std::size_t ox, std::size_t oy)
   }
   for (std::size_t j = 0; j < c.ny(); ++j) {
     for (std::size_t i = 0; i < c.nx(); ++i) {
-      const std::size_t fi = ox + 2 * i, fj = oy + 2 * j;
+      const std::size_t fi = ox + n * i, fj = oy + n * j;
       c.mask[j * c.nx() + i] = map.mask[fj * map.nx() + fi];
       for (std::size_t f = 0; f < nf; ++f) {
         c.status[c.point(f, j, i)] = map.status[map.point(f, fj, fi)];
@@ -73,9 +73,7 @@ ChargeMap every_other_node(const ChargeMap& map, std::size_t ox, std::size_t oy)
   return c;
 }
 
-/// |hierarchical surplus| of the reduced charge G = Q/F^p per [f][j][i][k]: the largest
-/// |G − I₂ₕG| over the 2h grids that do not hold the node; NaN where none covers it.
-std::vector<double> surplus(const ChargeMap& map) {
+std::vector<double> hierarchical_surplus_G(const ChargeMap& map) {
   const std::size_t nx = map.nx(), ny = map.ny(), nf = map.nf(), ne = map.ne();
   std::vector<double> s(nf * ny * nx * ne, unknown);
   const std::vector<std::uint8_t> ok = usable_nodes(map);
@@ -87,7 +85,7 @@ std::vector<double> surplus(const ChargeMap& map) {
   std::array<double, max_electrodes> q{};
   for (std::size_t oy = 0; oy < 2; ++oy) {
     for (std::size_t ox = 0; ox < 2; ++ox) {
-      const ChargeMap coarse = every_other_node(map, ox, oy);
+      const ChargeMap coarse = every_nth_node(map, 2, ox, oy);
       if (coarse.nx() < 2 || coarse.ny() < 2) continue;
       const MapInterpolant I(coarse);
       for (std::size_t j = 0; j < ny; ++j) {
@@ -110,6 +108,8 @@ std::vector<double> surplus(const ChargeMap& map) {
   return s;
 }
 
+namespace {
+
 /// Largest non-NaN value of a [f][j][i][k] array within ±r nodes of (i, j); NaN if none.
 double window_max(const std::vector<double>& a, const ChargeMap& map, std::size_t f, std::size_t i, std::size_t j,
                   std::size_t k, long r) {
@@ -130,13 +130,13 @@ double window_max(const std::vector<double>& a, const ChargeMap& map, std::size_
 /// (W: the largest surplus within ±2 nodes), ρ₁ = 2 where it cannot be measured.
 std::vector<double> between_nodes(const ChargeMap& map) {
   const std::size_t nx = map.nx(), ny = map.ny(), nf = map.nf(), ne = map.ne();
-  const std::vector<double> s1 = surplus(map);
+  const std::vector<double> s1 = hierarchical_surplus_G(map);
   std::vector<double> s2(s1.size(), unknown);
   for (std::size_t oy = 0; oy < 2; ++oy) {
     for (std::size_t ox = 0; ox < 2; ++ox) {
-      const ChargeMap c = every_other_node(map, ox, oy);
+      const ChargeMap c = every_nth_node(map, 2, ox, oy);
       if (c.nx() < 2 || c.ny() < 2) continue;
-      const std::vector<double> sc = surplus(c);
+      const std::vector<double> sc = hierarchical_surplus_G(c);
       for (std::size_t f = 0; f < nf; ++f) {
         for (std::size_t j = 0; j < c.ny(); ++j) {
           for (std::size_t i = 0; i < c.nx(); ++i) {

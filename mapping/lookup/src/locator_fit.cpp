@@ -343,6 +343,12 @@ void Locator::set_map_error(const ChargeMap& map) {
   if (!node_estimate && !options_.interpolation_error) return;
   InterpolationError between;
   if (options_.interpolation_error) between = estimate_interpolation_error(map);
+  // A map whose node errors are totals (adaptive generation) already holds the error between its
+  // nodes and between its levels: only the extrapolation beyond the levels is added here.
+  if (!std::isnan(map.estimated_total_relative_error) && node_estimate) {
+    between.between_nodes_C.clear();
+    between.between_levels_C.clear();
+  }
   auto share = [](const std::vector<double>& values, std::size_t at) {
     if (values.empty()) return 0.0f;
     const double e = values[at];

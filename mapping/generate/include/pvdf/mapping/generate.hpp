@@ -23,11 +23,31 @@ struct FilmMesh;  // pvdf/mesh/film_mesh.hpp
 
 namespace pvdf::mapping {
 
+/// Where a map generation solves (docs/map-generation.md §10).
+enum class Placement {
+  /// Every grid node is solved (the stored error is each node's own estimate; the lookup adds
+  /// its interpolation-error estimate, docs/lookup.md §1.10).
+  uniform,
+  /// A coarse level (2^adaptive_levels × the spacing) is solved everywhere; then, level by level,
+  /// the next level's nodes are solved only in cells whose estimated interpolation error exceeds
+  /// its share of the tolerance. The other nodes are filled from the coarser level's interpolant
+  /// (provenance::interpolated), and every node stores its total error (node + between nodes +
+  /// between force levels; ChargeMap::charge_error_is_total).
+  adaptive
+};
+
 /// Settings of a map generation (public members with defaults).
 struct MapOptions {
   /// Grid spacing in x and y (m). Grid nodes sit at integer multiples of it (the origin is a
-  /// node), so a mirror-symmetric scene gives a mirror-symmetric grid.
+  /// node), so a mirror-symmetric scene gives a mirror-symmetric grid. With adaptive placement
+  /// the finest spacing at which a solve is placed (the stored grid has this spacing).
   double spacing_m = 0.002;
+  /// Uniform or adaptive placement of the solves (see Placement).
+  Placement placement = Placement::adaptive;
+  /// Adaptive placement: levels of refinement below the coarse level (coarse spacing =
+  /// 2^adaptive_levels × spacing_m), 1..5. The force-scaling check positions are then the coarse
+  /// level's nodes (scaling_check_stride is set to 2^adaptive_levels).
+  int adaptive_levels = 2;
   /// Force levels (N), > 0; sorted ascending and de-duplicated in the map.
   std::vector<double> forces_N{1.0};
   /// Optional rectangle {xmin, xmax, ymin, ymax} (m) limiting the mapped positions; default:
@@ -103,6 +123,10 @@ inline constexpr std::uint8_t mirrored = 2;  ///< copied from the mirror-image p
 /// The node's estimated charge error exceeds the tolerance even with the rim model and the direct solve (values usable,
 /// /estimated_charge_error_C says by how much).
 inline constexpr std::uint8_t tolerance_not_met = 4;
+/// Not solved (adaptive placement): filled from the interpolant of the coarser level's nodes, whose
+/// estimated error there met its share of the tolerance; its stored error is that interpolation
+/// error plus the largest node estimate of the coarser cell's corners.
+inline constexpr std::uint8_t interpolated = 8;
 }  // namespace provenance
 
 /// What a generation did.
@@ -135,10 +159,22 @@ struct MapReport {
   double direct_s = 0;            ///< thread-seconds spent in them (this process)
   std::size_t rim_solves = 0;     ///< rim-model solves (this process)
   double rim_s = 0;               ///< thread-seconds spent in rim-model solves (this process)
-  double estimate_s = 0;          ///< thread-seconds spent in the error estimates (this process)
+  double estimate_s = 0;          ///< thread-seconds spent in the error estimates (this process; all ranks under MPI)
   double probe_size_m = 0;        ///< cell size under each probe's footprint (0 = probes solved on the sweep mesh alone)
   double probe_mesh_s = 0;        ///< thread-seconds building the footprint-refined probe meshes and moving states (this process)
   double probe_mesh_dofs = 0;     ///< mean DOFs of the footprint-refined probe meshes of the cheap model (largest over threads)
+  std::string placement = "uniform";  ///< "uniform" | "adaptive"
+  /// Adaptive placement, per level from the coarsest: spacing (m), grid positions solved at that
+  /// level (mirror images included) and FEM solves made (this process; all ranks on rank 0).
+  std::vector<double> level_spacing_m;
+  std::vector<std::size_t> level_positions;
+  std::vector<std::size_t> level_solves;
+  std::size_t n_interpolated = 0; ///< map points filled from a coarser level (adaptive placement)
+  /// Largest stated total error of the map (max_k error_k / max_k |Q_k| over ok points; adaptive
+  /// placement: node + between nodes + between force levels).
+  double estimated_total_relative_error = 0;
+  double solve_cpu_s = 0;         ///< CPU-seconds of the FEM solves (all threads; all ranks under MPI)
+  double placement_s = 0;         ///< wall seconds deciding the placement and filling (adaptive)
   int ranks = 1;                  ///< MPI ranks
   int threads = 1;                ///< threads per rank
   double setup_s = 0;             ///< ProbeSweep setup (max over threads of this process)

@@ -15,9 +15,12 @@ namespace pvdf::mapping {
 
 /// The first 8 bytes of every flat map.
 inline constexpr char flat_map_magic[8] = {'P', 'V', 'D', 'F', 'F', 'L', 'A', 'T'};
-/// The version encode_flat_map writes. Version 2 added the per-node charge error section (content
-/// bit 2); version 1 files (no such section) are still read.
-inline constexpr std::uint32_t flat_map_version = 2;
+/// The newest version encode_flat_map writes (it writes the oldest version that holds the map's
+/// content). Version 2 added the per-node charge error section (content bit 2); version 3 the
+/// content bit 3 (those errors are totals: node + between nodes + between force levels, adaptive
+/// maps) with the header's former reserved field holding estimated_total_relative_error (f64).
+/// Versions 1 and 2 are still read.
+inline constexpr std::uint32_t flat_map_version = 3;
 inline constexpr std::uint32_t flat_map_oldest_version = 1;
 inline constexpr std::uint32_t flat_map_header_bytes = 80;
 /// Bytes of each electrode name field (NUL-padded; names are at most 31 bytes).
@@ -26,6 +29,7 @@ inline constexpr std::uint32_t flat_map_name_bytes = 32;
 inline constexpr std::uint32_t flat_map_has_derivatives = 1u << 0;
 inline constexpr std::uint32_t flat_map_has_calibration = 1u << 1;
 inline constexpr std::uint32_t flat_map_has_charge_error = 1u << 2;  ///< version ≥ 2: estimated_charge_error_C
+inline constexpr std::uint32_t flat_map_charge_error_is_total = 1u << 3;  ///< version ≥ 3: ChargeMap::estimated_total_relative_error set
 /// Largest flat map the reader accepts (bytes): larger files are refused before anything is read.
 inline constexpr std::uint64_t flat_map_max_bytes = std::uint64_t(1) << 30;
 /// Largest grid the reader accepts per axis and in force levels.

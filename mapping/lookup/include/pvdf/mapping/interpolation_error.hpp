@@ -33,4 +33,14 @@ struct InterpolationError {
 /// give the same bits, so an HDF5 map and its flat export give the same estimate.
 InterpolationError estimate_interpolation_error(const ChargeMap& map);
 
+/// The nodes (ox + n·i, oy + n·j) of `map`: the grid of spacing n·h with that offset (all levels,
+/// electrodes, status, mask, derivatives; no deflections or estimates). Fewer than two nodes on
+/// an axis: x_m or y_m shorter than 2 (not a usable map).
+ChargeMap every_nth_node(const ChargeMap& map, std::size_t n, std::size_t ox, std::size_t oy);
+
+/// |hierarchical surplus| of the reduced charge G = Q/F^p (C/N^p) per [f][j][i][k]: the largest
+/// |G − I₂ₕG| over the grids of every other node (spacing 2h, the four offsets) that do not hold
+/// the node, I₂ₕ the MapInterpolant of that grid; NaN where none covers the node.
+std::vector<double> hierarchical_surplus_G(const ChargeMap& map);
+
 }  // namespace pvdf::mapping

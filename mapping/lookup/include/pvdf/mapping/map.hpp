@@ -45,6 +45,12 @@ struct ChargeMap {
   /// (synthetic map, file written before these existed).
   double estimated_relative_error = std::numeric_limits<double>::quiet_NaN();
   double estimated_deflection_relative_error = std::numeric_limits<double>::quiet_NaN();
+  /// Set (not NaN) when estimated_charge_error_C holds each node's *total* error: its own estimate
+  /// plus the interpolation error between it and its neighbours plus the error between force
+  /// levels (adaptive map generation, docs/map-generation.md §10); the value is the largest
+  /// total relative error of the map. The Locator then adds no interpolation estimate of its
+  /// own between nodes and levels (docs/lookup.md §1.10). NaN = node estimates only.
+  double estimated_total_relative_error = std::numeric_limits<double>::quiet_NaN();
   double rim_margin_m = 0.0;       ///< positions closer than this to the rim are masked out
   std::string description;         ///< free text
 
