@@ -40,7 +40,7 @@ struct MapCommandOptions {
   std::string scene_path;
   std::string output;
   double spacing_m = 0.002;
-  std::string placement = "adaptive";
+  std::string placement = "uniform";
   int adaptive_levels = 2;
   std::string forces = "1";
   std::string region;
@@ -377,8 +377,9 @@ PVDF_COMMAND(35, [](CLI::App& root) {
   sub->add_option("--spacing-m", o->spacing_m, "Grid spacing (m); nodes at multiples of it (default 0.002)")
       ->check(pvdf::app::number_in(1e-5, 0.1, "m (the unit is metres: 2 mm is 0.002)"));
   sub->add_option("--placement", o->placement,
-                  "adaptive (default): solves placed where the interpolant's estimated error needs them, down to "
-                  "--spacing-m; uniform: every node solved (docs/map-generation.md section 10)");
+                  "uniform (default): every node solved; adaptive: solves placed where the interpolant's estimated "
+                  "error needs them, down to --spacing-m, every node storing its total error (opt-in: its estimate is "
+                  "10-25x cautious today; docs/map-generation.md section 10)");
   sub->add_option("--adaptive-levels", o->adaptive_levels,
                   "Adaptive placement: the coarse level is 2^N x --spacing-m (N in 1..5, default 2)");
   sub->add_option("--forces-N", o->forces, "Force levels F1,F2,... (N, in [1e-9, 1e4], distinct; default 1)");

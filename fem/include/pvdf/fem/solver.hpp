@@ -68,12 +68,13 @@ struct Options {
   /// mesh or when `auto` switches bending on (docs/fem.md §6). The goal-oriented loop cannot find
   /// that layer from a coarse rim (its estimate is blind there).
   bool grade_rim_for_bending = true;
-  /// The clamp's bending layer as a boundary condition (docs/fem.md §3.4): where bending would be
-  /// kept near the clamp, the rim's w is not clamped but satisfies w = l_b ∂w/∂n (l_b = sqrt(D_nn/N_nn),
-  /// Nitsche form, N_nn lagged between Newton solves) and the rim's bending terms are dropped, so
-  /// the rim is not graded to l_b; the rim is graded (grade_rim_for_bending) only when the
-  /// condition's own error estimate exceeds a quarter of the tolerance. false = the rim-graded
-  /// reference path.
+  /// The clamp's bending layer as a boundary condition (docs/fem.md §3.4): where `auto` would switch
+  /// bending on near the clamp, the rim's w is not clamped but held at w = l_b ∂w/∂n
+  /// (l_b = sqrt(D_nn/N_nn); rim Dirichlet values lagged between Newton solves, slope from the rim
+  /// reaction) and the rim's bending terms are dropped, so the rim is not graded to l_b. The rim is
+  /// graded (grade_rim_for_bending) only when the condition's own error estimate exceeds its share
+  /// of the tolerance (¾·tolerance minus the other model errors) or its passes do not settle.
+  /// false = the rim-graded reference path.
   bool clamp_layer_condition = true;
   /// With the clamp-layer condition: also shift the rim's in-plane displacement inward by
   /// ¾ l_b (∂w/∂n)² (the stretch the layer does not take, docs/fem.md §3.4).
