@@ -381,7 +381,7 @@ PVDF_COMMAND(35, [](CLI::App& root) {
                   "error needs them, down to --spacing-m, every node storing its total error (opt-in: its estimate is "
                   "10-25x cautious today; docs/map-generation.md section 10)");
   sub->add_option("--adaptive-levels", o->adaptive_levels,
-                  "Adaptive placement: the coarse level is 2^N x --spacing-m (N in 1..5, default 2)");
+                  "Adaptive placement: the coarse level is 2^N x --spacing-m, N in 1..5 (default 2)");
   sub->add_option("--forces-N", o->forces, "Force levels F1,F2,... (N, in [1e-9, 1e4], distinct; default 1)");
   sub->add_option("--region", o->region, "Map only XMIN,XMAX,YMIN,YMAX (m; default: the whole film)");
   sub->add_option("--rim-margin-m", o->rim_margin_m, "No probe centres closer than this to the rim (m; 0 = 2 x probe radius)")
