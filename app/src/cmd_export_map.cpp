@@ -64,8 +64,8 @@ PVDF_COMMAND(63, [](CLI::App& root) {
   sub->add_option("-o,--output", o->output, "File to write: FILE.h = C header, any other name = binary")
       ->required()
       ->check(pvdf::app::output_file());
-  sub->add_option("--format", o->format, "auto (by the -o extension: .h/.hpp = C header), binary or c-header; default auto")
+  sub->add_option("--format", o->format, "auto (by the -o extension: .h/.hpp = C header), binary or c-header (default auto)")
       ->check(CLI::IsMember({"auto", "binary", "c-header"}));
-  sub->add_option("--symbol", o->symbol, "Name of the C array (C header only); default: the output file's stem");
+  sub->add_option("--symbol", o->symbol, "Name of the C array, C header only (default the output file's stem)");
   return pvdf::app::Subcommand{sub, [o] { return run_export_map(*o); }};
 });

@@ -382,8 +382,8 @@ PVDF_COMMAND(35, [](CLI::App& root) {
                   "10-25x cautious today; docs/map-generation.md section 10)");
   sub->add_option("--adaptive-levels", o->adaptive_levels,
                   "Adaptive placement: the coarse level is 2^N x --spacing-m, N in 1..5 (default 2)");
-  sub->add_option("--forces-N", o->forces, "Force levels F1,F2,... (N, in [1e-9, 1e4], distinct; default 1)");
-  sub->add_option("--region", o->region, "Map only XMIN,XMAX,YMIN,YMAX (m; default: the whole film)");
+  sub->add_option("--forces-N", o->forces, "Force levels F1,F2,... in N, each in [1e-9, 1e4], distinct (default 1)");
+  sub->add_option("--region", o->region, "Map only XMIN,XMAX,YMIN,YMAX, m (default the whole film)");
   sub->add_option("--rim-margin-m", o->rim_margin_m, "No probe centres closer than this to the rim (m; 0 = 2 x probe radius)")
       ->check(pvdf::app::number_in(0, 1, "m"));
   sub->add_option("--model", o->model, "Kinematics: auto|linear|von-karman|large-rotation (default auto)");
@@ -401,7 +401,7 @@ PVDF_COMMAND(35, [](CLI::App& root) {
                   "Force-scaling check positions every N grid steps (default 4)")
       ->check(pvdf::app::integer_in(1, 1000));
   sub->add_option("--setup-checks", o->setup_checks,
-                  "Probe positions at which the setup evaluates its error estimate to size the mesh (0-3, default 3)")
+                  "Probe positions at which the setup evaluates its error estimate to size the mesh, 0-3 (default 3)")
       ->check(pvdf::app::integer_in(0, 3));
   sub->add_option("--rim-model", o->rim_model,
                   "Where bending on a rim-graded mesh solves a node: by-estimate (default), never, always");
@@ -411,7 +411,7 @@ PVDF_COMMAND(35, [](CLI::App& root) {
   sub->add_option("--probe-refinement", o->probe_refinement,
                   "Mesh of each probe solve: footprint (default: the sweep mesh refined around the probe's footprint), "
                   "none (the sweep mesh alone: faster, footprint error unseen by the estimate)");
-  sub->add_option("--noise-C", o->noise, "1-sigma charge noise per electrode N1,N2,... (C; default 5e-14 each)");
+  sub->add_option("--noise-C", o->noise, "1-sigma charge noise per electrode N1,N2,..., C (default 5e-14 each)");
   sub->add_option("--mesh", o->mesh_path,
                   "Start the sweep mesh from this Gmsh mesh (.msh from `pvdfkit mesh`, physical groups of docs/mesh.md); "
                   "it is refined to the sweep's sizes, never coarsened");

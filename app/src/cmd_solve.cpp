@@ -204,7 +204,7 @@ PVDF_COMMAND(30, [](CLI::App& root) {
   sub->add_option("--max-refinements", o->max_refinements, "Cap on adaptive refinement cycles (default: scene)")
       ->check(pvdf::app::integer_in(0, 20, "(the rule of the scene key model.max_refinements)"));
   sub->add_option("--refinement", o->refinement,
-                  "Adaptive refinement indicators: goal (adjoint-weighted residual of the outputs, default) or kelly");
+                  "Adaptive refinement indicators: goal (adjoint-weighted residual of the outputs) or kelly (default goal)");
   sub->add_option("--vtu", o->vtu_dir, "Write VTU files (one per mesh) and film.pvd into this folder")
       ->check(pvdf::app::output_folder());
   sub->add_option("--mesh", o->mesh_path,
