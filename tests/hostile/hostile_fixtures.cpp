@@ -151,18 +151,8 @@ void write_hostile_fixtures(const std::filesystem::path& d) {
   write(d / "force_neg.json", seed001_with(R"({"loads": [{"position_m": [0, 0], "force_N": -1}]})"));
   // A 10 mm film whose 5 x 3 map (2 mm, x -> -x symmetric) takes about two seconds: the
   // checkpoint rows interrupt it after one row and damage the checkpoint it leaves.
-  write(d / "small_film.json", R"({
-    "membrane": {"shape": "circle", "radius_m": 0.010, "thickness_m": 25e-6},
-    "material": {"E1_Pa": 2.2e9, "E2_Pa": 1.8e9, "G12_Pa": 0.58e9, "nu12": 0.35,
-                 "draw_angle_deg": 0.0, "d31_C_per_N": 6.5e-12, "d32_C_per_N": 0.65e-12},
-    "electrodes": [
-      {"name": "A", "center_m": [0.0, 0.004], "size_m": [0.0015, 0.0015]},
-      {"name": "B", "center_m": [-0.0035, -0.002], "size_m": [0.0015, 0.0015]},
-      {"name": "C", "center_m": [0.0035, -0.002], "size_m": [0.0015, 0.0015]}
-    ],
-    "probe": {"radius_m": 0.001},
-    "model": {"kinematics": "auto", "tolerance": 0.02, "max_refinements": 0}
-  })");
+  std::filesystem::copy_file(std::string(PVDF_SOURCE_DIR) + "/tests/mapping/small_film_10mm.json", d / "small_film.json",
+                             std::filesystem::copy_options::overwrite_existing);
   // Damages a map checkpoint as a disk, an editor or an attacker would (docs/map-generation.md
   // §7: text header, a `checksum` line, then float64 records). `fix` recomputes the checksum
   // with its own FNV-1a 64, so a NaN charge arrives with a valid checksum.

@@ -26,23 +26,9 @@ std::string dir() {
   return d.string();
 }
 
+// A 10 mm film with three electrodes (shared with the hostile table's checkpoint rows).
 const std::string& scene_path() {
-  static const std::string path = [] {
-    const std::string p = dir() + "/scene.json";
-    std::ofstream(p) << R"({
-      "membrane": {"shape": "circle", "radius_m": 0.010, "thickness_m": 25e-6},
-      "material": {"E1_Pa": 2.2e9, "E2_Pa": 1.8e9, "G12_Pa": 0.58e9, "nu12": 0.35,
-                   "draw_angle_deg": 0.0, "d31_C_per_N": 6.5e-12, "d32_C_per_N": 0.65e-12},
-      "electrodes": [
-        {"name": "A", "center_m": [0.0, 0.004], "size_m": [0.0015, 0.0015]},
-        {"name": "B", "center_m": [-0.0035, -0.002], "size_m": [0.0015, 0.0015]},
-        {"name": "C", "center_m": [0.0035, -0.002], "size_m": [0.0015, 0.0015]}
-      ],
-      "probe": {"radius_m": 0.001},
-      "model": {"kinematics": "auto", "tolerance": 0.02, "max_refinements": 0}
-    })";
-    return p;
-  }();
+  static const std::string path = std::string(PVDF_SOURCE_DIR) + "/tests/mapping/small_film_10mm.json";
   return path;
 }
 
