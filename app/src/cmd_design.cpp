@@ -63,15 +63,17 @@ struct DesignCommandOptions {
 };
 
 /// One progress report over the FEM maps of a phase (the previews, or the refined winners), so
-/// that its ETA is the phase's: the total is the positions of the maps done plus, for each map
-/// still to come, as many as the map in progress (layouts of one film and spacing have about the
-/// same number of positions). Its ETA divides the positions left by the rate since the first
-/// position (pvdf::Progress), so the first map's setup does not count and later maps' setups are
-/// spread over their positions.
+/// that its ETA is the phase's: the total is the positions of the maps done, of the map in
+/// progress, and the planned positions of each map still to come (mapping::planned_positions:
+/// layouts differ, e.g. a mirror-symmetric one solves half its grid). Its ETA divides the
+/// positions left by the rate since the first position (pvdf::Progress), so the first map's setup
+/// does not count and later maps' setups are spread over their positions.
 class MapsProgress {
  public:
   /// The clock (and a heartbeat line every 10 s off a terminal) starts now, before the first setup.
-  MapsProgress(std::string label, std::size_t n_maps, bool quiet) : label_(std::move(label)), n_maps_(n_maps), quiet_(quiet) {
+  /// `planned`: the positions of each map of the phase, in the order they run.
+  MapsProgress(std::string label, std::vector<std::size_t> planned, bool quiet)
+      : label_(std::move(label)), planned_(std::move(planned)), n_maps_(planned_.size()), quiet_(quiet) {
     if (!quiet_ && n_maps_ > 0) bar_ = std::make_unique<pvdf::Progress>(label_, 0);
   }
   /// The callback of MapOptions::progress for map number `index` (0-based) of the phase.
@@ -83,8 +85,8 @@ class MapsProgress {
         current_ = index;
       }
       current_total_ = total;
-      const std::size_t still_to_come = n_maps_ > index + 1 ? n_maps_ - index - 1 : 0;
-      const std::size_t all = done_before_ + total * (1 + still_to_come);
+      std::size_t all = done_before_ + total;
+      for (std::size_t k = index + 1; k < n_maps_; ++k) all += planned_[k];
       bar_->set_total(all);
       bar_->update(done_before_ + done);
     };
@@ -102,6 +104,7 @@ class MapsProgress {
 
  private:
   std::string label_;
+  std::vector<std::size_t> planned_;
   std::size_t n_maps_;
   bool quiet_;
   std::size_t current_ = 0, current_total_ = 0, done_before_ = 0;
@@ -148,6 +151,36 @@ std::string pct(double f) { return std::isfinite(f) ? fmt("%.1f %%", 100 * f) : 
 // ---------------------------------------------------------------------------------------------
 // Maps
 
+#ifdef PVDF_HAVE_MAP_GENERATION
+MapOptions map_options(const Candidate& c, const DesignCommandOptions& o, double spacing) {
+  MapOptions mo;
+  mo.spacing_m = spacing;
+  mo.forces_N = {o.force_N};  // one level: other forces by the F^(2/3) law (docs/design.md §1)
+  mo.tolerance = o.tolerance;
+  mo.threads = o.threads;
+  mo.description = "pvdfkit design preview of " + c.label;
+  return mo;
+}
+#endif
+
+/// The positions each FEM map of `maps` will solve at `spacing` (progress totals; none synthetic).
+std::vector<std::size_t> planned_positions(const std::vector<const Candidate*>& maps, const DesignCommandOptions& o,
+                                           double spacing) {
+  std::vector<std::size_t> planned;
+#ifdef PVDF_HAVE_MAP_GENERATION
+  if (!o.synthetic) {
+    for (const Candidate* c : maps) {
+      if (c->scene) planned.push_back(pvdf::mapping::planned_positions(pvdf::parse_scene(*c->scene, c->source), map_options(*c, o, spacing)));
+    }
+  }
+#else
+  (void)maps;
+  (void)o;
+  (void)spacing;
+#endif
+  return planned;
+}
+
 ChargeMap make_map(const Candidate& c, const DesignCommandOptions& o, double spacing, std::string& map_file,
                    std::string& map_source, MapsProgress& progress, std::size_t map_index) {
   const pvdf::Scene scene = pvdf::parse_scene(*c.scene, c.source);
@@ -156,12 +189,7 @@ ChargeMap make_map(const Candidate& c, const DesignCommandOptions& o, double spa
     return synthetic_map_for_scene(scene, spacing, o.force_N, 5e-14);
   }
 #ifdef PVDF_HAVE_MAP_GENERATION
-  MapOptions mo;
-  mo.spacing_m = spacing;
-  mo.forces_N = {o.force_N};  // one level: other forces by the F^(2/3) law (docs/design.md §1)
-  mo.tolerance = o.tolerance;
-  mo.threads = o.threads;
-  mo.description = "pvdfkit design preview of " + c.label;
+  MapOptions mo = map_options(c, o, spacing);
   mo.progress = progress.for_map(map_index);
   MapReport report;
   ChargeMap map = generate_map(scene, mo, &report);
@@ -611,9 +639,11 @@ std::vector<Candidate> refine_winners(const std::vector<const Candidate*>& ranke
   std::vector<Candidate> refined;
   if (o.refine_best > 0) {
     const double fine = o.refine_spacing_m > 0 ? o.refine_spacing_m : spacing / 2;
-    std::size_t n_maps = 0;
-    for (const Candidate* c : ranked) n_maps += c->scene && !o.synthetic ? 1 : 0;
-    MapsProgress progress("design: refined maps, positions", std::min<std::size_t>(n_maps, std::size_t(o.refine_best)), o.quiet);
+    std::vector<const Candidate*> to_refine;
+    for (const Candidate* c : ranked) {
+      if (c->scene && int(to_refine.size()) < o.refine_best) to_refine.push_back(c);
+    }
+    MapsProgress progress("design: refined maps, positions", planned_positions(to_refine, o, fine), o.quiet);
     for (const Candidate* c : ranked) {
       if (int(refined.size()) >= o.refine_best) break;
       if (!c->scene) continue;  // a ready map cannot be refined here
@@ -702,9 +732,9 @@ int run_design(const DesignCommandOptions& o) {
   }
 
   // Step 2: maps (coarse previews) and their evaluation.
-  std::size_t n_maps = 0;
-  for (const auto& c : all) n_maps += c.scene && !o.synthetic ? 1 : 0;
-  MapsProgress progress("design: preview maps, positions", n_maps, o.quiet);
+  std::vector<const Candidate*> with_scene;
+  for (const auto& c : all) with_scene.push_back(&c);
+  MapsProgress progress("design: preview maps, positions", planned_positions(with_scene, o, spacing), o.quiet);
   std::size_t map_index = 0;
   for (auto& c : all) {
     if (c.scene) c.map = make_map(c, o, spacing, c.map_file, c.map_source, progress, map_index++);

@@ -38,7 +38,7 @@ int run_export_map(const ExportMapOptions& o) {
   // What the deployed Locator adds to the charge noise (docs/lookup.md §1.10): the per-node
   // estimates travel in the file; the interpolation error is estimated again from the charges.
   const char* errors = map.estimated_charge_error_C.empty()                 ? "no per-node charge errors"
-                       : std::isnan(map.estimated_total_relative_error) ? "per-node charge errors"
+                       : !map.charge_error_is_total()                    ? "per-node charge errors"
                                                                           : "per-node total charge errors (between nodes and levels included)";
   if (header) {
     const std::string symbol = o.symbol.empty() ? pvdf::mapping::c_identifier(std::filesystem::path(o.output).stem().string()) : o.symbol;

@@ -160,6 +160,7 @@ TEST_CASE("mirror symmetry: mirrored points equal solves at the mirrored positio
   REQUIRE(report.n_positions == 6);
   CHECK(report.n_mirrored == 2);  // x = -2 mm copied from x = +2 mm
   CHECK(report.n_solved == 4);
+  CHECK(pvdf::mapping::planned_positions(scene, o) == 4);  // design's progress total, known before the run
   const std::size_t i = index_of(m.x_m, -0.002);
   pvdf::fem::ProbeSweep sweep(scene, sweep_options_like(scene, o));
   for (std::size_t j = 0; j < m.ny(); ++j) {
@@ -180,6 +181,7 @@ TEST_CASE("mirror symmetry: mirrored points equal solves at the mirrored positio
   CHECK_FALSE(skew.mirror_x);
   CHECK_FALSE(skew.mirror_y);
   CHECK(skew.n_mirrored == 0);
+  CHECK(pvdf::mapping::planned_positions(small_scene(0.0, 30.0), one) == 4);  // 2 x 2 nodes, none mirrored
 }
 
 TEST_CASE("force scaling is used only where its check passes", "[mapping][generate][slow]") {

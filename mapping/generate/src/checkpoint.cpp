@@ -17,15 +17,6 @@
 
 namespace pvdf::mapping::detail {
 
-std::uint64_t fnv1a(const std::string& text) {
-  std::uint64_t h = 1469598103934665603ull;
-  for (unsigned char c : text) {
-    h ^= c;
-    h *= 1099511628211ull;
-  }
-  return h;
-}
-
 std::string hex(std::uint64_t v) {
   char buf[20];
   std::snprintf(buf, sizeof buf, "%016llx", static_cast<unsigned long long>(v));
@@ -40,7 +31,7 @@ std::string hex(std::uint64_t v) {
 constexpr const char* checkpoint_magic = "pvdfkit-map-checkpoint 3";
 constexpr const char* checkpoint_magic_v2 = "pvdfkit-map-checkpoint 2";  // before checksums
 
-/// FNV-1a 64 continued over raw bytes.
+/// FNV-1a 64 continued over raw bytes (prime 2^40 + 2^8 + 0xb3).
 std::uint64_t fnv1a_bytes(std::uint64_t h, const char* data, std::size_t n) {
   for (std::size_t i = 0; i < n; ++i) {
     h ^= static_cast<unsigned char>(data[i]);
@@ -48,6 +39,10 @@ std::uint64_t fnv1a_bytes(std::uint64_t h, const char* data, std::size_t n) {
   }
   return h;
 }
+constexpr std::uint64_t fnv1a_offset_basis = 14695981039346656037ull;
+/// The run hash's start: the offset basis one digit short, a slip of the first version kept
+/// because the hash names existing checkpoints (a resume would otherwise start afresh).
+constexpr std::uint64_t run_hash_basis = 1469598103934665603ull;
 
 std::string checkpoint_header(const std::string& hash, std::size_t record_doubles, std::size_t n_records) {
   return std::string(checkpoint_magic) + "\nhash " + hash + "\nrecord_doubles " + std::to_string(record_doubles) +
@@ -55,9 +50,7 @@ std::string checkpoint_header(const std::string& hash, std::size_t record_double
 }
 
 std::uint64_t checkpoint_checksum(const std::string& header, const std::vector<double>& records) {
-  // The standard FNV-1a 64 offset basis (the run hash above starts from a constant one digit
-  // short of it; kept, as it names existing checkpoints).
-  const std::uint64_t h = fnv1a_bytes(14695981039346656037ull, header.data(), header.size());
+  const std::uint64_t h = fnv1a_bytes(fnv1a_offset_basis, header.data(), header.size());
   return fnv1a_bytes(h, reinterpret_cast<const char*>(records.data()), records.size() * sizeof(double));
 }
 
@@ -248,7 +241,8 @@ std::string Generator::run_hash() const {
     key << "|mesh " << o_.mesh->n_cells();
     for (const auto& v : o_.mesh->vertices) key << ' ' << v[0] << ' ' << v[1];
   }
-  return hex(fnv1a(key.str()));
+  const std::string text = key.str();
+  return hex(fnv1a_bytes(run_hash_basis, text.data(), text.size()));
 }
 
 // Takes the records of every checkpoint file of this run (one per rank that wrote one).

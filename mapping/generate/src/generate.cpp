@@ -162,6 +162,16 @@ void Generator::setup_sweeps() {
 }
 
 // Canonical positions still to compute count for the progress total (phase B decided later).
+std::size_t Generator::planned_positions() {
+  validate_options();
+  sym_ = detect_symmetry(scene_, o_.use_symmetry);
+  build_grid();
+  known_.assign(grid_.nx * grid_.ny, 0);
+  progress_total_ = 0;
+  count_progress_total();
+  return progress_total_;
+}
+
 void Generator::count_progress_total() {
   for (std::size_t p = 0; p < grid_.nx * grid_.ny; ++p) {
     if (map_.mask[p] && !known_[p] && canonical(p % grid_.nx, p / grid_.nx)) ++progress_total_;
@@ -357,6 +367,10 @@ ChargeMap generate_map(const pvdf::Scene& scene, const MapOptions& options, MapR
   ChargeMap map = g.run(local);
   if (report) *report = std::move(local);
   return map;
+}
+
+std::size_t planned_positions(const pvdf::Scene& scene, const MapOptions& options) {
+  return detail::Generator(scene, options).planned_positions();
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -94,8 +94,7 @@ struct Layout {
 // ---------------------------------------------------------------------------------------------
 // Checkpoint files (checkpoint.cpp).
 
-/// 64-bit FNV-1a hash of `text`, and its 16 hex digits.
-std::uint64_t fnv1a(const std::string& text);
+/// The 16 hex digits of `v`.
 std::string hex(std::uint64_t v);
 /// Writes `records` (whole records of `layout`) atomically under a header holding `hash`.
 void write_checkpoint(const std::string& path, const std::string& hash, const Layout& layout,
@@ -114,6 +113,8 @@ class Generator {
  public:
   Generator(const pvdf::Scene& scene, const MapOptions& options) : scene_(scene), o_(options) {}
   ChargeMap run(MapReport& report);
+  /// The positions run() would solve from scratch (planned_positions): options, symmetry, grid.
+  std::size_t planned_positions();
 
  private:
   // steps of run() (generate.cpp)

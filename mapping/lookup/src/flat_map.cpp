@@ -178,7 +178,7 @@ std::vector<unsigned char> encode_flat_map(const ChargeMap& map, const std::stri
   l.derivatives = !map.dcharge_dx_C_per_m.empty();
   l.calibration = map.calibration.has_value();
   l.charge_error = !map.estimated_charge_error_C.empty();
-  l.total_error = l.charge_error && !std::isnan(map.estimated_total_relative_error);
+  l.total_error = l.charge_error && map.charge_error_is_total();
   if (l.nx > flat_map_max_axis || l.ny > flat_map_max_axis || l.nf > flat_map_max_levels || l.ne > max_electrodes ||
       l.total() > flat_map_max_bytes) {
     bad(source, "the map (" + text(l.nx) + " x " + text(l.ny) + " points, " + text(l.nf) + " levels, " + text(l.ne) +

@@ -345,7 +345,7 @@ void Locator::set_map_error(const ChargeMap& map) {
   if (options_.interpolation_error) between = estimate_interpolation_error(map);
   // A map whose node errors are totals (adaptive generation) already holds the error between its
   // nodes and between its levels: only the extrapolation beyond the levels is added here.
-  if (!std::isnan(map.estimated_total_relative_error) && node_estimate) {
+  if (map.charge_error_is_total() && node_estimate) {
     between.between_nodes_C.clear();
     between.between_levels_C.clear();
   }

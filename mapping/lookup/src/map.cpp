@@ -165,7 +165,7 @@ void validate(const ChargeMap& m, const std::string& source) {
       bad(source, std::string("attribute ") + name + " = " + num(value) + " must be finite and >= 0 (or absent: unknown)" + regenerate);
     }
   }
-  if (!std::isnan(m.estimated_total_relative_error) && !has_err) {
+  if (m.charge_error_is_total() && !has_err) {
     bad(source, "attribute estimated_total_relative_error is set but /estimated_charge_error_C is absent" + regenerate);
   }
   if (m.calibration) {

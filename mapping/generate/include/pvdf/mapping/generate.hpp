@@ -197,6 +197,13 @@ struct MapReport {
 /// guess. With `distributed`, collective over MPI_COMM_WORLD.
 ChargeMap generate_map(const pvdf::Scene& scene, const MapOptions& options, MapReport* report = nullptr);
 
+/// The positions generate_map would solve for a fresh run of `scene` with `options` (the grid
+/// inside the film and its margin, one of each mirror pair; a checkpoint is not read): the
+/// progress total of a study that runs several maps (`pvdfkit design`) before any of them starts.
+/// Adaptive placement solves fewer, this many at most. Milliseconds; no solve. Throws
+/// pvdf::InputError like generate_map.
+std::size_t planned_positions(const pvdf::Scene& scene, const MapOptions& options);
+
 /// Writes a generated map atomically (pvdf::mapping::write_map) with the extra dataset
 /// `/provenance` (uint8 [nf][ny][nx], flags above; empty = not written).
 /// `node_model` (same shape, empty = not written) becomes `/model`: 0 = the map's model attribute

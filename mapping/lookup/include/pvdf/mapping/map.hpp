@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
@@ -73,6 +74,10 @@ struct ChargeMap {
   /// [nf][ny][nx][ne] each; empty when absent (the interpolant then uses finite differences).
   std::vector<double> dcharge_dx_C_per_m, dcharge_dy_C_per_m;
   std::vector<double> estimated_charge_error_C;  // [nf][ny][nx][ne], C; empty = not stored
+
+  /// True when estimated_charge_error_C holds totals (between nodes and force levels included):
+  /// the one test of it, for the lookup, the flat export and the readers.
+  bool charge_error_is_total() const { return !std::isnan(estimated_total_relative_error); }
 
   std::optional<Calibration> calibration;     ///< fitted from measurements (pvdfkit calibrate)
 
