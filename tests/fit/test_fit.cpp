@@ -13,7 +13,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <fstream>
 #include <random>
 
@@ -128,98 +127,54 @@ TEST_CASE("the sweep charges equal adaptive direct solves at the presses (no int
 
 namespace {
 
-/// σ scale for the coverage tests only: PVDF_TEST_SIGMA_SCALE multiplies every reported σ before
-/// it is compared with the truth, so that a run with 0.5 or 2 shows the test fails on a σ that
-/// is too small or too large (docs/testing.md "Coverage tests"). Read by this test, never by the
-/// library.
-double test_sigma_scale() {
-  const char* text = std::getenv("PVDF_TEST_SIGMA_SCALE");
-  if (text == nullptr || *text == '\0') return 1.0;
-  char* end = nullptr;
-  const double v = std::strtod(text, &end);
-  if (end == text || *end != '\0' || !(v > 0) || !std::isfinite(v)) {
-    std::fprintf(stderr, "PVDF_TEST_SIGMA_SCALE = '%s' is not a positive number; ignored\n", text);
-    return 1.0;
-  }
-  return v;
-}
-
-/// Noise-free observations [press][deflection, QA, QB, QC] of the film with pre-tension T,
-/// stiffness scale E and d31, from direct adaptive solves (pvdf::fem::solve, tolerance 0.005, up
-/// to 3 refinements): the solver's own mesh, refinement and charge integral, not the fit's
-/// Predictor (sweep mesh, (E, N0, F) rescaling, charges_C), so the fit never sees data it made.
-std::vector<std::vector<double>> direct_observations(const pvdf::Scene& s, const std::vector<Press>& ps, double T,
-                                                     double E, double d31, double d32) {
-  const pvdf::Scene film = apply_parameters(s, T, E, d31, d32);
-  pvdf::fem::Options o = pvdf::fem::options_from_scene(film);
-  o.tolerance = 0.005;
-  o.max_refinements = 3;
-  std::vector<std::vector<double>> out;
-  for (const auto& p : ps) {
-    const auto d = pvdf::fem::solve(pvdf::with_probe_load(film, p.x_m, p.y_m, p.force_N), o);
-    REQUIRE(pvdf::fem::usable(d.summary.status));
-    REQUIRE(d.electrodes.size() == 3);
-    out.push_back({d.deflection_at_load_m, d.electrodes[0].charge_C, d.electrodes[1].charge_C, d.electrodes[2].charge_C});
-  }
-  return out;
-}
-
-/// Normalized errors z = (estimate − truth)/σ_reported of every estimate (repetitions × parameters).
-struct Coverage {
-  std::vector<double> z;
-  /// Share of |z|/scale <= k, i.e. of estimates whose k-σ interval (σ × scale) holds the truth.
-  double share(double k, double scale) const {
-    int n = 0;
-    for (double v : z) n += std::abs(v) / scale <= k;
-    return double(n) / double(z.size());
-  }
-  /// Mean of (z/scale)²: 1 when σ × scale is right.
-  double mean_z2(double scale) const {
-    double sum = 0;
-    for (double v : z) sum += (v / scale) * (v / scale);
-    return sum / double(z.size()) ;
-  }
-};
-
-/// Coverage study: a known film (pre-tension T of either sign, E_scale E, d31); data from direct
-/// solves (above) plus 5 % Gaussian noise, `reps` seeded fits started at the truth (coverage is a
-/// property of where the fit stops, not of the path; the path from a far start is the other
-/// tests' business, and it saves most of the iterations). Prints the 1σ and 2σ coverage for the
-/// σ's as reported and, for reference, for σ × 0.5 and σ × 2. `eps`: the tension-field residual
-/// stiffness of the fit's predictor.
-Coverage coverage(double T, double E, double d31, const char* label, int reps, double eps = 0) {
+/// Coverage study: a known film (pre-tension T of either sign, E_scale E, d31), data from a finer
+/// sweep mesh + 2 % noise, 20 seeded fits started at (T_start, E_start, the scene's d31); returns the
+/// number of repetitions whose value lies within 2σ of the truth, per parameter.
+/// `eps`: the tension-field residual stiffness of both predictors (the fit's slack path).
+std::array<int, 3> coverage(double T, double E, double d31, double T_start, double E_start, const char* label,
+                            double eps = 0) {
   const pvdf::Scene s = film();
   const auto ps = presses();
   const double d32 = s.material.d32_C_per_N;
-  const auto t0 = std::chrono::steady_clock::now();
-  const auto clean = direct_observations(s, ps, T, E, d31, d32);
-  const double t_data = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  // The data come from a finer sweep mesh (tolerance 0.005: cells half the size, finer grading)
+  // than the fit's (the scene's 0.04), so the fit does not see its own discretization.
+  PredictorOptions fine;
+  fine.use_scene_model = false;
+  fine.sweep.solver = pvdf::fem::options_from_scene(s);
+  fine.sweep.solver.tolerance = 0.005;
+  fine.sweep.n_setup_checks = 0;
+  fine.sweep.solver.tension_field_residual_stiffness = eps;
+  Predictor truth(s, ps, fine);
+  const auto clean = observe(truth, T, E, d31, d32);
 
   PredictorOptions coarse;
   coarse.sweep.solver.tension_field_residual_stiffness = eps;
   Predictor model(s, ps, coarse);
   std::mt19937 rng(20261124);
   std::normal_distribution<double> normal(0.0, 1.0);
-  const double rel = 0.05;  // 5 % of every value, 1 sigma: well above the fit mesh's model error
-  Coverage c;
+  const double rel = 0.02;  // 2 % of every value, 1 sigma
+  std::array<int, 3> within{0, 0, 0};
+  const int reps = 20;
+  const auto t0 = std::chrono::steady_clock::now();
   for (int rep = 0; rep < reps; ++rep) {
     std::vector<std::vector<double>> noisy = clean, sig = clean;
     for (std::size_t i = 0; i < clean.size(); ++i) {
-      for (std::size_t k = 0; k < 4; ++k) {
-        sig[i][k] = rel * std::abs(clean[i][k]);
-        noisy[i][k] = clean[i][k] + sig[i][k] * normal(rng);
+      for (std::size_t c = 0; c < 4; ++c) {
+        sig[i][c] = rel * std::abs(clean[i][c]);
+        noisy[i][c] = clean[i][c] + sig[i][c] * normal(rng);
       }
     }
     FitOptions fo;
     fo.parameters = {"pretension_N_per_m", "E_scale", "d31_C_per_N"};
-    fo.start = {{"pretension_N_per_m", T}, {"E_scale", E}, {"d31_C_per_N", d31}};
+    // Started away from the truth (the fit must travel), but not so far that 20 repetitions take minutes.
+    fo.start = {{"pretension_N_per_m", T_start}, {"E_scale", E_start}};
     const FitResult r = fit_film(model, table(ps, noisy, sig), fo);
     INFO(label << " repetition " << rep << ": " << r.message);
     REQUIRE(r.status == FitStatus::converged);
     const double truth_values[3] = {T, E, d31};
     for (int j = 0; j < 3; ++j) {
       const auto& p = r.parameters[j];
-      c.z.push_back((p.value - truth_values[j]) / p.sigma);
+      if (std::abs(p.value - truth_values[j]) <= 2 * p.sigma) ++within[j];
       if (rep == 0) std::printf("  %s = %.5g +- %.3g (true %.5g)\n", p.name.c_str(), p.value, p.sigma, truth_values[j]);
     }
     if (rep == 0)
@@ -227,54 +182,33 @@ Coverage coverage(double T, double E, double d31, const char* label, int reps, d
                   r.fem.n_solves, r.fem.solve_s, r.fem.n_sweeps, r.fem.setup_s);
   }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::printf("%s: %d repetitions x 3 parameters (data %.1f s, total %.1f s)\n", label, reps, t_data, wall);
-  for (double scale : {test_sigma_scale(), 0.5, 1.0, 2.0}) {
-    std::printf("  sigma x %g: inside 1 sigma %.1f %%, inside 2 sigma %.1f %%, mean z^2 %.3f\n", scale,
-                100 * c.share(1, scale), 100 * c.share(2, scale), c.mean_z2(scale));
-  }
-  return c;
-}
-
-/// The two-sided bands, from the binomial spread (docs/testing.md "Coverage tests"). With the
-/// right σ an estimate falls inside its 1σ interval with p = 0.683 and inside 2σ with 0.954; σ
-/// halved gives 0.383 and 0.683, σ doubled 0.954 and 0.99994. The upper edge that catches a
-/// doubled σ is asserted on the 1σ interval: on the 2σ interval it would need ≥ 90 independent
-/// estimates to tell 95.4 % from 100 % (0.954^90 = 1.4 %), on the 1σ interval 30 suffice.
-/// n = 20 repetitions × 3 parameters = 60 estimates (the three of one fit are correlated, so the
-/// effective n lies between 20 and 60; SDs below for n = 60 / n = 20):
-///  - 1σ share in [0.45, 0.88]: nominal 0.683 lies 3.9 / 2.2 SDs inside the lower edge and 3.3 /
-///    1.9 inside the upper; σ × 2 (0.954) lies 2.8 / 1.6 SDs above the upper edge;
-///  - 2σ share >= 0.80: nominal 0.954 lies 5.7 / 3.3 SDs above it; σ × 0.5 (0.683) 1.9 / 1.1 SDs below;
-///  - mean z² in [0.4, 2.2] (nominal 1 ± 0.18 / 0.32; σ × 2 gives 0.25, σ × 0.5 gives 4): the
-///    most sensitive of the three to a wrong σ, on its own catches both.
-void check_coverage(const Coverage& c) {
-  const double scale = test_sigma_scale();
-  CHECK(c.share(1, scale) >= 0.45);
-  CHECK(c.share(1, scale) <= 0.88);
-  CHECK(c.share(2, scale) >= 0.80);
-  CHECK(c.mean_z2(scale) >= 0.4);
-  CHECK(c.mean_z2(scale) <= 2.2);
+  std::printf("%s: coverage of the 2-sigma intervals over %d repetitions: pretension %d, E_scale %d, d31 %d (%.1f s)\n",
+              label, reps, within[0], within[1], within[2], wall);
+  return within;
 }
 
 }  // namespace
 
-TEST_CASE("a known film (pre-tension, stiffness, d31) from direct solves: the fit's sigmas cover the truth, two-sided",
+TEST_CASE("a known film (pre-tension, stiffness, d31) is recovered within 2 sigma in >= 17 of 20 noisy repetitions",
           "[fit][.coverage]") {
-  check_coverage(coverage(20.0, 0.5, 5.0e-12, "pre-tensioned film", 20));
+  const auto within = coverage(20.0, 0.5, 5.0e-12, 10.0, 0.7, "pre-tensioned film");
+  for (int j = 0; j < 3; ++j) CHECK(within[j] >= 17);
 }
 
-TEST_CASE("a known SLACK film from direct solves: the fit's sigmas cover the truth, two-sided",
+TEST_CASE("a known SLACK film (negative pre-tension, stiffness, d31) is recovered within 2 sigma in >= 17 of 20",
           "[fit][.coverage-slack]") {
   // N0 = −150 N/m on the 25 µm seed-001 film: held flat it would be compressed by 150 N/m, a natural
   // strain of about 2e-3 (stress-free radius 30.06 mm); at E_scale 0.5 the fit's rescaled slack is −300.
-  check_coverage(coverage(-150.0, 0.5, 5.0e-12, "slack film", 20));
+  const auto within = coverage(-150.0, 0.5, 5.0e-12, -80.0, 0.7, "slack film");
+  for (int j = 0; j < 3; ++j) CHECK(within[j] >= 17);
 }
 
-TEST_CASE("a known SLACK film on the residual-stiffness path (1e-3): the fit's sigmas cover the truth, two-sided",
+TEST_CASE("a known SLACK film is recovered within 2 sigma in >= 17 of 20 on the residual-stiffness path (1e-3)",
           "[fit][.coverage-slack-residual]") {
   // The same film and data as above, with the fit's strongly-slack settings: residual stiffness 1e-3
-  // and bending kept.
-  check_coverage(coverage(-150.0, 0.5, 5.0e-12, "slack film, residual stiffness 1e-3", 20, 1e-3));
+  // (in the data's finer model too) and bending kept.
+  const auto within = coverage(-150.0, 0.5, 5.0e-12, -80.0, 0.7, "slack film, residual stiffness 1e-3", 1e-3);
+  for (int j = 0; j < 3; ++j) CHECK(within[j] >= 17);
 }
 
 TEST_CASE("charges alone cannot separate E_scale from the gains on a pure membrane: flagged, with the condition number",
