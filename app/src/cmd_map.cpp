@@ -7,6 +7,7 @@
 #include "pvdf/core/io.hpp"
 #include "pvdf/core/progress.hpp"
 #include "pvdf/core/scene.hpp"
+#include "pvdf/core/scene_geometry.hpp"
 #include "pvdf/fem/solver.hpp"
 #include "pvdf/mapping/ambiguity.hpp"
 #include "pvdf/mapping/ramp.hpp"
@@ -296,6 +297,10 @@ int run_map(const MapCommandOptions& o) {
     for (const auto& w : scene.warnings) pvdf::app::warn(w);
   }
   MapOptions options = map_options(o, scene);
+  for (const double f : options.forces_N) {  // each level must deflect this film beyond rounding
+    const std::string unresolved = pvdf::force_resolution_problem(scene, f);
+    if (!unresolved.empty()) throw pvdf::InputError("--forces-N " + pvdf::quote_cell(o.forces) + ": " + unresolved);
+  }
   if (!o.no_checkpoint) options.checkpoint_path = o.checkpoint.empty() ? o.output + ".checkpoint" : o.checkpoint;
   options.resume = !o.no_resume;
   options.distributed = mpi.has_value();

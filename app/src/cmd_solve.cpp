@@ -7,6 +7,7 @@
 #include "pvdf/core/scene.hpp"
 #include "pvdf/core/scene_geometry.hpp"
 #include "pvdf/fem/result_json.hpp"
+#include "pvdf/fem/plausibility.hpp"
 #include "pvdf/fem/solver.hpp"
 #include "pvdf/mesh/mesher.hpp"
 
@@ -48,6 +49,8 @@ void apply_load_flags(const SolveOptions& o, pvdf::Scene& scene) {
       throw pvdf::InputError("--load " + pvdf::quote_cell(text) + ": force " + pvdf::format_g(v[2]) +
                              " N must lie in [1e-9, 1e4] N (a probe pushes the film; the rule of loads[].force_N)");
     }
+    const std::string unresolved = pvdf::force_resolution_problem(scene, v[2]);
+    if (!unresolved.empty()) throw pvdf::InputError("--load " + pvdf::quote_cell(text) + ": " + unresolved);
     const std::string problem = pvdf::probe_footprint_problem(scene, {v[0], v[1]}, scene.probe.radius_m);
     if (!problem.empty()) throw pvdf::InputError("--load " + pvdf::escape_control_bytes(text) + ": " + problem);
     pvdf::Load l;
@@ -171,7 +174,8 @@ int run_solve(const SolveOptions& o) {
   std::size_t mesh_file_cells = 0;
   std::optional<StdoutToStderr> progress_to_stderr;
   if (o.json && o.verbose) progress_to_stderr.emplace();  // stdout carries the JSON alone
-  const pvdf::fem::Result r = solve_scene(o, scene, options, mesh_file_cells);
+  pvdf::fem::Result r = solve_scene(o, scene, options, mesh_file_cells);
+  pvdf::fem::enforce_physical_bounds(scene, r);  // never "converged" for an absurd answer
   progress_to_stderr.reset();
   const auto& s = r.summary;
   const bool ok = pvdf::fem::usable(s.status);

@@ -207,7 +207,44 @@ void check_scene_geometry(const Scene& s) {
     if (l.kind != Load::Kind::probe) continue;
     const std::string problem = probe_footprint_problem(s, l.position_m, l.radius_m > 0 ? l.radius_m : s.probe.radius_m);
     if (!problem.empty()) fail(s, "loads[" + std::to_string(i) + "].position_m: " + problem);
+    // After the film's own checks: the estimate needs a film of physical size.
+    const std::string unresolved = force_resolution_problem(s, l.force_N);
+    if (!unresolved.empty()) fail(s, "loads[" + std::to_string(i) + "].force_N = " + format_g(l.force_N) + " is too small: " + unresolved);
   }
+}
+
+double estimated_deflection_m(const Scene& scene, double force_N) {
+  const double a = scene.membrane.outline.inscribed_radius_m();
+  const double h = scene.membrane.thickness_m;
+  const Material& m = scene.material;
+  const double E = std::max(m.E1_Pa, m.E2_Pa);
+  const double D = E * h * h * h / (12.0 * std::max(1.0 - m.nu12 * m.nu21(), 0.05));
+  const double r_p = std::min(std::max(scene.probe.radius_m, 1e-3 * a), 0.5 * a);
+  // Stiffnesses F/w of the three mechanisms at this force (the membrane's is secant: F^(2/3)).
+  const double k_plate = 16.0 * pi * D / (a * a);
+  const double N0 = std::max(scene.membrane.pretension_N_per_m, 0.0);
+  const double k_tension = 2.0 * pi * N0 / std::log(a / r_p);
+  const double w_membrane = a * std::cbrt(force_N / (E * h * a));
+  const double k_membrane = w_membrane > 0 ? force_N / w_membrane : 0.0;
+  const double k = k_plate + k_tension + k_membrane;
+  return k > 0 ? force_N / k : 0.0;
+}
+
+std::string force_resolution_problem(const Scene& scene, double force_N) {
+  const double size = scene.membrane.outline.inscribed_radius_m();
+  const double w_min = scene_limits::deflection_ratio_min * size;
+  if (!(size > 0) || !(force_N > 0)) return "";  // the outline's and the force's own rules refuse these
+  const double w = estimated_deflection_m(scene, force_N);
+  if (w >= w_min) return "";
+  // The deflection grows monotonically with the force: bisect in log F for the smallest force.
+  double lo = std::log(std::max(force_N, 1e-300)), hi = std::log(1e4);
+  for (int it = 0; it < 100; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (estimated_deflection_m(scene, std::exp(mid)) >= w_min ? hi : lo) = mid;
+  }
+  return "a press of " + format_g(force_N) + " N deflects this film by about " + format_g(w) + " m, below " +
+         format_g(scene_limits::deflection_ratio_min) + " of its size " + format_g(size) +
+         " m (lost to rounding); use a force >= " + format_g(std::exp(hi)) + " N";
 }
 
 }  // namespace pvdf

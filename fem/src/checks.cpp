@@ -1,12 +1,17 @@
 // Test hooks of the solver (docs/fem.md §3, §8): the assembled tangent against central
-// differences of the residual, and the C0IP bending operator against its energy.
+// differences of the residual, and the C0IP bending operator against its energy; and the
+// physical bounds every answer must meet before it is called converged (plausibility.hpp).
 #include "film_solver.hpp"
+#include "pvdf/fem/plausibility.hpp"
+
+#include "pvdf/core/io.hpp"
 
 #include <deal.II/base/quadrature_lib.h>
 #include <deal.II/dofs/dof_tools.h>
 #include <deal.II/fe/fe_values.h>
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <random>
 
@@ -127,3 +132,40 @@ JacobianCheck FilmSolver::check_jacobian(double amplitude_m, int n_directions, u
 }
 
 }  // namespace pvdf::fem::detail
+
+namespace pvdf::fem {
+
+// The bounds of plausibility.hpp. The applied force is what the rim must carry at equilibrium
+// (vertical loads; a follower pressure's vertical share is smaller but not zero, so only a
+// reaction below a millionth of it is refused).
+std::string physical_bound_violation(const pvdf::Scene& scene, const Result& result) {
+  if (!usable(result.summary.status)) return "";
+  const double size_m = scene.membrane.outline.characteristic_radius_m();
+  if (!(std::abs(result.max_deflection_m) <= size_m)) {
+    return "physical bound broken: the largest deflection " + pvdf::format_g(result.max_deflection_m) +
+           " m exceeds the film's size " + pvdf::format_g(size_m) +
+           " m (a strain far beyond any film); check the moduli and the loads in the scene";
+  }
+  double applied_N = 0;
+  for (const auto& l : scene.loads) {
+    applied_N += l.kind == pvdf::Load::Kind::probe ? l.force_N : l.pressure_Pa * scene.membrane.outline.area_m2();
+  }
+  if (applied_N != 0 && !(std::abs(result.rim_reaction_N) > 1e-6 * std::abs(applied_N))) {
+    return "physical bound broken: the rim carries " + pvdf::format_g(result.rim_reaction_N) + " N of the applied " +
+           pvdf::format_g(applied_N) + " N (a loaded film with no reaction); the load is lost to rounding";
+  }
+  return "";
+}
+
+bool enforce_physical_bounds(const pvdf::Scene& scene, Result& result) {
+  const std::string why = physical_bound_violation(scene, result);
+  if (why.empty()) return false;
+  Result refused;
+  refused.summary = result.summary;
+  refused.summary.status = Status::no_convergence;
+  refused.summary.message = result.summary.message + "; " + why;
+  result = std::move(refused);
+  return true;
+}
+
+}  // namespace pvdf::fem

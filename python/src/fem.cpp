@@ -8,6 +8,7 @@
 #include "pvdf/core/io.hpp"
 #include "pvdf/core/scene_geometry.hpp"
 #include "pvdf/core/scene.hpp"
+#include "pvdf/fem/plausibility.hpp"
 #include "pvdf/fem/probe_sweep.hpp"
 #include "pvdf/fem/solver.hpp"
 #include "pvdf/mapping/generate.hpp"
@@ -48,6 +49,8 @@ std::vector<pvdf::Load> load_rows(py::object value, const pvdf::Scene& scene) {
     if (!(std::abs(r[2]) <= 1e4)) {
       throw pvdf::InputError(at + ": force " + pvdf::format_g(r[2]) + " N must lie in [-1e4, 1e4] N (the rule of loads[].force_N)");
     }
+    const std::string unresolved = r[2] == 0 ? std::string() : pvdf::force_resolution_problem(scene, std::abs(r[2]));
+    if (!unresolved.empty()) throw pvdf::InputError(at + ": " + unresolved);
     const std::string problem = pvdf::probe_footprint_problem(scene, {r[0], r[1]}, scene.probe.radius_m);
     if (!problem.empty()) throw pvdf::InputError(at + ": " + problem);
     pvdf::Load l;
@@ -87,6 +90,7 @@ pvdf::fem::Result solve(py::object scene_arg, py::object loads, py::object sampl
     py::gil_scoped_release release;
     r = pvdf::fem::solve(scene, options);
   }
+  pvdf::fem::enforce_physical_bounds(scene, r);  // never "converged" for an absurd answer
   if (check && !pvdf::fem::usable(r.summary.status)) {
     throw pvdf::NumericalError(scene.source + ": the film solve did not converge (" +
                                pvdf::fem::status_name(r.summary.status) + "): " + r.summary.message);

@@ -149,6 +149,16 @@ void write_hostile_fixtures(const std::filesystem::path& d) {
   write(d / "force_tiny.json", seed001_with(R"({"loads": [{"position_m": [0, 0], "force_N": 1e-300}]})"));
   write(d / "force_zero.json", seed001_with(R"({"loads": [{"position_m": [0, 0], "force_N": 0}]})"));
   write(d / "force_neg.json", seed001_with(R"({"loads": [{"position_m": [0, 0], "force_N": -1}]})"));
+  // A 10 mm thick film of diamond-like stiffness: 1 uN deflects it by ~4e-16 m, 1e-14 of its size
+  // (below rounding); 1 N is fine (4e-10 m).
+  const std::string stiff = R"({"membrane": {"thickness_m": 0.01}, "material": {"E1_Pa": 1e12, "E2_Pa": 1e12, "G12_Pa": 4e11}})";
+  write(d / "stiff_thick.json", seed001_with(stiff));
+  nlohmann::json stiff_tiny = nlohmann::json::parse(seed001_with(stiff));
+  stiff_tiny["loads"] = nlohmann::json::parse(R"([{"position_m": [0, 0], "force_N": 1e-6}])");
+  write(d / "stiff_thick_1uN.json", stiff_tiny.dump(1));
+  write(d / "probe_as_film.json", seed001_with(R"({"probe": {"radius_m": 0.045}})"));
+  write(d / "poisson_pd_edge.json", seed001_with(R"({"material": {"nu12": 1.5}})"));
+  write(d / "pressure_huge.json", seed001_with(R"({"loads": [{"type": "pressure", "pressure_Pa": 1e12}]})"));
   // A 10 mm film whose 5 x 3 map (2 mm, x -> -x symmetric) takes about two seconds: the
   // checkpoint rows interrupt it after one row and damage the checkpoint it leaves.
   std::filesystem::copy_file(std::string(PVDF_SOURCE_DIR) + "/tests/mapping/small_film_10mm.json", d / "small_film.json",

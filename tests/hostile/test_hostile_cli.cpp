@@ -308,6 +308,18 @@ const std::vector<Row> rows = {
   {"map-pretension-1e9", "map pretension_huge.json -o m8.h5 --quiet", 2, "membrane.pretension_N_per_m", "m8.h5"},
   {"map-nu-auxetic", "map nu_auxetic.json -o m9.h5 --quiet", 2, "material.nu", "m9.h5"},
   {"fit-E-1e-30", "fit E_tiny.json fit_ok.csv -o f.json", 2, "material.E1_Pa", "f.json"},
+  // A force must deflect the film beyond rounding (1e-12 of its size, docs/scene.md): on a 10 mm
+  // thick stiff film 1 uN does not, in the scene, in solve --load and in map --forces-N.
+  {"solve-force-below-rounding", "solve stiff_thick_1uN.json", 2, "loads[0].force_N"},
+  {"solve-load-below-rounding", "solve stiff_thick.json --load 0,0,1e-6", 2, "lost to rounding"},
+  {"map-forces-below-rounding", "map stiff_thick.json -o m10.h5 --quiet --forces-N 1e-6,1", 2, "lost to rounding",
+   "m10.h5,m10.h5.checkpoint"},
+  {"map-forces-duplicate-rounding", "map good.json -o m11.h5 --quiet --forces-N 2,1,2.0000000000000004", 2,
+   "not distinct", "m11.h5,m11.h5.checkpoint"},
+  {"solve-probe-as-film", "solve probe_as_film.json", 2, "probe.radius_m"},
+  {"map-probe-as-film", "map probe_as_film.json -o m12.h5 --quiet", 2, "probe.radius_m", "m12.h5,m12.h5.checkpoint"},
+  {"solve-poisson-not-pd", "solve poisson_pd_edge.json", 2, "material"},
+  {"solve-pressure-huge", "solve pressure_huge.json", 2, "pressure_Pa"},
   // ---- CSV inputs: rows, duplicate columns, cells quoted to 80 characters, NUL bytes
   {"compare-too-many-rows", "compare $M measured_many.csv", 2, "100000"},
   {"compare-dup-column", "compare $M measured_dup.csv", 2, "appears twice"},

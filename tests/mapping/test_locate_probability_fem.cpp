@@ -1,20 +1,26 @@
 // The lookup's solutions and their probabilities on a multi-level FEM map with the force
 // unknown (docs/lookup.md §1.8): presses solved by the FEM between the map's nodes, with
-// Gaussian charge noise, must have the true press among the reported solutions (≥ 99 %; the
-// σ's are the default lookup's, valley σ's where the misfit's valley is wide), and
-// the probability of the main answer must be calibrated: among presses whose p_best falls in a
-// bin, the main answer is the right one about as often as the bin says (p_best ≥ 0.9 → ≥ 90 %).
+// Gaussian charge noise. Three claims, each two-sided or counted over every draw:
+//  - the reported position σ's are right: the truth lies within 2σ of the nearest reported
+//    solution, per axis, in 90–99 % of ALL draws (nominal 95.4 %; an unlocated draw counts as a
+//    miss; the band is from the binomial spread, see below). PVDF_TEST_SIGMA_SCALE multiplies the
+//    reported σ's here (test only) to show the band catches σ × 0.5 and σ × 2;
+//  - the truth is among the reported solutions: within 3σ per axis plus a fixed 0.1 mm (the
+//    map's interpolation budget, 5 % of its 2 mm spacing; not measured by the locator) in ≥ 98 %
+//    of ALL draws;
+//  - the probability of the main answer is calibrated: among presses whose p_best falls in a
+//    bin, the main answer is the right one about as often as the bin says.
 // (The force-known accuracy target, median < 0.05 mm, is checked on a 1 mm FEM map by
 // test_locate_fem; this 2 mm map errs by ~0.06 mm noise-free and is here for its extent.)
 //
-// Oracle: the FEM (pvdf::fem::ProbeSweep) at the true press, never the lookup's own model. The
-// presses are drawn from the lookup's prior — uniform over the map's area and uniform in F over
-// the force range — because calibration is a statement about presses drawn from the prior.
+// Oracle: FEM solves (pvdf::fem::ProbeSweep) at each true press, never the lookup's own model.
+// The presses are drawn from the lookup's prior — uniform over the map's area and uniform in F
+// over the force range — because calibration is a statement about presses drawn from the prior.
 // The film is the seed-001 film with the draw direction turned by 20°, so the layout has no
 // mirror symmetry (with it every off-axis press would have an exact mirror twin: p = ½ always).
 // The map: 2 mm grid over ±6 mm (clear of the electrodes), levels 0.5, 1, 2 N: 147 probe solves
-// plus 160 truth solves, ~70 s of CPU (label `slow`). The truths lie a cell inside the map's
-// edge, so every one has full interpolation stencils.
+// plus the truth solves (label `slow`). The truths lie a cell inside the map's edge, so every
+// one has full interpolation stencils.
 #include "pvdf/core/scene.hpp"
 #include "pvdf/fem/probe_sweep.hpp"
 #include "pvdf/mapping/locator.hpp"
@@ -25,6 +31,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <random>
 #include <string>
@@ -38,6 +46,16 @@ double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   const std::size_t n = v.size();
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+/// PVDF_TEST_SIGMA_SCALE (test only): multiplies every reported σ before the coverage count.
+double test_sigma_scale() {
+  const char* text = std::getenv("PVDF_TEST_SIGMA_SCALE");
+  if (text == nullptr || *text == '\0') return 1.0;
+  char* end = nullptr;
+  const double v = std::strtod(text, &end);
+  if (end == text || *end != '\0' || !(v > 0) || !std::isfinite(v)) return 1.0;
+  return v;
 }
 
 struct Press {
@@ -119,9 +137,8 @@ TEST_CASE("FEM presses with unknown force: the truth is among the solutions and 
     presses.push_back(p);
   }
 
-  // The map's own error at each press (interpolating FEM charges between 2 mm nodes, measured
-  // without noise and with the force known): part of what "the truth is among the solutions"
-  // must allow, beside the noise's 3 σ.
+  // The map's own error at each press (noise-free, force known), printed for the reader only:
+  // no tolerance below is derived from it.
   LocatorOptions known_options;
   known_options.min_force_N = 0.5;
   known_options.max_force_N = 2.0;
@@ -134,16 +151,16 @@ TEST_CASE("FEM presses with unknown force: the truth is among the solutions and 
   WARN("map error (noise-free, force known): median " << median(map_error) * 1e3 << " mm; the 1 mm FEM map of "
        "test_locate_fem checks the < 0.05 mm target");
 
-  // 3. Locate each press under 8 independent noise draws, force unknown. "Among the
-  //    solutions": the nearest reported solution is within 3 σ (its own position σ) plus twice
-  //    the map's own error at that press (at least 0.1 mm). "Right": the main answer is the
-  //    reported solution nearest the truth (the branch p_best speaks about). The noise, 0.6 pC,
-  //    keeps σ above most of the map's error, so the test measures the probability model
+  // 3. Locate each press under independent noise draws, force unknown. The solution the
+  //    σ's speak about is the reported solution nearest the truth (in units of its own σ's);
+  //    "right": that solution is the main answer (the branch p_best speaks about). The noise,
+  //    0.6 pC, keeps σ above most of the map's error, so the test measures the probability model
   //    rather than the map.
   LocatorOptions options;
   options.min_force_N = 0.5;
   options.max_force_N = 2.0;
   const Locator locator(map, options);
+  const double sigma_scale = test_sigma_scale();
   std::normal_distribution<double> gauss(0.0, noise_C);
   struct Bin {
     double lo, hi;
@@ -151,7 +168,10 @@ TEST_CASE("FEM presses with unknown force: the truth is among the solutions and 
     double sum_p = 0;
   };
   std::vector<Bin> bins{{0.9, 1.01}, {0.7, 0.9}, {0.5, 0.7}, {0.0, 0.5}};
+  const double fixed_allowance_m = 0.1e-3;  // the map's interpolation budget: 5 % of the 2 mm spacing
   int n_total = 0, n_among = 0, n_located = 0, n_ambiguous = 0, n_max_solutions = 0;
+  int n_axis_1sigma = 0, n_axis_2sigma = 0;  // per axis: 2 per draw
+  std::vector<double> axis_z;                // |error| / σ as reported, per axis (for the reference shares)
   for (std::size_t press_index = 0; press_index < presses.size(); ++press_index) {
     const Press& p = presses[press_index];
     for (int draw = 0; draw < n_draws; ++draw) {
@@ -159,7 +179,10 @@ TEST_CASE("FEM presses with unknown force: the truth is among the solutions and 
       for (double& v : q) v += gauss(rng);
       const Location r = locator.locate(q);
       ++n_total;
-      if (!r.has_position()) continue;
+      if (!r.has_position()) {  // counted in n_total: a miss for every share below
+        axis_z.insert(axis_z.end(), 2, HUGE_VAL);
+        continue;
+      }
       ++n_located;
       n_ambiguous += (r.flags & flag::ambiguous) != 0;
       n_max_solutions = std::max(n_max_solutions, r.n_solutions);
@@ -167,22 +190,24 @@ TEST_CASE("FEM presses with unknown force: the truth is among the solutions and 
       double p_sum = r.probability;
       for (int a = 0; a < r.n_alternatives; ++a) p_sum += r.alternatives[std::size_t(a)].probability;
       REQUIRE(std::abs(p_sum - 1.0) < 1e-9);
-      // The nearest reported solution, and whether it is the main answer.
-      const double allowance = std::max(0.1e-3, 2.0 * map_error[press_index]);
-      auto tolerance = [&](double sx, double sy) { return 3.0 * std::hypot(sx, sy) + allowance; };
-      double best_d = std::hypot(r.x_m - p.x, r.y_m - p.y), best_tol = tolerance(r.sigma_x_m, r.sigma_y_m);
+      // The reported solution nearest the truth in units of its σ's (scaled for the test).
+      struct Candidate { double dx, dy, sx, sy; };
+      auto normalized = [](const Candidate& c) { return std::hypot(c.dx / c.sx, c.dy / c.sy); };
+      Candidate best{r.x_m - p.x, r.y_m - p.y, sigma_scale * r.sigma_x_m, sigma_scale * r.sigma_y_m};
       bool main_nearest = true;
       for (int a = 0; a < r.n_alternatives; ++a) {
         const auto& alt = r.alternatives[std::size_t(a)];
-        const double d = std::hypot(alt.x_m - p.x, alt.y_m - p.y);
-        if (d < best_d) {
-          best_d = d;
-          best_tol = tolerance(alt.sigma_x_m, alt.sigma_y_m);
+        const Candidate c{alt.x_m - p.x, alt.y_m - p.y, sigma_scale * alt.sigma_x_m, sigma_scale * alt.sigma_y_m};
+        if (normalized(c) < normalized(best)) {
+          best = c;
           main_nearest = false;
         }
       }
-      const bool among = best_d <= best_tol;
-      n_among += among;
+      axis_z.push_back(std::abs(best.dx) / best.sx * sigma_scale);
+      axis_z.push_back(std::abs(best.dy) / best.sy * sigma_scale);
+      n_axis_1sigma += (std::abs(best.dx) <= best.sx) + (std::abs(best.dy) <= best.sy);
+      n_axis_2sigma += (std::abs(best.dx) <= 2 * best.sx) + (std::abs(best.dy) <= 2 * best.sy);
+      n_among += std::abs(best.dx) <= 3 * best.sx + fixed_allowance_m && std::abs(best.dy) <= 3 * best.sy + fixed_allowance_m;
       for (Bin& b : bins) {
         if (r.probability >= b.lo && r.probability < b.hi) {
           ++b.n;
@@ -194,20 +219,34 @@ TEST_CASE("FEM presses with unknown force: the truth is among the solutions and 
       }
     }
   }
-  const double among_share = double(n_among) / double(n_located);
-  WARN("FEM map 2 mm, levels 0.5/1/2 N, draw 20 deg, 0.6 pC noise, force unknown: " << n_located << " of " << n_total
-       << " located, " << n_ambiguous << " ambiguous, at most " << n_max_solutions << " solutions; truth among the "
-       << "solutions at " << 100.0 * among_share << " %");
+  const double among_share = double(n_among) / double(n_total);
+  const double axis_1sigma = double(n_axis_1sigma) / (2.0 * n_total), axis_2sigma = double(n_axis_2sigma) / (2.0 * n_total);
+  WARN("FEM map 2 mm, levels 0.5/1/2 N, draw 20 deg, 0.6 pC noise, force unknown, sigma x " << sigma_scale << ": "
+       << n_located << " of " << n_total << " located, " << n_ambiguous << " ambiguous, at most " << n_max_solutions
+       << " solutions; of all draws, per axis inside 1 sigma " << 100.0 * axis_1sigma << " %, inside 2 sigma "
+       << 100.0 * axis_2sigma << " %; truth among the solutions (3 sigma + 0.1 mm) " << 100.0 * among_share << " %");
+  for (const double scale : {0.5, 1.0, 2.0}) {  // for reference: what the σ-scale runs give
+    auto share = [&](double k) {
+      return double(std::count_if(axis_z.begin(), axis_z.end(), [&](double z) { return z / scale <= k; })) / axis_z.size();
+    };
+    WARN("for reference, sigma x " << scale << ": per axis inside 1 sigma " << 100 * share(1) << " %, inside 2 sigma "
+         << 100 * share(2) << " %");
+  }
   for (const Bin& b : bins) {
     WARN("p_best in [" << b.lo << ", " << std::min(b.hi, 1.0) << "): " << b.n << " located draws of " << b.n_presses
          << " presses, mean p_best "
          << (b.n ? b.sum_p / b.n : 0.0) << ", main answer right " << (b.n ? 100.0 * b.right / b.n : 0.0) << " %");
   }
   CHECK(n_located >= n_total * 99 / 100);
-  // Measured 99.30 % (9 of 1279 draws) with the valley σ's (docs/lookup.md §1.6, §7b); 98.98 %
-  // with linearised σ's only, whose misses lay 3-7 σ from the truth along a bent valley of the
-  // misfit.
-  CHECK(among_share >= 0.99);
+  // Two-sided σ check over every draw. Band [0.90, 0.99] for the nominal 0.954 of a 2σ interval:
+  // with N = 2 × n_total per-axis indicators (≥ n_total = 1280 independent ones) the binomial SD
+  // at 0.954 is ≤ sqrt(0.954·0.046/1280) = 0.006, so nominal lies 9 SDs above 0.90 and 6 below
+  // 0.99; σ × 0.5 makes it a 1σ interval (nominal 0.683) and σ × 2 a 4σ one (0.99994). Measured
+  // (seed 17): 1σ 84.8 %, 2σ 97.3 % — the valley σ's (docs/lookup.md §1.6) are conservative,
+  // about 1.4 × a Gaussian's — so σ × 0.5 gives 84.8 % (below 0.90) and σ × 2 gives > 99 %.
+  CHECK(axis_2sigma >= 0.90);
+  CHECK(axis_2sigma <= 0.99);
+  CHECK(among_share >= 0.98);
   // Calibration: the ≥ 0.9 bin is right ≥ 90 % of the time; every bin with enough presses is
   // right as often as its mean p_best says, within 0.1 plus two binomial standard errors.
   REQUIRE(bins[0].n >= 100);

@@ -78,6 +78,36 @@ def test_bad_arguments_raise_input_errors():
         pvdfkit.solve(plate_scene(), samples=[[0.0, 1.0, 2.0]])
 
 
+def test_physical_bounds_refuse_before_any_work():
+    """Issue 30 item 2: absurd films and presses are refused naming the key, the value and the fix
+    (docs/scene.md "Physical bounds"), before a solve starts."""
+    def patched(**sections):
+        s = plate_scene()
+        for key, value in sections.items():
+            s[key] = {**s[key], **value} if isinstance(value, dict) else value
+        return s
+    cases = [
+        (dict(material={"E_Pa": 1e-30}), r"material\.E_Pa .*check the unit"),
+        (dict(material={"E_Pa": 2e3}), r"material\.E_Pa"),                      # MPa written as Pa
+        (dict(material={"nu": -0.99}), r"material\.nu"),                         # compliance nearly singular
+        (dict(membrane={"radius_m": A, "thickness_m": H, "pretension_N_per_m": -1e9}), r"pretension_N_per_m"),
+        (dict(loads=[{"position_m": [0.0, 0.0], "force_N": 1e-300}]), r"loads\[0\]\.force_N"),
+        (dict(probe={"radius_m": A}), r"probe\.radius_m"),                        # a probe as large as the film
+    ]
+    for sections, message in cases:
+        with pytest.raises(pvdfkit.InputError, match=message):
+            pvdfkit.solve(patched(**sections))
+    # A press too small for a stiff, thick film: its deflection would be lost to rounding.
+    stiff = patched(membrane={"radius_m": A, "thickness_m": 0.01}, material={"E_Pa": 1e12, "nu": 0.3})
+    with pytest.raises(pvdfkit.InputError, match=r"lost to rounding\); use a force >="):
+        pvdfkit.solve(stiff, loads=[[0.0, 0.0, 1e-6]])
+    # A press outside the film, and one whose footprint touches the rim.
+    with pytest.raises(pvdfkit.InputError, match=r"loads\[0\]"):
+        pvdfkit.solve(plate_scene(), loads=[[0.06, 0.0, 0.01]])
+    with pytest.raises(pvdfkit.InputError, match=r"loads\[0\]"):
+        pvdfkit.solve(plate_scene(), loads=[[0.0, A - C, 0.01]])
+
+
 def test_probe_sweep_equals_direct_solves_within_its_estimate():
     scene = pvdfkit.default_scene()
     sweep = pvdfkit.ProbeSweep(scene, tolerance=0.02, n_setup_checks=1)

@@ -23,6 +23,10 @@ inline constexpr double film_aspect_max = 100.0;
 inline constexpr double feature_ratio_min = 1e-3;
 /// Largest probe radius as a fraction of the inscribed radius.
 inline constexpr double probe_radius_max_ratio = 0.25;
+/// Smallest estimated deflection of a press as a fraction of the film size: below it the
+/// deflection is a few thousand ulps of the coordinates (rounding), and a solve "converges" to
+/// zero (docs/scene.md "Physical bounds").
+inline constexpr double deflection_ratio_min = 1e-12;
 }  // namespace scene_limits
 
 /// The film outline as a planar region (the ellipse as a fine polygon, 1024 vertices).
@@ -43,6 +47,17 @@ RimRelation rim_relation(const FilmOutline& outline, const Electrode& electrode)
 /// its centre must lie inside and its footprint must stay one probe radius clear of the rim
 /// (the margin charge maps keep: the clamped edge beside a footprint is what a mesh resolves).
 std::string probe_footprint_problem(const Scene& scene, const Point2& center_m, double radius_m);
+
+/// Lower estimate of the deflection (m) under a press of `force_N` at the film's centre: plate
+/// bending (w = F·a²/(16πD)), pre-tension (w = F·ln(a/r_p)/(2πN0), N0 > 0) and membrane
+/// stretching (w = a·(F/(E·h·a))^(1/3)) as springs in parallel, with a the inscribed radius and
+/// E the larger modulus (the stiffest reading of the film). Within a factor of about 3 of the
+/// solver's answer; used only to refuse forces whose deflection would be lost to rounding.
+double estimated_deflection_m(const Scene& scene, double force_N);
+
+/// Why a press of `force_N` on `scene`'s film would deflect it by less than deflection_ratio_min
+/// of the film size (lost to rounding), with the smallest force that would not; or "".
+std::string force_resolution_problem(const Scene& scene, double force_N);
 
 /// Throws InputError (naming the scene file and the key) when the scene breaks a rule above.
 void check_scene_geometry(const Scene& scene);
