@@ -192,6 +192,10 @@ void print_map_json(const MapCommandOptions& o, const ChargeMap& map, const MapR
   j["n_rim_model"] = report.n_rim_model;
   j["rim_solves"] = report.rim_solves;
   j["rim_s"] = report.rim_s;
+  j["n_clamp_layer"] = report.n_clamp_layer;
+  j["clamp_layer_solves"] = report.clamp_layer_solves;
+  j["clamp_layer_s"] = report.clamp_layer_s;
+  j["clamp_layer_condition"] = report.clamp_layer_condition;
   j["estimate_s"] = report.estimate_s;
   j["probe_size_m"] = report.probe_size_m;
   j["probe_mesh_s"] = report.probe_mesh_s;

@@ -13,6 +13,7 @@
 // leaves no layer to resolve.
 #include "film_solver.hpp"
 
+#include "pvdf/core/error.hpp"
 #include "pvdf/core/material.hpp"
 
 #include <deal.II/base/quadrature_lib.h>
@@ -21,6 +22,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <map>
 
@@ -296,6 +298,82 @@ double FilmSolver::clamp_layer_estimate() const {
   if (!clamp_settled_) return 1.0;
   const double e = clamp_estimate_constant * clamp_ratio_ * clamp_correction_;
   return std::isfinite(e) ? e : 1.0;
+}
+
+// Its share of electrode k's error bar: the relative estimate spread over the electrodes in
+// proportion to the change the condition made in each charge (all of |Q_k| when not estimated).
+std::vector<double> FilmSolver::clamp_layer_charge_error_C(const std::vector<double>& charge_C) const {
+  std::vector<double> e(charge_C.size(), 0.0);
+  if (!clamp_layer_) return e;
+  const double c = clamp_layer_estimate();
+  for (std::size_t k = 0; k < e.size(); ++k) {
+    if (c >= 1.0) e[k] = std::abs(charge_C[k]);
+    else if (clamp_correction_ > 0 && k < clamp_correction_C_.size())
+      e[k] = c / clamp_correction_ * std::abs(clamp_correction_C_[k]);
+  }
+  return e;
+}
+
+// A probe of a sweep (sweep_engine.cpp), the ladder of solve's refine_until_tolerance on one fixed
+// mesh: from the converged plain clamp without bending, the condition (bending-free, its correction
+// measured against that plain clamp), then bending's remaining effect estimated with the rim terms
+// dropped; above tolerance/2 bending is switched on and kept with the condition. Whether its
+// estimate is within its share is the caller's decision (clamp_layer_share).
+FilmSolver::ClampLayerProbe FilmSolver::solve_probe_with_clamp_layer(Model model, Vector<double>& u, GoalErrors& goal) {
+  ClampLayerProbe c;
+  c.wanted = clamp_layer_wanted() && bending_pattern_ && !options_.include_bending && !clamp_layer_;
+  if (!c.wanted) return c;
+  const Vector<double> start = u;
+  const int before = summary_.newton_iterations;
+  c.outcome = switch_to_clamp_layer(model, u);
+  if (c.outcome.status == Status::converged) {
+    goal = estimate_goal_errors(u, model);
+    std::string reason;
+    if (goal.model_estimated && !bending_may_be_left_out(goal.relative_model, options_.tolerance, reason)) {
+      enable_bending();
+      c.bending = true;
+      c.outcome = solve_with_clamp_layer(model, u);
+      if (c.outcome.status == Status::converged) goal = estimate_goal_errors(u, model);
+    }
+  }
+  c.newton_iterations = summary_.newton_iterations - before;
+  c.passes = summary_.clamp_layer_passes;
+  c.width_m = summary_.clamp_layer_width_m;
+  if (c.outcome.status != Status::converged) {
+    u = start;
+    return c;
+  }
+  c.settled = clamp_settled_;
+  c.estimate = clamp_layer_estimate();
+  c.charge_error_C = clamp_layer_charge_error_C(goal.charge_C.empty() ? electrode_charges(u, model) : goal.charge_C);
+  return c;
+}
+
+void FilmSolver::reset_clamp_layer() {
+  options_.include_bending = false;
+  if (!clamp_layer_) return;
+  Vector<double> u(dof_handler_.n_dofs());
+  set_clamp_layer(false, u);
+  summary_.clamp_layer = "none";
+}
+
+// The condition's share of the tolerance (docs/fem.md §3.4): what the other model errors leave of
+// three quarters of it; the last quarter is the discretization's.
+double clamp_layer_share(double tolerance, double other_model_error) {
+  return 0.75 * tolerance - (std::isfinite(other_model_error) ? other_model_error : tolerance);
+}
+
+// The bench switch, read like PVDF_FACTORIZATION (bench/fem/bench_clamp_layer.sh,
+// bench/mapping/bench_clamp_layer_map.sh).
+Options with_clamp_layer_switch(Options options) {
+  const char* v = std::getenv("PVDF_CLAMP_LAYER");
+  if (!v) return options;
+  const std::string mode = v;
+  if (mode == "rim-graded") options.clamp_layer_condition = false;
+  else if (mode == "no-shift") options.clamp_layer_inplane_shift = false;
+  else if (!mode.empty())
+    throw InputError("PVDF_CLAMP_LAYER = '" + mode + "' is not a mode; use rim-graded or no-shift, or unset it");
+  return options;
 }
 
 }  // namespace pvdf::fem::detail

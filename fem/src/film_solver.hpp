@@ -195,6 +195,24 @@ class FilmSolver {
   /// factorization, reliable on coarse meshes) instead of the patch-wise extrapolation of the Q(p)
   /// adjoint (cheap; what the probe sweep uses).
   GoalErrors estimate_goal_errors(const Vector<double>& u, Model model, bool higher_order_adjoint = false);
+  // clamp_layer.cpp: one probe of a sweep with the clamp-layer condition (docs/fem.md §3.4).
+  struct ClampLayerProbe {
+    bool wanted = false;   // tried: the layer matters (clamp_layer_wanted) and bending can be switched
+    NewtonOutcome outcome;
+    bool settled = false;  // the lagged passes settled
+    bool bending = false;  // bending switched on with it (its remaining effect > tolerance/2, as in solve)
+    double estimate = 0;   // clamp_layer_estimate(), relative to the largest charge
+    std::vector<double> charge_error_C;  // its share of each electrode's error bar (C)
+    double width_m = 0;
+    int passes = 0, newton_iterations = 0;
+  };
+  /// From the converged plain-clamp, bending-free state u of the current probe: the condition on,
+  /// solved, estimated (into `goal`); bending on with it when its remaining effect asks. The
+  /// condition stays on until reset_clamp_layer(); on failure u is as given.
+  ClampLayerProbe solve_probe_with_clamp_layer(Model model, Vector<double>& u, GoalErrors& goal);
+  bool clamp_layer_on() const { return clamp_layer_; }
+  /// Back to the plain clamp without bending (DOFs unchanged), for the next probe.
+  void reset_clamp_layer();
   /// Assemble the bending operator and its sparsity even when the model leaves bending out (call
   /// before the first setup_system()): needed to estimate what bending would change.
   /// `switchable`: the adaptive loop switches bending on when its estimated effect is too large
@@ -246,6 +264,8 @@ class FilmSolver {
   NewtonOutcome switch_to_clamp_layer(Model model, Vector<double>& u);
   /// Its estimated remaining error, relative (largest charge change × clamp_ratio_).
   double clamp_layer_estimate() const;
+  /// Its share of each electrode's error bar (C), for charges charge_C.
+  std::vector<double> clamp_layer_charge_error_C(const std::vector<double>& charge_C) const;
 
   // assembly.cpp
   void assemble_bending_matrix();

@@ -7,7 +7,9 @@
 // (sweep_engine.cpp), warm-starts Newton from a given state, and carries the solver's
 // adjoint-weighted estimates of its discretization and model errors for every electrode charge;
 // where the cheap model's model-error estimate exceeds its share of the tolerance the probe is
-// solved again with the rim model.
+// solved again near the clamp: first with the clamp's bending layer as a boundary condition on the
+// probe's own mesh (clamp_layer.cpp, docs/fem.md §3.4), and with the rim model only where that
+// condition's own estimate exceeds its share of the tolerance (or it fails), as `solve` does.
 #include "pvdf/core/membrane_scaling.hpp"
 #include "pvdf/core/constants.hpp"
 #include "pvdf/fem/probe_sweep.hpp"
@@ -151,6 +153,8 @@ struct ProbeSweep::Impl {
   detail::SweepEngine& rim_engine(int sector);
   double rim_s = 0;
   int rim_solves = 0;
+  double clamp_s = 0;
+  int clamp_solves = 0;
   ProbeSolution from_engine(const detail::EngineSolution& e, SweepModel used) const;
   detail::EngineSolution walk_probe(double x_m, double y_m, double force_N, std::vector<double>& state, bool warm,
                                     double state_force_N, const SweepState* from);
@@ -257,6 +261,11 @@ ProbeSolution ProbeSweep::Impl::from_engine(const detail::EngineSolution& e, Swe
     if (k < e.charge_error_model_C.size()) s.charge_error_model_C[k] = std::abs(e.charge_error_model_C[k]);
     s.charge_error_C[k] = s.charge_error_discretization_C[k] + s.charge_error_model_C[k];
   }
+  if (e.clamp_layer && e.charge_error_clamp_layer_C.size() == ne) {  // the condition's own estimate
+    s.charge_error_clamp_layer_C = e.charge_error_clamp_layer_C;
+    for (std::size_t k = 0; k < ne; ++k) s.charge_error_C[k] += std::abs(e.charge_error_clamp_layer_C[k]);
+    s.clamp_layer_relative_error = e.clamp_layer_relative_error;
+  }
   s.estimated_relative_error = relative(s.charge_error_C, s.charge_C);
   s.deflection_error_m = std::abs(e.deflection_error_discretization_m) + std::abs(e.deflection_error_model_m);
   return s;
@@ -272,6 +281,7 @@ ProbeSweep::ProbeSweep(const pvdf::Scene& scene, const SweepOptions& options) : 
   Impl& im = *impl_;
   im.scene = scene;
   im.options = options;
+  im.options.solver = detail::with_clamp_layer_switch(options.solver);  // PVDF_CLAMP_LAYER, as `solve`
   if (!(options.rim_margin_m >= 0) || !std::isfinite(options.rim_margin_m)) {
     throw pvdf::InputError("probe sweep: rim margin = " + fmt(options.rim_margin_m) + " m must be >= 0 and finite");
   }
@@ -288,7 +298,7 @@ ProbeSweep::ProbeSweep(const pvdf::Scene& scene, const SweepOptions& options) : 
   }
   const double f_max = *std::max_element(forces.begin(), forces.end());
   const double f_min = *std::min_element(forces.begin(), forces.end());
-  const Options& so = options.solver;
+  const Options& so = im.options.solver;
   if (!(so.tolerance > 0)) throw pvdf::InputError("fem options: tolerance = " + fmt(so.tolerance) + " must be > 0");
 
   // 1. Model: the `auto` rule over the force range (bending judged at the smallest force, where
@@ -362,6 +372,7 @@ ProbeSweep::ProbeSweep(const pvdf::Scene& scene, const SweepOptions& options) : 
     im.rim_engines.resize(static_cast<std::size_t>(std::max(1, options.rim_sectors)));
     im.setup.rim_model_available = true;
     im.setup.rim_size_m = im.rim_sizes.rim_size_m;
+    im.setup.clamp_layer_condition = so.clamp_layer_condition;
   }
   im.setup.setup_s = seconds_since(t0);
 }
@@ -377,6 +388,8 @@ SweepTiming ProbeSweep::timing() const {
     if (engine) add_timing(t, engine->timing());
   t.rim_solves = impl_->rim_solves;
   t.rim_s = impl_->rim_s;
+  t.clamp_layer_solves = impl_->clamp_solves;
+  t.clamp_layer_s = impl_->clamp_s;
   return t;
 }
 
@@ -421,7 +434,41 @@ ProbeSolution ProbeSweep::solve(double x_m, double y_m, double force_N, const Sw
   const bool want_rim = !im.rim_engines.empty() && usable(s.status) &&
                         (im.options.rim_model == SweepOptions::RimModel::always ||
                          cheap_model > 0.5 * tol || s.estimated_relative_error > tol);
-  if (want_rim) {
+  // First the clamp's bending layer as a boundary condition on this probe's own mesh, kept where
+  // its estimate is within its share of the tolerance (3/4 of it minus bending's remaining
+  // estimated effect), its Newton converged and its lagged passes settled: solve's rule
+  // (docs/fem.md §3.4). Otherwise the reference path, the rim model.
+  bool near_clamp_done = false;
+  std::string clamp_note;
+  if (want_rim && im.setup.clamp_layer_condition) {
+    const auto t_clamp = Clock::now();
+    const detail::EngineSolution e = im.engine->solve_clamp_layer();
+    if (e.clamp_layer) {
+      ++im.clamp_solves;
+      ProbeSolution c = im.from_engine(e, SweepModel::clamp_layer);
+      if (usable(c.status)) {
+        const double remaining = relative(c.charge_error_model_C, c.charge_C);
+        const double share = detail::clamp_layer_share(tol, remaining);
+        if (e.clamp_layer_settled && c.clamp_layer_relative_error <= share) {
+          c.cheap_model_relative_error = cheap_model;
+          c.newton_iterations += s.newton_iterations;
+          clamp_note = "clamp-layer condition (" + std::to_string(e.clamp_layer_passes) + " passes, l_b " +
+                      fmt(e.clamp_layer_width_m * 1e3) + " mm" + (e.clamp_layer_bending ? ", bending kept" : "") +
+                      "): its estimate " + fmt(c.clamp_layer_relative_error) + " <= its share " + fmt(share);
+          s = std::move(c);
+          near_clamp_done = true;
+        } else {
+          clamp_note = e.clamp_layer_settled ? "clamp-layer estimate " + fmt(c.clamp_layer_relative_error) +
+                                                   " > its share " + fmt(share)
+                                             : "clamp-layer passes did not settle";
+        }
+      } else {
+        clamp_note = "clamp-layer condition did not converge (" + c.message + ")";
+      }
+    }
+    im.clamp_s += seconds_since(t_clamp);
+  }
+  if (want_rim && !near_clamp_done) {
     const auto t_rim = Clock::now();
     // Warm only from a rim state converged nearby (a chain's rim probes are its row's ends).
     const double reach = 8 * im.scene.probe.radius_m;
@@ -450,7 +497,9 @@ ProbeSolution ProbeSweep::solve(double x_m, double y_m, double force_N, const Sw
   s.y_m = y_m;
   s.force_N = force_N;
   if (usable(s.status)) {
-    const std::string which = s.model_used == SweepModel::rim ? "rim model (bending, rim-graded mesh)" : "sweep model";
+    const std::string which = s.model_used == SweepModel::rim           ? "rim model (bending, rim-graded mesh)"
+                              : s.model_used == SweepModel::clamp_layer ? "clamp-layer condition"
+                                                                         : "sweep model";
     if (s.estimated_relative_error > tol) {
       s.status = Status::tolerance_not_met;
       s.message = "Newton converged; " + which + " estimated charge error " + fmt(s.estimated_relative_error) +
@@ -462,6 +511,7 @@ ProbeSolution ProbeSweep::solve(double x_m, double y_m, double force_N, const Sw
                             fmt(im.setup.estimated_relative_error) + ")"
                       : "Newton converged; " + which + " estimated charge error " + fmt(s.estimated_relative_error);
     }
+    if (!clamp_note.empty()) s.message += "; " + clamp_note + (s.model_used == SweepModel::rim ? ": rim model" : "");
     if (state_out) {
       state_out->dofs = std::move(state);
       state_out->force_N = force_N;

@@ -134,6 +134,10 @@ struct SweepEngine::Impl {
   double retired_load_s = 0;
   double probe_dofs_sum = 0;
   int probe_meshes = 0;
+  // The last converged probe (for solve_clamp_layer): its solver (the sweep's or the probe's own)
+  // and its state on that solver's mesh.
+  FilmSolver* last_solver = nullptr;
+  Vector<double> last_u;
   void retire_probe_solver();
   FilmSolver& probe_solver_at(double x_m, double y_m, double force_N);
 };
@@ -240,7 +244,9 @@ EngineSolution SweepEngine::solve(double x_m, double y_m, double force_N, std::v
   const double probe_size = impl_->sizes.probe_size_m;
   const bool refine_probe =
       probe_size > 0 && sweep.largest_cell_near(x_m, y_m, impl_->scene.probe.radius_m) > 1.3 * probe_size;
+  impl_->last_solver = nullptr;
   FilmSolver& fs = refine_probe ? impl_->probe_solver_at(x_m, y_m, force_N) : sweep;
+  if (fs.clamp_layer_on()) fs.reset_clamp_layer();  // left on by solve_clamp_layer at the last probe
   EngineSolution out;
   const int factorizations_before = fs.n_factorizations();
   fs.set_probe(x_m, y_m, force_N);
@@ -288,6 +294,8 @@ EngineSolution SweepEngine::solve(double x_m, double y_m, double force_N, std::v
     out.message = "non-finite outputs";
     return out;
   }
+  impl_->last_solver = &fs;
+  impl_->last_u = u;
   if (refine_probe) {
     const auto t1 = Clock::now();
     Vector<double> s;
@@ -296,6 +304,52 @@ EngineSolution SweepEngine::solve(double x_m, double y_m, double force_N, std::v
     impl_->timing.probe_mesh_s += seconds_since(t1);
   } else {
     state.assign(u.begin(), u.end());
+  }
+  return out;
+}
+
+// The clamp's bending layer as a boundary condition at the last probe (clamp_layer.cpp): on the
+// probe's own mesh, from its converged plain-clamp state, so near the clamp the probe costs a few
+// lagged Newton solves on the cheap model's mesh instead of a bending solve on a rim-graded one.
+// The condition stays on in that solver until its next probe (solve() resets it).
+EngineSolution SweepEngine::solve_clamp_layer() {
+  Impl& im = *impl_;
+  EngineSolution out;
+  out.message = "the clamp-layer condition is not wanted here";
+  if (!im.last_solver || !im.estimate_errors || im.include_bending) return out;
+  FilmSolver& fs = *im.last_solver;
+  im.last_solver = nullptr;
+  Vector<double> u = im.last_u;
+  const int factorizations_before = fs.n_factorizations();
+  FilmSolver::GoalErrors ge;
+  // (its time, estimates included, is counted by the sweep as clamp_layer_s)
+  const FilmSolver::ClampLayerProbe c = fs.solve_probe_with_clamp_layer(im.model, u, ge);
+  out.newton_iterations = c.newton_iterations;
+  out.factorizations = fs.n_factorizations() - factorizations_before;
+  out.clamp_layer = c.wanted;
+  if (!c.wanted) return out;
+  out.status = c.outcome.status;
+  out.message = c.outcome.message;
+  out.warm_started = true;
+  out.clamp_layer_bending = c.bending;
+  out.clamp_layer_passes = c.passes;
+  out.clamp_layer_width_m = c.width_m;
+  if (c.outcome.status != Status::converged) return out;
+  fs.probe_outputs(u, im.model, out);
+  out.errors_estimated = true;
+  out.charge_error_discretization_C = ge.charge_discretization_C;
+  out.charge_error_model_C = ge.charge_model_C;
+  out.deflection_error_discretization_m = ge.deflection_discretization_m.empty() ? 0.0 : ge.deflection_discretization_m[0];
+  out.deflection_error_model_m = ge.deflection_model_m.empty() ? 0.0 : ge.deflection_model_m[0];
+  out.clamp_layer_settled = c.settled;
+  out.clamp_layer_relative_error = c.estimate;
+  out.charge_error_clamp_layer_C = c.charge_error_C;
+  bool finite = std::isfinite(out.deflection_at_load_m) && std::isfinite(out.rim_reaction_N) &&
+                std::isfinite(out.clamp_layer_relative_error);
+  for (double q : out.charge_C) finite = finite && std::isfinite(q);
+  if (!finite) {
+    out.status = Status::not_finite;
+    out.message = "non-finite outputs with the clamp-layer condition";
   }
   return out;
 }

@@ -57,6 +57,19 @@ struct EngineSolution {
   std::vector<double> charge_error_model_C;
   double deflection_error_discretization_m = 0;  ///< of deflection_at_load_m (m)
   double deflection_error_model_m = 0;           ///< bending's effect on deflection_at_load_m (m); 0 with bending
+
+  /// SweepEngine::solve_clamp_layer only (docs/fem.md §3.4). `clamp_layer`: the condition was tried
+  /// (false: not wanted here, e.g. the layer is thinner than tolerance/10 of the radius, or
+  /// Options::clamp_layer_condition is off; nothing else is filled). Its estimate of what it leaves
+  /// out: relative to the largest charge (1 = its lagged values did not settle) and each
+  /// electrode's share (C, by magnitude, to be added to the discretization and model parts).
+  bool clamp_layer = false;
+  bool clamp_layer_settled = false;
+  bool clamp_layer_bending = false;  ///< bending kept with it (its remaining effect exceeded tolerance/2)
+  double clamp_layer_relative_error = 0;
+  std::vector<double> charge_error_clamp_layer_C;
+  double clamp_layer_width_m = 0;    ///< largest l_b along the rim (m)
+  int clamp_layer_passes = 0;
 };
 
 /// Accumulated cost of the probe solves: the public pvdf::fem::SweepTiming.
@@ -90,6 +103,14 @@ class SweepEngine {
   EngineSolution solve(double x_m, double y_m, double force_N, std::vector<double>& state, bool warm,
                        double state_force_N = 0, bool cold_fallback = true);
 
+  /// The last probe solve() converged (same position and force, same mesh) again with the clamp's
+  /// bending layer as a boundary condition (docs/fem.md §3.4), from its converged state; the
+  /// warm-start state solve() returned is not touched. Needs an engine built with estimate_errors
+  /// and without bending. With the condition not wanted, `clamp_layer` is false and the status
+  /// no_convergence; a usable outcome carries solve()'s estimates (the model part: bending's
+  /// remaining effect with the rim terms dropped) and the condition's own.
+  EngineSolution solve_clamp_layer();
+
  private:
   struct Impl;
   std::unique_ptr<Impl> impl_;
@@ -99,6 +120,16 @@ class SweepEngine {
 /// pretension and the rim membrane force of the point-loaded membrane under force_N
 /// (model_choice.cpp): the rim cell size that resolves it.
 double rim_boundary_layer_m(const pvdf::Scene& scene, double force_N);
+
+/// The clamp-layer condition's share of the tolerance (clamp_layer.cpp, docs/fem.md §3.4):
+/// 3/4 · tolerance − the other model errors (relative; non-finite counts as the whole tolerance).
+/// The condition is kept where its estimate is within it, else the rim-graded reference path.
+double clamp_layer_share(double tolerance, double other_model_error);
+
+/// `options` with the PVDF_CLAMP_LAYER bench switch applied (read like PVDF_FACTORIZATION):
+/// "rim-graded" = Options::clamp_layer_condition off (the reference path), "no-shift" = no in-plane
+/// shift, unset or empty = as given; another value throws pvdf::InputError.
+Options with_clamp_layer_switch(Options options);
 
 /// What the `auto` rule decided.
 struct ModelChoice {

@@ -161,6 +161,10 @@ py::dict report_dict(const pvdf::mapping::MapReport& r, const pvdf::mapping::Cha
   d["n_rim_model"] = r.n_rim_model;
   d["rim_solves"] = r.rim_solves;
   d["rim_s"] = r.rim_s;
+  d["n_clamp_layer"] = r.n_clamp_layer;
+  d["clamp_layer_solves"] = r.clamp_layer_solves;
+  d["clamp_layer_s"] = r.clamp_layer_s;
+  d["clamp_layer_condition"] = r.clamp_layer_condition;
   d["estimate_s"] = r.estimate_s;
   d["probe_size_m"] = r.probe_size_m;
   d["probe_mesh_s"] = r.probe_mesh_s;

@@ -60,6 +60,8 @@ ChargeMap Generator::run(MapReport& report) {
     const fem::SweepTiming t = sw->timing();
     report.rim_solves += std::size_t(t.rim_solves);
     report.rim_s += t.rim_s;
+    report.clamp_layer_solves += std::size_t(t.clamp_layer_solves);
+    report.clamp_layer_s += t.clamp_layer_s;
     report.estimate_s += t.estimate_s;
     report.probe_mesh_s += t.probe_mesh_s;
     report.probe_mesh_dofs = std::max(report.probe_mesh_dofs, t.probe_mesh_dofs);
@@ -82,6 +84,7 @@ ChargeMap Generator::run(MapReport& report) {
   report.estimated_deflection_relative_error = map_.estimated_deflection_relative_error;
   report.n_dofs = setup.n_dofs;
   report.rim_n_dofs = setup.rim_n_dofs;
+  report.clamp_layer_condition = setup.clamp_layer_condition;
   report.setup_s = setup.setup_s;
   report.mirror_x = sym_.about_x;
   report.mirror_y = sym_.about_y;
@@ -309,6 +312,7 @@ void Generator::summarize_estimates(MapReport& report) {
     const double w = std::abs(map_.deflection_at_load_m[pt]);
     if (w > 0) deflection = std::max(deflection, deflection_error_[pt] / w);
     if (node_model_[pt] == std::uint8_t(fem::SweepModel::rim)) ++report.n_rim_model;
+    if (node_model_[pt] == std::uint8_t(fem::SweepModel::clamp_layer)) ++report.n_clamp_layer;
     if (node_model_[pt] == std::uint8_t(direct_model)) ++report.n_direct;
     if (provenance_[pt] & provenance::tolerance_not_met) ++report.n_tolerance_not_met;
   }

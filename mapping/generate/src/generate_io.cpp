@@ -88,7 +88,8 @@ void write_generated_map(const std::string& path, const ChargeMap& map, const st
                   "per point [nf][ny][nx]: model that solved it, 0 = the root attribute model as the sweep chose it "
                   "(bending dropped when its estimate allowed), 1 = the same kinematics with bending on a mesh graded "
                   "toward the clamped rim, 2 = a direct adaptive solve at this press alone (its own goal-oriented mesh, "
-                  "bending kept) where the sweep's estimate exceeded the tolerance");
+                  "bending kept) where the sweep's estimate exceeded the tolerance, 3 = the model of 0 with the clamp's "
+                  "bending layer as a boundary condition (docs/fem.md 3.4) on the probe's own mesh");
       }
     } catch (...) {
       H5Fclose(file);

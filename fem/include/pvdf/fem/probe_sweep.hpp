@@ -40,9 +40,12 @@ struct SweepOptions {
   /// estimate does not see). Slack and wrinkling films get no per-probe refinement unless a
   /// size is given here (their warm starts must carry the film's cone from press to press).
   double probe_size_m = 0;
-  /// Where the richer rim model (bending kept, mesh graded toward the clamped rim) solves a probe:
-  /// `by_estimate` = where the cheap model's estimated model error exceeds its share of the
-  /// tolerance (only when the cheap model drops bending), `never`, `always`.
+  /// Where a probe is solved again near the clamp, when the cheap model drops bending: `by_estimate`
+  /// = where the cheap model's estimated model error exceeds its share of the tolerance, `never`,
+  /// `always`. Such a probe first gets the clamp-layer condition on its own mesh (docs/fem.md §3.4;
+  /// solver.clamp_layer_condition, PVDF_CLAMP_LAYER=rim-graded turns it off); the rim model
+  /// (bending kept, mesh graded toward the clamped rim) solves it where the condition's estimate
+  /// exceeds its share of the tolerance, its Newton fails or its lagged passes do not settle.
   enum class RimModel { by_estimate, never, always };
   RimModel rim_model = RimModel::by_estimate;
   /// Rim-graded mesh: cell size at the clamp (m) and growth with the distance from it; 0 = chosen
@@ -78,6 +81,9 @@ struct SweepSetup {
   bool rim_model_available = false;
   std::size_t rim_n_dofs = 0;           ///< of the first rim mesh built (0 = none yet)
   double rim_size_m = 0;                ///< cell size at the clamp of the rim mesh (m)
+  /// Near-clamp probes try the clamp-layer condition before the rim model (Options::clamp_layer_condition
+  /// after the PVDF_CLAMP_LAYER switch).
+  bool clamp_layer_condition = false;
   double region_size_m = 0;             ///< largest cell size of the sweep mesh (also under any probe)
   double electrode_size_m = 0;          ///< cell size on the electrodes
   double probe_size_m = 0;              ///< cell size under each probe's footprint (0 = not refined there)
@@ -99,7 +105,11 @@ struct SweepState {
 /// Which model and mesh solved a probe (stored per map node as uint8).
 enum class SweepModel : unsigned char {
   cheap = 0,  ///< the setup's model (SweepSetup::model, bending per SweepSetup::include_bending), sweep mesh
-  rim = 1     ///< the setup's kinematics with bending, on the mesh graded toward the clamped rim
+  rim = 1,    ///< the setup's kinematics with bending, on the mesh graded toward the clamped rim
+  direct = 2, ///< a direct adaptive solve at this press alone (map generation, not the sweep)
+  /// The cheap model's mesh and kinematics with the clamp's bending layer as a boundary condition
+  /// (docs/fem.md §3.4; bending kept with it where its remaining effect exceeded tolerance/2).
+  clamp_layer = 3
 };
 
 /// One probe solve.
@@ -118,12 +128,17 @@ struct ProbeSolution {
   std::vector<double> charge_error_C;
   std::vector<double> charge_error_discretization_C;
   std::vector<double> charge_error_model_C;
+  /// The clamp-layer condition's share (model clamp_layer; empty otherwise), C, by electrode.
+  std::vector<double> charge_error_clamp_layer_C;
   /// max_k charge_error_C[k] / max_k |charge_C[k]|: the relative charge error of this probe.
   double estimated_relative_error = 1;
   double deflection_error_m = 0;        ///< estimated |error| of deflection_at_load_m (m)
   SweepModel model_used = SweepModel::cheap;
   /// When the rim model solved it: the cheap model's own estimated relative model error that sent it there.
   double cheap_model_relative_error = 0;
+  /// Model clamp_layer: the condition's own estimate K·ρ·|ΔQ| relative to the largest charge (in
+  /// estimated_relative_error too); otherwise 0.
+  double clamp_layer_relative_error = 0;
   int newton_iterations = 0;
   bool warm_started = false;            ///< Newton started from the given state (not from flat)
   double wall_s = 0;
@@ -139,6 +154,8 @@ struct SweepTiming {
   int factorizations = 0;
   int rim_solves = 0;         ///< probes solved (also) by the rim model
   double rim_s = 0;           ///< wall time of the rim-model solves
+  int clamp_layer_solves = 0; ///< probes solved (also) with the clamp-layer condition, kept or not
+  double clamp_layer_s = 0;   ///< wall time of those solves (their estimates included)
   double estimate_s = 0;      ///< wall time of the error estimates
   double probe_mesh_s = 0;    ///< building each probe's footprint-refined mesh and moving states to and from it
   double probe_mesh_dofs = 0; ///< mean DOFs of the footprint-refined probe meshes (0 = none)

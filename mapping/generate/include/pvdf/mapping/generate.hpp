@@ -155,6 +155,12 @@ struct MapReport {
   std::size_t n_dofs = 0;         ///< sweep mesh of the cheap model
   std::size_t rim_n_dofs = 0;     ///< rim-graded mesh of the rim model (0 = none)
   std::size_t n_rim_model = 0;    ///< map points solved by the rim model (mirror images included)
+  /// Map points solved with the clamp's bending layer as a boundary condition (docs/fem.md §3.4;
+  /// mirror images included): near-clamp nodes whose condition estimate met its share of the tolerance.
+  std::size_t n_clamp_layer = 0;
+  std::size_t clamp_layer_solves = 0;  ///< clamp-layer condition solves (this process), kept or not
+  double clamp_layer_s = 0;            ///< thread-seconds spent in them (this process)
+  bool clamp_layer_condition = false;  ///< near-clamp nodes tried the condition (off: PVDF_CLAMP_LAYER=rim-graded)
   std::size_t n_tolerance_not_met = 0;  ///< map points whose estimate exceeds the tolerance
   std::size_t n_direct = 0;       ///< map points solved by a direct adaptive solve (mirror images included)
   std::size_t direct_solves = 0;  ///< direct adaptive solves (this process), kept or not
@@ -187,7 +193,8 @@ struct MapReport {
   std::string first_failure;      ///< first failed point and the solver's message ("" = none)
   /// [nf][ny][nx] provenance flags (see namespace provenance).
   std::vector<std::uint8_t> provenance;
-  /// [nf][ny][nx] which model solved each point (pvdf::fem::SweepModel: 0 cheap, 1 rim; 2 direct adaptive solve).
+  /// [nf][ny][nx] which model solved each point (pvdf::fem::SweepModel: 0 cheap, 1 rim; 2 direct adaptive solve;
+  /// 3 the cheap model with the clamp-layer condition).
   std::vector<std::uint8_t> node_model;
 };
 
