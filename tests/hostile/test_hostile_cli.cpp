@@ -250,8 +250,12 @@ const std::vector<Row> rows = {
   {"map-o-is-checkpoint", "map good.json -o mc.h5 --checkpoint mc.h5 --quiet", 2, "--checkpoint", "mc.h5"},
   {"map-checkpoint-dev-full", "map good.json -o mc2.h5 --checkpoint /dev/full --quiet", 2, "/dev/full", "mc2.h5"},
   {"map-checkpoint-scene", "map good.json -o mc3.h5 --checkpoint good.json --quiet", 2, "is the input", "mc3.h5"},
-  {"map-locked", "flock -x ml.h5.lock sleep 2 & sleep 0.5; $X map good.json -o ml.h5 --quiet 2>.err; rc=$?; wait; "
-                 "exit $rc", 2, "being written by another pvdfkit", "ml.h5"},
+  // A handshake, not a sleep: the holder signals when it has the lock and keeps it until the map
+  // returned (a fixed 0.5 s let a loaded machine start the map before the lock was taken).
+  {"map-locked", "rm -f ml.held ml.done; flock -x ml.h5.lock sh -c 'touch ml.held; n=0; while [ ! -e ml.done ] && [ $n -lt 600 ]; do sleep 0.05; n=$((n+1)); done' & "
+                 "n=0; while [ ! -e ml.held ] && [ $n -lt 600 ]; do sleep 0.05; n=$((n+1)); done; "
+                 "$X map good.json -o ml.h5 --quiet 2>.err; rc=$?; touch ml.done; wait; exit $rc",
+   2, "being written by another pvdfkit", "ml.h5"},
   {"map-lock-symlink", "ln -sf target.txt ml2.h5.lock; $X map good.json -o ml2.h5 --quiet 2>.err", 2, "ml2.h5.lock",
    "ml2.h5"},
   {"map-forces-not-distinct", "map good.json -o m.h5 --quiet --forces-N 1,1.0000000000000002", 2, "not distinct", "m.h5"},
