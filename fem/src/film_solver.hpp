@@ -267,10 +267,6 @@ class FilmSolver {
   LineSearch line_search(Model model, double artificial_tension, const Vector<double>& u, const Vector<double>& du,
                          double slope, double energy0, double r_norm, Vector<double>& trial, Vector<double>& r_trial);
   double estimate_tension() const;
-  /// The membrane similarity predictor (docs/fem.md §5): u_in-plane ← s²·u_in-plane, w ← s·w with the
-  /// s that minimizes the potential at artificial tension `next_tension` (N/m) over that family.
-  /// Returns s (1 where the scaling does not apply).
-  double similarity_rescale(Model model, double probe_tension, double next_tension, Vector<double>& u);
   NewtonOutcome solve_from_flat(Model model, Vector<double>& u);
 
   // adaptivity.cpp
