@@ -7,7 +7,6 @@
 #include "pvdf/core/scene.hpp"
 #include "pvdf/core/scene_geometry.hpp"
 #include "pvdf/fem/result_json.hpp"
-#include "pvdf/fem/plausibility.hpp"
 #include "pvdf/fem/solver.hpp"
 #include "pvdf/mesh/mesher.hpp"
 
@@ -175,7 +174,6 @@ int run_solve(const SolveOptions& o) {
   std::optional<StdoutToStderr> progress_to_stderr;
   if (o.json && o.verbose) progress_to_stderr.emplace();  // stdout carries the JSON alone
   pvdf::fem::Result r = solve_scene(o, scene, options, mesh_file_cells);
-  pvdf::fem::enforce_physical_bounds(scene, r);  // never "converged" for an absurd answer
   progress_to_stderr.reset();
   const auto& s = r.summary;
   const bool ok = pvdf::fem::usable(s.status);

@@ -3,6 +3,7 @@
 // test hooks' constructors. docs/fem.md explains every equation; the parts are listed in
 // film_solver.hpp.
 #include "film_solver.hpp"
+#include "pvdf/fem/plausibility.hpp"
 
 #include "pvdf/core/error.hpp"
 
@@ -108,6 +109,7 @@ Result FilmSolver::run() {
   if (!vtu_files_.empty()) result.vtu_files.push_back(options_.vtu_directory + "/film.pvd");
   s.wall_s = seconds_since(t_start);
   result.summary = s;
+  enforce_physical_bounds(scene_, result);  // never "converged" for an absurd answer (checks.cpp)
   return result;
 }
 

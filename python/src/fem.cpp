@@ -8,7 +8,6 @@
 #include "pvdf/core/io.hpp"
 #include "pvdf/core/scene_geometry.hpp"
 #include "pvdf/core/scene.hpp"
-#include "pvdf/fem/plausibility.hpp"
 #include "pvdf/fem/probe_sweep.hpp"
 #include "pvdf/fem/solver.hpp"
 #include "pvdf/mapping/generate.hpp"
@@ -90,7 +89,6 @@ pvdf::fem::Result solve(py::object scene_arg, py::object loads, py::object sampl
     py::gil_scoped_release release;
     r = pvdf::fem::solve(scene, options);
   }
-  pvdf::fem::enforce_physical_bounds(scene, r);  // never "converged" for an absurd answer
   if (check && !pvdf::fem::usable(r.summary.status)) {
     throw pvdf::NumericalError(scene.source + ": the film solve did not converge (" +
                                pvdf::fem::status_name(r.summary.status) + "): " + r.summary.message);
