@@ -4,6 +4,7 @@
 #include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
+#include "pvdf/core/membrane_scaling.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -224,7 +225,7 @@ double estimated_deflection_m(const Scene& scene, double force_N) {
   const double k_plate = 16.0 * pi * D / (a * a);
   const double N0 = std::max(scene.membrane.pretension_N_per_m, 0.0);
   const double k_tension = 2.0 * pi * N0 / std::log(a / r_p);
-  const double w_membrane = a * std::cbrt(force_N / (E * h * a));
+  const double w_membrane = membrane_deflection_scale_m(E * h, force_N, a);
   const double k_membrane = w_membrane > 0 ? force_N / w_membrane : 0.0;
   const double k = k_plate + k_tension + k_membrane;
   return k > 0 ? force_N / k : 0.0;

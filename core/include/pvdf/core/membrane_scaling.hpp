@@ -30,4 +30,10 @@ inline double membrane_force_scale_N_per_m(double stiffness_N_per_m, double forc
   return stiffness_N_per_m * std::pow(force_N / (stiffness_N_per_m * radius_m), 2.0 / 3.0);
 }
 
+/// Membrane deflection scale w ~ a·(F/(E·h·a))^(1/3) (m) of the same membrane: its sag under the
+/// probe up to an O(1) factor (the scene check of a force too small to deflect the film).
+inline double membrane_deflection_scale_m(double stiffness_N_per_m, double force_N, double radius_m) {
+  return radius_m * std::cbrt(force_N / (stiffness_N_per_m * radius_m));
+}
+
 }  // namespace pvdf
