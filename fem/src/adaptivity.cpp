@@ -214,7 +214,7 @@ NewtonOutcome FilmSolver::refine_until_tolerance(Model model, std::string& where
     const double clamp_estimate = clamp_layer_estimate();
     const double other_model =
         (goal_.model_estimated && std::isfinite(goal_.relative_model) ? goal_.relative_model : 0.0) + kinematics_model_error_;
-    const double clamp_share = 0.75 * options_.tolerance - other_model;
+    const double clamp_share = clamp_layer_share(options_.tolerance, other_model);
     if (clamp_layer_ && clamp_estimate > clamp_share) {
       clamp_reason_ += "; its estimated error " + fmt(clamp_estimate) + " > its share of the tolerance " +
                        fmt(clamp_share) + ": bending kept, rim graded to l_b instead";

@@ -180,14 +180,12 @@ void FilmSolver::add_error_estimates(Result& result) const {
     return e + kinematics_model_error_ * std::abs(value);
   };
   auto at = [](const std::vector<double>& v, std::size_t j) { return j < v.size() && std::isfinite(v[j]) ? v[j] : 0.0; };
+  std::vector<double> charges;
+  for (const auto& e : result.electrodes) charges.push_back(e.charge_C);
+  const std::vector<double> clamp_error = clamp_layer_charge_error_C(charges);  // 0 without the condition
   for (std::size_t k = 0; k < result.electrodes.size(); ++k) {
     ElectrodeResult& e = result.electrodes[k];
-    e.charge_error_C = bar(goal_.charge_discretization_C, goal_.charge_model_C, k, e.charge_C);
-    if (clamp_layer_ && k < clamp_correction_C_.size()) {  // the clamp-layer condition's estimate (clamp_layer.cpp)
-      const double c = clamp_layer_estimate();
-      e.charge_error_C += c >= 1.0 ? std::abs(e.charge_C)
-                                   : (clamp_correction_ > 0 ? c / clamp_correction_ : 0.0) * std::abs(clamp_correction_C_[k]);
-    }
+    e.charge_error_C = clamp_error[k] + bar(goal_.charge_discretization_C, goal_.charge_model_C, k, e.charge_C);
     e.charge_discretization_error_C = at(goal_.charge_discretization_C, k);
     e.charge_model_error_C = at(goal_.charge_model_C, k);
   }
@@ -206,16 +204,7 @@ namespace {
 Result run_with_model_choice(const pvdf::Scene& scene, const Options& options,
                              const std::function<void(FilmSolver&)>& make_grid) {
   const ModelChoice choice = choose_model(scene, options);
-  Options used = options;
-  // Bench switch for the clamp's layer (docs/bench-fem.md, bench/fem/bench_clamp_layer.sh), read like
-  // PVDF_FACTORIZATION: "rim-graded" = the reference path, "no-shift" = the condition without its
-  // in-plane shift. Unset (the default): Options as given.
-  if (const char* v = std::getenv("PVDF_CLAMP_LAYER")) {
-    const std::string mode = v;
-    if (mode == "rim-graded") used.clamp_layer_condition = false;
-    else if (mode == "no-shift") used.clamp_layer_inplane_shift = false;
-    else if (!mode.empty()) throw InputError("PVDF_CLAMP_LAYER = '" + mode + "' is not a mode; use rim-graded or no-shift, or unset it");
-  }
+  Options used = with_clamp_layer_switch(options);  // the PVDF_CLAMP_LAYER bench switch (clamp_layer.cpp)
   used.model = choice.model;
   used.include_bending = choice.include_bending;
   FilmSolver solver(scene, used);
