@@ -10,6 +10,8 @@
 #include "pvdf/mapping/map_io.hpp"
 #include "pvdf/plot/plot.hpp"
 #include "pvdf/core/progress.hpp"
+#include "pvdf/core/resources.hpp"
+#include "pvdf/core/staged_eta.hpp"
 #include "pvdf/core/scene.hpp"
 #include "pvdf/mapping/design.hpp"
 #include "pvdf/mapping/map.hpp"
@@ -21,6 +23,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdint>
 #include <cmath>
 #include <filesystem>
 #include <functional>
@@ -65,20 +68,37 @@ struct DesignCommandOptions {
 /// One progress report over the FEM maps of a phase (the previews, or the refined winners), so
 /// that its ETA is the phase's: the total is the positions of the maps done, of the map in
 /// progress, and the planned positions of each map still to come (mapping::planned_positions:
-/// layouts differ, e.g. a mirror-symmetric one solves half its grid). Its ETA divides the
-/// positions left by the rate since the first position (pvdf::Progress), so the first map's setup
-/// does not count and later maps' setups are spread over their positions.
+/// layouts differ, e.g. a mirror-symmetric one solves half its grid). The ETA is pvdf::StagedEta's:
+/// each map's setup (mesh, setup checks) and its rate per position are measured apart, the map in
+/// progress is finished at its own rate, and the maps to come are predicted with the measured mean
+/// setup and the pooled rate (docs/design.md §6).
+/// The process's resident memory after each block of map positions (design.json's `memory`).
+struct MemorySample {
+  std::string phase;
+  std::size_t positions = 0;  ///< positions solved in the phase so far
+  std::uint64_t resident_bytes = 0;
+};
+
 class MapsProgress {
  public:
   /// The clock (and a heartbeat line every 10 s off a terminal) starts now, before the first setup.
-  /// `planned`: the positions of each map of the phase, in the order they run.
-  MapsProgress(std::string label, std::vector<std::size_t> planned, bool quiet)
-      : label_(std::move(label)), planned_(std::move(planned)), n_maps_(planned_.size()), quiet_(quiet) {
+  /// `planned`: the positions of each map of the phase, in the order they run. `memory`: where the
+  /// resident memory after each block is appended (also when quiet), or null.
+  MapsProgress(std::string label, std::vector<std::size_t> planned, bool quiet, std::string phase = {},
+               std::vector<MemorySample>* memory = nullptr)
+      : label_(std::move(label)), planned_(std::move(planned)), n_maps_(planned_.size()), quiet_(quiet),
+        phase_(std::move(phase)), memory_(memory), eta_(planned_), t0_(std::chrono::steady_clock::now()) {
     if (!quiet_ && n_maps_ > 0) bar_ = std::make_unique<pvdf::Progress>(label_, 0);
+  }
+  /// Map number `index` (0-based) starts its setup now.
+  void start_map(std::size_t index) {
+    if (quiet_) return;
+    eta_.start_stage(index, now_s());
+    if (bar_) bar_->set_eta_s(eta_.seconds_left(now_s()));
   }
   /// The callback of MapOptions::progress for map number `index` (0-based) of the phase.
   std::function<void(std::size_t, std::size_t)> for_map(std::size_t index) {
-    if (quiet_) return {};
+    if (quiet_ && memory_ == nullptr) return {};
     return [this, index](std::size_t done, std::size_t total) {
       if (index != current_) {  // the previous map ended: its positions are done
         done_before_ += current_total_;
@@ -87,7 +107,12 @@ class MapsProgress {
       current_total_ = total;
       std::size_t all = done_before_ + total;
       for (std::size_t k = index + 1; k < n_maps_; ++k) all += planned_[k];
+      if (memory_ != nullptr) memory_->push_back({phase_, done_before_ + done, pvdf::current_resident_bytes()});
+      if (!bar_) return;
+      const double t = now_s();
+      eta_.items_done(index, done, total, t);
       bar_->set_total(all);
+      bar_->set_eta_s(eta_.seconds_left(t));
       bar_->update(done_before_ + done);
     };
   }
@@ -103,10 +128,15 @@ class MapsProgress {
   }
 
  private:
+  double now_s() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count(); }
   std::string label_;
   std::vector<std::size_t> planned_;
   std::size_t n_maps_;
   bool quiet_;
+  std::string phase_;
+  std::vector<MemorySample>* memory_;
+  pvdf::StagedEta eta_;
+  std::chrono::steady_clock::time_point t0_;
   std::size_t current_ = 0, current_total_ = 0, done_before_ = 0;
   std::unique_ptr<pvdf::Progress> bar_;
 };
@@ -191,6 +221,7 @@ ChargeMap make_map(const Candidate& c, const DesignCommandOptions& o, double spa
 #ifdef PVDF_HAVE_MAP_GENERATION
   MapOptions mo = map_options(c, o, spacing);
   mo.progress = progress.for_map(map_index);
+  progress.start_map(map_index);
   MapReport report;
   ChargeMap map = generate_map(scene, mo, &report);
   pvdf::make_directories(o.out_dir + "/maps");
@@ -635,7 +666,7 @@ std::vector<const Candidate*> rank(const std::vector<Candidate>& candidates) {
 
 /// The best `--refine-best` scene candidates recomputed at the finer spacing and evaluated again.
 std::vector<Candidate> refine_winners(const std::vector<const Candidate*>& ranked, const DesignCommandOptions& o,
-                                      const DesignOptions& d, double spacing) {
+                                      const DesignOptions& d, double spacing, std::vector<MemorySample>* memory) {
   std::vector<Candidate> refined;
   if (o.refine_best > 0) {
     const double fine = o.refine_spacing_m > 0 ? o.refine_spacing_m : spacing / 2;
@@ -643,7 +674,8 @@ std::vector<Candidate> refine_winners(const std::vector<const Candidate*>& ranke
     for (const Candidate* c : ranked) {
       if (c->scene && int(to_refine.size()) < o.refine_best) to_refine.push_back(c);
     }
-    MapsProgress progress("design: refined maps, positions", planned_positions(to_refine, o, fine), o.quiet);
+    MapsProgress progress("design: refined maps, positions", planned_positions(to_refine, o, fine), o.quiet, "refined",
+                          memory);
     for (const Candidate* c : ranked) {
       if (int(refined.size()) >= o.refine_best) break;
       if (!c->scene) continue;  // a ready map cannot be refined here
@@ -734,7 +766,9 @@ int run_design(const DesignCommandOptions& o) {
   // Step 2: maps (coarse previews) and their evaluation.
   std::vector<const Candidate*> with_scene;
   for (const auto& c : all) with_scene.push_back(&c);
-  MapsProgress progress("design: preview maps, positions", planned_positions(with_scene, o, spacing), o.quiet);
+  std::vector<MemorySample> memory;
+  MapsProgress progress("design: preview maps, positions", planned_positions(with_scene, o, spacing), o.quiet, "preview",
+                        &memory);
   std::size_t map_index = 0;
   for (auto& c : all) {
     if (c.scene) c.map = make_map(c, o, spacing, c.map_file, c.map_source, progress, map_index++);
@@ -744,7 +778,7 @@ int run_design(const DesignCommandOptions& o) {
 
   // Step 3: rank; refine the winners at a finer spacing and rank again.
   const std::vector<const Candidate*> ranked = rank(all);
-  const std::vector<Candidate> refined = refine_winners(ranked, o, d, spacing);
+  const std::vector<Candidate> refined = refine_winners(ranked, o, d, spacing, &memory);
   const std::vector<const Candidate*> ranked_refined = rank(refined);
 
   // Step 4: report.
@@ -760,7 +794,12 @@ int run_design(const DesignCommandOptions& o) {
     if (sweep) write_sweep_figure(all, series_names, o, sweep->key, written);
   }
   const Candidate* best = ranked_refined.empty() ? ranked.front() : ranked_refined.front();
-  const nlohmann::json j = design_json(d, any_synthetic, spacing, ranked, refined, ranked_refined, best, sweep, written);
+  nlohmann::json j = design_json(d, any_synthetic, spacing, ranked, refined, ranked_refined, best, sweep, written);
+  j["peak_resident_bytes"] = pvdf::peak_resident_bytes();
+  j["memory"] = nlohmann::json::array();
+  for (const auto& m : memory) {
+    j["memory"].push_back({{"phase", m.phase}, {"positions", m.positions}, {"resident_bytes", m.resident_bytes}});
+  }
   if (!o.no_plots) {
     pvdf::write_file_atomically(o.out_dir + "/design.json", [&j](std::ostream& out) { out << j.dump(2) << '\n'; });
   }

@@ -1,6 +1,7 @@
 // Progress on stderr: a terminal bar, or plain lines with rate and ETA for logs and pipes.
 #include "pvdf/core/progress.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -85,6 +86,10 @@ void Progress::update(std::size_t done) {
 }
 
 double Progress::eta_s() const {
+  if (eta_hint_s_ >= 0) {
+    const double since = std::chrono::duration<double>(std::chrono::steady_clock::now() - eta_hint_at_).count();
+    return std::max(0.0, eta_hint_s_ - since);
+  }
   if (done_ <= done_at_first_ || total_ < done_) return NAN;
   const double since_first = std::chrono::duration<double>(std::chrono::steady_clock::now() - first_item_).count();
   const double rate = since_first > 0 ? static_cast<double>(done_ - done_at_first_) / since_first : 0.0;
@@ -94,6 +99,12 @@ double Progress::eta_s() const {
 void Progress::set_total(std::size_t total) {
   std::lock_guard<std::mutex> lock(mutex_);
   total_ = total;
+}
+
+void Progress::set_eta_s(double seconds_left) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  eta_hint_s_ = std::isfinite(seconds_left) && seconds_left >= 0 ? seconds_left : -1;
+  eta_hint_at_ = std::chrono::steady_clock::now();
 }
 
 void Progress::finish() {

@@ -31,6 +31,10 @@ class Progress {
   void update(std::size_t done);
   /// Changes the total (work whose size is learnt on the way, e.g. several maps in turn).
   void set_total(std::size_t total);
+  /// An ETA computed by the caller, who knows the work's structure (e.g. several maps, each with a
+  /// setup and its own rate), in place of the items-left-over-rate one: the seconds left as of now,
+  /// counted down until the next call. NaN or negative returns to the rate-based ETA.
+  void set_eta_s(double seconds_left);
   /// Final line (see the class comment); idempotent. Stops the heartbeat.
   void finish();
   /// True when stderr is a terminal (or forced): the bar; false: plain lines.
@@ -57,6 +61,8 @@ class Progress {
   std::chrono::steady_clock::time_point last_draw_;
   std::chrono::steady_clock::time_point first_item_;  ///< when done first became > 0
   std::size_t done_at_first_ = 0;
+  double eta_hint_s_ = -1;  ///< set_eta_s's value (< 0: none)
+  std::chrono::steady_clock::time_point eta_hint_at_;
   std::mutex mutex_;  ///< guards the counts, the clocks and stderr writes
   std::condition_variable stop_;
   std::thread heartbeat_;  ///< non-terminal only

@@ -1,0 +1,15 @@
+// What the running process has used: its peak resident memory (for the `--json` of long commands).
+#pragma once
+
+#include <cstdint>
+
+namespace pvdf {
+
+/// The largest resident set size of this process so far, in bytes (getrusage's ru_maxrss; 0 when
+/// the system does not say). Children are not counted.
+std::uint64_t peak_resident_bytes();
+
+/// The resident set size of this process now, in bytes (/proc/self/statm; 0 where it is absent).
+std::uint64_t current_resident_bytes();
+
+}  // namespace pvdf

@@ -1,0 +1,48 @@
+// The time left of work done in stages one after another (the maps of a `design` run): each stage
+// a setup followed by items solved at the stage's own rate.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+namespace pvdf {
+
+/// Predicts the seconds left of staged work from what was measured so far, stage by stage.
+///
+/// Per stage k it keeps when the stage started, its first and latest item counts and times. Its
+/// item rate r_k is measured between its first and latest report (so the setup before the first
+/// report does not count); its setup s_k = (first report − start) − items of the first report / r_k.
+/// The time left is
+///   current stage: its setup still to run (while no item is reported, the mean measured setup
+///                  minus the time since its start) + items left / rate;
+///   stages to come: mean measured setup + planned items / rate,
+/// with `rate` the current stage's own once measured, else the pooled rate of the stages seen
+/// (their items over the time between their first and last reports). NaN until one rate is known.
+/// Times are seconds on any monotone clock the caller chooses.
+class StagedEta {
+ public:
+  /// `planned_items`: the items each stage is expected to have, in the order the stages run.
+  explicit StagedEta(std::vector<std::size_t> planned_items);
+  /// Stage `index` starts its setup at `t_s`.
+  void start_stage(std::size_t index, double t_s);
+  /// Stage `index` has `done` of `total` items at `t_s` (`total` replaces the planned count).
+  void items_done(std::size_t index, std::size_t done, std::size_t total, double t_s);
+  /// Seconds left at `t_s`; NaN before any stage has a measured rate.
+  double seconds_left(double t_s) const;
+
+ private:
+  struct Stage {
+    std::size_t planned = 0;
+    bool started = false;
+    double start_s = 0;
+    bool reported = false;
+    std::size_t first_done = 0, last_done = 0;
+    double first_s = 0, last_s = 0;
+    double rate() const;   ///< items per second between first and latest report; 0 if not measured
+    double setup_s() const;  ///< measured setup, < 0 if not measured
+  };
+  std::vector<Stage> stages_;
+  std::size_t current_ = 0;
+};
+
+}  // namespace pvdf

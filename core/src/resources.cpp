@@ -1,0 +1,29 @@
+// peak_resident_bytes from getrusage (Linux reports ru_maxrss in KiB); current_resident_bytes from
+// /proc/self/statm (pages).
+#include "pvdf/core/resources.hpp"
+
+#include <cstdio>
+
+#include <sys/resource.h>
+#include <unistd.h>
+
+namespace pvdf {
+
+std::uint64_t peak_resident_bytes() {
+  struct rusage usage {};
+  if (getrusage(RUSAGE_SELF, &usage) != 0 || usage.ru_maxrss < 0) return 0;
+  return static_cast<std::uint64_t>(usage.ru_maxrss) * 1024u;
+}
+
+std::uint64_t current_resident_bytes() {
+  std::FILE* f = std::fopen("/proc/self/statm", "r");
+  if (f == nullptr) return 0;
+  unsigned long long size_pages = 0, resident_pages = 0;
+  const int n = std::fscanf(f, "%llu %llu", &size_pages, &resident_pages);
+  std::fclose(f);
+  const long page = sysconf(_SC_PAGESIZE);
+  if (n != 2 || page <= 0) return 0;
+  return resident_pages * static_cast<std::uint64_t>(page);
+}
+
+}  // namespace pvdf

@@ -1,0 +1,82 @@
+// StagedEta: the ETA of stages each made of a setup and items (see the header for the model).
+#include "pvdf/core/staged_eta.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace pvdf {
+
+double StagedEta::Stage::rate() const {
+  const double dt = last_s - first_s;
+  return reported && last_done > first_done && dt > 0 ? double(last_done - first_done) / dt : 0.0;
+}
+
+double StagedEta::Stage::setup_s() const {
+  const double r = rate();
+  if (!started || r <= 0) return -1;
+  return std::max(0.0, first_s - start_s - double(first_done) / r);
+}
+
+StagedEta::StagedEta(std::vector<std::size_t> planned_items) {
+  stages_.resize(planned_items.size());
+  for (std::size_t k = 0; k < planned_items.size(); ++k) stages_[k].planned = planned_items[k];
+}
+
+void StagedEta::start_stage(std::size_t index, double t_s) {
+  if (index >= stages_.size()) return;
+  Stage& s = stages_[index];
+  s.started = true;
+  s.start_s = t_s;
+  current_ = index;
+}
+
+void StagedEta::items_done(std::size_t index, std::size_t done, std::size_t total, double t_s) {
+  if (index >= stages_.size()) return;
+  Stage& s = stages_[index];
+  if (!s.started) start_stage(index, t_s);
+  s.planned = total;
+  if (!s.reported) {
+    s.reported = true;
+    s.first_done = done;
+    s.first_s = t_s;
+  }
+  s.last_done = done;
+  s.last_s = t_s;
+  current_ = index;
+}
+
+double StagedEta::seconds_left(double t_s) const {
+  // Pooled rate and mean setup of the stages whose rate is measured.
+  double items = 0, seconds = 0, setup_sum = 0;
+  int n_setups = 0;
+  for (const Stage& s : stages_) {
+    if (s.rate() <= 0) continue;
+    items += double(s.last_done - s.first_done);
+    seconds += s.last_s - s.first_s;
+    const double setup = s.setup_s();
+    if (setup >= 0) {
+      setup_sum += setup;
+      ++n_setups;
+    }
+  }
+  if (items <= 0 || seconds <= 0) return NAN;
+  const double pooled = items / seconds;
+  const double mean_setup = n_setups > 0 ? setup_sum / n_setups : 0.0;
+
+  double left = 0;
+  if (current_ < stages_.size()) {
+    const Stage& c = stages_[current_];
+    const double rate = c.rate() > 0 ? c.rate() : pooled;
+    if (!c.reported) {
+      const double into = c.started ? t_s - c.start_s : 0.0;
+      left += std::max(0.0, mean_setup - into) + double(c.planned) / rate;
+    } else {
+      left += double(c.planned > c.last_done ? c.planned - c.last_done : 0) / rate;
+      left -= std::min(t_s - c.last_s, double(c.planned > c.last_done ? c.planned - c.last_done : 0) / rate);
+    }
+  }
+  for (std::size_t k = current_ + 1; k < stages_.size(); ++k) left += mean_setup + double(stages_[k].planned) / pooled;
+  return std::max(0.0, left);
+}
+
+}  // namespace pvdf
