@@ -11,6 +11,7 @@
 // values held (an SPD tangent, Newton increments zero on the rim), and again until the outputs stop
 // changing. With bending kept, the rim's C0IP terms (∂_n w = 0) are dropped: a simply supported rim
 // leaves no layer to resolve.
+#include "clamp_layer.hpp"
 #include "film_solver.hpp"
 
 #include "pvdf/core/error.hpp"

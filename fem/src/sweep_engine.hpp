@@ -7,6 +7,8 @@
 #include "pvdf/fem/probe_sweep.hpp"
 #include "pvdf/fem/solver.hpp"
 
+#include "clamp_layer.hpp"  // the condition's share of the tolerance and its bench switch
+
 #include <array>
 #include <memory>
 #include <string>
@@ -120,16 +122,6 @@ class SweepEngine {
 /// pretension and the rim membrane force of the point-loaded membrane under force_N
 /// (model_choice.cpp): the rim cell size that resolves it.
 double rim_boundary_layer_m(const pvdf::Scene& scene, double force_N);
-
-/// The clamp-layer condition's share of the tolerance (clamp_layer.cpp, docs/fem.md §3.4):
-/// 3/4 · tolerance − the other model errors (relative; non-finite counts as the whole tolerance).
-/// The condition is kept where its estimate is within it, else the rim-graded reference path.
-double clamp_layer_share(double tolerance, double other_model_error);
-
-/// `options` with the PVDF_CLAMP_LAYER bench switch applied (read like PVDF_FACTORIZATION):
-/// "rim-graded" = Options::clamp_layer_condition off (the reference path), "no-shift" = no in-plane
-/// shift, unset or empty = as given; another value throws pvdf::InputError.
-Options with_clamp_layer_switch(Options options);
 
 /// What the `auto` rule decided.
 struct ModelChoice {

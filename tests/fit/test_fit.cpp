@@ -13,6 +13,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <random>
 
@@ -127,11 +128,30 @@ TEST_CASE("the sweep charges equal adaptive direct solves at the presses (no int
 
 namespace {
 
+/// PVDF_TEST_SIGMA_SCALE (test only, never read by the library): multiplies every σ the fit reports
+/// before the coverage count, to show that the two-sided bands fail for σ × 0.5 and σ × 2.
+double test_sigma_scale() {
+  const char* text = std::getenv("PVDF_TEST_SIGMA_SCALE");
+  if (text == nullptr || *text == '\0') return 1.0;
+  char* end = nullptr;
+  const double v = std::strtod(text, &end);
+  if (end == text || *end != '\0' || !(v > 0) || !std::isfinite(v)) return 1.0;
+  return v;
+}
+
+/// What a coverage study counts: per parameter the repetitions within 2σ of the truth, over all
+/// parameters and repetitions the estimates within 1σ, and the mean of z² = ((value − truth)/σ)².
+struct Coverage {
+  std::array<int, 3> within_2sigma{0, 0, 0};
+  int within_1sigma = 0;
+  int n = 0;
+  double mean_z2 = 0;
+};
+
 /// Coverage study: a known film (pre-tension T of either sign, E_scale E, d31), data from a finer
-/// sweep mesh + 2 % noise, 20 seeded fits started at (T_start, E_start, the scene's d31); returns the
-/// number of repetitions whose value lies within 2σ of the truth, per parameter.
+/// sweep mesh + 2 % noise, 20 seeded fits started at (T_start, E_start, the scene's d31).
 /// `eps`: the tension-field residual stiffness of both predictors (the fit's slack path).
-std::array<int, 3> coverage(double T, double E, double d31, double T_start, double E_start, const char* label,
+Coverage coverage(double T, double E, double d31, double T_start, double E_start, const char* label,
                             double eps = 0) {
   const pvdf::Scene s = film();
   const auto ps = presses();
@@ -153,7 +173,9 @@ std::array<int, 3> coverage(double T, double E, double d31, double T_start, doub
   std::mt19937 rng(20261124);
   std::normal_distribution<double> normal(0.0, 1.0);
   const double rel = 0.02;  // 2 % of every value, 1 sigma
-  std::array<int, 3> within{0, 0, 0};
+  Coverage cov;
+  const double scale = test_sigma_scale();
+  double sum_z2 = 0;
   const int reps = 20;
   const auto t0 = std::chrono::steady_clock::now();
   for (int rep = 0; rep < reps; ++rep) {
@@ -174,7 +196,14 @@ std::array<int, 3> coverage(double T, double E, double d31, double T_start, doub
     const double truth_values[3] = {T, E, d31};
     for (int j = 0; j < 3; ++j) {
       const auto& p = r.parameters[j];
-      if (std::abs(p.value - truth_values[j]) <= 2 * p.sigma) ++within[j];
+      const double sigma = scale * p.sigma;
+      REQUIRE(sigma > 0);
+      const double z = (p.value - truth_values[j]) / sigma;
+      REQUIRE(std::isfinite(z));
+      if (std::abs(z) <= 2) ++cov.within_2sigma[j];
+      if (std::abs(z) <= 1) ++cov.within_1sigma;
+      sum_z2 += z * z;
+      ++cov.n;
       if (rep == 0) std::printf("  %s = %.5g +- %.3g (true %.5g)\n", p.name.c_str(), p.value, p.sigma, truth_values[j]);
     }
     if (rep == 0)
@@ -182,33 +211,45 @@ std::array<int, 3> coverage(double T, double E, double d31, double T_start, doub
                   r.fem.n_solves, r.fem.solve_s, r.fem.n_sweeps, r.fem.setup_s);
   }
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  std::printf("%s: coverage of the 2-sigma intervals over %d repetitions: pretension %d, E_scale %d, d31 %d (%.1f s)\n",
-              label, reps, within[0], within[1], within[2], wall);
-  return within;
+  cov.mean_z2 = sum_z2 / cov.n;
+  std::printf("%s (sigma x %g): coverage of the 2-sigma intervals over %d repetitions: pretension %d, E_scale %d, "
+              "d31 %d; within 1 sigma %d of %d; mean z^2 %.3f (%.1f s)\n",
+              label, scale, reps, cov.within_2sigma[0], cov.within_2sigma[1], cov.within_2sigma[2], cov.within_1sigma,
+              cov.n, cov.mean_z2, wall);
+  return cov;
+}
+
+/// The two-sided bands (docs/testing.md, "Coverage tests"): ≥ 17 of 20 within 2σ per parameter
+/// (too small a σ fails here), 1σ share of all 60 estimates in [0.45, 0.88] (σ × 2 gives 0.954, σ × 0.5
+/// gives 0.383), mean z² in [0.4, 2.2] (1 for the right σ, 0.25 for σ × 2, 4 for σ × 0.5).
+void check_two_sided(const Coverage& c) {
+  for (int j = 0; j < 3; ++j) CHECK(c.within_2sigma[j] >= 17);
+  const double share_1sigma = double(c.within_1sigma) / c.n;
+  CHECK(share_1sigma >= 0.45);
+  CHECK(share_1sigma <= 0.88);
+  CHECK(c.mean_z2 >= 0.4);
+  CHECK(c.mean_z2 <= 2.2);
 }
 
 }  // namespace
 
-TEST_CASE("a known film (pre-tension, stiffness, d31) is recovered within 2 sigma in >= 17 of 20 noisy repetitions",
+TEST_CASE("a known film (pre-tension, stiffness, d31): the fit's sigma is neither too small nor too large (two-sided coverage)",
           "[fit][.coverage]") {
-  const auto within = coverage(20.0, 0.5, 5.0e-12, 10.0, 0.7, "pre-tensioned film");
-  for (int j = 0; j < 3; ++j) CHECK(within[j] >= 17);
+  check_two_sided(coverage(20.0, 0.5, 5.0e-12, 10.0, 0.7, "pre-tensioned film"));
 }
 
 TEST_CASE("a known SLACK film (negative pre-tension, stiffness, d31) is recovered within 2 sigma in >= 17 of 20",
           "[fit][.coverage-slack]") {
   // N0 = −150 N/m on the 25 µm seed-001 film: held flat it would be compressed by 150 N/m, a natural
   // strain of about 2e-3 (stress-free radius 30.06 mm); at E_scale 0.5 the fit's rescaled slack is −300.
-  const auto within = coverage(-150.0, 0.5, 5.0e-12, -80.0, 0.7, "slack film");
-  for (int j = 0; j < 3; ++j) CHECK(within[j] >= 17);
+  check_two_sided(coverage(-150.0, 0.5, 5.0e-12, -80.0, 0.7, "slack film"));
 }
 
 TEST_CASE("a known SLACK film is recovered within 2 sigma in >= 17 of 20 on the residual-stiffness path (1e-3)",
           "[fit][.coverage-slack-residual]") {
   // The same film and data as above, with the fit's strongly-slack settings: residual stiffness 1e-3
   // (in the data's finer model too) and bending kept.
-  const auto within = coverage(-150.0, 0.5, 5.0e-12, -80.0, 0.7, "slack film, residual stiffness 1e-3", 1e-3);
-  for (int j = 0; j < 3; ++j) CHECK(within[j] >= 17);
+  check_two_sided(coverage(-150.0, 0.5, 5.0e-12, -80.0, 0.7, "slack film, residual stiffness 1e-3", 1e-3));
 }
 
 TEST_CASE("charges alone cannot separate E_scale from the gains on a pure membrane: flagged, with the condition number",
