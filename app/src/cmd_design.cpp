@@ -251,15 +251,6 @@ void evaluate(Candidate& c, const DesignOptions& d) {
   if (c.map_source == "synthetic") c.summary.synthetic = true;
 }
 
-/// Best first: usable fraction, then coverage, then the median bound; unable-to-locate last.
-bool better(const Candidate& a, const Candidate& b) {
-  const auto& x = a.summary;
-  const auto& y = b.summary;
-  if ((x.status == DesignStatus::ok) != (y.status == DesignStatus::ok)) return x.status == DesignStatus::ok;
-  if (x.usable_fraction != y.usable_fraction) return x.usable_fraction > y.usable_fraction;
-  if (x.coverage != y.coverage) return x.coverage > y.coverage;
-  return x.median_sigma_pos_m < y.median_sigma_pos_m;
-}
 
 // ---------------------------------------------------------------------------------------------
 // Text and JSON
@@ -539,7 +530,7 @@ void write_sweep_figure(const std::vector<Candidate>& all, const std::vector<std
       usable.push_back(100 * c.summary.usable_fraction);
       coverage.push_back(100 * c.summary.coverage);
       median.push_back(std::isfinite(c.summary.median_sigma_pos_m) ? c.summary.median_sigma_pos_m * 1e3 : std::nan(""));
-      if (!best || better(c, *best)) best = &c;
+      if (!best || ranks_before(c.summary, best->summary)) best = &c;
     }
     const auto color = pvdf::plot::cycle_color(s);
     a.line(x, usable, series_names[s] + ": usable", color, pvdf::plot::LineStyle::solid, pvdf::plot::Marker::circle);
@@ -656,11 +647,12 @@ std::vector<Candidate> collect_candidates(const DesignCommandOptions& o, const s
   return all;
 }
 
-/// The candidates best first (stable: equal candidates keep their order).
+/// The candidates best first by the library's rule (mapping::rank_designs).
 std::vector<const Candidate*> rank(const std::vector<Candidate>& candidates) {
+  std::vector<DesignSummary> summaries;
+  for (const auto& c : candidates) summaries.push_back(c.summary);
   std::vector<const Candidate*> ranked;
-  for (const auto& c : candidates) ranked.push_back(&c);
-  std::stable_sort(ranked.begin(), ranked.end(), [](const Candidate* a, const Candidate* b) { return better(*a, *b); });
+  for (std::size_t i : rank_designs(summaries)) ranked.push_back(&candidates[i]);
   return ranked;
 }
 

@@ -7,6 +7,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <vector>
 
 using namespace pvdf::mapping;
 
@@ -82,4 +83,30 @@ TEST_CASE("derived keys scale, size and rotate the layout", "[design][keys]") {
   const auto r30 = pvdf::parse_scene(rotate_scene(rect, pvdf::pi / 6, "rect"), "t");
   CHECK(r30.membrane.outline.shape == pvdf::FilmOutline::Shape::polygon);
   CHECK(r30.membrane.outline.area_m2() == Approx(0.09 * 0.06));
+}
+
+TEST_CASE("the ranking rule: able to locate first, then usable area, coverage, median sigma; ties keep their order",
+          "[design]") {
+  using pvdf::mapping::DesignStatus;
+  using pvdf::mapping::DesignSummary;
+  auto layout = [](DesignStatus status, double usable, double coverage, double median_m) {
+    DesignSummary s;
+    s.status = status;
+    s.usable_fraction = usable;
+    s.coverage = coverage;
+    s.median_sigma_pos_m = median_m;
+    return s;
+  };
+  const std::vector<DesignSummary> s{
+      layout(DesignStatus::unable_to_locate, 0.9, 0.9, 1e-4),  // cannot locate: last despite its numbers
+      layout(DesignStatus::ok, 0.3, 0.5, 2e-4),
+      layout(DesignStatus::ok, 0.3, 0.6, 3e-4),        // same usable area, more coverage
+      layout(DesignStatus::ok, 0.3, 0.6, 1e-4),        // same again, smaller median σ
+      layout(DesignStatus::ok, 0.5, 0.1, 9e-4),        // most usable area
+      layout(DesignStatus::ok, 0.3, 0.5, 2e-4),        // equal to index 1: stays after it
+  };
+  CHECK(pvdf::mapping::rank_designs(s) == std::vector<std::size_t>{4, 3, 2, 1, 5, 0});
+  CHECK(pvdf::mapping::ranks_before(s[1], s[0]));
+  CHECK_FALSE(pvdf::mapping::ranks_before(s[1], s[5]));
+  CHECK_FALSE(pvdf::mapping::ranks_before(s[5], s[1]));
 }

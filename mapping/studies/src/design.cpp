@@ -424,6 +424,21 @@ void DesignEvaluation::electrode_reports() {
 
 }  // namespace
 
+bool ranks_before(const DesignSummary& a, const DesignSummary& b) {
+  if ((a.status == DesignStatus::ok) != (b.status == DesignStatus::ok)) return a.status == DesignStatus::ok;
+  if (a.usable_fraction != b.usable_fraction) return a.usable_fraction > b.usable_fraction;
+  if (a.coverage != b.coverage) return a.coverage > b.coverage;
+  return a.median_sigma_pos_m < b.median_sigma_pos_m;
+}
+
+std::vector<std::size_t> rank_designs(const std::vector<DesignSummary>& summaries) {
+  std::vector<std::size_t> order(summaries.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t i, std::size_t j) { return ranks_before(summaries[i], summaries[j]); });
+  return order;
+}
+
 DesignSummary evaluate_design(const ChargeMap& map, const DesignOptions& o) {
   DesignEvaluation e(map, o, checked_noise(map, o));
   e.allocate();

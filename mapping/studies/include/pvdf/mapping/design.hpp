@@ -152,6 +152,14 @@ DesignSummary evaluate_design(const ChargeMap& map, const DesignOptions& options
 /// Summary as JSON (maps omitted; infinite values as null, documented in docs/design.md).
 nlohmann::json design_summary_json(const DesignSummary& summary);
 
+/// The ranking rule of `pvdfkit design` (docs/design.md): true when layout `a` ranks before `b` —
+/// a layout that can locate before one that cannot, then the larger usable fraction (the figure
+/// of merit), then the larger coverage, then the smaller median σ_pos.
+bool ranks_before(const DesignSummary& a, const DesignSummary& b);
+
+/// Indices of `summaries` best first by ranks_before (stable: equal layouts keep their order).
+std::vector<std::size_t> rank_designs(const std::vector<DesignSummary>& summaries);
+
 // ---------------------------------------------------------------------------------------------
 // Layouts as scenes: synthetic stand-ins, sweeps of one scene key, rotation.
 
