@@ -16,7 +16,8 @@ in the press's cell, over max_k |Q_ref,k|. For a uniform map that is the node es
 the lookup adds its own interpolation estimate on top (docs/lookup.md §1.10), which this script
 does not reproduce. Prints per map: median and largest true error, the count above 1 %, the
 median stated error and the effectivity (stated / true where true > 1e-3): median, share in
-[0.5, 3], share below 0.5. docs/map-generation.md §10.3 (seed 001, the region around electrode B):
+[0.5, 3], share below 0.5 and the smallest. docs/map-generation.md §10.3 (seed 001, the region
+around electrode B, maps made with `pvdfkit map --placement adaptive ...`, the commands there):
 
     PYTHONPATH=build/python bench/mapping/audit_off_node.py examples/scenes/seed001.json adaptive.h5 uniform2.h5 \\
         --box=-0.015,-0.001,-0.011,0.003
@@ -104,7 +105,8 @@ def main():
                 f"above 1 %: {(t > 0.01).sum()}; stated median {100 * np.median(s):.2f} %")
         if big.any():
             line += (f"; effectivity (true > 1e-3: {big.sum()}) median {np.median(eff):.2f}, in [0.5, 3] "
-                     f"{100 * np.mean((eff >= 0.5) & (eff <= 3)):.0f} %, below 0.5 {100 * np.mean(eff < 0.5):.0f} %")
+                     f"{100 * np.mean((eff >= 0.5) & (eff <= 3)):.0f} %, below 0.5 {100 * np.mean(eff < 0.5):.0f} %, "
+                     f"smallest {eff.min():.2f}")
         print(line)
 
 

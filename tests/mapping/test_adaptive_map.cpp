@@ -2,12 +2,16 @@
 // nodes and force levels. A small 15 mm film with three electrodes is mapped whole (adaptive,
 // finest spacing 2 mm, coarse 4 mm, two force levels); at presses drawn at random off the nodes
 // and between the levels — a third of them within 3 mm of the served edge — the lookup's charges
-// are compared with direct probe solves made here on a finer mesh at a tolerance five times
-// tighter (independent of the map and its interpolant). Asserted: the stated total error never
-// falls below half the true error (σ does not under-state), and where the map states that it met
-// the tolerance the true error is within it. The effectivity (stated / true) is printed; its
-// upper bound is not asserted (measured in docs/map-generation.md §10.3: far above 3 at many
-// presses, the prediction being a cell's largest).
+// are compared with probe solves made here at a tolerance 25 times tighter, on a sweep mesh the
+// test requires to be finer than the map's (independent of the map, its mesh and its
+// interpolant). Asserted: the stated total error never falls below half the true error (σ does
+// not under-state); where the map states that it met the tolerance the true error is within it;
+// and the stated error is sharp: stated / true ≤ 8 in the median (the predictor it replaced, a
+// cell's largest coarser surplus over an extrapolated rate, gave 10–16). Not asserted: the issue's
+// band (stated / true in [0.5, 3] at ≥ 90 % of the presses whose true error exceeds 1e-3) —
+// measured 37 % at 143 presses (docs/map-generation.md §10.3): the 2 mm interpolant's error varies
+// within a cell by more than a node-based estimate read bilinearly can follow (even fitted to the
+// truth itself: 72 %).
 #include "pvdf/core/constants.hpp"
 #include "pvdf/fem/probe_sweep.hpp"
 #include "pvdf/mapping/generate.hpp"
@@ -21,7 +25,6 @@
 #include <cmath>
 #include <cstdio>
 #include <random>
-#include <thread>
 #include <vector>
 
 using namespace pvdf::mapping;
@@ -89,27 +92,25 @@ TEST_CASE("adaptive map: the stated total error holds between nodes and force le
   REQUIRE(presses.size() >= 30);
   REQUIRE(n_edge >= 10);
 
-  // References: a sweep of its own (no error estimates needed), tolerance five times tighter, its
-  // mesh sized by its own setup check; two threads.
+  // References: a sweep of its own (no error estimates needed), tolerance 25 times tighter, its mesh
+  // sized by two setup checks — finer than the map's, so the map's discretization error is part of
+  // the true error its stated total must cover.
   std::vector<std::vector<double>> reference(presses.size());
-  auto work = [&](std::size_t first) {
-    pvdf::fem::SweepOptions so;
-    so.solver = pvdf::fem::options_from_scene(scene);
-    so.solver.tolerance = o.tolerance / 5;
-    so.rim_margin_m = 2 * scene.probe.radius_m;
-    so.forces_N = o.forces_N;
-    so.n_setup_checks = 1;
-    so.estimate_errors = false;
-    so.rim_model = pvdf::fem::SweepOptions::RimModel::never;
-    pvdf::fem::ProbeSweep sweep(scene, so);
-    for (std::size_t i = first; i < presses.size(); i += 2) {
-      const auto s = sweep.solve(presses[i].x_m, presses[i].y_m, presses[i].force_N);
-      if (pvdf::fem::usable(s.status)) reference[i] = s.charge_C;
-    }
-  };
-  std::thread other(work, 1);
-  work(0);
-  other.join();
+  pvdf::fem::SweepOptions so;
+  so.solver = pvdf::fem::options_from_scene(scene);
+  so.solver.tolerance = o.tolerance / 25;
+  so.rim_margin_m = 2 * scene.probe.radius_m;
+  so.forces_N = o.forces_N;
+  so.n_setup_checks = 2;
+  so.estimate_errors = false;
+  so.rim_model = pvdf::fem::SweepOptions::RimModel::never;
+  pvdf::fem::ProbeSweep sweep(scene, so);
+  INFO("map mesh " << report.n_dofs << " DOFs, reference mesh " << sweep.setup().n_dofs);
+  REQUIRE(sweep.setup().n_dofs > report.n_dofs);
+  for (std::size_t i = 0; i < presses.size(); ++i) {
+    const auto s = sweep.solve(presses[i].x_m, presses[i].y_m, presses[i].force_N);
+    if (pvdf::fem::usable(s.status)) reference[i] = s.charge_C;
+  }
 
   int n_counted = 0, n_in_band = 0, n_met = 0;
   double worst_under = 1e300;
@@ -148,8 +149,11 @@ TEST_CASE("adaptive map: the stated total error holds between nodes and force le
     std::printf("press %6.2f %6.2f mm %5.2f N edge %5.2f mm: true %.4f stated %.4f\n", 1e3 * p.x_m, 1e3 * p.y_m, p.force_N,
                 1e3 * p.edge_distance_m, truth, stated);
   }
+  REQUIRE(n_counted >= 20);
   std::sort(effectivities.begin(), effectivities.end());
-  const double median = effectivities.empty() ? 0.0 : effectivities[effectivities.size() / 2];
+  const double median = effectivities[effectivities.size() / 2];
+  // Sharp, not only honest: the median of stated / true within a factor 8 (fails on NaN).
+  CHECK(median <= 8.0);
   std::printf("adaptive map: %zu + %zu solves (levels 4, 2 mm), %zu points interpolated; %zu presses (%d within 3 mm of "
               "the served edge); stated <= tolerance at %d; true > 1e-3 at %d: effectivity in [0.5, 3] at %d, median %.2f, "
               "smallest %.2f\n",

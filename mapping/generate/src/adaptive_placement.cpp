@@ -3,21 +3,25 @@
 //
 // Levels ℓ = 0..L on the stored grid (spacing h): level ℓ's nodes are the multiples of
 // s_ℓ = 2^(L−ℓ)·h. Level 0 is solved everywhere. The error of level ℓ's interpolant (the
-// lookup's own bicubic, MapInterpolant, on the nodes of spacing s_ℓ) in one of its cells is
-// predicted from hierarchical surpluses: at the nodes new at level ℓ, |G − I_{ℓ−1}G|, the true
-// error of the coarser interpolant there (G = Q/F^(2/3)); at level 0 the same against the grids
-// of every other level-0 node. One halving of the spacing is assumed to divide the error by
-// ρ = min(16, ρ₁²), ρ₁ the fall measured at the previous halving around the cell, never less than
-// 2 — the first-order rate the charge shows where the probe's footprint meets an electrode (a
-// kink; measured 4 → 2 mm on seed 001, issue 29) — and 2 where ρ₁ is not measured.
-// A cell is refined (the next level's five nodes inside it solved) where that prediction exceeds
-// the interpolation's share of the tolerance; otherwise it governs: the stored grid's nodes in it
-// not solved are filled from its interpolant, and every node in it carries its predicted error.
+// lookup's own bicubic Hermite, MapInterpolant, on the nodes of spacing s_ℓ) near a node is
+// predicted from that level's own nodes: κ·max(|Δ⁴ₓG|, |Δ⁴ᵧG|), the fourth differences of
+// G = Q/F^(2/3) at step s_ℓ through the node (the interpolant's leading error term, measured
+// where it is used; no rate extrapolated from a coarser level). κ = 1/8: a cubic Hermite
+// interpolant with 4th-order slopes misses a slope discontinuity (the probe's footprint meeting an
+// electrode's edge) in its cell by at most 0.060 × the corners' mean |Δ⁴| in the median over
+// where the kink lies, ≤ 1/8 at 81 % of them (a Gaussian bump one spacing wide: 0.045, a smooth
+// quartic 0.0026 — smooth regions are over-stated, by a small absolute amount). Within a cell the
+// prediction is bilinear in its corners' values: local to the press, not the cell's largest.
+// A cell is refined (the next level's five nodes inside it solved) where the largest of its
+// corners' predictions exceeds the interpolation's share of the tolerance; otherwise it governs:
+// the stored grid's nodes in it not solved are filled from its interpolant, and every node in it
+// carries the prediction at its place.
 //
-// Total stored error of a node, per level and electrode (C):
+// Total stored error of a node, per level and electrode (C), the three shares independent hence
+// in quadrature (as the lookup adds its shares, docs/lookup.md §1.10):
 //   own estimate (solved) or the largest of the governing cell's corners (filled)
-//   + the predicted interpolation error of the cells around it
-//   + the error between force levels (estimate_interpolation_error's curvature term, both
+//   ⊕ the predicted interpolation error at the node (the largest over the cells it belongs to)
+//   ⊕ the error between force levels (estimate_interpolation_error's curvature term, both
 //     intervals next to the level).
 // The lookup (ChargeMap::estimated_total_relative_error set) reads it as the map's whole error.
 #include "generator.hpp"
@@ -31,19 +35,45 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 
 namespace pvdf::mapping::detail {
 namespace {
 
-/// Error reduction per halving of the spacing assumed by the prediction: at least first order
-/// (the kink where the footprint meets an electrode), at most the bicubic's fourth order.
-constexpr double min_ratio = 2.0;
-constexpr double max_ratio = 16.0;
+/// Interpolation error of the bicubic Hermite interpolant per unit fourth difference of the data
+/// at its nodes, for the worst feature a map has, a slope discontinuity in the cell: its largest
+/// error in the cell is ≤ κ × the corners' mean |Δ⁴| for 81 % of the kink's positions (median
+/// 0.060; 1/16 leaves 46 % above). A press sees less than the cell's largest error.
+constexpr double kappa = 1.0 / 8.0;
 /// The interpolation's guaranteed share of the tolerance (the rest is left to the node estimates;
 /// where those use less, the interpolation may use what they leave).
 constexpr double interpolation_share = 0.5;
 
 long floor_mod(long a, long m) { return ((a % m) + m) % m; }
+
+/// The highest difference (up to the fourth) of a line of samples through index i, from the
+/// consecutive valid samples nearest to it: 5 → |Δ⁴|, centred if it can be, else shifted by one or
+/// two; fewer valid neighbours → |Δ³| (4), |Δ²| (3) — larger than |Δ⁴| for a smooth line, so the
+/// served edge is over-stated rather than under-stated; NaN with fewer than 3. f(m), ok(m) for
+/// any m (ok false outside the line).
+template <class Value, class Valid>
+double highest_difference(const Value& f, const Valid& ok, long i) {
+  static const double weights[3][5] = {{1, -2, 1, 0, 0}, {-1, 3, -3, 1, 0}, {1, -4, 6, -4, 1}};
+  for (int order = 4; order >= 2; --order) {
+    const long n = order + 1;
+    for (const long shift : {0L, -1L, 1L, -2L, 2L}) {
+      const long first = i - n / 2 + shift;
+      if (first > i || first + n - 1 < i) continue;
+      bool all = true;
+      for (long m = first; m < first + n && all; ++m) all = ok(m);
+      if (!all) continue;
+      double d = 0;
+      for (long m = 0; m < n; ++m) d += weights[order - 2][m] * f(first + m);
+      return std::abs(d);
+    }
+  }
+  return std::numeric_limits<double>::quiet_NaN();
+}
 
 }  // namespace
 
@@ -129,31 +159,39 @@ bool Generator::run_adaptive_levels() {
     const ChargeMap coarse = every_nth_node(map_, std::size_t(s), ox, oy);
     const std::size_t cnx = coarse.nx(), cny = coarse.ny();
     auto fine = [&](std::size_t a, std::size_t b) { return (oy + std::size_t(s) * b) * nx + ox + std::size_t(s) * a; };
-    if (level == 0 && cnx >= 2 && cny >= 2) {
-      const std::vector<double> s0 = hierarchical_surplus_G(coarse);
-      for (std::size_t b = 0; b < cny; ++b) {
-        for (std::size_t a = 0; a < cnx; ++a) {
-          const std::size_t p = fine(a, b);
-          if (!node_solved(p)) continue;
-          bool any = false;
-          for (std::size_t f = 0; f < nf; ++f) {
-            for (std::size_t k = 0; k < ne; ++k) {
-              const double v = s0[coarse.charge_index(f, b, a, k)];
-              surplus_G_[(f * n + p) * ne + k] = v;
-              any = any || !std::isnan(v);
-            }
+    // Predicted error of this level's interpolant at each of its nodes (C/N^p, [nf][cny][cnx][ne]):
+    // κ·max(|Δ⁴ₓG|, |Δ⁴ᵧG|) at step s over the level's usable nodes (solved, or filled by a coarser
+    // level); NaN where neither direction has three usable nodes in a row.
+    auto usable = [&](long aa, long bb) {
+      if (aa < 0 || bb < 0 || aa >= long(cnx) || bb >= long(cny)) return false;
+      const std::size_t p = fine(std::size_t(aa), std::size_t(bb));
+      return node_solved(p) || interpolated_[p] != 0;
+    };
+    std::vector<double> predicted(nf * cny * cnx * ne, std::numeric_limits<double>::quiet_NaN());
+    for (std::size_t bb = 0; bb < cny; ++bb) {
+      for (std::size_t aa = 0; aa < cnx; ++aa) {
+        if (!usable(long(aa), long(bb))) continue;
+        for (std::size_t f = 0; f < nf; ++f) {
+          for (std::size_t k = 0; k < ne; ++k) {
+            auto g = [&](long ia, long ib) {
+              return map_.charge_C[(f * n + fine(std::size_t(ia), std::size_t(ib))) * ne + k] / force_p[f];
+            };
+            const double dx = highest_difference([&](long m) { return g(m, long(bb)); },
+                                                 [&](long m) { return usable(m, long(bb)); }, long(aa));
+            const double dy = highest_difference([&](long m) { return g(long(aa), m); },
+                                                 [&](long m) { return usable(long(aa), m); }, long(bb));
+            const double d = std::isnan(dx) ? dy : std::isnan(dy) ? dx : std::max(dx, dy);
+            predicted[((f * cny + bb) * cnx + aa) * ne + k] = kappa * d;
           }
-          if (any) surplus_level_[p] = 0;
         }
       }
     }
-    // Predicted error of this level's interpolant per cell (C/N^p), from the surpluses measured
-    // at this level's nodes within one cell of it (two, three, ... where none is).
     std::vector<std::uint8_t> next_want(n, 0);
-    std::vector<double> e(nf * ne), e_prev(nf * ne);
+    std::vector<double> e(nf * ne);
     for (std::size_t b = 0; b + 1 < cny; ++b) {
       for (std::size_t a = 0; a + 1 < cnx; ++a) {
         const std::size_t corners[4] = {fine(a, b), fine(a + 1, b), fine(a, b + 1), fine(a + 1, b + 1)};
+        const std::size_t ca[4] = {a, a + 1, a, a + 1}, cb[4] = {b, b, b + 1, b + 1};
         bool in_mask = true, active = true;
         for (std::size_t c : corners) {
           in_mask = in_mask && map_.mask[c];
@@ -176,53 +214,26 @@ bool Generator::run_adaptive_levels() {
           if (level < levels_ && !(in_mask && filled_corner)) mark_inside(next_want);
           continue;
         }
-        // W: the largest surplus at this level's nodes among the cell's corners (within one cell,
-        // two where none is); W⁻: the same one level coarser, within twice that. ρ₁ = W⁻/W is how much the
-        // error fell at the last halving; the next is assumed to divide it by ρ = min(16, ρ₁²)
-        // (floor 2: first order, the kink where the footprint meets an electrode), as the lookup
-        // assumes (docs/lookup.md §1.10); ρ = 2 where W⁻ is not measured.
-        std::fill(e.begin(), e.end(), -1.0);
-        std::fill(e_prev.begin(), e_prev.end(), -1.0);
-        long r_used = 1;
-        for (long r = 1; r <= 3 && e[0] < 0; ++r) {
-          r_used = r;
-          for (long bb = long(b) - r + 1; bb <= long(b) + r; ++bb) {
-            for (long aa = long(a) - r + 1; aa <= long(a) + r; ++aa) {
-              if (aa < 0 || bb < 0 || aa >= long(cnx) || bb >= long(cny)) continue;
-              const std::size_t p = fine(std::size_t(aa), std::size_t(bb));
-              if (surplus_level_[p] != level) continue;
-              for (std::size_t fk = 0; fk < nf * ne; ++fk) {
-                const double v = surplus_G_[((fk / ne) * n + p) * ne + fk % ne];
-                if (!std::isnan(v)) e[fk] = std::max(e[fk], v);
-              }
+        // The cell's largest prediction (its corners'), per level and electrode; unknown where a
+        // corner has none (refined; at the finest level the largest known one, else flagged).
+        std::fill(e.begin(), e.end(), 0.0);
+        bool unknown = false, none = true;
+        for (int c = 0; c < 4; ++c) {
+          for (std::size_t fk = 0; fk < nf * ne; ++fk) {
+            const double v = predicted[(((fk / ne) * cny + cb[c]) * cnx + ca[c]) * ne + fk % ne];
+            if (std::isnan(v)) {
+              unknown = true;
+            } else {
+              e[fk] = std::max(e[fk], v);
+              none = false;
             }
           }
         }
-        if (level > 0 && e[0] >= 0) {
-          const long r = 2 * r_used;
-          for (long bb = long(b) - r + 1; bb <= long(b) + r; ++bb) {
-            for (long aa = long(a) - r + 1; aa <= long(a) + r; ++aa) {
-              if (aa < 0 || bb < 0 || aa >= long(cnx) || bb >= long(cny)) continue;
-              const std::size_t p = fine(std::size_t(aa), std::size_t(bb));
-              if (surplus_level_[p] != level - 1) continue;
-              for (std::size_t fk = 0; fk < nf * ne; ++fk) {
-                const double v = surplus_G_[((fk / ne) * n + p) * ne + fk % ne];
-                if (!std::isnan(v)) e_prev[fk] = std::max(e_prev[fk], v);
-              }
-            }
-          }
-        }
-        for (std::size_t fk = 0; fk < nf * ne && e[0] >= 0; ++fk) {
-          const double rho1 = e_prev[fk] >= 0 && e[fk] > 0 ? e_prev[fk] / e[fk] : 0.0;
-          const double rho = std::min(max_ratio, std::max(min_ratio, rho1 * rho1));
-          e[fk] = std::max(e[fk], 0.0) / rho;
-        }
-        bool unknown = e[0] < 0;
         // Within the budget? Per level: the largest electrode's predicted error against the
         // interpolation's share of the tolerance × the press's largest charge (smallest corner).
         bool refine = unknown;
-        bool exceeded = unknown;
-        for (std::size_t f = 0; f < nf && !unknown; ++f) {
+        bool exceeded = none;
+        for (std::size_t f = 0; f < nf && !none; ++f) {
           double q = 1e300, node = 0, interp = 0;
           for (std::size_t c : corners) {
             double qc = 0;
@@ -235,20 +246,28 @@ bool Generator::run_adaptive_levels() {
           for (std::size_t k = 0; k < ne; ++k) interp = std::max(interp, e[f * ne + k] * force_p[f]);
           const double budget = std::max(interpolation_share * tol * q, tol * q - node);
           refine = refine || interp > budget;
-          exceeded = exceeded || interp + node > tol * q;
+          exceeded = exceeded || std::hypot(interp, node) > tol * q;
         }
         if (level < levels_ && refine) {
           mark_inside(next_want);
           continue;
         }
-        // A governing cell: its prediction is the interpolation error of every stored node in it.
+        // A governing cell: every stored node in it carries the prediction at its place, bilinear
+        // in the corners' (a corner without one: the cell's largest).
         for (std::size_t j = j0; j <= j0 + std::size_t(s); ++j) {
           for (std::size_t i = i0; i <= i0 + std::size_t(s); ++i) {
             const std::size_t p = j * nx + i;
             if (!map_.mask[p]) continue;
+            const double u = double(i - i0) / double(s), v = double(j - j0) / double(s);
+            const double w[4] = {(1 - u) * (1 - v), u * (1 - v), (1 - u) * v, u * v};
             for (std::size_t fk = 0; fk < nf * ne; ++fk) {
+              double here = 0;
+              for (int c = 0; c < 4; ++c) {
+                const double pc = predicted[(((fk / ne) * cny + cb[c]) * cnx + ca[c]) * ne + fk % ne];
+                here += w[c] * (std::isnan(pc) ? e[fk] : pc);
+              }
               double& out = interp_err_G_[((fk / ne) * n + p) * ne + fk % ne];
-              out = std::max(out, unknown ? 0.0 : e[fk]);
+              out = std::max(out, here);
             }
             if (exceeded) {
               for (std::size_t f = 0; f < nf; ++f) provenance_[f * n + p] |= provenance::tolerance_not_met;
@@ -274,7 +293,7 @@ bool Generator::run_adaptive_levels() {
       placement_s_ = placement_s;
       return true;
     }
-    // The next level's nodes: surplus where solved, the interpolant of this level where not.
+    // The next level's nodes not solved: filled from this level's interpolant.
     if (cnx < 2 || cny < 2) continue;  // no cell at this level: every next-level node was solved
     const auto t1 = std::chrono::steady_clock::now();
     const MapInterpolant interp(coarse);
@@ -283,26 +302,14 @@ bool Generator::run_adaptive_levels() {
       for (std::size_t i = 0; i < nx; ++i) {
         const std::size_t p = j * nx + i;
         if (!map_.mask[p] || node_level(i, j) != level + 1) continue;
-        const bool solved = node_solved(p);
-        if (!solved && map_.status[p] == std::uint8_t(PointStatus::not_converged)) continue;  // a failed solve stays failed
+        if (node_solved(p) || map_.status[p] == std::uint8_t(PointStatus::not_converged)) continue;  // a failed solve stays failed
         bool all = true;
         for (std::size_t f = 0; f < nf && all; ++f) {
           all = interp.evaluate(map_.x_m[i], map_.y_m[j], nf == 1 ? 0.0 : std::log(o_.forces_N[f]), q.data(), nullptr);
           if (!all) break;
           // A one-level interpolant returns G itself (F^p at ln F = 0 is 1).
           const double to_q = nf == 1 ? force_p[f] : 1.0;
-          for (std::size_t k = 0; k < ne; ++k) {
-            const std::size_t at = (f * n + p) * ne + k;
-            if (solved) {
-              surplus_G_[at] = std::abs(map_.charge_C[at] - q[k] * to_q) / force_p[f];
-            } else {
-              map_.charge_C[at] = q[k] * to_q;
-            }
-          }
-        }
-        if (solved) {
-          if (all) surplus_level_[p] = std::int8_t(level + 1);
-          continue;
+          for (std::size_t k = 0; k < ne; ++k) map_.charge_C[(f * n + p) * ne + k] = q[k] * to_q;
         }
         if (!all) continue;  // cannot happen: such nodes were solved (left not_computed otherwise)
         // Filled: status ok, the largest node estimates and deflection error of the cell's corners,
@@ -368,7 +375,7 @@ void Generator::finish_adaptive(MapReport& report) {
         double levels = f + 1 < nf ? between.between_levels_C[at] : 0.0;
         if (f > 0) levels = std::max(levels, between.between_levels_C[((f - 1) * n + p) * ne + k] * force_p[f] / force_p[f - 1]);
         double& e = map_.estimated_charge_error_C[at];
-        e += interp_err_G_[at] * force_p[f] + levels;
+        e = std::sqrt(e * e + std::pow(interp_err_G_[at] * force_p[f], 2) + levels * levels);
         e_max = std::max(e_max, e);
         q_max = std::max(q_max, std::abs(map_.charge_C[at]));
       }
