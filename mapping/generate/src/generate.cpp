@@ -131,8 +131,6 @@ void Generator::init_map() {
   }
   provenance_.assign(nf * n, provenance::solved);
   interpolated_.assign(n, 0);
-  surplus_level_.assign(n, -1);
-  surplus_G_.assign(nf * n * ne, nan);
   interp_err_G_.assign(adaptive_ ? nf * n * ne : 0, 0.0);
   known_.assign(n, 0);
   this_run_.assign(n, 0);

@@ -202,8 +202,6 @@ class Generator {
   bool adaptive_ = false;
   int levels_ = 0;                        // refinement levels below the coarse level
   std::vector<std::uint8_t> interpolated_;  // [ny][nx] 1 = filled from a coarser level
-  std::vector<double> surplus_G_;         // [nf][ny][nx][ne] |G − I G| against the next coarser level (C/N^p), NaN = not measured
-  std::vector<std::int8_t> surplus_level_;  // [ny][nx] level at which surplus_G_ was measured (−1 none)
   std::vector<double> interp_err_G_;      // [nf][ny][nx][ne] interpolation error of the governing cells (C/N^p)
   std::vector<std::size_t> level_positions_, level_solves_;
   double solve_cpu_s_ = 0;                // CPU-seconds of the FEM solves (this process), under mutex_
