@@ -475,10 +475,14 @@ PVDF_COMMAND(70, [](CLI::App& root) {
   sub->add_option("--gain-mV-per-pC", o->gain_mV_per_pC,
                   "Charge-amplifier sensitivity (mV/pC): set on a usb device (and the simulator), and used to turn volts into "
                   "charge for --locate (default the device's)")
+      ->check(pvdf::app::number_in(0, 1e6, "mV/pC", true))
       ->each([o](const std::string&) { o->gain_given = true; });
-  sub->add_option("--duration-s", o->duration_s, "Stop after this much signal (s); 0 = until the stream ends or Ctrl-C (default 0)");
-  sub->add_option("--stall-timeout-s", o->stall_timeout_s, "usb: give up when no data arrives for this long (s) (default 2)");
-  sub->add_option("--transfers", o->transfers, "usb: bulk transfers kept in flight (default 8)");
+  sub->add_option("--duration-s", o->duration_s, "Stop after this much signal (s); 0 = until the stream ends or Ctrl-C (default 0)")
+      ->check(pvdf::app::number_in(0, 1e7, "s (0 = until the stream ends)"));
+  sub->add_option("--stall-timeout-s", o->stall_timeout_s, "usb: give up when no data arrives for this long (s) (default 2)")
+      ->check(pvdf::app::number_in(0, 3600, "s", true));
+  sub->add_option("--transfers", o->transfers, "usb: bulk transfers kept in flight (default 8)")
+      ->check(pvdf::app::integer_in(1, 64, ""));
   sub->add_flag("--realtime", o->realtime, "replay/sim: deliver at the recorded pace instead of as fast as possible");
   sub->add_flag("--quiet", o->quiet, "No progress lines on stderr (faults and errors are still reported)");
   return pvdf::app::Subcommand{sub, [o] {

@@ -399,6 +399,7 @@ PVDF_COMMAND(60, [](CLI::App& root) {
   sub->add_option("--noise-C", o->noise, "1-sigma charge noise per electrode, one value or one per electrode in the map's electrode order (C) (default the map's)");
   sub->add_option("--force-N", o->force_N, "Known force of the press (N): fit the position only (and the force of --pictures) (default unknown: fitted with the "
                   "position)")
+      ->check(pvdf::app::number_in(0, 1e4, "N (a press beyond 10 kN is no tactile press: is the unit right?)", true))
       ->each([o](const std::string&) { o->force_N_given = true; });
   sub->add_option("--force-range-N", o->force_range, "Plausible forces MIN,MAX (N), also the prior of the solutions' probabilities (default half the lowest to twice the "
                   "highest force level of the map)");

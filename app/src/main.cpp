@@ -113,9 +113,24 @@ void collect_paths(CLI::App* app, std::vector<NamedPath>& outputs, std::vector<N
   for (CLI::App* sub : app->get_subcommands()) collect_paths(sub, outputs, inputs);
 }
 
+/// An option that takes a value refuses an empty one (`--seed ''`, `--params=`): CLI11 would
+/// otherwise leave the default in place and the user's intent silently unmet (issue 30).
+void check_no_empty_values(CLI::App* app) {
+  for (CLI::Option* opt : app->get_options()) {
+    if (opt->count() == 0 || opt->get_expected_min() == 0 || opt->get_positional()) continue;
+    for (const std::string& value : opt->results()) {
+      if (value.empty()) {
+        throw InputError(flag_name(opt) + " is given an empty value ''; give a value (see --help) or leave the option out");
+      }
+    }
+  }
+  for (CLI::App* sub : app->get_subcommands()) check_no_empty_values(sub);
+}
+
 }  // namespace
 
 void check_outputs_against_inputs(CLI::App* app) {
+  check_no_empty_values(app);
   std::vector<NamedPath> outputs, inputs;
   collect_paths(app, outputs, inputs);
   for (std::size_t i = 0; i < outputs.size(); ++i) {
