@@ -75,5 +75,13 @@ PVDF_COMMAND(61, [](CLI::App& root) {
       ->check(pvdf::app::output_file());
   sub->add_option("--noise-C", o->noise, "1-sigma charge noise per electrode used when locating for the report (C) (default the map's)");
   sub->add_flag("--json", o->json, "Print the report as JSON");
-  return pvdf::app::Subcommand{sub, [o] { return run_calibrate(*o); }};
+  return pvdf::app::Subcommand{sub, [o] {
+    try {
+      return run_calibrate(*o);
+    } catch (const pvdf::InputError& e) {
+      std::string what = e.what();  // the locator's option is the flag --noise-C here
+      if (what.rfind("locator noise_C", 0) == 0) what.replace(0, 15, "--noise-C");
+      throw pvdf::InputError(what);
+    }
+  }};
 });

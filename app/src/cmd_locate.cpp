@@ -15,6 +15,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <memory>
@@ -89,6 +90,10 @@ LocatorOptions locator_options(const LocateOptions& o, const ChargeMap& map) {
   if (!options.noise_C.empty()) {
     for (double s : options.noise_C) {
       if (!(s > 0 && std::isfinite(s))) throw pvdf::InputError("--noise-C " + o.noise + ": " + g_text(s) + " must be finite and > 0 (C)");
+      if (s > 1e-6) {
+        throw pvdf::InputError("--noise-C " + pvdf::quote_cell(o.noise) + ": " + g_text(s) +
+                               " C of noise exceeds 1e-6 C, beyond any film's charge; is the unit pC? (5e-14 C = 0.05 pC)");
+      }
     }
   }
   options.known_force_N = o.force_N;
@@ -351,6 +356,10 @@ int locate_rows(const LocateOptions& o, const Locator& locator) {
   std::ifstream file;
   std::istream* in = &std::cin;
   if (!o.input.empty() && o.input != "-") {
+    std::error_code ec;
+    if (std::filesystem::is_directory(o.input, ec)) {
+      throw pvdf::InputError("--input " + pvdf::quote_cell(o.input) + " is a folder; give the CSV file of charges");
+    }
     pvdf::check_csv_file(o.input, "--input", 0);  // a stream: its header only (unique columns, no NUL, short cells)
     file.open(o.input);
     if (!file) throw pvdf::InputError(o.input + ": cannot open; check the path");

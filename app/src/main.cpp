@@ -172,9 +172,20 @@ CLI::Validator integer_in(long long lo, long long hi, const std::string& why) {
       desc);
 }
 
+/// A file name the system cannot create (longer than a path component may be, with room for the
+/// ".tmp.NNNNNN" of the atomic write) refused at parse time, not by the writer after the work.
+std::string name_length_problem(const std::string& path) {
+  constexpr std::size_t max_name = 200;
+  const std::string name = std::filesystem::path(path).filename().string();
+  if (name.size() <= max_name && path.size() < 3800) return "";
+  return quote_cell(path) + " has a file name of " + std::to_string(name.size()) + " characters; give one of at most " +
+         std::to_string(max_name);
+}
+
 CLI::Validator output_file() {
   return CLI::Validator(
              [](std::string& path) -> std::string {
+               if (const std::string too_long = name_length_problem(path); !too_long.empty()) return too_long;
                const std::string problem = output_path_problem(path);
                return problem.empty() ? "" : quote_cell(path) + " " + problem;
              },
@@ -185,6 +196,7 @@ CLI::Validator output_file() {
 CLI::Validator figure_file() {
   return CLI::Validator(
              [](std::string& path) -> std::string {
+               if (const std::string too_long = name_length_problem(path); !too_long.empty()) return too_long;
                const std::string problem = output_path_problem(path);
                if (!problem.empty()) return quote_cell(path) + " " + problem;
                std::string ext = std::filesystem::path(path).extension().string();
@@ -201,6 +213,7 @@ CLI::Validator output_folder() {
   return CLI::Validator(
              [](std::string& path) -> std::string {
                namespace fs = std::filesystem;
+               if (const std::string too_long = name_length_problem(path); !too_long.empty()) return too_long;
                struct stat st {};
                if (::lstat(path.c_str(), &st) == 0 && S_ISLNK(st.st_mode)) {
                  return quote_cell(path) + " is a symbolic link; give the folder's real path";
@@ -368,11 +381,11 @@ int run(int argc, char** argv) {
   try {
     root.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
-    return root.exit(e);
+    return finish_stdout(root.exit(e));
   } catch (const CLI::CallForAllHelp& e) {
-    return root.exit(e);
+    return finish_stdout(root.exit(e));
   } catch (const CLI::CallForVersion& e) {
-    return root.exit(e);
+    return finish_stdout(root.exit(e));
   } catch (const CLI::ParseError& e) {
     std::string what = e.what();
     if (what.empty()) what = e.get_name();

@@ -290,7 +290,7 @@ Thread-safe in C++; the GIL is released while locating.)doc")
              // file, before the Locator indexes into it.
              pvdf::mapping::validate(map, f + "map");
              pvdf::mapping::LocatorOptions o;
-             o.noise_C = noise_list(noise_C, f + "noise_C", false);
+             o.noise_C = noise_list(noise_C, f + "noise_C", true);
              if (!o.noise_C.empty() && o.noise_C.size() != 1 && o.noise_C.size() != map.ne()) {
                throw pvdf::InputError(f + "noise_C has " + std::to_string(o.noise_C.size()) + " values; give 1 or " +
                                       std::to_string(map.ne()) + " (one per electrode) in C");

@@ -370,6 +370,21 @@ const std::vector<Row> rows = {
   {"locate-charges-count", "locate $M --charges-C 1e-11,2e-11", 2, "order A,B,C"},
   {"map-noise-count", "map good.json -o m.h5 --quiet --noise-C 5e-14,5e-14", 2, "order A,B,C", "m.h5"},
   {"locate-noise-count", "locate $M --charges-C 1e-11,2e-11,3e-11 --noise-C 1e-14,1e-14", 2, "order A,B,C"},
+  // ---- found by the hostile sweep (tests/hostile/hostile_sweep.py): an empty value no longer
+  // keeps the default, a known force and the acquisition flags are range-checked at parse time
+  {"sweep-seed-empty", "lookup-accuracy $M --presses 10 --seed ''", 2, "--seed is given an empty value"},
+  {"sweep-residual-stiffness-empty", "fit good.json fit_ok.csv -o f.json --residual-stiffness ''", 2,
+   "--residual-stiffness is given an empty value", "f.json"},
+  {"sweep-solve-model-empty", "solve good.json --model=", 2, "--model is given an empty value"},
+  {"sweep-locate-force-1e308", "locate $M --charges-C 2.4925e-12,1.87487e-11,1.87487e-11 --force-N 1e308", 2,
+   "--force-N: 1e+308 must lie in (0, 10000]"},
+  {"sweep-locate-force-5e5", "locate $M --charges-C 2.4925e-12,1.87487e-11,1.87487e-11 --force-N 5e5", 2, "--force-N"},
+  {"sweep-acquire-duration-nan", "acquire --device sim: --quiet --duration-s nan", 2, "--duration-s: nan"},
+  {"sweep-acquire-duration-inf", "acquire --device sim: --quiet --duration-s inf", 2, "--duration-s"},
+  {"sweep-acquire-stall-0", "acquire --device sim: --quiet --duration-s 0.01 --stall-timeout-s 0", 2, "--stall-timeout-s"},
+  {"sweep-acquire-gain-1e308", "acquire --device sim: --quiet --duration-s 0.01 --gain-mV-per-pC 1e308", 2,
+   "--gain-mV-per-pC"},
+  {"sweep-acquire-transfers-0", "acquire --device sim: --quiet --duration-s 0.01 --transfers 0", 2, "--transfers"},
   // ---- the command line itself
   {"unknown-command", "frobnicate", 2, "frobnicate"},
   {"unknown-command-ctl", "$X $'fro\\x1bbnicate' 2>.err", 2, "fro\\x1bbnicate"},
