@@ -2,6 +2,7 @@
 // gain and offset by least squares, leave-one-out validation, before/after report, and a
 // calibrated map that `pvdfkit locate` uses.
 #include "command.hpp"
+#include "map_checks.hpp"
 
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
@@ -28,6 +29,7 @@ int run_calibrate(const CalibrateOptions& o) {
   ChargeMap map = read_map(o.map_path);
   pvdf::check_csv_file(o.measured_path, "MEASURED");
   const auto presses = read_measurements(o.measured_path, map.electrode_names);
+  pvdf::app::check_measured_plausible(presses, o.measured_path, map.electrode_names);
   LocatorOptions options;
   if (!o.noise.empty()) options.noise_C = pvdf::parse_number_list(o.noise, "--noise-C");
   const CalibrationReport report = fit_calibration(map, presses, options, o.measured_path);

@@ -44,6 +44,17 @@ int run_isocharge(const IsochargeOptions& o) {
       throw pvdf::InputError("--at-m " + o.at + ": not inside the map's usable cells; choose a position inside the map");
     }
   }
+  // The triple is located before any picture is drawn: charges that place no press leave no
+  // half-made folder of pictures behind (exit 3, nothing written).
+  Location located;
+  if (!q.empty()) {
+    located = o.force_N > 0 ? locator.locate(q.data(), o.force_N) : locator.locate(q.data());
+    if (!located.has_position()) {
+      std::cerr << "error: the charges " << pvdf::quote_cell(o.charges) << " locate no press on this map ("
+                << flags_text(located.flags) << "): no pictures written; check the charges (C, map electrode order)\n";
+      return pvdf::exit_code::numerical;
+    }
+  }
   for (const char* name : {"/isocharge_all.png", "/charges.vtk", "/intersection.png"}) {
     // Before any picture is drawn (a folder still to be created holds nothing to protect).
     if (std::filesystem::is_directory(o.out_dir)) pvdf::app::check_output_file(o.out_dir + name, "--out-dir");
@@ -68,12 +79,7 @@ int run_isocharge(const IsochargeOptions& o) {
   write_charge_vtk(map, vtk);
   std::printf("wrote %s\n", vtk.c_str());
   if (!q.empty()) {
-    const Location r = o.force_N > 0 ? locator.locate(q.data(), o.force_N) : locator.locate(q.data());
-    if (!r.has_position()) {
-      std::cerr << "error: the charges " << o.charges << " locate no press on this map (" << flags_text(r.flags)
-                << "): no intersection picture\n";
-      return pvdf::exit_code::numerical;
-    }
+    const Location& r = located;
     const std::string path = o.out_dir + "/intersection.png";
     write_intersection_png(locator, map, q.data(), r, path);
     std::printf("wrote %s: contours meet at (%.3f, %.3f) mm, %.4g N, flags %s\n", path.c_str(), r.x_m * 1e3, r.y_m * 1e3,

@@ -4,6 +4,9 @@
 
 #include "command.hpp"
 
+#include "pvdf/core/error.hpp"
+#include "pvdf/core/io.hpp"
+
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -41,6 +44,25 @@ int warn_if_map_too_coarse(const pvdf::mapping::ChargeMap& map, const std::vecto
     }
   }
   return n;
+}
+
+void check_measured_plausible(const std::vector<pvdf::mapping::MeasuredPress>& presses, const std::string& source,
+                              const std::vector<std::string>& electrode_names) {
+  for (const auto& p : presses) {
+    const std::string at = source + ":" + std::to_string(p.line) + ": ";
+    if (!(p.force_N > 0 && p.force_N <= 1e4)) {
+      throw pvdf::InputError(at + "force_N = " + pvdf::format_g(p.force_N) +
+                             " must lie in (0, 1e4] N (a press pushes the film); is the unit mN or g?");
+    }
+    for (std::size_t k = 0; k < p.charge_C.size(); ++k) {
+      if (!(std::abs(p.charge_C[k]) <= 1e-6)) {
+        const std::string name = k < electrode_names.size() ? electrode_names[k] : std::to_string(k);
+        throw pvdf::InputError(at + "charge_" + name + "_C = " + pvdf::format_g(p.charge_C[k]) +
+                               " exceeds 1e-6 C, beyond any film's charge: the values look like pC; give coulombs "
+                               "(18 pC = 1.8e-11 C)");
+      }
+    }
+  }
 }
 
 }  // namespace pvdf::app
