@@ -2,6 +2,7 @@
 // map per electrode, all electrodes on one figure, VTK image data for ParaView, and for a
 // charge triple its three isocharge contours with their intersection.
 #include "command.hpp"
+#include "map_checks.hpp"
 
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
@@ -31,7 +32,7 @@ int run_isocharge(const IsochargeOptions& o) {
   using namespace pvdf::mapping;
   const ChargeMap map = read_map(o.map_path);
   std::vector<double> q;
-  if (!o.charges.empty()) q = pvdf::parse_number_list(o.charges, "--charges-C", map.ne());
+  if (!o.charges.empty()) q = pvdf::app::parse_charges(o.charges, map);  // count, and pC typed for C
   if (!o.charges.empty() && !o.at.empty()) throw pvdf::InputError("--charges-C and --at-m: give one charge triple, not both");
   LocatorOptions lo;
   lo.use_calibration = false;  // pictures of the map as computed

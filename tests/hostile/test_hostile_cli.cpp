@@ -405,6 +405,7 @@ const std::vector<Row> rows = {
   {"sweep-compare-charges-pC", "compare $M measured_pC.csv", 2, "measured_pC.csv:2: charge_A_C = 2 exceeds 1e-6 C"},
   {"sweep-compare-force-mN", "compare $M measured_mN.csv", 2, "measured_mN.csv:2: force_N = 1e+06"},
   {"sweep-calibrate-charges-pC", "calibrate $M measured_pC.csv -o cal4.h5", 2, "look like pC", "cal4.h5"},
+  {"sweep-isocharge-charges-pC", "isocharge $M --out-dir iso3 --charges-C 1,2,3", 2, "these look like pC", "iso3"},
   {"sweep-help-dev-full", "$X --help >/dev/full 2>.err", 2, "stdout"},
   {"sweep-solve-help-dev-full", "$X solve --help >/dev/full 2>.err", 2, "stdout"},
   {"sweep-solve-nu12-auxetic", "solve nu12_auxetic.json", 2, "material.nu12 = -0.99 is below -0.5"},
