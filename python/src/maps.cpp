@@ -437,6 +437,7 @@ adc_bits: 0 (ideal) or 2..32; full_scale_C: 0 (automatic) or up to 1e-3 C. Retur
           if (electrode_names.empty()) {
             throw pvdf::InputError("read_measurements: electrode_names is empty; give the map's electrode names, e.g. m.electrode_names");
           }
+          pvdf::check_csv_file(path, "read_measurements: path");  // rows, cells, NUL bytes: as compare and calibrate
           const auto rows = pvdf::mapping::read_measurements(path, electrode_names);
           std::vector<double> x, y, f, q;
           std::vector<std::int64_t> line;
