@@ -464,21 +464,28 @@ PVDF_COMMAND(70, [](CLI::App& root) {
   auto o = std::make_shared<AcquireOptions>();
   sub->add_option("--device", o->device,
                   "usb | usb:VID:PID (hex) | replay:FILE | sim:SCENE (sim: = built-in 3-channel scene) (default sim:)");
-  sub->add_option("--record", o->record_path, "Also record the stream to FILE (.pvdfrec, replay with --device replay:FILE)");
+  sub->add_option("--record", o->record_path, "Also record the stream to FILE (.pvdfrec, replay with --device replay:FILE)")
+      ->check(pvdf::app::output_file());
   sub->add_option("--locate", o->locate_map, "Locate presses with this charge map (one row per frame)");
   sub->add_option("--restore", o->restore_filter, "Restore forces f_x, f_z with this inverse filter (first two streamed channels = m1, m2)");
   sub->add_option("--force-range-N", o->force_range,
                   "--locate: plausible forces MIN,MAX (N), removes the second solution three electrodes often have");
-  sub->add_option("--output", o->output_path, "Write the CSV to FILE instead of stdout (rows flushed per frame)");
-  sub->add_option("--rate-Hz", o->rate_Hz, "usb: sample rate per channel (Hz) (default the device's)");
+  sub->add_option("--output", o->output_path, "Write the CSV to FILE instead of stdout (rows flushed per frame)")
+      ->check(pvdf::app::output_file());
+  sub->add_option("--rate-Hz", o->rate_Hz, "usb: sample rate per channel (Hz) (default the device's)")
+      ->check(pvdf::app::number_in(0, 1e7, "Hz (0 = the device's)"));
   sub->add_option("--channels", o->channels, "usb: channels to stream, e.g. 0,1,2 (default the device's)");
   sub->add_option("--gain-mV-per-pC", o->gain_mV_per_pC,
                   "Charge-amplifier sensitivity (mV/pC): set on a usb device (and the simulator), and used to turn volts into "
                   "charge for --locate (default the device's)")
+      ->check(pvdf::app::number_in(0, 1e6, "mV/pC", true))
       ->each([o](const std::string&) { o->gain_given = true; });
-  sub->add_option("--duration-s", o->duration_s, "Stop after this much signal (s); 0 = until the stream ends or Ctrl-C (default 0)");
-  sub->add_option("--stall-timeout-s", o->stall_timeout_s, "usb: give up when no data arrives for this long (s) (default 2)");
-  sub->add_option("--transfers", o->transfers, "usb: bulk transfers kept in flight (default 8)");
+  sub->add_option("--duration-s", o->duration_s, "Stop after this much signal (s); 0 = until the stream ends or Ctrl-C (default 0)")
+      ->check(pvdf::app::number_in(0, 1e7, "s (0 = until the stream ends)"));
+  sub->add_option("--stall-timeout-s", o->stall_timeout_s, "usb: give up when no data arrives for this long (s) (default 2)")
+      ->check(pvdf::app::number_in(0, 3600, "s", true));
+  sub->add_option("--transfers", o->transfers, "usb: bulk transfers kept in flight (default 8)")
+      ->check(pvdf::app::integer_in(1, 64, ""));
   sub->add_flag("--realtime", o->realtime, "replay/sim: deliver at the recorded pace instead of as fast as possible");
   sub->add_flag("--quiet", o->quiet, "No progress lines on stderr (faults and errors are still reported)");
   return pvdf::app::Subcommand{sub, [o] {

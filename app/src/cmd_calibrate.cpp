@@ -2,6 +2,7 @@
 // gain and offset by least squares, leave-one-out validation, before/after report, and a
 // calibrated map that `pvdfkit locate` uses.
 #include "command.hpp"
+#include "map_checks.hpp"
 
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
@@ -28,6 +29,7 @@ int run_calibrate(const CalibrateOptions& o) {
   ChargeMap map = read_map(o.map_path);
   pvdf::check_csv_file(o.measured_path, "MEASURED");
   const auto presses = read_measurements(o.measured_path, map.electrode_names);
+  pvdf::app::check_measured_plausible(presses, o.measured_path, map.electrode_names);
   LocatorOptions options;
   if (!o.noise.empty()) options.noise_C = pvdf::parse_number_list(o.noise, "--noise-C");
   const CalibrationReport report = fit_calibration(map, presses, options, o.measured_path);
@@ -75,5 +77,13 @@ PVDF_COMMAND(61, [](CLI::App& root) {
       ->check(pvdf::app::output_file());
   sub->add_option("--noise-C", o->noise, "1-sigma charge noise per electrode used when locating for the report (C) (default the map's)");
   sub->add_flag("--json", o->json, "Print the report as JSON");
-  return pvdf::app::Subcommand{sub, [o] { return run_calibrate(*o); }};
+  return pvdf::app::Subcommand{sub, [o] {
+    try {
+      return run_calibrate(*o);
+    } catch (const pvdf::InputError& e) {
+      std::string what = e.what();  // the locator's option is the flag --noise-C here
+      if (what.rfind("locator noise_C", 0) == 0) what.replace(0, 15, "--noise-C");
+      throw pvdf::InputError(what);
+    }
+  }};
 });

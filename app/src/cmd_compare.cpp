@@ -47,6 +47,7 @@ int run_compare(const CompareCliOptions& o) {
   const ChargeMap map = read_map(o.map_path);
   const MapInterpolant interpolant(map);
   const auto measured = read_measured_csv(o.measured_path, map.electrode_names);
+  pvdf::app::check_measured_plausible(measured, o.measured_path, map.electrode_names);
 #ifdef PVDF_HAVE_FIT
   pvdf::app::warn_if_map_too_coarse(map, measured);
 #endif

@@ -41,15 +41,37 @@ std::vector<std::string> split(const std::string& text) {
   return out;
 }
 
+/// Refuses an empty item in a comma list (`--params E_scale,,`): split() would drop it silently.
+void check_no_empty_item(const std::string& text, const std::string& flag) {
+  std::stringstream ss(text + ",");
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    if (item.find_first_not_of(' ') == std::string::npos) {
+      throw pvdf::InputError(flag + " " + pvdf::quote_cell(text) + ": has an empty item; separate the names by single commas");
+    }
+  }
+}
+
 std::map<std::string, double> parse_start(const std::string& text) {
   std::map<std::string, double> out;
+  if (!text.empty()) check_no_empty_item(text, "--start");
   for (const auto& item : split(text)) {
     const auto eq = item.find('=');
     double v = 0;
     if (eq == std::string::npos || !pvdf::parse_finite(item.substr(eq + 1), v)) {
       throw pvdf::InputError("--start: '" + item + "' must be NAME=VALUE with a finite number, e.g. E_scale=0.02");
     }
-    out[item.substr(0, eq)] = v;
+    const std::string name = item.substr(0, eq);
+    // Plausible starting values: a factor beyond 1e3 on the stiffness or a gain, or a piezo
+    // constant beyond 1e-9 C/N (50 x any piezo polymer), is a typo or a unit slip, not a start.
+    const bool factor = name == "E_scale" || name.rfind("gain_", 0) == 0;
+    if (factor && !(v >= 1e-3 && v <= 1e3)) {
+      throw pvdf::InputError("--start: " + pvdf::quote_cell(item) + ": " + name + " must lie in [1e-3, 1e3] (a factor on the scene's value)");
+    }
+    if ((name == "d31_C_per_N" || name == "d32_C_per_N") && !(std::abs(v) <= 1e-9)) {
+      throw pvdf::InputError("--start: " + pvdf::quote_cell(item) + ": |" + name + "| must be <= 1e-9 C/N (PVDF: ~2e-11; is the unit pC/N?)");
+    }
+    out[name] = v;
   }
   return out;
 }
@@ -116,6 +138,7 @@ int run_fit(const FitCliOptions& o) {
     }
   }
   pvdf::fit::FitOptions fo;
+  if (o.params_given && !o.params.empty()) check_no_empty_item(o.params, "--params");
   fo.parameters = split(o.params);
   if (o.params_given && fo.parameters.empty()) {
     throw pvdf::InputError("--params '" + pvdf::quote_cell(o.params) + "' names no parameter; give NAME,... or omit "
@@ -245,5 +268,17 @@ PVDF_COMMAND(67, [](CLI::App& root) {
   sub->add_flag("--verbose", o->verbose, "One line per iteration on stderr even when it is not a terminal "
                                          "(otherwise at most one each 10 s there)");
   sub->add_flag("--quiet", o->quiet, "No progress on stderr (warnings and errors are still reported)");
-  return pvdf::app::Subcommand{sub, [o] { return run_fit(*o); }};
+  return pvdf::app::Subcommand{sub, [o] {
+    try {
+      return run_fit(*o);
+    } catch (const pvdf::InputError& e) {
+      // The library names its options; on the command line they are flags.
+      std::string what = e.what();
+      for (const auto& [from, to] : {std::pair<std::string, std::string>{"FitOptions::start", "--start"},
+                                     {"FitOptions::parameters", "--params"}}) {
+        for (auto at = what.find(from); at != std::string::npos; at = what.find(from, at + to.size())) what.replace(at, from.size(), to);
+      }
+      throw pvdf::InputError(what);
+    }
+  }};
 });

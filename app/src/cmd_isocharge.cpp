@@ -2,6 +2,7 @@
 // map per electrode, all electrodes on one figure, VTK image data for ParaView, and for a
 // charge triple its three isocharge contours with their intersection.
 #include "command.hpp"
+#include "map_checks.hpp"
 
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
@@ -31,7 +32,7 @@ int run_isocharge(const IsochargeOptions& o) {
   using namespace pvdf::mapping;
   const ChargeMap map = read_map(o.map_path);
   std::vector<double> q;
-  if (!o.charges.empty()) q = pvdf::parse_number_list(o.charges, "--charges-C", map.ne());
+  if (!o.charges.empty()) q = pvdf::app::parse_charges(o.charges, map);  // count, and pC typed for C
   if (!o.charges.empty() && !o.at.empty()) throw pvdf::InputError("--charges-C and --at-m: give one charge triple, not both");
   LocatorOptions lo;
   lo.use_calibration = false;  // pictures of the map as computed
@@ -42,6 +43,17 @@ int run_isocharge(const IsochargeOptions& o) {
     q.assign(map.ne(), 0.0);
     if (!locator.predict(xy[0], xy[1], o.force_N > 0 ? o.force_N : 1.0, q.data())) {
       throw pvdf::InputError("--at-m " + o.at + ": not inside the map's usable cells; choose a position inside the map");
+    }
+  }
+  // The triple is located before any picture is drawn: charges that place no press leave no
+  // half-made folder of pictures behind (exit 3, nothing written).
+  Location located;
+  if (!q.empty()) {
+    located = o.force_N > 0 ? locator.locate(q.data(), o.force_N) : locator.locate(q.data());
+    if (!located.has_position()) {
+      std::cerr << "error: the charges " << pvdf::quote_cell(o.charges) << " locate no press on this map ("
+                << flags_text(located.flags) << "): no pictures written; check the charges (C, map electrode order)\n";
+      return pvdf::exit_code::numerical;
     }
   }
   for (const char* name : {"/isocharge_all.png", "/charges.vtk", "/intersection.png"}) {
@@ -68,12 +80,7 @@ int run_isocharge(const IsochargeOptions& o) {
   write_charge_vtk(map, vtk);
   std::printf("wrote %s\n", vtk.c_str());
   if (!q.empty()) {
-    const Location r = o.force_N > 0 ? locator.locate(q.data(), o.force_N) : locator.locate(q.data());
-    if (!r.has_position()) {
-      std::cerr << "error: the charges " << o.charges << " locate no press on this map (" << flags_text(r.flags)
-                << "): no intersection picture\n";
-      return pvdf::exit_code::numerical;
-    }
+    const Location& r = located;
     const std::string path = o.out_dir + "/intersection.png";
     write_intersection_png(locator, map, q.data(), r, path);
     std::printf("wrote %s: contours meet at (%.3f, %.3f) mm, %.4g N, flags %s\n", path.c_str(), r.x_m * 1e3, r.y_m * 1e3,

@@ -1,6 +1,7 @@
 // `pvdfkit locate`: where was the sensor pressed and how hard, from its electrode charges and a
 // charge map: one press (--charges-C), a CSV stream, or pictures of the map.
 #include "command.hpp"
+#include "map_checks.hpp"
 
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
@@ -15,6 +16,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <memory>
@@ -89,6 +91,10 @@ LocatorOptions locator_options(const LocateOptions& o, const ChargeMap& map) {
   if (!options.noise_C.empty()) {
     for (double s : options.noise_C) {
       if (!(s > 0 && std::isfinite(s))) throw pvdf::InputError("--noise-C " + o.noise + ": " + g_text(s) + " must be finite and > 0 (C)");
+      if (s > 1e-6) {
+        throw pvdf::InputError("--noise-C " + pvdf::quote_cell(o.noise) + ": " + g_text(s) +
+                               " C of noise exceeds 1e-6 C, beyond any film's charge; is the unit pC? (5e-14 C = 0.05 pC)");
+      }
     }
   }
   options.known_force_N = o.force_N;
@@ -172,37 +178,10 @@ std::string force_coverage(const ChargeMap& map) {
   return lo == hi ? g_text(lo) + " N" : g_text(lo) + "-" + g_text(hi) + " N";
 }
 
-/// The charges of --charges-C, one per electrode in the map's order, refused (naming that order)
-/// when their count differs, and refused with the likely cause when they are a thousand times
-/// larger than any charge of the map (pC typed where C is meant).
-std::vector<double> parse_charges(const std::string& text, const ChargeMap& map) {
-  const auto q = pvdf::parse_number_list(text, "--charges-C");
-  if (q.size() != map.ne()) {
-    throw pvdf::InputError("--charges-C " + pvdf::quote_cell(text) + ": " + std::to_string(q.size()) +
-                           " charges for a map of " + std::to_string(map.ne()) + " electrodes; give one charge (C) per " +
-                           "electrode in the map's order " + electrode_order(map));
-  }
-  double map_max_C = 0;
-  for (const double c : map.charge_C) {
-    if (std::isfinite(c)) map_max_C = std::max(map_max_C, std::abs(c));
-  }
-  double given_max_C = 0;
-  for (const double c : q) given_max_C = std::max(given_max_C, std::abs(c));
-  if (map_max_C > 0 && given_max_C > 1e3 * map_max_C) {
-    const bool pico = given_max_C * 1e-12 <= 10 * map_max_C;
-    throw pvdf::InputError("--charges-C " + pvdf::quote_cell(text) + ": " + g_text(given_max_C) +
-                           " C is more than 1000 times the map's largest charge (" + g_text(map_max_C) + " C)" +
-                           (pico ? "; these look like pC: the unit is coulombs (1 pC = 1e-12 C), e.g. " +
-                                       g_text(q[0] * 1e-12) + " for " + g_text(q[0])
-                                 : "; the unit is coulombs: check the charge amplifier's gain"));
-  }
-  return q;
-}
-
 /// `--charges-C`: one press.
 int locate_one(const LocateOptions& o, const ChargeMap& map, const Locator& locator) {
   if (o.stream || !o.input.empty()) throw pvdf::InputError("--charges-C and --stream/--input: choose one press or a stream");
-  const auto q = parse_charges(o.charges, map);
+  const auto q = pvdf::app::parse_charges(o.charges, map);
   const bool force_outside_levels =
       o.force_N > 0 && (o.force_N < map.forces_N.front() * (1 - 1e-9) || o.force_N > map.forces_N.back() * (1 + 1e-9));
   const Location r = locator.locate(q.data());
@@ -351,6 +330,10 @@ int locate_rows(const LocateOptions& o, const Locator& locator) {
   std::ifstream file;
   std::istream* in = &std::cin;
   if (!o.input.empty() && o.input != "-") {
+    std::error_code ec;
+    if (std::filesystem::is_directory(o.input, ec)) {
+      throw pvdf::InputError("--input " + pvdf::quote_cell(o.input) + " is a folder; give the CSV file of charges");
+    }
     pvdf::check_csv_file(o.input, "--input", 0);  // a stream: its header only (unique columns, no NUL, short cells)
     file.open(o.input);
     if (!file) throw pvdf::InputError(o.input + ": cannot open; check the path");
@@ -399,6 +382,7 @@ PVDF_COMMAND(60, [](CLI::App& root) {
   sub->add_option("--noise-C", o->noise, "1-sigma charge noise per electrode, one value or one per electrode in the map's electrode order (C) (default the map's)");
   sub->add_option("--force-N", o->force_N, "Known force of the press (N): fit the position only (and the force of --pictures) (default unknown: fitted with the "
                   "position)")
+      ->check(pvdf::app::number_in(0, 1e4, "N (a press beyond 10 kN is no tactile press: is the unit right?)", true))
       ->each([o](const std::string&) { o->force_N_given = true; });
   sub->add_option("--force-range-N", o->force_range, "Plausible forces MIN,MAX (N), also the prior of the solutions' probabilities (default half the lowest to twice the "
                   "highest force level of the map)");

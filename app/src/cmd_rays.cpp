@@ -67,6 +67,14 @@ struct RayPlotChoice {
 /// The plot choices, validated before the (cheap but not free) analysis.
 RayPlotChoice ray_plot_choice(const RaysOptions& o, const ChargeMap& map) {
   RayPlotChoice plot;
+  // Checked with or without --plot: a bad list is a mistake either way.
+  plot.angles_deg = pvdf::parse_number_list(o.plot_angles, "--plot-angles-deg");
+  for (const double a : plot.angles_deg) {
+    if (!(std::abs(a) <= 360)) {
+      throw pvdf::InputError("--plot-angles-deg " + pvdf::quote_cell(o.plot_angles) + ": " + pvdf::format_g(a) +
+                             " must lie in [-360, 360] deg");
+    }
+  }
   if (!o.plot_path.empty()) {
     std::string name = o.electrode;
     if (name.empty()) {  // seed 001 Fig. 7 shows electrode B
@@ -87,7 +95,6 @@ RayPlotChoice ray_plot_choice(const RaysOptions& o, const ChargeMap& map) {
       for (const auto& n : map.electrode_names) names += (names.empty() ? "" : ",") + n;
       throw pvdf::InputError("--electrode " + name + ": not an electrode of " + o.map_path + " (it has " + names + ")");
     }
-    plot.angles_deg = pvdf::parse_number_list(o.plot_angles, "--plot-angles-deg");
     if (!o.measured_path.empty()) {
       pvdf::check_csv_file(o.measured_path, "--measured");
       plot.measured = read_measured_csv(o.measured_path, map.electrode_names);

@@ -204,8 +204,12 @@ void print_comparison_text(const SceneComparison& r, const std::string& scene_pa
   std::printf("\n");
   for (std::size_t i = 0; i < n; ++i) {
     const auto& p = c.presses[i];
-    std::printf("%5zu %9.3f %9.3f %7.3g %9.4g %9.4g", p.measured.line, p.measured.x_m * 1e3, p.measured.y_m * 1e3,
-                p.measured.force_N, r.w_meas[i] * 1e3, r.w_fem[i] * 1e3);
+    std::printf("%5zu %9.3f %9.3f %7.3g", p.measured.line, p.measured.x_m * 1e3, p.measured.y_m * 1e3, p.measured.force_N);
+    // a deflection the CSV does not give (or the FEM did not reach) is "-", never "nan"
+    for (const double w : {r.w_meas[i], r.w_fem[i]}) {
+      if (std::isfinite(w)) std::printf(" %9.4g", w * 1e3);
+      else std::printf(" %9s", "-");
+    }
     for (std::size_t k = 0; k < ne; ++k) {
       std::printf(" %10.4g %10.4g", p.measured.charge_C[k] * 1e12, p.map_charge_C[k] * 1e12);
       if (std::isfinite(p.difference_pct[k])) std::printf(" %8.2f", p.difference_pct[k]);

@@ -113,9 +113,24 @@ void collect_paths(CLI::App* app, std::vector<NamedPath>& outputs, std::vector<N
   for (CLI::App* sub : app->get_subcommands()) collect_paths(sub, outputs, inputs);
 }
 
+/// An option that takes a value refuses an empty one (`--seed ''`, `--params=`): CLI11 would
+/// otherwise leave the default in place and the user's intent silently unmet (issue 30).
+void check_no_empty_values(CLI::App* app) {
+  for (CLI::Option* opt : app->get_options()) {
+    if (opt->count() == 0 || opt->get_expected_min() == 0 || opt->get_positional()) continue;
+    for (const std::string& value : opt->results()) {
+      if (value.empty()) {
+        throw InputError(flag_name(opt) + " is given an empty value ''; give a value (see --help) or leave the option out");
+      }
+    }
+  }
+  for (CLI::App* sub : app->get_subcommands()) check_no_empty_values(sub);
+}
+
 }  // namespace
 
 void check_outputs_against_inputs(CLI::App* app) {
+  check_no_empty_values(app);
   std::vector<NamedPath> outputs, inputs;
   collect_paths(app, outputs, inputs);
   for (std::size_t i = 0; i < outputs.size(); ++i) {
@@ -157,9 +172,20 @@ CLI::Validator integer_in(long long lo, long long hi, const std::string& why) {
       desc);
 }
 
+/// A file name the system cannot create (longer than a path component may be, with room for the
+/// ".tmp.NNNNNN" of the atomic write) refused at parse time, not by the writer after the work.
+std::string name_length_problem(const std::string& path) {
+  constexpr std::size_t max_name = 200;
+  const std::string name = std::filesystem::path(path).filename().string();
+  if (name.size() <= max_name && path.size() < 3800) return "";
+  return quote_cell(path) + " has a file name of " + std::to_string(name.size()) + " characters; give one of at most " +
+         std::to_string(max_name);
+}
+
 CLI::Validator output_file() {
   return CLI::Validator(
              [](std::string& path) -> std::string {
+               if (const std::string too_long = name_length_problem(path); !too_long.empty()) return too_long;
                const std::string problem = output_path_problem(path);
                return problem.empty() ? "" : quote_cell(path) + " " + problem;
              },
@@ -170,6 +196,7 @@ CLI::Validator output_file() {
 CLI::Validator figure_file() {
   return CLI::Validator(
              [](std::string& path) -> std::string {
+               if (const std::string too_long = name_length_problem(path); !too_long.empty()) return too_long;
                const std::string problem = output_path_problem(path);
                if (!problem.empty()) return quote_cell(path) + " " + problem;
                std::string ext = std::filesystem::path(path).extension().string();
@@ -186,6 +213,7 @@ CLI::Validator output_folder() {
   return CLI::Validator(
              [](std::string& path) -> std::string {
                namespace fs = std::filesystem;
+               if (const std::string too_long = name_length_problem(path); !too_long.empty()) return too_long;
                struct stat st {};
                if (::lstat(path.c_str(), &st) == 0 && S_ISLNK(st.st_mode)) {
                  return quote_cell(path) + " is a symbolic link; give the folder's real path";
@@ -353,11 +381,11 @@ int run(int argc, char** argv) {
   try {
     root.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
-    return root.exit(e);
+    return finish_stdout(root.exit(e));
   } catch (const CLI::CallForAllHelp& e) {
-    return root.exit(e);
+    return finish_stdout(root.exit(e));
   } catch (const CLI::CallForVersion& e) {
-    return root.exit(e);
+    return finish_stdout(root.exit(e));
   } catch (const CLI::ParseError& e) {
     std::string what = e.what();
     if (what.empty()) what = e.get_name();

@@ -4,6 +4,10 @@
 
 #include "command.hpp"
 
+#include "pvdf/core/error.hpp"
+#include "pvdf/core/io.hpp"
+
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -41,6 +45,56 @@ int warn_if_map_too_coarse(const pvdf::mapping::ChargeMap& map, const std::vecto
     }
   }
   return n;
+}
+
+void check_measured_plausible(const std::vector<pvdf::mapping::MeasuredPress>& presses, const std::string& source,
+                              const std::vector<std::string>& electrode_names) {
+  for (const auto& p : presses) {
+    const std::string at = source + ":" + std::to_string(p.line) + ": ";
+    if (!(p.force_N > 0 && p.force_N <= 1e4)) {
+      throw pvdf::InputError(at + "force_N = " + pvdf::format_g(p.force_N) +
+                             " must lie in (0, 1e4] N (a press pushes the film); is the unit mN or g?");
+    }
+    for (std::size_t k = 0; k < p.charge_C.size(); ++k) {
+      if (!(std::abs(p.charge_C[k]) <= 1e-6)) {
+        const std::string name = k < electrode_names.size() ? electrode_names[k] : std::to_string(k);
+        throw pvdf::InputError(at + "charge_" + name + "_C = " + pvdf::format_g(p.charge_C[k]) +
+                               " exceeds 1e-6 C, beyond any film's charge: the values look like pC; give coulombs "
+                               "(18 pC = 1.8e-11 C)");
+      }
+    }
+  }
+}
+
+std::vector<double> parse_charges(const std::string& text, const pvdf::mapping::ChargeMap& map) {
+  const auto g_text = [](double v) {
+    char buffer[32];
+    std::snprintf(buffer, sizeof buffer, "%g", v);
+    return std::string(buffer);
+  };
+  const auto q = pvdf::parse_number_list(text, "--charges-C");
+  if (q.size() != map.ne()) {
+    std::string order;
+    for (const auto& n : map.electrode_names) order += (order.empty() ? "" : ",") + n;
+    throw pvdf::InputError("--charges-C " + pvdf::quote_cell(text) + ": " + std::to_string(q.size()) +
+                           " charges for a map of " + std::to_string(map.ne()) + " electrodes; give one charge (C) per " +
+                           "electrode in the map's order " + order);
+  }
+  double map_max_C = 0;
+  for (const double c : map.charge_C) {
+    if (std::isfinite(c)) map_max_C = std::max(map_max_C, std::abs(c));
+  }
+  double given_max_C = 0;
+  for (const double c : q) given_max_C = std::max(given_max_C, std::abs(c));
+  if (map_max_C > 0 && given_max_C > 1e3 * map_max_C) {
+    const bool pico = given_max_C * 1e-12 <= 10 * map_max_C;
+    throw pvdf::InputError("--charges-C " + pvdf::quote_cell(text) + ": " + g_text(given_max_C) +
+                           " C is more than 1000 times the map's largest charge (" + g_text(map_max_C) + " C)" +
+                           (pico ? "; these look like pC: the unit is coulombs (1 pC = 1e-12 C), e.g. " +
+                                       g_text(q[0] * 1e-12) + " for " + g_text(q[0])
+                                 : "; the unit is coulombs: check the charge amplifier's gain"));
+  }
+  return q;
 }
 
 }  // namespace pvdf::app

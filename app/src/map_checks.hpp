@@ -17,4 +17,15 @@ bool is_scene_file(const std::string& path);
 /// Returns the number of such presses.
 int warn_if_map_too_coarse(const pvdf::mapping::ChargeMap& map, const std::vector<pvdf::mapping::MeasuredPress>& presses);
 
+/// Refuses (InputError naming the CSV and its line) a measured press no bench produces: a force
+/// outside (0, 1e4] N (mN typed for N?) or a charge beyond 1e-6 C (pC typed for C?). Run before
+/// any work on the presses (compare, calibrate).
+void check_measured_plausible(const std::vector<pvdf::mapping::MeasuredPress>& presses, const std::string& source,
+                              const std::vector<std::string>& electrode_names);
+
+/// The charges of --charges-C (locate, isocharge), one per electrode in the map's order, refused
+/// (naming that order) when their count differs, and refused with the likely cause when they are
+/// a thousand times larger than any charge of the map (pC typed where C is meant).
+std::vector<double> parse_charges(const std::string& text, const pvdf::mapping::ChargeMap& map);
+
 }  // namespace pvdf::app

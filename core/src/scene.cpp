@@ -37,6 +37,7 @@ Point2 polygon_centroid(const std::vector<Point2>& v) {
 // Kept here, not in scene.hpp, so that tuning them rebuilds one file.
 constexpr double modulus_min_Pa = 1e5;          // E_Pa, E1_Pa, E2_Pa, G12_Pa: soft rubber
 constexpr double modulus_max_Pa = 1e12;         // ... to diamond
+constexpr double auxetic_limit = -0.5;         // nu12 (or nu) below this: refused, see material()
 constexpr double poisson_margin = 0.05;         // 1 - nu12*nu21 >= this: positive definite with a margin
 constexpr double pretension_max_strain = 0.1;   // |pretension| <= this x sqrt(E1 E2) x thickness
 constexpr double force_min_N = 1e-9;            // loads[].force_N (the app's force flags use the same)
@@ -247,6 +248,9 @@ Material parse_material(const JsonObjectReader& r, std::vector<std::string>& war
     m.isotropic = true;
     const double E = r.positive("E_Pa");
     const double nu = r.in_range_or("nu", 0.3, -0.99, 0.499999);
+    if (nu < auxetic_limit) {
+      r.fail("nu", "is below " + fmt(auxetic_limit) + ": a strongly auxetic film is no PVDF film (nu ~ 0.35); check the sign");
+    }
     m.E1_Pa = m.E2_Pa = E;
     m.nu12 = nu;
     m.G12_Pa = E / (2 * (1 + nu));
@@ -256,6 +260,12 @@ Material parse_material(const JsonObjectReader& r, std::vector<std::string>& war
     m.E2_Pa = r.positive_or("E2_Pa", m.E2_Pa);
     m.G12_Pa = r.positive_or("G12_Pa", m.G12_Pa);
     m.nu12 = r.in_range_or("nu12", m.nu12, -0.99, 10.0);
+    // Strongly auxetic films are no polymer film of these sensors (PVDF: 0.3-0.45) and the solve
+    // of one stagnates (nu12 = -0.99: > 60 s on a 10 mm film that takes 1 s at 0.35, issue 30).
+    if (m.nu12 < auxetic_limit) {
+      r.fail("nu12", "is below " + fmt(auxetic_limit) +
+                         ": a strongly auxetic film is no PVDF film (nu12 ~ 0.35); check the sign");
+    }
     m.nu21_given = r.has("nu21");
     m.nu21_table = r.in_range_or("nu21", m.nu12 * m.E2_Pa / m.E1_Pa, -0.99, 10.0);
     if (m.nu21_given) {

@@ -13,6 +13,8 @@
 #include "pvdf/mapping/generate.hpp"
 
 #include <cmath>
+#include <algorithm>
+#include <cstdio>
 #include <optional>
 
 namespace pvdf::python {
@@ -23,13 +25,27 @@ std::optional<double> tolerance_arg(py::object value, const std::string& what) {
   return arg::optional_number_in(value, what, 1e-8, 0.5, "(the rule of the scene key model.tolerance), e.g. 0.01");
 }
 
-/// Force levels (N) as `pvdfkit map --forces-N` takes them: each in (0, 1e4].
-std::vector<double> force_levels(py::object value, const std::string& what) {
+/// Force levels (N) as `pvdfkit map --forces-N` takes them: each in (0, 1e4], resolved by the
+/// film (not lost to rounding), and distinct (two levels within 1e-6 are one level twice).
+std::vector<double> force_levels(py::object value, const std::string& what, const pvdf::Scene& scene) {
   const std::vector<double> forces = arg::vector(value, what, {false, true, "give force levels in N, e.g. [0.5, 1.0, 2.0]"});
   for (std::size_t i = 0; i < forces.size(); ++i) {
     if (!(forces[i] > 0 && forces[i] <= 1e4)) {
       throw pvdf::InputError(what + "[" + std::to_string(i) + "] = " + pvdf::format_g(forces[i]) +
                              " must lie in (0, 1e4] N (a press pushes the film; the rule of loads[].force_N)");
+    }
+    const std::string unresolved = pvdf::force_resolution_problem(scene, forces[i]);
+    if (!unresolved.empty()) throw pvdf::InputError(what + "[" + std::to_string(i) + "] = " + pvdf::format_g(forces[i]) + ": " + unresolved);
+  }
+  std::vector<double> sorted = forces;
+  std::sort(sorted.begin(), sorted.end());
+  for (std::size_t i = 1; i < sorted.size(); ++i) {
+    if (sorted[i] - sorted[i - 1] <= 1e-6 * sorted[i]) {
+      char a[32], b[32];
+      std::snprintf(a, sizeof a, "%.17g", sorted[i - 1]);
+      std::snprintf(b, sizeof b, "%.17g", sorted[i]);
+      throw pvdf::InputError(what + ": the levels " + std::string(a) + " and " + b +
+                             " N are not distinct (within 1e-6); give each force level once");
     }
   }
   return forces;
@@ -48,7 +64,11 @@ std::vector<pvdf::Load> load_rows(py::object value, const pvdf::Scene& scene) {
     if (!(std::abs(r[2]) <= 1e4)) {
       throw pvdf::InputError(at + ": force " + pvdf::format_g(r[2]) + " N must lie in [-1e4, 1e4] N (the rule of loads[].force_N)");
     }
-    const std::string unresolved = r[2] == 0 ? std::string() : pvdf::force_resolution_problem(scene, std::abs(r[2]));
+    if (r[2] == 0) {
+      throw pvdf::InputError(at + ": a force of 0 N loads nothing (the answer would be the flat film); give the press's "
+                                  "force or leave the row out");
+    }
+    const std::string unresolved = pvdf::force_resolution_problem(scene, std::abs(r[2]));
     if (!unresolved.empty()) throw pvdf::InputError(at + ": " + unresolved);
     const std::string problem = pvdf::probe_footprint_problem(scene, {r[0], r[1]}, scene.probe.radius_m);
     if (!problem.empty()) throw pvdf::InputError(at + ": " + problem);
@@ -218,7 +238,7 @@ pvdf::mapping::MapOptions map_options(const pvdf::Scene& scene, py::object spaci
   const std::string f = "generate_map: ";
   pvdf::mapping::MapOptions o;
   o.spacing_m = arg::number_in(spacing_m, f + "spacing_m", 1e-5, 0.1, "m");
-  o.forces_N = force_levels(forces_N, f + "forces_N");
+  o.forces_N = force_levels(forces_N, f + "forces_N", scene);
   double area_m2 = scene.membrane.outline.area_m2();
   if (!region_m.is_none()) {
     const auto r = arg::vector(region_m, f + "region_m", {false, true, "give (xmin, xmax, ymin, ymax) in m"});
@@ -228,6 +248,15 @@ pvdf::mapping::MapOptions map_options(const pvdf::Scene& scene, py::object spaci
     if (!(r[0] < r[1] && r[2] < r[3])) {
       throw pvdf::InputError(f + "region_m = (" + pvdf::format_g(r[0]) + ", " + pvdf::format_g(r[1]) + ", " +
                              pvdf::format_g(r[2]) + ", " + pvdf::format_g(r[3]) + ") needs xmin < xmax and ymin < ymax (m)");
+    }
+    // As `pvdfkit map --region`: a region far beyond the film maps nothing and its node count
+    // would overflow.
+    const double half_size_m = scene.membrane.outline.characteristic_radius_m();
+    for (const double v : r) {
+      if (std::abs(v) > 2 * half_size_m) {
+        throw pvdf::InputError(f + "region_m: " + pvdf::format_g(v) + " m lies beyond the film (half-size " +
+                               pvdf::format_g(half_size_m) + " m); give the region in m, within the film");
+      }
     }
     o.region_m = std::array<double, 4>{r[0], r[1], r[2], r[3]};
     area_m2 = std::min(area_m2, (r[1] - r[0]) * (r[3] - r[2]));
@@ -307,7 +336,11 @@ scene's own loads are ignored; the probe radius is the scene's.)doc")
                                                     "(positions checked at setup; pvdfkit map uses 3)"));
              if (!forces_N.is_none()) {
                const auto levels = arg::vector(forces_N, f + "forces_N", {true, true, "give force levels in N, e.g. [0.5, 1.0]"});
-               if (!levels.empty()) o.forces_N = force_levels(forces_N, f + "forces_N");
+               if (levels.empty()) {
+                 throw pvdf::InputError(f + "forces_N = [] names no force level; give levels in N, e.g. [0.5, 1.0], "
+                                            "or leave forces_N out for the default");
+               }
+               o.forces_N = force_levels(forces_N, f + "forces_N", scene);
              }
              o.rim_margin_m = arg::number_in(rim_margin_m, f + "rim_margin_m", 0, 1, "m (0 = the probe radius)");
              Sweep s;

@@ -290,7 +290,7 @@ Thread-safe in C++; the GIL is released while locating.)doc")
              // file, before the Locator indexes into it.
              pvdf::mapping::validate(map, f + "map");
              pvdf::mapping::LocatorOptions o;
-             o.noise_C = noise_list(noise_C, f + "noise_C", false);
+             o.noise_C = noise_list(noise_C, f + "noise_C", true);
              if (!o.noise_C.empty() && o.noise_C.size() != 1 && o.noise_C.size() != map.ne()) {
                throw pvdf::InputError(f + "noise_C has " + std::to_string(o.noise_C.size()) + " values; give 1 or " +
                                       std::to_string(map.ne()) + " (one per electrode) in C");
@@ -437,6 +437,7 @@ adc_bits: 0 (ideal) or 2..32; full_scale_C: 0 (automatic) or up to 1e-3 C. Retur
           if (electrode_names.empty()) {
             throw pvdf::InputError("read_measurements: electrode_names is empty; give the map's electrode names, e.g. m.electrode_names");
           }
+          pvdf::check_csv_file(path, "read_measurements: path");  // rows, cells, NUL bytes: as compare and calibrate
           const auto rows = pvdf::mapping::read_measurements(path, electrode_names);
           std::vector<double> x, y, f, q;
           std::vector<std::int64_t> line;

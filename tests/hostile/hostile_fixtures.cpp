@@ -113,6 +113,8 @@ void write_hostile_fixtures(const std::filesystem::path& d) {
   // cells, NUL bytes; fit CSVs with an absurd force.
   const std::string measured_head = "x_m,y_m,force_N,charge_A_C,charge_B_C,charge_C_C\n";
   write(d / "measured.csv", measured_head + "0.002,0.001,1,2e-12,1.8e-11,1.9e-11\n0,0,1,5e-12,5e-12,5e-12\n");
+  write(d / "measured_pC.csv", measured_head + "0.002,0.001,1,2,18,19\n");
+  write(d / "measured_mN.csv", measured_head + "0.002,0.001,1000000,2e-12,1.8e-11,1.9e-11\n");
   write(d / "measured_dup.csv", "x_m,y_m,force_N,charge_A_C,charge_B_C,charge_C_C,charge_A_C\n0,0,1,1e-12,1e-12,1e-12,2e-12\n");
   std::string many = measured_head;
   for (int i = 0; i < 100001; ++i) many += "0,0,1,5e-12,5e-12,5e-12\n";
@@ -143,6 +145,7 @@ void write_hostile_fixtures(const std::filesystem::path& d) {
                                                            "E_Pa": 2000, "nu": 0.3}})"));
   write(d / "nu_auxetic.json", seed001_with(R"({"material": {"E1_Pa": null, "E2_Pa": null, "G12_Pa": null, "nu12": null,
                                                             "E_Pa": 2e9, "nu": -0.99}})"));
+  write(d / "nu12_auxetic.json", seed001_with(R"({"material": {"nu12": -0.99}})"));
   write(d / "nu12_edge.json", seed001_with(R"({"material": {"nu12": 1.08}})"));
   write(d / "pretension_huge.json", seed001_with(R"({"membrane": {"pretension_N_per_m": -1e9}})"));
   write(d / "pretension_pos.json", seed001_with(R"({"membrane": {"pretension_N_per_m": 1e5}})"));
