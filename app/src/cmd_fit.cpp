@@ -1,6 +1,7 @@
 // `pvdfkit fit SCENE measured.csv [--params NAME,...] -o fitted.json [--json] [--plot FILE.png]`:
 // fits the film's effective physics to bench data on FEM predictions (docs/fem-vs-experiment.md).
 #include "command.hpp"
+#include "pvdf/core/resources.hpp"
 
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
@@ -208,6 +209,7 @@ int run_fit(const FitCliOptions& o) {
   if (!o.plot_path.empty() && !r.observations.empty()) pvdf::fit::write_fit_png(r, measured, scene, o.plot_path);
   if (o.json) {
     nlohmann::json j = pvdf::fit::to_json(r, measured);
+    j["peak_resident_bytes"] = pvdf::peak_resident_bytes();  // this process, so far (getrusage)
     j["scene"] = o.scene_path;
     j["fitted_scene"] = usable ? nlohmann::json(o.output_path) : nlohmann::json(nullptr);
     std::cout << j.dump(2) << '\n';

@@ -2,6 +2,7 @@
 // every electrode (FEM probe sweep; docs/map-generation.md). Runs unchanged under
 // `mpirun -np N`; resumes from its checkpoint; exit 3 when any point failed (map still written).
 #include "command.hpp"
+#include "pvdf/core/resources.hpp"
 
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
@@ -226,6 +227,7 @@ void print_map_json(const MapCommandOptions& o, const ChargeMap& map, const MapR
   j["cpu_s_per_solve"] = solves > 0 ? nlohmann::json(report.solve_cpu_s / double(solves)) : nlohmann::json(nullptr);
   j["estimate_share"] = report.solve_cpu_s > 0 ? nlohmann::json(report.estimate_s / report.solve_cpu_s) : nlohmann::json(nullptr);
   j["wall_s"] = report.wall_s;
+  j["peak_resident_bytes"] = pvdf::peak_resident_bytes();  // this process (rank 0 under MPI), so far
   j["per_position_s"] = report.per_position_s;
   j["nx"] = map.nx();
   j["ny"] = map.ny();
@@ -388,7 +390,7 @@ PVDF_COMMAND(35, [](CLI::App& root) {
   sub->add_option("--placement", o->placement,
                   "uniform (default): every node solved; adaptive: solves placed where the interpolant's estimated "
                   "error needs them, down to --spacing-m, every node storing its total error (opt-in: its estimate is "
-                  "10-25x cautious today; docs/map-generation.md section 10)");
+                  "about 4x cautious in the median today, in the [0.5, 3] band at 37-79 % of presses; docs/map-generation.md section 10)");
   sub->add_option("--adaptive-levels", o->adaptive_levels,
                   "Adaptive placement: the coarse level is 2^N x --spacing-m, N in 1..5 (default 2)");
   sub->add_option("--forces-N", o->forces, "Force levels F1,F2,... in N, each in [1e-9, 1e4], distinct (default 1)");

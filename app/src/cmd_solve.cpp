@@ -7,6 +7,7 @@
 #include "pvdf/core/scene.hpp"
 #include "pvdf/core/scene_geometry.hpp"
 #include "pvdf/fem/result_json.hpp"
+#include "pvdf/core/resources.hpp"
 #include "pvdf/fem/solver.hpp"
 #include "pvdf/mesh/mesher.hpp"
 
@@ -128,6 +129,7 @@ pvdf::fem::Result solve_scene(const SolveOptions& o, const pvdf::Scene& scene, p
 
 void print_solve_json(const SolveOptions& o, const pvdf::fem::Result& r, std::size_t mesh_file_cells) {
   nlohmann::json j = pvdf::fem::result_json(r);
+  j["peak_resident_bytes"] = pvdf::peak_resident_bytes();  // this process, so far (getrusage)
   j["mesh"] = o.mesh_path.empty() ? nlohmann::json("built-in") : nlohmann::json(o.mesh_path);
   if (!o.mesh_path.empty()) j["mesh_file_cells"] = mesh_file_cells;
   std::cout << j.dump(2) << '\n';

@@ -44,6 +44,7 @@ from ._pvdfkit import (  # noqa: F401  (re-exported API)
     default_scene,
     design,
     flags_text,
+    rank_designs,
     read_map,
     read_measurements,
     synthetic_map,
@@ -330,7 +331,7 @@ from . import restore  # noqa: E402,F401  (after the helpers restore.py uses)
 
 __all__ = [
     "FLAGS", "ChargeMap", "DesignSummary", "InputError", "Locations", "Locator", "NumericalError",
-    "Scene", "default_scene", "design", "flags_text", "grid_points", "load_scene", "read_map",
+    "Scene", "default_scene", "design", "flags_text", "grid_points", "load_scene", "rank_designs", "read_map",
     "read_measurements", "restore", "scene_to_dict", "solve", "synthetic_map", "validate_map",
     "write_map",
 ] + (["ProbeSolutions", "ProbeSweep", "SolveResult", "generate_map"] if has_fem else [])

@@ -431,6 +431,27 @@ Cramer-Rao position and force bounds, ambiguity, dead zones and the ADC, at pres
 (m, in (0, 1]); noise_C (C, each in (0, 1e-6)): one value or one per electrode (default: the map's);
 adc_bits: 0 (ideal) or 2..32; full_scale_C: 0 (automatic) or up to 1e-3 C. Returns DesignSummary.)doc");
 
+  m.def("rank_designs", [](py::object summaries_arg) {
+          const std::string f = "rank_designs: summaries";
+          if (!py::isinstance<py::sequence>(summaries_arg) || py::isinstance<py::str>(summaries_arg)) {
+            throw pvdf::InputError(f + " must be a list of DesignSummary (what pvdfkit.design returns)");
+          }
+          std::vector<pvdf::mapping::DesignSummary> summaries;
+          for (py::handle item : summaries_arg) {
+            if (!py::isinstance<pvdf::mapping::DesignSummary>(item)) {
+              throw pvdf::InputError(f + " item " + std::to_string(summaries.size()) +
+                                     " is not a DesignSummary: give what pvdfkit.design returns");
+            }
+            summaries.push_back(item.cast<pvdf::mapping::DesignSummary>());
+          }
+          return pvdf::mapping::rank_designs(summaries);
+        },
+        py::arg("summaries"),
+        R"doc(Orders layouts best first by ``pvdfkit design``'s rule (one rule, the library's): a layout that can
+locate before one that cannot, then the larger usable fraction (figure_of_merit), then the larger
+coverage, then the smaller median sigma_pos; equal layouts keep their order. summaries: a list of
+DesignSummary (pvdfkit.design). Returns the list of indices, best first.)doc");
+
   m.def("read_measurements", [](py::object path_arg, py::object names_arg) {
           const std::string path = arg::path(path_arg, "read_measurements: path");
           const std::vector<std::string> electrode_names = arg::texts(names_arg, "read_measurements: electrode_names");

@@ -46,3 +46,19 @@ def test_design_refuses_bad_options():
         pvdfkit.design(amap, min_force_N=2.0, max_force_N=1.0)
     with pytest.raises(pvdfkit.InputError):
         pvdfkit.design(amap, noise_C=[-1.0])
+
+
+def test_rank_designs_orders_as_the_command_rule():
+    """Two layouts whose usable areas differ by construction: a finer noise gives the larger usable
+    fraction, so it ranks first whatever the order given; bad input raises InputError."""
+    amap = analytic_map(spacing=0.001)
+    quiet = pvdfkit.design(amap, noise_C=NOISE_C / 10, adc_bits=0, check_ambiguity=False)
+    noisy = pvdfkit.design(amap, noise_C=NOISE_C * 10, adc_bits=0, check_ambiguity=False)
+    assert quiet.figure_of_merit > noisy.figure_of_merit
+    assert pvdfkit.rank_designs([noisy, quiet]) == [1, 0]
+    assert pvdfkit.rank_designs([quiet, noisy]) == [0, 1]
+    assert pvdfkit.rank_designs([quiet, quiet]) == [0, 1]  # ties keep their order
+    with pytest.raises(pvdfkit.InputError, match="DesignSummary"):
+        pvdfkit.rank_designs([quiet, 3])
+    with pytest.raises(pvdfkit.InputError, match="list"):
+        pvdfkit.rank_designs("quiet")
