@@ -117,6 +117,7 @@ struct NewtonOutcome {
   int iterations = 0;
   double residual_norm = 0;
   std::string message;
+  bool stagnated = false;  ///< no_convergence by the stagnation limit (Options::stagnation_iterations)
 };
 
 /// The outputs compared between meshes and models for the error estimate.

@@ -69,7 +69,13 @@ bool FilmSolver::solve_linear(const Vector<double>& rhs, Vector<double>& x, std:
 }
 
 // Newton–Raphson with backtracking line search on ‖r‖. Stops when ‖r‖ ≤ rtol·‖f‖ + atol AND
-// ‖Δu‖ ≤ increment_tol·‖u‖ (both), or after max_newton_iterations (no_convergence).
+// ‖Δu‖ ≤ increment_tol·‖u‖ (both), or after max_newton_iterations (no_convergence), or earlier
+// when the residual has stagnated (no_convergence, `stagnated`): the smallest ‖r‖ of the last k =
+// stagnation_iterations iterations not below stagnation_factor × the smallest before them. A
+// converging Newton (quadratic, or chord steps contracting 10x) halves ‖r‖ in one or two steps;
+// the first continuation stage, whose residual first grows ~12x, still halved it within 4 (seed
+// 001). Films near the physical limits (nu12 -> -1, E2 -> 0, |N0| huge in compression) instead
+// stir ‖r‖ at one level for hundreds of iterations, minutes each at 127k DOFs (issue 30).
 NewtonOutcome FilmSolver::newton(Model model, double artificial_tension, Vector<double>& u, double stage_rtol) {
   NewtonOutcome out;
   const double f_norm = load_.l2_norm();
@@ -84,6 +90,8 @@ NewtonOutcome FilmSolver::newton(Model model, double artificial_tension, Vector<
   bool refactorize = !(reuse_factorization_ && chord_first_step_ && factorization_.usable());
   chord_first_step_ = false;
   bool have_r = false;  // r and last_energy_ already belong to u (the accepted line-search trial)
+  const int k_stag = options_.stagnation_iterations;
+  std::vector<double> best_so_far;  // best_so_far[i] = min ‖r‖ over iterations 0..i
   for (int it = 0; it <= options_.max_newton_iterations; ++it) {
     if (!have_r || refactorize) assemble(u, model, artificial_tension, refactorize, r);
     have_r = false;
@@ -107,6 +115,15 @@ NewtonOutcome FilmSolver::newton(Model model, double artificial_tension, Vector<
     const bool stage_done = stage_rtol > 0 && r_norm <= stage_rtol * f_norm;
     if ((r_norm <= r_tol && small_increment) || roundoff_floor || stage_done) {
       out.status = Status::converged;
+      return out;
+    }
+    best_so_far.push_back(std::min(r_norm, best_so_far.empty() ? r_norm : best_so_far.back()));
+    if (k_stag > 0 && it >= k_stag && best_so_far[it] > options_.stagnation_factor * best_so_far[it - k_stag]) {
+      out.status = Status::no_convergence;
+      out.stagnated = true;
+      out.message = "Newton stagnated: the residual fell by less than " + fmt(1 / options_.stagnation_factor) +
+                    "x over " + std::to_string(k_stag) + " iterations (|r| = " + fmt(r_norm) + " N after " +
+                    std::to_string(it) + " iterations, tolerance " + fmt(r_tol) + " N)";
       return out;
     }
     if (it == options_.max_newton_iterations) break;
@@ -242,7 +259,7 @@ NewtonOutcome FilmSolver::solve_from_flat(Model model, Vector<double>& u) {
   targets.push_back(0.0);
   double last_converged = -1;
   Vector<double> u_saved = u;
-  int cutbacks = 0;
+  int cutbacks = 0, stagnated_stages = 0;
   std::size_t k = 0;
   while (k < targets.size()) {
     const double target = targets[k];
@@ -263,6 +280,13 @@ NewtonOutcome FilmSolver::solve_from_flat(Model model, Vector<double>& u) {
       total.status = o.status;
       total.message = o.message + "; gave up after " + std::to_string(options_.max_cutbacks) +
                       " continuation cutbacks at artificial pretension " + fmt(target) + " N/m";
+      return total;
+    }
+    // A cut-back stage that stagnates again: smaller steps do not help (issue 30), stop now.
+    if (o.stagnated && ++stagnated_stages >= options_.max_stagnated_stages) {
+      total.status = o.status;
+      total.message = o.message + "; gave up after " + std::to_string(stagnated_stages) +
+                      " stagnated continuation stages (last at artificial pretension " + fmt(target) + " N/m)";
       return total;
     }
     u = u_saved;

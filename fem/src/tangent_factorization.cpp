@@ -56,28 +56,35 @@ TangentFactorization::TangentFactorization(Method method) : method_(method), imp
 }
 TangentFactorization::~TangentFactorization() = default;
 
-// The Eigen copy of the pattern and, for each deal.II entry, its slot there: each factorization
-// copies the values without searching.
+// The Eigen copy of the pattern (CSC) and, for each deal.II entry, its slot there: each
+// factorization copies the values without searching. Built by a counting transpose of deal.II's
+// rows, O(nnz): visiting the rows in increasing order leaves every column's row indices sorted, so
+// no sort or search is needed (the triplet sort + lower_bound before took 6.7 % of seed 001's
+// centre solve, perf, for the Q2 and the Q3 pattern). Same CSC as Eigen's setFromTriplets.
 void TangentFactorization::set_pattern(const dealii::SparsityPattern& pattern) {
   const auto n = static_cast<int>(pattern.n_rows());
-  std::vector<Eigen::Triplet<double>> triplets;
-  triplets.reserve(pattern.n_nonzero_elements());
-  for (int r = 0; r < n; ++r)
-    for (auto it = pattern.begin(r); it != pattern.end(r); ++it)
-      triplets.emplace_back(r, static_cast<int>(it->column()), 0.0);
   // A fresh Impl: CHOLMOD's and Eigen's symbolic analyses belong to the old pattern.
   impl_ = std::make_unique<Impl>();
   Impl& m = *impl_;
+  const auto nnz = static_cast<Eigen::Index>(pattern.n_nonzero_elements());
   m.matrix.resize(n, n);
-  m.matrix.setFromTriplets(triplets.begin(), triplets.end());
-  m.matrix.makeCompressed();
-  m.slot.reserve(triplets.size());
-  const int* outer = m.matrix.outerIndexPtr();
-  const int* inner = m.matrix.innerIndexPtr();
-  for (const auto& t : triplets) {
-    const int* pos = std::lower_bound(inner + outer[t.col()], inner + outer[t.col() + 1], t.row());
-    m.slot.push_back(pos - inner);
-  }
+  m.matrix.resizeNonZeros(nnz);
+  int* outer = m.matrix.outerIndexPtr();
+  int* inner = m.matrix.innerIndexPtr();
+  std::fill(outer, outer + n + 1, 0);
+  for (int r = 0; r < n; ++r)
+    for (auto it = pattern.begin(r); it != pattern.end(r); ++it) ++outer[it->column() + 1];
+  for (int c = 0; c < n; ++c) outer[c + 1] += outer[c];
+  std::vector<int> next(outer, outer + n);
+  m.slot.resize(static_cast<std::size_t>(nnz));
+  std::size_t k = 0;
+  for (int r = 0; r < n; ++r)
+    for (auto it = pattern.begin(r); it != pattern.end(r); ++it) {
+      const int pos = next[it->column()]++;
+      inner[pos] = r;
+      m.slot[k++] = pos;
+    }
+  std::fill(m.matrix.valuePtr(), m.matrix.valuePtr() + nnz, 0.0);
   usable_ = false;
 }
 

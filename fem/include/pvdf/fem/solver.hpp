@@ -110,6 +110,12 @@ struct Options {
   double residual_atol = 1e-14;         ///< (N)
   double increment_tol = 1e-8;          ///< ‖Δu‖ ≤ increment_tol·‖u‖
   int max_cutbacks = 12;                ///< halvings of a failed continuation step before giving up
+  /// Stagnation limit (issue 30): a Newton solve stops with no_convergence when the smallest ‖r‖ of
+  /// its last `stagnation_iterations` iterations is not below `stagnation_factor` × the smallest
+  /// ‖r‖ before them (0 = no limit); a continuation gives up after `max_stagnated_stages` such stops.
+  int stagnation_iterations = 8;
+  double stagnation_factor = 0.5;
+  int max_stagnated_stages = 2;
   bool iterative_solver = false;        ///< GMRES + ILU instead of the sparse direct solver (big meshes)
   /// Use the dense-enough direct solver below this many DOFs even if iterative_solver is set.
   unsigned int direct_solver_max_dofs = 400000;
