@@ -214,6 +214,12 @@ class FilmSolver {
   bool clamp_layer_on() const { return clamp_layer_; }
   /// Back to the plain clamp without bending (DOFs unchanged), for the next probe.
   void reset_clamp_layer();
+  /// A cold probe solve's start: no chord step from an earlier probe's tangent, no LDLᵀ-first
+  /// countdown left by one (TangentFactorization::forget_history).
+  void forget_solve_history() {
+    factorization_.forget_history();
+    chord_first_step_ = false;
+  }
   /// Assemble the bending operator and its sparsity even when the model leaves bending out (call
   /// before the first setup_system()): needed to estimate what bending would change.
   /// `switchable`: the adaptive loop switches bending on when its estimated effect is too large

@@ -416,6 +416,12 @@ ProbeSolution ProbeSweep::solve(double x_m, double y_m, double force_N, const Sw
   if (warm) {
     state = warm_start->dofs;
     state_force = warm_start->force_N;
+  } else {
+    // A cold solve (a map row's first) depends on nothing solved before it: no chord tangent or
+    // LDLᵀ countdown from another row, so the map is bitwise the same for any thread count.
+    im.engine->forget_history();
+    for (auto& e : im.rim_engines)
+      if (e) e->forget_history();
   }
   ProbeSolution s = im.from_engine(im.walk_probe(x_m, y_m, force_N, state, warm, state_force, warm_start), SweepModel::cheap);
   std::vector<double> rim_state;

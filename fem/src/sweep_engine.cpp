@@ -312,6 +312,12 @@ EngineSolution SweepEngine::solve(double x_m, double y_m, double force_N, std::v
 // probe's own mesh, from its converged plain-clamp state, so near the clamp the probe costs a few
 // lagged Newton solves on the cheap model's mesh instead of a bending solve on a rim-graded one.
 // The condition stays on in that solver until its next probe (solve() resets it).
+void SweepEngine::forget_history() {
+  impl_->solver->forget_solve_history();
+  if (impl_->probe_solver) impl_->probe_solver->forget_solve_history();  // kept: it serves its position again
+  impl_->last_solver = nullptr;
+}
+
 EngineSolution SweepEngine::solve_clamp_layer() {
   Impl& im = *impl_;
   EngineSolution out;

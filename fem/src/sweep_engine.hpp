@@ -105,6 +105,10 @@ class SweepEngine {
   EngineSolution solve(double x_m, double y_m, double force_N, std::vector<double>& state, bool warm,
                        double state_force_N = 0, bool cold_fallback = true);
 
+  /// Forgets what earlier solves left in the solvers (FilmSolver::forget_solve_history, the
+  /// footprint-refined probe mesh's too): the next solve depends only on its own inputs.
+  void forget_history();
+
   /// The last probe solve() converged (same position and force, same mesh) again with the clamp's
   /// bending layer as a boundary condition (docs/fem.md §3.4), from its converged state; the
   /// warm-start state solve() returned is not touched. Needs an engine built with estimate_errors

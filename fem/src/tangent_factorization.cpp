@@ -123,6 +123,11 @@ bool TangentFactorization::factorize(const dealii::SparseMatrix<double>& matrix)
   return usable_;
 }
 
+void TangentFactorization::forget_history() {
+  usable_ = false;
+  if (impl_) impl_->skip_cholesky = 0;
+}
+
 void TangentFactorization::solve(const double* b, double* x, std::size_t n) const {
   const Eigen::Map<const Eigen::VectorXd> bv(b, static_cast<Eigen::Index>(n));
   Eigen::Map<Eigen::VectorXd> xv(x, static_cast<Eigen::Index>(n));

@@ -43,6 +43,10 @@ class TangentFactorization {
   bool usable() const { return usable_; }
   /// Marks the held factorization unusable (e.g. its solve was found inaccurate).
   void invalidate() { usable_ = false; }
+  /// Forgets what earlier factorizations left behind (the held factor, the LDLᵀ-first countdown
+  /// after an indefinite tangent), keeping the symbolic analyses: the next solve then depends on
+  /// nothing solved before it (a map's rows are bitwise the same whichever thread ran what before).
+  void forget_history();
   /// Numeric factorizations since construction, and how many of them fell back to the LDLᵀ.
   int n_factorizations() const { return n_factorizations_; }
   int n_ldlt_fallbacks() const { return n_ldlt_fallbacks_; }
