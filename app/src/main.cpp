@@ -6,6 +6,7 @@
 
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
+#include "pvdf/core/scene_geometry.hpp"
 #include "pvdf/version.hpp"
 
 #include <algorithm>
@@ -237,23 +238,9 @@ void check_output_file(const std::string& path, const std::string& flag) {
 
 std::vector<double> parse_force_levels(const std::string& text, const std::string& flag) {
   std::vector<double> forces = parse_number_list(text, flag);
-  for (const double f : forces) {
-    if (!(f >= 1e-9 && f <= 1e4)) {
-      throw InputError(flag + " " + quote_cell(text) + ": " + format_g(f) +
-                             " must lie in [1e-9, 1e4] N (a press pushes the film; the rule of loads[].force_N)");
-    }
-  }
-  std::vector<double> sorted = forces;
-  std::sort(sorted.begin(), sorted.end());
-  for (std::size_t i = 1; i < sorted.size(); ++i) {
-    if (sorted[i] - sorted[i - 1] <= 1e-6 * sorted[i]) {
-      char a[32], b[32];
-      std::snprintf(a, sizeof a, "%.17g", sorted[i - 1]);
-      std::snprintf(b, sizeof b, "%.17g", sorted[i]);
-      throw InputError(flag + " " + quote_cell(text) + ": the levels " + a + " and " + b +
-                             " N are not distinct (closer than a relative 1e-6); give each force level once");
-    }
-  }
+  std::size_t index = 0;
+  const std::string problem = pvdf::force_levels_problem(forces, index);  // the rule Python applies too
+  if (!problem.empty()) throw InputError(flag + " " + quote_cell(text) + ": " + problem);
   return forces;
 }
 

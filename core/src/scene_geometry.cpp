@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 namespace pvdf {
 
@@ -229,6 +230,28 @@ double estimated_deflection_m(const Scene& scene, double force_N) {
   const double k_membrane = w_membrane > 0 ? force_N / w_membrane : 0.0;
   const double k = k_plate + k_tension + k_membrane;
   return k > 0 ? force_N / k : 0.0;
+}
+
+std::string force_levels_problem(const std::vector<double>& forces_N, std::size_t& index) {
+  for (index = 0; index < forces_N.size(); ++index) {
+    const double f = forces_N[index];
+    if (!(f >= 1e-9 && f <= 1e4)) {
+      return format_g(f) + " must lie in [1e-9, 1e4] N (a press pushes the film; the rule of loads[].force_N)";
+    }
+  }
+  std::vector<double> sorted = forces_N;
+  std::sort(sorted.begin(), sorted.end());
+  for (std::size_t i = 1; i < sorted.size(); ++i) {
+    if (sorted[i] - sorted[i - 1] <= 1e-6 * sorted[i]) {
+      char a[32], b[32];
+      std::snprintf(a, sizeof a, "%.17g", sorted[i - 1]);
+      std::snprintf(b, sizeof b, "%.17g", sorted[i]);
+      return std::string("the levels ") + a + " and " + b +
+             " N are not distinct (closer than a relative 1e-6); give each force level once";
+    }
+  }
+  index = forces_N.size();
+  return "";
 }
 
 std::string force_resolution_problem(const Scene& scene, double force_N) {

@@ -29,24 +29,14 @@ std::optional<double> tolerance_arg(py::object value, const std::string& what) {
 /// film (not lost to rounding), and distinct (two levels within 1e-6 are one level twice).
 std::vector<double> force_levels(py::object value, const std::string& what, const pvdf::Scene& scene) {
   const std::vector<double> forces = arg::vector(value, what, {false, true, "give force levels in N, e.g. [0.5, 1.0, 2.0]"});
+  std::size_t index = 0;
+  const std::string problem = pvdf::force_levels_problem(forces, index);  // the rule of map --forces-N
+  if (!problem.empty()) {
+    throw pvdf::InputError(what + (index < forces.size() ? "[" + std::to_string(index) + "] = " : ": ") + problem);
+  }
   for (std::size_t i = 0; i < forces.size(); ++i) {
-    if (!(forces[i] > 0 && forces[i] <= 1e4)) {
-      throw pvdf::InputError(what + "[" + std::to_string(i) + "] = " + pvdf::format_g(forces[i]) +
-                             " must lie in (0, 1e4] N (a press pushes the film; the rule of loads[].force_N)");
-    }
     const std::string unresolved = pvdf::force_resolution_problem(scene, forces[i]);
     if (!unresolved.empty()) throw pvdf::InputError(what + "[" + std::to_string(i) + "] = " + pvdf::format_g(forces[i]) + ": " + unresolved);
-  }
-  std::vector<double> sorted = forces;
-  std::sort(sorted.begin(), sorted.end());
-  for (std::size_t i = 1; i < sorted.size(); ++i) {
-    if (sorted[i] - sorted[i - 1] <= 1e-6 * sorted[i]) {
-      char a[32], b[32];
-      std::snprintf(a, sizeof a, "%.17g", sorted[i - 1]);
-      std::snprintf(b, sizeof b, "%.17g", sorted[i]);
-      throw pvdf::InputError(what + ": the levels " + std::string(a) + " and " + b +
-                             " N are not distinct (within 1e-6); give each force level once");
-    }
   }
   return forces;
 }

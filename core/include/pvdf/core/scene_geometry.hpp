@@ -6,7 +6,9 @@
 #include "pvdf/core/planar.hpp"
 #include "pvdf/core/scene.hpp"
 
+#include <cstddef>
 #include <string>
+#include <vector>
 
 namespace pvdf {
 
@@ -58,6 +60,12 @@ double estimated_deflection_m(const Scene& scene, double force_N);
 /// Why a press of `force_N` on `scene`'s film would deflect it by less than deflection_ratio_min
 /// of the film size (lost to rounding), with the smallest force that would not; or "".
 std::string force_resolution_problem(const Scene& scene, double force_N);
+
+/// Why `forces_N` cannot be a map's force levels, or "" — the one rule of `map --forces-N`, the
+/// design's levels and Python's generate_map/ProbeSweep: each level in [1e-9, 1e4] N (the rule of
+/// loads[].force_N; then `index` is the offending level's and the text starts with its value) and
+/// no two within a relative 1e-6 (one level twice; `index` = forces_N.size()).
+std::string force_levels_problem(const std::vector<double>& forces_N, std::size_t& index);
 
 /// Throws InputError (naming the scene file and the key) when the scene breaks a rule above.
 void check_scene_geometry(const Scene& scene);
