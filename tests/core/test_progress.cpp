@@ -6,6 +6,7 @@
 #include <catch2/catch.hpp>
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -106,4 +107,36 @@ TEST_CASE("progress off a terminal: silent for short work and for work abandoned
   });
   REQUIRE_FALSE(abandoned.empty());
   for (const auto& l : abandoned) CHECK(l.find("done") == std::string::npos);
+}
+
+TEST_CASE("progress off a terminal shows the ETA the caller set, counted down, until it is withdrawn",
+          "[core][progress]") {
+  const auto lines = stderr_lines_of("0.01", [] {
+    pvdf::Progress p("maps", 10);
+    p.set_eta_s(600.0);
+    sleep_s(0.03);
+    p.update(1);
+    sleep_s(0.03);
+    p.update(2);
+    p.set_eta_s(NAN);  // back to items left over the rate: well under ten minutes here
+    sleep_s(0.03);
+    p.update(3);
+    sleep_s(0.03);
+    p.update(4);
+    p.finish();
+  });
+  // Lines while the caller's ETA holds (1 done) show it; lines after it was withdrawn (3 done) the rate's.
+  int with_hint = 0, with_rate = 0;
+  for (const auto& line : lines) {
+    if (line.rfind("maps: 1/10", 0) == 0) {
+      CHECK((line.find("ETA 10:00") != std::string::npos || line.find("ETA 9:5") != std::string::npos));
+      ++with_hint;
+    }
+    if (line.rfind("maps: 3/10", 0) == 0) {
+      CHECK(line.find("ETA 0:0") != std::string::npos);
+      ++with_rate;
+    }
+  }
+  CHECK(with_hint > 0);
+  CHECK(with_rate > 0);
 }

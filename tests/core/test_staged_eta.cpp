@@ -1,25 +1,13 @@
 // pvdf::StagedEta against hand-computed times left of two stages (a setup, then items at the
-// stage's own rate), pvdf::Progress showing an ETA the caller set, and the resident-memory probes.
-#include "pvdf/core/progress.hpp"
+// stage's own rate), and the resident-memory probes.
 #include "pvdf/core/resources.hpp"
 #include "pvdf/core/staged_eta.hpp"
 
 #include <catch2/catch.hpp>
 
-#include <chrono>
 #include <cmath>
 #include <cstdint>
-#include <cstdio>
-#include <cstdlib>
-#include <filesystem>
-#include <fstream>
-#include <sstream>
-#include <string>
-#include <thread>
 #include <vector>
-
-#include <fcntl.h>
-#include <unistd.h>
 
 TEST_CASE("staged ETA: setup and rate measured per stage, stages to come predicted from them", "[core][progress]") {
   pvdf::StagedEta eta({20, 30});
@@ -44,56 +32,6 @@ TEST_CASE("staged ETA: setup and rate measured per stage, stages to come predict
   // A total revised by the stage (e.g. a mirror-symmetric grid) replaces the planned count.
   eta.items_done(1, 12, 16, 51.0);
   CHECK(eta.seconds_left(51.0) == Approx(4.0 / (8.0 / 4.0)));
-}
-
-TEST_CASE("progress off a terminal shows the ETA the caller set, counted down, until it is withdrawn",
-          "[core][progress]") {
-  const auto path = std::filesystem::temp_directory_path() / ("pvdf_test_staged_" + std::to_string(::getpid()));
-  std::fflush(stderr);
-  const int saved = ::dup(STDERR_FILENO);
-  const int file = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  REQUIRE(file >= 0);
-  ::dup2(file, STDERR_FILENO);
-  ::close(file);
-  ::setenv("PVDF_PROGRESS_INTERVAL_S", "0.01", 1);
-  {
-    pvdf::Progress p("maps", 10);
-    const auto pause = [] { std::this_thread::sleep_for(std::chrono::milliseconds(30)); };
-    p.set_eta_s(600.0);
-    pause();
-    p.update(1);
-    pause();
-    p.update(2);
-    p.set_eta_s(NAN);  // back to items left over the rate: well under ten minutes here
-    pause();
-    p.update(3);
-    pause();
-    p.update(4);
-    p.finish();
-  }
-  ::unsetenv("PVDF_PROGRESS_INTERVAL_S");
-  std::fflush(stderr);
-  ::dup2(saved, STDERR_FILENO);
-  ::close(saved);
-  std::ifstream in(path);
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  std::filesystem::remove(path);
-  INFO(text);
-  // Lines while the caller's ETA holds (1 done) show it; lines after it was withdrawn (3 done) the rate's.
-  std::istringstream lines(text);
-  int with_hint = 0, with_rate = 0;
-  for (std::string line; std::getline(lines, line);) {
-    if (line.rfind("maps: 1/10", 0) == 0) {
-      CHECK((line.find("ETA 10:00") != std::string::npos || line.find("ETA 9:5") != std::string::npos));
-      ++with_hint;
-    }
-    if (line.rfind("maps: 3/10", 0) == 0) {
-      CHECK(line.find("ETA 0:0") != std::string::npos);
-      ++with_rate;
-    }
-  }
-  CHECK(with_hint > 0);
-  CHECK(with_rate > 0);
 }
 
 TEST_CASE("resident memory: the peak covers a 64 MiB buffer touched now, and the current size sees it",

@@ -7,6 +7,8 @@
 #include "pvdf/fit/predictor.hpp"
 #include "axisymmetric_plate.hpp"  // tests/fem/oracles: the independent tension-field oracle
 
+#include "../test_sigma_scale.hpp"
+
 #include <catch2/catch.hpp>
 
 #include <array>
@@ -128,16 +130,7 @@ TEST_CASE("the sweep charges equal adaptive direct solves at the presses (no int
 
 namespace {
 
-/// PVDF_TEST_SIGMA_SCALE (test only, never read by the library): multiplies every σ the fit reports
-/// before the coverage count, to show that the two-sided bands fail for σ × 0.5 and σ × 2.
-double test_sigma_scale() {
-  const char* text = std::getenv("PVDF_TEST_SIGMA_SCALE");
-  if (text == nullptr || *text == '\0') return 1.0;
-  char* end = nullptr;
-  const double v = std::strtod(text, &end);
-  if (end == text || *end != '\0' || !(v > 0) || !std::isfinite(v)) return 1.0;
-  return v;
-}
+using pvdf::testing::test_sigma_scale;  // tests/test_sigma_scale.hpp
 
 /// What a coverage study counts: per parameter the repetitions within 2σ of the truth, over all
 /// parameters and repetitions the estimates within 1σ, and the mean of z² = ((value − truth)/σ)².

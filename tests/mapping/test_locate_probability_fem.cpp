@@ -26,6 +26,8 @@
 #include "pvdf/mapping/locator.hpp"
 #include "pvdf/mapping/map.hpp"
 
+#include "../test_sigma_scale.hpp"
+
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
@@ -48,15 +50,7 @@ double median(std::vector<double> v) {
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
-/// PVDF_TEST_SIGMA_SCALE (test only): multiplies every reported σ before the coverage count.
-double test_sigma_scale() {
-  const char* text = std::getenv("PVDF_TEST_SIGMA_SCALE");
-  if (text == nullptr || *text == '\0') return 1.0;
-  char* end = nullptr;
-  const double v = std::strtod(text, &end);
-  if (end == text || *end != '\0' || !(v > 0) || !std::isfinite(v)) return 1.0;
-  return v;
-}
+using pvdf::testing::test_sigma_scale;  // tests/test_sigma_scale.hpp
 
 struct Press {
   double x, y, F;
