@@ -42,7 +42,8 @@ int run_compare(const CompareCliOptions& o) {
   pvdf::check_csv_file(o.measured_path, "MEASURED");
 #ifdef PVDF_HAVE_FIT
   if (pvdf::app::is_scene_file(o.map_path))  // a scene: FEM solves at the presses (compare_scene.cpp)
-    return pvdf::app::run_compare_scene(o.map_path, o.measured_path, o.json, o.plot_path, o.report_path, o.quiet);
+    return pvdf::app::run_compare_scene(o.map_path, o.measured_path, o.json, o.plot_path, o.report_path,
+                                           o.min_map_charge_C, o.quiet);
 #endif
   const ChargeMap map = read_map(o.map_path);
   const MapInterpolant interpolant(map);
@@ -168,7 +169,8 @@ PVDF_COMMAND(66, [](CLI::App& root) {
       ->check(pvdf::app::figure_file());
   sub->add_option("-o,--report", o->report_path, "Write the per-press report as CSV")->check(pvdf::app::output_file());
   sub->add_option("--min-map-charge-C", o->min_map_charge_C,
-                  "Map charges smaller than this are not compared as a percentage (C) (default 3 x the map's 1-sigma charge noise)")
+                  "Map (or, with a scene, FEM) charges smaller than this are not compared as a percentage (C) "
+                  "(default 3 x the map's 1-sigma charge noise; with a scene 3 x 0.05 pC)")
       ->check(pvdf::app::number_in(0, 1e-3, "C"));
   sub->add_flag("--quiet", o->quiet, "A scene: no progress of its FEM solves on stderr (warnings and errors are still reported)");
   return pvdf::app::Subcommand{sub, [o] { return run_compare(*o); }};

@@ -70,8 +70,9 @@ struct DesignCommandOptions {
 /// progress, and the planned positions of each map still to come (mapping::planned_positions:
 /// layouts differ, e.g. a mirror-symmetric one solves half its grid). The ETA is pvdf::StagedEta's:
 /// each map's setup (mesh, setup checks) and its rate per position are measured apart, the map in
-/// progress is finished at its own rate, and the maps to come are predicted with the measured mean
-/// setup and the pooled rate (docs/design.md §6).
+/// progress is finished by its own estimate (MapOptions::time_left: each position's cost predicted
+/// from its distance to the clamp) or else at its own rate, and the maps to come are predicted with
+/// the measured mean setup and the pooled rate (docs/design.md §6).
 /// The process's resident memory after each block of map positions (design.json's `memory`).
 struct MemorySample {
   std::string phase;
@@ -114,6 +115,17 @@ class MapsProgress {
       bar_->set_total(all);
       bar_->set_eta_s(eta_.seconds_left(t));
       bar_->update(done_before_ + done);
+    };
+  }
+  /// The callback of MapOptions::time_left for map number `index`: the map's own estimate of its
+  /// time left (its positions' costs predicted by their distance to the clamp) replaces its rate's.
+  std::function<void(double)> time_left_for_map(std::size_t index) {
+    if (quiet_) return {};
+    return [this, index](double seconds_left) {
+      if (!bar_) return;
+      const double t = now_s();
+      eta_.stage_seconds_left(index, seconds_left, t);
+      bar_->set_eta_s(eta_.seconds_left(t));
     };
   }
   void finish() {
@@ -221,6 +233,7 @@ ChargeMap make_map(const Candidate& c, const DesignCommandOptions& o, double spa
 #ifdef PVDF_HAVE_MAP_GENERATION
   MapOptions mo = map_options(c, o, spacing);
   mo.progress = progress.for_map(map_index);
+  mo.time_left = progress.time_left_for_map(map_index);
   progress.start_map(map_index);
   MapReport report;
   ChargeMap map = generate_map(scene, mo, &report);

@@ -11,6 +11,8 @@
 #include "pvdf/core/scene.hpp"
 #include "pvdf/fit/measured.hpp"
 #include "pvdf/fit/predictor.hpp"
+#include "pvdf/mapping/analysis.hpp"
+#include "pvdf/mapping/map.hpp"
 #include "pvdf/mapping/pictures.hpp"
 
 #include <nlohmann/json.hpp>
@@ -43,7 +45,8 @@ struct SceneComparison {
   pvdf::fem::SweepSetup setup;
 };
 
-SceneComparison compare_with_fem(const pvdf::Scene& scene, const std::string& measured_path, bool quiet) {
+SceneComparison compare_with_fem(const pvdf::Scene& scene, const std::string& measured_path, double min_charge_C,
+                                 bool quiet) {
   SceneComparison out;
   std::vector<std::string>& names = out.names;
   for (const auto& e : scene.electrodes) names.push_back(e.name);
@@ -83,9 +86,10 @@ SceneComparison compare_with_fem(const pvdf::Scene& scene, const std::string& me
       else measured_q[i][col.electrode] = col.value[i];
     }
   }
-  c.electrodes.resize(ne);
-  for (std::size_t k = 0; k < ne; ++k) c.electrodes[k].name = names[k];
-  double sum_abs = 0, sum = 0;
+  pvdf::mapping::CompareOptions co;
+  co.min_map_charge_C = min_charge_C;
+  const std::vector<double> floor_C =
+      pvdf::mapping::comparison_floor_C(co, std::vector<double>(ne, pvdf::mapping::default_noise_C));
   for (std::size_t i = 0; i < n; ++i) {
     pvdf::mapping::ComparedPress p;
     p.measured.x_m = m.x_m[i];
@@ -97,34 +101,13 @@ SceneComparison compare_with_fem(const pvdf::Scene& scene, const std::string& me
     p.map_charge_C = fit::charges_C(responses[i], predictor.electrode_areas_m2(), scene.membrane.thickness_m,
                                     scene.material.d31_C_per_N, scene.material.d32_C_per_N, gains);
     p.difference_pct.assign(ne, nan_value);
-    for (std::size_t k = 0; k < ne; ++k) {
-      if (!std::isfinite(measured_q[i][k]) || p.map_charge_C[k] == 0) continue;
-      const double d = 100 * (measured_q[i][k] - p.map_charge_C[k]) / p.map_charge_C[k];
-      p.difference_pct[k] = d;
-      auto& s = c.electrodes[k];
-      ++s.n_compared;
-      s.mean_abs_difference_pct += std::abs(d);
-      s.mean_difference_pct += d;
-      s.rms_difference_pct += d * d;
-      s.max_abs_difference_pct = std::max(s.max_abs_difference_pct, std::abs(d));
-      sum_abs += std::abs(d);
-      sum += d;
-      ++c.n_compared_values;
-    }
+    for (std::size_t k = 0; k < ne; ++k)
+      p.difference_pct[k] = pvdf::mapping::charge_difference_pct(measured_q[i][k], p.map_charge_C[k], floor_C[k]);
     out.w_fem[i] = responses[i].deflection_m;
     c.presses.push_back(p);
   }
-  for (auto& s : c.electrodes) {
-    if (s.n_compared == 0) continue;
-    s.mean_abs_difference_pct /= s.n_compared;
-    s.mean_difference_pct /= s.n_compared;
-    s.rms_difference_pct = std::sqrt(s.rms_difference_pct / s.n_compared);
-  }
+  pvdf::mapping::summarize_comparison(c, names);
   c.n_presses = c.n_in_map = static_cast<int>(n);
-  if (c.n_compared_values > 0) {
-    c.mean_abs_difference_pct = sum_abs / c.n_compared_values;
-    c.mean_difference_pct = sum / c.n_compared_values;
-  }
   out.setup = predictor.stats().reference_setup;
   return out;
 }
@@ -229,9 +212,9 @@ void print_comparison_text(const SceneComparison& r, const std::string& scene_pa
 }  // namespace
 
 int run_compare_scene(const std::string& scene_path, const std::string& measured_path, bool json,
-                      const std::string& plot_path, const std::string& report_path, bool quiet) {
+                      const std::string& plot_path, const std::string& report_path, double min_charge_C, bool quiet) {
   const pvdf::Scene scene = pvdf::load_scene(scene_path);
-  const SceneComparison r = compare_with_fem(scene, measured_path, quiet);
+  const SceneComparison r = compare_with_fem(scene, measured_path, min_charge_C, quiet);
   if (!report_path.empty()) write_comparison_csv(r, report_path);
   if (json) {
     print_comparison_json(r, scene_path, measured_path);

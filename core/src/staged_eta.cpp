@@ -45,6 +45,13 @@ void StagedEta::items_done(std::size_t index, std::size_t done, std::size_t tota
   current_ = index;
 }
 
+void StagedEta::stage_seconds_left(std::size_t index, double seconds, double t_s) {
+  if (index >= stages_.size()) return;
+  Stage& s = stages_[index];
+  s.own_left_s = std::isfinite(seconds) && seconds >= 0 ? seconds : -1;
+  s.own_at_s = t_s;
+}
+
 double StagedEta::seconds_left(double t_s) const {
   // Pooled rate and mean setup of the stages whose rate is measured.
   double items = 0, seconds = 0, setup_sum = 0;
@@ -67,7 +74,9 @@ double StagedEta::seconds_left(double t_s) const {
   if (current_ < stages_.size()) {
     const Stage& c = stages_[current_];
     const double rate = c.rate() > 0 ? c.rate() : pooled;
-    if (!c.reported) {
+    if (c.own_left_s >= 0) {
+      left += std::max(0.0, c.own_left_s - (t_s - c.own_at_s));
+    } else if (!c.reported) {
       const double into = c.started ? t_s - c.start_s : 0.0;
       left += std::max(0.0, mean_setup - into) + double(c.planned) / rate;
     } else {

@@ -62,9 +62,10 @@ TEST_CASE("progress off a terminal: lines with rate and ETA at the set cadence, 
   });
   INFO([&] { std::string all; for (const auto& l : lines) all += l + "\n"; return all; }());
   REQUIRE(lines.size() >= 3);
-  const std::regex report(R"(job: [0-9]/8 \([0-9]+ %\), [0-9.e+]+/s, elapsed 0:00, ETA (0:0[0-9]|\?))");
+  // Elapsed and done-in times allow a few seconds: a loaded machine (CI beside other jobs) stretches the sleeps.
+  const std::regex report(R"(job: [0-9]/8 \([0-9]+ %\), [0-9.e+]+/s, elapsed 0:0[0-9], ETA (0:0[0-9]|\?))");
   for (std::size_t i = 0; i + 1 < lines.size(); ++i) CHECK(std::regex_match(lines[i], report));
-  CHECK(std::regex_match(lines.back(), std::regex(R"(job: 8/8 done in 0:00 \([0-9.e+]+/s\))")));
+  CHECK(std::regex_match(lines.back(), std::regex(R"(job: 8/8 done in 0:0[0-9] \([0-9.e+]+/s\))")));
   // Each line stands alone in a log: no carriage returns or escape sequences.
   for (const auto& l : lines) CHECK(l.find_first_of("\r\x1b") == std::string::npos);
 }
@@ -102,7 +103,7 @@ TEST_CASE("progress off a terminal: silent for short work and for work abandoned
   const auto abandoned = stderr_lines_of("0.05", [] {
     pvdf::Progress p("failing", 10);
     p.update(2);
-    sleep_s(0.08);
+    sleep_s(0.5);  // ten heartbeats: at least one runs even on a loaded machine
     // destroyed without finish(): an exception left the work
   });
   REQUIRE_FALSE(abandoned.empty());

@@ -1,10 +1,12 @@
 // pvdf::StagedEta against hand-computed times left of two stages (a setup, then items at the
 // stage's own rate), and the resident-memory probes.
+#include "pvdf/core/item_cost_eta.hpp"
 #include "pvdf/core/resources.hpp"
 #include "pvdf/core/staged_eta.hpp"
 
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -44,4 +46,92 @@ TEST_CASE("resident memory: the peak covers a 64 MiB buffer touched now, and the
   CHECK(now >= before + (60u << 20));
   CHECK(pvdf::peak_resident_bytes() >= now - (1u << 20));
   CHECK(buffer[4096] == static_cast<unsigned char>(4096));
+}
+
+TEST_CASE("staged ETA: a stage that states its own time left is taken at its word while current", "[core][progress]") {
+  pvdf::StagedEta eta({10, 10});
+  eta.start_stage(0, 0.0);
+  eta.items_done(0, 1, 10, 1.0);
+  eta.items_done(0, 2, 10, 2.0);  // 1/s, setup 0
+  CHECK(eta.seconds_left(2.0) == Approx(8.0 + 10.0));
+  eta.stage_seconds_left(0, 30.0, 2.0);  // the stage knows its dear items are still to come
+  CHECK(eta.seconds_left(2.0) == Approx(30.0 + 10.0));
+  CHECK(eta.seconds_left(7.0) == Approx(25.0 + 10.0));  // counted down
+  eta.stage_seconds_left(0, NAN, 7.0);                  // cleared: back to the rate
+  CHECK(eta.seconds_left(7.0) == Approx(8.0 + 10.0 - 5.0));
+}
+
+// A map-like run: the positions of a unit disc on a 0.1 grid, solved row by row from the bottom on
+// two threads; those within 0.15 of the rim need the dear model (30 CPU-s), the others 1 CPU-s;
+// each thread gets 0.8 CPU-s per wall second. The true time left at each row's end comes from the
+// simulated schedule; ItemCostEta must track it, where items-left over the rate so far does not.
+TEST_CASE("item-cost ETA: dear rim positions early in the run do not inflate the time left", "[core][progress]") {
+  struct Item {
+    double feature;
+    bool dear;
+  };
+  std::vector<std::vector<Item>> rows;
+  std::vector<double> features;
+  for (int j = -10; j <= 10; ++j) {
+    std::vector<Item> row;
+    for (int i = -10; i <= 10; ++i) {
+      const double d = 1.0 - std::hypot(0.1 * i, 0.1 * j);
+      if (d <= 0.02) continue;
+      row.push_back({d, d < 0.15});
+      features.push_back(d);
+    }
+    if (!row.empty()) rows.push_back(row);
+  }
+  pvdf::ItemCostEta eta(2, 0.1, 2);
+  REQUIRE(eta.plan(features) == 0);
+  // The schedule: rows taken in order by whichever thread is free first.
+  const double efficiency = 0.8;
+  std::vector<double> start(rows.size()), end(rows.size()), cpu(rows.size());
+  double free_at[2] = {0, 0};
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    cpu[r] = 0;
+    for (const auto& it : rows[r]) cpu[r] += it.dear ? 30.0 : 1.0;
+    const int t = free_at[0] <= free_at[1] ? 0 : 1;
+    start[r] = free_at[t];
+    end[r] = start[r] + cpu[r] / efficiency;
+    free_at[t] = end[r];
+  }
+  const double finish = std::max(free_at[0], free_at[1]);
+  std::vector<std::size_t> order(rows.size());
+  for (std::size_t r = 0; r < rows.size(); ++r) order[r] = r;
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return end[a] < end[b]; });
+  std::vector<std::size_t> first_id(rows.size());
+  for (std::size_t r = 0, id = 0; r < rows.size(); id += rows[r].size(), ++r) first_id[r] = id;
+  int within = 0, reports = 0, naive_within = 0;
+  double worst_naive = 1;
+  std::size_t items_done = 0;
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    const std::size_t r = order[k];
+    std::vector<std::size_t> ids;
+    std::vector<std::vector<double>> work;
+    for (std::size_t n = 0; n < rows[r].size(); ++n) {
+      ids.push_back(first_id[r] + n);
+      work.push_back(rows[r][n].dear ? std::vector<double>{0, 1} : std::vector<double>{1, 0});
+    }
+    eta.block_done(ids, work, cpu[r], start[r], end[r]);
+    items_done += rows[r].size();
+    const double truth = finish - end[r];
+    if (k < 3 || truth < 0.05 * finish) continue;  // the first rows teach it; the last are a tail
+    const double predicted = eta.seconds_left(end[r]);
+    REQUIRE(std::isfinite(predicted));
+    ++reports;
+    if (std::abs(predicted / truth - 1) <= 0.3) ++within;
+    const double naive = double(features.size() - items_done) / (double(items_done) / end[r]);
+    if (std::abs(naive / truth - 1) <= 0.3) ++naive_within;
+    worst_naive = std::max(worst_naive, naive / truth);
+  }
+  REQUIRE(reports >= 10);
+  CHECK(within == reports);                // every report within ±30 %
+  CHECK(worst_naive > 1.5);                // the case is one the rate-based ETA gets wrong
+  CHECK(naive_within < reports);
+  // The fitted costs are the simulated ones (blocks mix both kinds, so both are identified).
+  const auto k = eta.cost_per_kind();
+  REQUIRE(k.size() == 2);
+  CHECK(k[0] == Approx(1.0).epsilon(0.15));
+  CHECK(k[1] == Approx(30.0).epsilon(0.15));
 }

@@ -139,6 +139,7 @@ bool Generator::run_adaptive_levels() {
     const std::size_t before = fem_points_solved_;
     progress_total_ = progress_done_;
     for (std::size_t p = 0; p < n; ++p) progress_total_ += canonical_want[p] && !known_[p] ? 1 : 0;
+    plan_time_left();
     const bool stopped = run_other_positions(&canonical_want);
     level_solves_[std::size_t(level)] += fem_points_solved_ - before;
     share_records();

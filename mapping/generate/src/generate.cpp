@@ -177,6 +177,29 @@ void Generator::count_progress_total() {
   for (std::size_t p = 0; p < grid_.nx * grid_.ny; ++p) {
     if (map_.mask[p] && !known_[p] && canonical(p % grid_.nx, p / grid_.nx)) ++progress_total_;
   }
+  plan_time_left();
+}
+
+// Every canonical position still to compute, planned once for the time left with its distance
+// to the clamp as the feature (bins of one grid spacing).
+void Generator::plan_time_left() {
+  const std::size_t n = grid_.nx * grid_.ny;
+  if (time_left_id_.size() != n) {
+    time_left_ = pvdf::ItemCostEta(4, grid_.spacing > 0 ? grid_.spacing : 1e-3, std::max(1, threads_));
+    time_left_id_.assign(n, std::size_t(-1));
+  }
+  if (map_.mask.size() != n || known_.size() != n) return;
+  std::vector<double> features;
+  std::vector<std::size_t> points;
+  for (std::size_t p = 0; p < n; ++p) {
+    if (!map_.mask[p] || known_[p] || time_left_id_[p] != std::size_t(-1) || !canonical(p % grid_.nx, p / grid_.nx)) continue;
+    const double x = double(grid_.i0 + long(p % grid_.nx)) * grid_.spacing;
+    const double y = double(grid_.j0 + long(p / grid_.nx)) * grid_.spacing;
+    features.push_back(scene_.membrane.outline.inside_distance_m({x, y}));
+    points.push_back(p);
+  }
+  const std::size_t first = time_left_.plan(features);
+  for (std::size_t k = 0; k < points.size(); ++k) time_left_id_[points[k]] = first + k;
 }
 
 // Phase A: the force-scaling check positions (every level solved), their verdicts shared by

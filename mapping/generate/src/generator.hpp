@@ -11,6 +11,7 @@
 //   generate.cpp       Generator::run step by step, the report, generate_map, MpiSession
 #pragma once
 
+#include "pvdf/core/item_cost_eta.hpp"
 #include "pvdf/core/scene.hpp"
 #include "pvdf/fem/probe_sweep.hpp"
 #include "pvdf/mapping/generate.hpp"
@@ -159,7 +160,10 @@ class Generator {
   // work (solve_blocks.cpp; records and checkpoints in checkpoint.cpp)
   void run_blocks(const std::vector<Block>& blocks);
   void solve_block(fem::ProbeSweep& sweep, const Block& block, std::vector<double>& records, bool& abandoned);
-  void commit(const std::vector<double>& records, std::size_t n_positions);
+  /// `cpu_s`, `start_s`: the block's thread CPU seconds and its start on the time-left clock.
+  void commit(const std::vector<double>& records, std::size_t n_positions, double cpu_s, double start_s);
+  double eta_clock_s() const;  ///< seconds on the time-left clock (steady, since construction)
+  void plan_time_left();       ///< adds the counted positions not yet planned to time_left_
   void improve_by_direct_solve(double x_m, double y_m, fem::ProbeSolution& s);  // direct_solve.cpp
   void maybe_checkpoint(bool force);
   std::vector<double> known_records(bool only_this_run) const;
@@ -193,6 +197,11 @@ class Generator {
   std::size_t fem_points_solved_ = 0;    // FEM-solved points (position × level), committed
   std::size_t n_resumed_points_ = 0;
   std::size_t progress_done_ = 0, progress_total_ = 0;
+  // MapOptions::time_left: kinds of work = fem::SweepModel codes 0..3 per solved level; feature =
+  // the position's distance to the clamp; time_left_id_[p] = its item id (npos: not planned).
+  pvdf::ItemCostEta time_left_{4, 1.0, 1};
+  std::vector<std::size_t> time_left_id_;
+  std::chrono::steady_clock::time_point clock0_ = std::chrono::steady_clock::now();
   std::chrono::steady_clock::time_point last_checkpoint_;
   std::string first_failure_;
   std::size_t direct_solves_ = 0;        // direct adaptive solves (this process), under mutex_

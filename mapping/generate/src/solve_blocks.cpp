@@ -145,8 +145,31 @@ void Generator::solve_block(fem::ProbeSweep& sweep, const Block& block, std::vec
   }
 }
 
-void Generator::commit(const std::vector<double>& records, std::size_t n_positions) {
+double Generator::eta_clock_s() const {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - clock0_).count();
+}
+
+void Generator::commit(const std::vector<double>& records, std::size_t n_positions, double cpu_s, double start_s) {
   std::lock_guard<std::mutex> lock(mutex_);
+  // The time left: the kinds of solve each position of the block needed.
+  std::vector<std::size_t> items;
+  std::vector<std::vector<double>> work;
+  for (std::size_t r = 0; r < records.size(); r += layout_.size()) {
+    const double* rec = records.data() + r;
+    const std::size_t p = std::size_t(rec[Layout::point_index]);
+    if (p >= time_left_id_.size() || time_left_id_[p] == std::size_t(-1)) continue;
+    std::vector<double> w(4, 0.0);
+    for (std::size_t f = 0; f < layout_.nf; ++f) {
+      const double* lv = layout_.level(rec, f);
+      if ((std::uint8_t(lv[Layout::provenance]) & (provenance::scaled | provenance::mirrored)) != 0) continue;
+      const int m = int(lv[Layout::model]);
+      if (m >= 0 && m < 4) w[std::size_t(m)] += 1;
+    }
+    items.push_back(time_left_id_[p]);
+    work.push_back(std::move(w));
+  }
+  const double now_s = eta_clock_s();
+  time_left_.block_done(items, work, cpu_s, start_s, now_s);
   for (std::size_t r = 0; r < records.size(); r += layout_.size()) {
     const double* rec = records.data() + r;
     store_record(rec, false);
@@ -158,6 +181,7 @@ void Generator::commit(const std::vector<double>& records, std::size_t n_positio
   progress_done_ += n_positions;
   // Under MPI the total is global; this rank's count × ranks estimates the global count.
   if (o_.progress) o_.progress(std::min(progress_total_, progress_done_ * std::size_t(size_)), progress_total_);
+  if (o_.time_left) o_.time_left(time_left_.seconds_left(now_s));
 }
 
 void Generator::run_blocks(const std::vector<Block>& blocks) {
@@ -180,9 +204,10 @@ void Generator::run_blocks(const std::vector<Block>& blocks) {
         const std::size_t b = next.fetch_add(1);
         if (b >= blocks.size()) break;
         bool abandoned = false;
+        const double start_s = eta_clock_s(), cpu0_s = thread_cpu_s();
         solve_block(*sweeps_[std::size_t(t)], blocks[b], records, abandoned);
         if (abandoned) break;
-        commit(records, blocks[b].size());
+        commit(records, blocks[b].size(), thread_cpu_s() - cpu0_s, start_s);
         std::lock_guard<std::mutex> lock(mutex_);
         maybe_checkpoint(false);
       }

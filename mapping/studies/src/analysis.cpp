@@ -161,16 +161,56 @@ std::vector<MeasuredPress> read_measured_csv(const std::string& path, const std:
   return read_measurements(path, names);
 }
 
+double charge_difference_pct(double measured_C, double predicted_C, double floor_C) {
+  if (!(std::abs(predicted_C) >= floor_C) || predicted_C == 0 || !std::isfinite(measured_C)) return nan_value;
+  return 100.0 * (measured_C - predicted_C) / predicted_C;
+}
+
+std::vector<double> comparison_floor_C(const CompareOptions& options, const std::vector<double>& noise_C) {
+  std::vector<double> floor_C(noise_C.size(), options.min_map_charge_C);
+  if (!(options.min_map_charge_C > 0)) {
+    for (std::size_t k = 0; k < noise_C.size(); ++k) floor_C[k] = 3.0 * noise_C[k];
+  }
+  return floor_C;
+}
+
+void summarize_comparison(Comparison& c, const std::vector<std::string>& electrode_names) {
+  const std::size_t ne = electrode_names.size();
+  c.electrodes.assign(ne, {});
+  c.n_compared_values = 0;
+  double sum_abs = 0, sum = 0;
+  for (std::size_t k = 0; k < ne; ++k) {
+    CompareElectrodeSummary& s = c.electrodes[k];
+    s.name = electrode_names[k];
+    double sa = 0, ss = 0, s2 = 0;
+    for (const auto& p : c.presses) {
+      if (k >= p.difference_pct.size() || !std::isfinite(p.difference_pct[k])) continue;
+      const double d = p.difference_pct[k];
+      ++s.n_compared;
+      sa += std::abs(d);
+      ss += d;
+      s2 += d * d;
+      s.max_abs_difference_pct = std::max(s.max_abs_difference_pct, std::abs(d));
+    }
+    if (s.n_compared > 0) {
+      s.mean_abs_difference_pct = sa / s.n_compared;
+      s.mean_difference_pct = ss / s.n_compared;
+      s.rms_difference_pct = std::sqrt(s2 / s.n_compared);
+    }
+    sum_abs += sa;
+    sum += ss;
+    c.n_compared_values += s.n_compared;
+  }
+  c.mean_abs_difference_pct = c.n_compared_values > 0 ? sum_abs / c.n_compared_values : 0.0;
+  c.mean_difference_pct = c.n_compared_values > 0 ? sum / c.n_compared_values : 0.0;
+}
+
 Comparison compare_with_map(const ChargeMap& map, const MapInterpolant& interpolant,
                             const std::vector<MeasuredPress>& measured, const CompareOptions& options) {
   const std::size_t ne = map.ne();
-  std::vector<double> floor_C(ne, options.min_map_charge_C);
-  if (!(options.min_map_charge_C > 0)) {
-    for (std::size_t k = 0; k < ne; ++k) floor_C[k] = 3.0 * map.noise_C[k];
-  }
+  const std::vector<double> floor_C = comparison_floor_C(options, map.noise_C);
   Comparison c;
   c.n_presses = int(measured.size());
-  std::vector<std::vector<double>> diffs(ne);
   std::array<double, max_electrodes> q{};
   for (const auto& m : measured) {
     if (m.charge_C.size() != ne) {
@@ -189,42 +229,14 @@ Comparison compare_with_map(const ChargeMap& map, const MapInterpolant& interpol
       c.n_force_extrapolated += p.force_extrapolated;
       for (std::size_t k = 0; k < ne; ++k) {
         p.map_charge_C[k] = q[k];
-        if (std::abs(q[k]) >= floor_C[k]) {
-          p.difference_pct[k] = 100.0 * (m.charge_C[k] - q[k]) / q[k];
-          diffs[k].push_back(p.difference_pct[k]);
-        }
+        p.difference_pct[k] = charge_difference_pct(m.charge_C[k], q[k], floor_C[k]);
       }
     } else {
       ++c.n_outside;
     }
     c.presses.push_back(std::move(p));
   }
-  double sum_abs = 0, sum = 0;
-  for (std::size_t k = 0; k < ne; ++k) {
-    CompareElectrodeSummary s;
-    s.name = map.electrode_names[k];
-    s.n_compared = int(diffs[k].size());
-    double sa = 0, ss = 0, s2 = 0;
-    for (double d : diffs[k]) {
-      sa += std::abs(d);
-      ss += d;
-      s2 += d * d;
-      s.max_abs_difference_pct = std::max(s.max_abs_difference_pct, std::abs(d));
-    }
-    if (s.n_compared > 0) {
-      s.mean_abs_difference_pct = sa / s.n_compared;
-      s.mean_difference_pct = ss / s.n_compared;
-      s.rms_difference_pct = std::sqrt(s2 / s.n_compared);
-    }
-    sum_abs += sa;
-    sum += ss;
-    c.n_compared_values += s.n_compared;
-    c.electrodes.push_back(s);
-  }
-  if (c.n_compared_values > 0) {
-    c.mean_abs_difference_pct = sum_abs / c.n_compared_values;
-    c.mean_difference_pct = sum / c.n_compared_values;
-  }
+  summarize_comparison(c, map.electrode_names);
   return c;
 }
 

@@ -2,6 +2,7 @@
 #include "pvdf/mapping/calibration.hpp"
 
 #include "pvdf/core/error.hpp"
+#include "pvdf/core/measured.hpp"
 #include "pvdf/core/io.hpp"
 
 #include <algorithm>
@@ -11,36 +12,19 @@
 namespace pvdf::mapping {
 
 std::vector<Measurement> read_measurements(const std::string& path, const std::vector<std::string>& names) {
-  const CsvTable t = read_csv(path, BadRowPolicy::refuse);
-  auto need = [&](const std::string& column) {
-    if (!t.has_column(column)) {
-      std::string have;
-      for (const auto& c : t.columns) have += (have.empty() ? "" : ",") + c;
-      std::string want = "x_m,y_m,force_N";
-      for (const auto& n : names) want += ",charge_" + n + "_C";
-      throw InputError(path + ": missing column '" + column + "' (the header has " + have + "); the map's electrodes need " +
-                       want);
-    }
-    return t.column(column);
-  };
-  const std::size_t cx = need("x_m"), cy = need("y_m"), cf = need("force_N");
-  std::vector<std::size_t> cq;
-  for (const auto& n : names) cq.push_back(need("charge_" + n + "_C"));
-  if (t.rows.empty()) throw InputError(path + ": no data rows after the header; add one row per measured press");
-  std::vector<Measurement> out;
-  for (std::size_t i = 0; i < t.rows.size(); ++i) {
-    const auto& row = t.rows[i];
-    Measurement p;
-    p.x_m = row[cx];
-    p.y_m = row[cy];
-    p.force_N = row[cf];
-    p.line = t.line_numbers[i];
-    if (!(p.force_N > 0)) {
-      throw InputError(path + ":" + std::to_string(p.line) + ": force_N = " + std::to_string(p.force_N) +
-                       " must be > 0 (the press force in newtons); fix or remove the row");
-    }
-    for (std::size_t c : cq) p.charge_C.push_back(row[c]);
-    out.push_back(std::move(p));
+  // The one reader of measured CSVs, asked for every channel of every press; other columns are notes.
+  const MeasuredTable t = read_measured(path, names, MeasuredRules{true, true});
+  std::vector<Measurement> out(t.n_rows());
+  for (std::size_t i = 0; i < t.n_rows(); ++i) {
+    out[i].x_m = t.x_m[i];
+    out[i].y_m = t.y_m[i];
+    out[i].force_N = t.force_N[i];
+    out[i].line = t.line[i];
+    out[i].charge_C.assign(names.size(), 0.0);
+  }
+  for (const auto& c : t.observed) {
+    if (c.electrode < 0) continue;  // a deflection column: not part of a charge comparison
+    for (std::size_t i = 0; i < t.n_rows(); ++i) out[i].charge_C[std::size_t(c.electrode)] = c.value[i];
   }
   return out;
 }

@@ -17,7 +17,9 @@ namespace pvdf {
 ///                  minus the time since its start) + items left / rate;
 ///   stages to come: mean measured setup + planned items / rate,
 /// with `rate` the current stage's own once measured, else the pooled rate of the stages seen
-/// (their items over the time between their first and last reports). NaN until one rate is known.
+/// (their items over the time between their first and last reports); a stage that states its own
+/// time left (stage_seconds_left) is taken at its word while it is current. NaN until one rate is
+/// known.
 /// Times are seconds on any monotone clock the caller chooses.
 class StagedEta {
  public:
@@ -27,6 +29,10 @@ class StagedEta {
   void start_stage(std::size_t index, double t_s);
   /// Stage `index` has `done` of `total` items at `t_s` (`total` replaces the planned count).
   void items_done(std::size_t index, std::size_t done, std::size_t total, double t_s);
+  /// The stage's own estimate of its seconds left at `t_s` (e.g. a map's, which knows which of its
+  /// positions are dear): used for the current stage in place of items left / rate, counted down
+  /// from `t_s`. NaN clears it.
+  void stage_seconds_left(std::size_t index, double seconds, double t_s);
   /// Seconds left at `t_s`; NaN before any stage has a measured rate.
   double seconds_left(double t_s) const;
 
@@ -38,6 +44,7 @@ class StagedEta {
     bool reported = false;
     std::size_t first_done = 0, last_done = 0;
     double first_s = 0, last_s = 0;
+    double own_left_s = -1, own_at_s = 0;  ///< stage_seconds_left's (< 0: none)
     double rate() const;   ///< items per second between first and latest report; 0 if not measured
     double setup_s() const;  ///< measured setup, < 0 if not measured
   };

@@ -1,40 +1,12 @@
-// Bench measurements for a fit or a comparison: one row per press (position, force) with any of
-// the deflection under the probe and the electrode charges, each with an optional 1-σ column.
+// The measured CSV of a fit: pvdf::read_measured (core/measured.hpp), the one reader of measured
+// CSVs, under the names the fit has always used.
 #pragma once
 
-#include <cstddef>
-#include <string>
-#include <vector>
+#include "pvdf/core/measured.hpp"
 
 namespace pvdf::fit {
-
-/// One observed column: `deflection_m` or `charge_<electrode>_C`.
-struct ObservedColumn {
-  std::string name;                  ///< the CSV header, e.g. "charge_A_C"
-  int electrode = -1;                ///< scene electrode index for a charge column, -1 for the deflection
-  bool has_sigma = false;            ///< a `sigma_<name>` column was given
-  std::vector<double> value;         ///< [row] in SI units (m, C)
-  std::vector<double> sigma;         ///< [row] 1-σ (same unit), empty when has_sigma is false
-};
-
-/// A measured CSV (docs/fem-vs-experiment.md §1).
-struct MeasuredTable {
-  std::string source;                ///< file name, for messages
-  std::vector<std::size_t> line;     ///< [row] 1-based line in the file
-  std::vector<double> x_m, y_m, force_N;
-  std::vector<ObservedColumn> observed;  ///< deflection first (if any), then charges in scene electrode order
-  std::size_t n_rows() const { return line.size(); }
-  /// True when every observed column has its sigma column (false when none has).
-  bool sigmas_given() const;
-};
-
-/// Reads a measured CSV: required columns x_m, y_m, force_N; optional deflection_m and
-/// charge_<name>_C for names in `electrode_names`; optional sigma_<column> for each of those.
-/// Throws pvdf::InputError naming the file, the line number and the fix for: a missing required
-/// column, no observed column, a charge column of an electrode the scene does not have, a sigma
-/// column without its value column or for x/y/force, sigma columns given for some observed
-/// columns but not all, an unknown column, a malformed or non-finite value (NaN), a force <= 0,
-/// a sigma <= 0, no data rows.
-MeasuredTable read_measured(const std::string& path, const std::vector<std::string>& electrode_names);
-
+using pvdf::MeasuredRules;
+using pvdf::MeasuredTable;
+using pvdf::ObservedColumn;
+using pvdf::read_measured;
 }  // namespace pvdf::fit

@@ -108,6 +108,11 @@ struct MapOptions {
   const std::atomic<bool>* cancel = nullptr;
   /// Called (from one thread) as positions complete: (done, total) over this process.
   std::function<void(std::size_t done, std::size_t total)> progress;
+  /// Called (from one thread) after each completed row with the seconds this process still needs
+  /// for the positions it knows of (pvdf::ItemCostEta: a position's cost predicted from its distance
+  /// to the clamp, by the kinds of solve — cheap model, clamp layer, rim model, direct — that the
+  /// positions done at that distance needed, at the CPU rate measured so far). NaN until known.
+  std::function<void(double seconds_left)> time_left;
   /// 1-σ charge noise per channel written into the map (C); empty = 0.05 pC each.
   std::vector<double> noise_C;
   /// Free text stored in the map.

@@ -14,6 +14,10 @@
 
 namespace pvdf::mapping {
 
+/// The 1-σ charge noise of a channel when none is given (C): 0.05 pC, the front end of seed 001's
+/// bench (docs/lookup.md §1).
+inline constexpr double default_noise_C = 0.05e-12;
+
 /// Outcome of one map point (one probe position at one force level). Stored as uint8 in the
 /// `status` dataset; the numbers are part of the file format.
 enum class PointStatus : std::uint8_t {

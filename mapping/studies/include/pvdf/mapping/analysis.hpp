@@ -128,6 +128,17 @@ struct Comparison {
   double mean_difference_pct = 0;
 };
 
+/// 100·(measured − predicted)/predicted (%): the difference a comparison reports; NaN where
+/// |predicted| < floor_C, where a percentage of a charge within the noise means nothing.
+double charge_difference_pct(double measured_C, double predicted_C, double floor_C);
+
+/// The charge floor of a comparison: `min_map_charge_C` when > 0, else 3 × each channel's noise.
+std::vector<double> comparison_floor_C(const CompareOptions& options, const std::vector<double>& noise_C);
+
+/// Fills c.electrodes (named `electrode_names`) and c's means from the presses' difference_pct
+/// (NaN = not compared): the one home of the comparison's statistics (`compare MAP` and `compare SCENE`).
+void summarize_comparison(Comparison& c, const std::vector<std::string>& electrode_names);
+
 /// Compares measured presses with the map's (uncalibrated) charges at the same position and force.
 Comparison compare_with_map(const ChargeMap& map, const MapInterpolant& interpolant,
                             const std::vector<MeasuredPress>& measured, const CompareOptions& options = {});

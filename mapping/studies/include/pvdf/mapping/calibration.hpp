@@ -20,7 +20,9 @@ struct Measurement {
 };
 
 /// Reads `x_m,y_m,force_N,charge_<name>_C...` (one charge column per map electrode, any order,
-/// other columns ignored). Malformed rows are refused with their line number (InputError).
+/// every cell filled; unknown columns ignored) with pvdf::read_measured (core/measured.hpp), the
+/// reader `fit` uses, under MeasuredRules{every_charge, ignore_other_columns}. Malformed rows are
+/// refused with their line number (InputError).
 std::vector<Measurement> read_measurements(const std::string& path, const std::vector<std::string>& electrode_names);
 
 /// Errors of one variant (uncalibrated map, calibrated in-sample, leave-one-out).

@@ -1,5 +1,5 @@
 // Reader of measured CSVs (docs/fem-vs-experiment.md §1): strict, every error names the line.
-#include "pvdf/fit/measured.hpp"
+#include "pvdf/core/measured.hpp"
 
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
@@ -11,7 +11,7 @@
 #include <map>
 #include <sstream>
 
-namespace pvdf::fit {
+namespace pvdf {
 
 namespace {
 
@@ -75,7 +75,7 @@ RawCsv read_raw(const std::string& path) {
 /// column or the charge column of one of the scene's electrodes; `where` = "path:header line: ".
 void check_other_columns(const RawCsv& t, const std::map<std::string, std::size_t>& index,
                          const std::vector<std::string>& allowed_charges, const std::vector<std::string>& electrode_names,
-                         const std::string& where, const std::string& expected) {
+                         const std::string& where, const std::string& expected, bool ignore_unknown) {
   for (const auto& c : t.columns) {
     if (c == "x_m" || c == "y_m" || c == "force_N" || c == "deflection_m") continue;
     if (c.rfind("sigma_", 0) == 0) {
@@ -98,13 +98,14 @@ void check_other_columns(const RawCsv& t, const std::map<std::string, std::size_
       }
       continue;
     }
-    throw InputError(where + "unknown column '" + c + "'; a measured CSV has " + expected);
+    if (!ignore_unknown) throw InputError(where + "unknown column '" + c + "'; a measured CSV has " + expected);
   }
 }
 
 }  // namespace
 
-MeasuredTable read_measured(const std::string& path, const std::vector<std::string>& electrode_names) {
+MeasuredTable read_measured(const std::string& path, const std::vector<std::string>& electrode_names,
+                            const MeasuredRules& rules) {
   const RawCsv t = read_raw(path);
   const std::string where = path + ":" + std::to_string(t.header_line) + ": ";
   auto has_column = [&](const std::string& c) { return std::find(t.columns.begin(), t.columns.end(), c) != t.columns.end(); };
@@ -132,7 +133,15 @@ MeasuredTable read_measured(const std::string& path, const std::vector<std::stri
   if (index.count("deflection_m")) value_columns.push_back("deflection_m");
   for (const auto& c : allowed_charges)
     if (index.count(c)) value_columns.push_back(c);
-  check_other_columns(t, index, allowed_charges, electrode_names, where, expected);
+  if (rules.every_charge) {
+    for (const auto& c : allowed_charges) {
+      if (!index.count(c)) {
+        throw InputError(where + "missing column '" + c + "' (the header has " + join(t.columns) + "); the electrodes need " +
+                         "x_m,y_m,force_N," + join(allowed_charges));
+      }
+    }
+  }
+  check_other_columns(t, index, allowed_charges, electrode_names, where, expected, rules.ignore_other_columns);
   if (value_columns.empty()) {
     throw InputError(where + "no observed column (the header has " + join(t.columns) + "); give deflection_m and/or " +
                      join(allowed_charges));
@@ -177,7 +186,7 @@ MeasuredTable read_measured(const std::string& path, const std::vector<std::stri
       if (allowed_charges[k] == c) o.electrode = static_cast<int>(k);
     o.has_sigma = index.count("sigma_" + c) > 0;
     for (std::size_t r = 0; r < t.rows.size(); ++r) {
-      const double v = cell(r, c, true);
+      const double v = cell(r, c, !(rules.every_charge && o.electrode >= 0));
       o.value.push_back(v);
       if (!o.has_sigma) continue;
       const double s = cell(r, "sigma_" + c, true);
@@ -202,4 +211,4 @@ MeasuredTable read_measured(const std::string& path, const std::vector<std::stri
   return m;
 }
 
-}  // namespace pvdf::fit
+}  // namespace pvdf

@@ -1,0 +1,152 @@
+// ItemCostEta: the time left of items whose kind of work is predicted from a feature (see the
+// header for the model).
+#include "pvdf/core/item_cost_eta.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace pvdf {
+
+ItemCostEta::ItemCostEta(std::size_t n_kinds, double bin_width, int threads)
+    : n_kinds_(std::max<std::size_t>(1, n_kinds)),
+      bin_width_(bin_width > 0 ? bin_width : 1.0),
+      threads_(std::max(1, threads)) {}
+
+std::size_t ItemCostEta::plan(const std::vector<double>& features) {
+  const std::size_t first = feature_.size();
+  for (double f : features) {
+    feature_.push_back(std::isfinite(f) ? std::max(0.0, f) : 0.0);
+    done_.push_back(0);
+  }
+  return first;
+}
+
+std::size_t ItemCostEta::bin_of(double feature) const {
+  // Features beyond 10⁶ bins share the last one (no unbounded allocation from a wild feature).
+  return std::size_t(std::min(1e6, std::floor(feature / bin_width_)));
+}
+
+void ItemCostEta::block_done(const std::vector<std::size_t>& items, const std::vector<std::vector<double>>& work,
+                             double cpu_s, double start_s, double end_s) {
+  std::vector<double> sum(n_kinds_, 0.0);
+  for (std::size_t n = 0; n < items.size() && n < work.size(); ++n) {
+    const std::size_t id = items[n];
+    if (id >= feature_.size() || done_[id]) continue;
+    done_[id] = 1;
+    const std::size_t b = bin_of(feature_[id]);
+    if (b >= bin_items_.size()) {
+      bin_items_.resize(b + 1, 0);
+      bin_work_.resize(b + 1, std::vector<double>(n_kinds_, 0.0));
+    }
+    ++bin_items_[b];
+    for (std::size_t c = 0; c < n_kinds_ && c < work[n].size(); ++c) {
+      bin_work_[b][c] += work[n][c];
+      sum[c] += work[n][c];
+    }
+  }
+  if (!(cpu_s >= 0) || !std::isfinite(cpu_s)) cpu_s = 0;
+  block_work_.push_back(sum);
+  block_cpu_s_.push_back(cpu_s);
+  cpu_done_s_ += cpu_s;
+  if (std::isfinite(end_s - start_s) && end_s > start_s) wall_done_s_ += end_s - start_s;
+  last_end_s_ = end_s;
+  fit();
+}
+
+// Ridge least squares of the blocks' CPU seconds on their work, k ≥ 0 by dropping the negative
+// ones and solving again (at most n_kinds rounds; n_kinds is a handful).
+void ItemCostEta::fit() {
+  const std::size_t n = n_kinds_;
+  double units = 0;
+  for (const auto& w : block_work_)
+    for (double x : w) units += x;
+  const double mean = units > 0 ? cpu_done_s_ / units : 0.0;
+  std::vector<char> free(n, 1);
+  std::vector<double> k(n, mean);
+  for (std::size_t round = 0; round <= n; ++round) {
+    // Normal equations (AᵀA + Λ) k = Aᵀb + Λ·mean over the free kinds; Λ_c = 10⁻³ Σ_b A_bc² (+1e-12).
+    std::vector<double> M(n * n, 0.0), r(n, 0.0);
+    for (std::size_t b = 0; b < block_work_.size(); ++b) {
+      const auto& a = block_work_[b];
+      for (std::size_t i = 0; i < n; ++i) {
+        r[i] += a[i] * block_cpu_s_[b];
+        for (std::size_t j = 0; j < n; ++j) M[i * n + j] += a[i] * a[j];
+      }
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      const double lambda = 1e-3 * M[i * n + i] + 1e-12;
+      M[i * n + i] += lambda;
+      r[i] += lambda * mean;
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      if (free[i]) continue;
+      for (std::size_t j = 0; j < n; ++j) M[i * n + j] = M[j * n + i] = 0;
+      M[i * n + i] = 1;
+      r[i] = 0;
+    }
+    // Gaussian elimination with partial pivoting (n ≤ a handful; M is positive definite).
+    std::vector<double> x = r;
+    std::vector<std::size_t> perm(n);
+    for (std::size_t i = 0; i < n; ++i) perm[i] = i;
+    bool singular = false;
+    for (std::size_t c = 0; c < n; ++c) {
+      std::size_t p = c;
+      for (std::size_t i = c + 1; i < n; ++i)
+        if (std::abs(M[i * n + c]) > std::abs(M[p * n + c])) p = i;
+      if (!(std::abs(M[p * n + c]) > 0)) {
+        singular = true;
+        break;
+      }
+      if (p != c) {
+        for (std::size_t j = 0; j < n; ++j) std::swap(M[c * n + j], M[p * n + j]);
+        std::swap(x[c], x[p]);
+      }
+      for (std::size_t i = c + 1; i < n; ++i) {
+        const double f = M[i * n + c] / M[c * n + c];
+        for (std::size_t j = c; j < n; ++j) M[i * n + j] -= f * M[c * n + j];
+        x[i] -= f * x[c];
+      }
+    }
+    if (singular) break;
+    for (std::size_t c = n; c-- > 0;) {
+      double s = x[c];
+      for (std::size_t j = c + 1; j < n; ++j) s -= M[c * n + j] * x[j];
+      x[c] = s / M[c * n + c];
+    }
+    k = x;
+    bool negative = false;
+    for (std::size_t i = 0; i < n; ++i)
+      if (free[i] && k[i] < 0) {
+        free[i] = 0;
+        negative = true;
+      }
+    if (!negative) break;
+  }
+  for (double& v : k) v = std::isfinite(v) ? std::max(0.0, v) : mean;
+  cost_ = k;
+}
+
+double ItemCostEta::seconds_left(double t_s) const {
+  if (block_cpu_s_.empty() || cost_.empty() || bin_items_.empty() || !(wall_done_s_ > 0)) return std::numeric_limits<double>::quiet_NaN();
+  double cpu_left = 0;
+  for (std::size_t id = 0; id < feature_.size(); ++id) {
+    if (done_[id]) continue;
+    // The nearest bin with items done (ties: the larger feature, i.e. farther from the clamp).
+    const std::size_t nb = bin_items_.size(), start = std::min(bin_of(feature_[id]), nb - 1);
+    std::size_t best = nb;
+    for (std::size_t d = 0; d < nb && best == nb; ++d) {
+      if (start + d < nb && bin_items_[start + d] > 0) best = start + d;
+      else if (d <= start && bin_items_[start - d] > 0) best = start - d;
+    }
+    if (best == nb) continue;
+    for (std::size_t c = 0; c < n_kinds_; ++c) cpu_left += cost_[c] * bin_work_[best][c] / double(bin_items_[best]);
+  }
+  const double per_thread = cpu_done_s_ / wall_done_s_;  // CPU-s per wall-s of one thread
+  if (!(per_thread > 0)) return std::numeric_limits<double>::quiet_NaN();
+  // Counted down from the last block's end: the blocks in flight have run since then.
+  const double left = cpu_left / (per_thread * threads_) - std::max(0.0, t_s - last_end_s_);
+  return std::max(0.0, left);
+}
+
+}  // namespace pvdf
