@@ -4,9 +4,11 @@
 #include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
+#include "pvdf/core/scene.hpp"
 #include "pvdf/plot/plot.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
 #include <cstdint>
@@ -69,12 +71,36 @@ plot::Grid charge_grid_pC(const Locator& locator, const ChargeMap& map, std::siz
   return g;
 }
 
+/// The electrodes as they lie on the film — rectangles at their angle, circles as 96-gons,
+/// polygons — read from the scene the map was computed for, with the name beside the outline's
+/// upper right; a map without a readable scene (or whose scene names other electrodes) shows
+/// 2 mm squares at the electrode centres, as maps have always been drawn.
 void mark_electrodes(plot::Axes& ax, const ChargeMap& map) {
+  std::vector<std::vector<std::array<double, 2>>> outlines(map.ne());
+  try {
+    const Scene scene = parse_scene(nlohmann::json::parse(map.scene_json), "the map's scene");
+    if (scene.electrodes.size() == map.ne()) {
+      for (std::size_t k = 0; k < map.ne(); ++k) {
+        if (scene.electrodes[k].name != map.electrode_names[k]) {
+          outlines.assign(map.ne(), {});
+          break;
+        }
+        for (const auto& p : scene.electrodes[k].outline(96)) outlines[k].push_back({p[0] * 1e3, p[1] * 1e3});
+      }
+    }
+  } catch (const std::exception&) {
+    outlines.assign(map.ne(), {});  // drawn as squares below
+  }
   for (std::size_t k = 0; k < map.ne(); ++k) {
-    const double x = map.electrode_centers_m[k][0] * 1e3, y = map.electrode_centers_m[k][1] * 1e3;
-    ax.polygon({{x - 1, y - 1}, {x + 1, y - 1}, {x + 1, y + 1}, {x - 1, y + 1}}, plot::Color{40, 40, 40},
-               plot::Color{0, 0, 0}, 1.0);
-    ax.text(x + 1.5, y + 1.5, map.electrode_names[k], plot::Color{0, 0, 0}, 11);
+    auto& v = outlines[k];
+    if (v.size() < 3) {
+      const double x = map.electrode_centers_m[k][0] * 1e3, y = map.electrode_centers_m[k][1] * 1e3;
+      v = {{x - 1, y - 1}, {x + 1, y - 1}, {x + 1, y + 1}, {x - 1, y + 1}};
+    }
+    double x_max = -std::numeric_limits<double>::infinity(), y_max = x_max;
+    for (const auto& p : v) x_max = std::max(x_max, p[0]), y_max = std::max(y_max, p[1]);
+    ax.polygon(v, plot::Color{40, 40, 40}, plot::Color{0, 0, 0}, 1.0);
+    ax.text(x_max + 0.5, y_max + 0.5, map.electrode_names[k], plot::Color{0, 0, 0}, 11);
   }
 }
 
@@ -226,7 +252,9 @@ void write_isocharge_overlay_png(const Locator& locator, const ChargeMap& map, d
                                  double half_width_m) {
   if (!(force_N > 0)) throw InputError("isocharge picture: force " + std::to_string(force_N) + " N must be > 0");
   if (!(half_width_m >= 0)) throw InputError("isocharge picture: half width " + std::to_string(half_width_m) + " m must be >= 0");
-  plot::Figure fig(990, 760);
+  // The legend under the panel, entries side by side: the panel takes the figure's width and
+  // no empty column is left beside it (a legend at the right would leave one under itself).
+  plot::Figure fig(820, 860);
   auto& ax = fig.axes();
   double x0 = std::numeric_limits<double>::infinity(), x1 = -x0, y0 = x0, y1 = -x0;
   for (std::size_t k = 0; k < map.ne(); ++k) {
@@ -249,7 +277,7 @@ void write_isocharge_overlay_png(const Locator& locator, const ChargeMap& map, d
       .ylabel("probe y (mm)")
       .equal_aspect()
       .grid_lines()
-      .legend("outside right")
+      .legend("outside below")
       .xlim(x0, x1)  // the drawn window (the zoom clipped to the map): no empty bands
       .ylim(y0, y1);
   fig.save(path);
