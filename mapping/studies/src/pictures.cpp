@@ -183,7 +183,8 @@ void write_intersection_png(const Locator& locator, const ChargeMap& map, const 
   }
   ax.scatter({result.x_m * 1e3}, {result.y_m * 1e3}, "located: (" + format_number("%.2f", result.x_m * 1e3) + ", " +
                                                          format_number("%.2f", result.y_m * 1e3) + ") mm, " +
-                                                         format_number("%.3g", result.force_N) + " N",
+                                                         format_number("%.3g", result.force_N) + " N" +
+                                                         (result.sigma_F_N == 0 ? " (given)" : ""),
              plot::Color{0, 0, 0}, plot::Marker::cross, 14);
   for (int a = 0; a < result.n_alternatives; ++a) {
     const auto& alt = result.alternatives[std::size_t(a)];
@@ -192,7 +193,10 @@ void write_intersection_png(const Locator& locator, const ChargeMap& map, const 
   }
   mark_electrodes(ax, map);
   // The axes span the map (where contours can be), the legend sits beside the panel, off the data.
-  ax.title("Isocharge contours Q$_k$ = q$_k$ of the given charges, at the located force")
+  // A force given to the lookup (locate/isocharge --force-N) has no σ: name it as given, not located.
+  const bool force_given = result.sigma_F_N == 0;
+  ax.title(std::string("Isocharge contours Q$_k$ = q$_k$ of the given charges, at the ") +
+           (force_given ? "given force" : "located force"))
       .xlabel("probe x (mm)")
       .ylabel("probe y (mm)")
       .xlim(map.x_m.front() * 1e3, map.x_m.back() * 1e3)
