@@ -104,6 +104,24 @@ void mark_electrodes(plot::Axes& ax, const ChargeMap& map) {
   }
 }
 
+/// The box [x0, x1, y0, y1] (mm) of the nodes the map covers (mask = 1), within the box `within`:
+/// the axes of a picture span where the data are, not the grid's masked corners beyond the film's
+/// rim margin. `within` unchanged when the map has no mask or no covered node inside it.
+std::array<double, 4> covered_box_mm(const ChargeMap& map, const std::array<double, 4>& within) {
+  if (map.mask.size() != map.nx() * map.ny()) return within;
+  std::array<double, 4> box{std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
+                            std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
+  for (std::size_t j = 0; j < map.ny(); ++j) {
+    for (std::size_t i = 0; i < map.nx(); ++i) {
+      if (!map.mask[j * map.nx() + i]) continue;
+      const double x = map.x_m[i] * 1e3, y = map.y_m[j] * 1e3;
+      box = {std::min(box[0], x), std::max(box[1], x), std::min(box[2], y), std::max(box[3], y)};
+    }
+  }
+  box = {std::max(box[0], within[0]), std::min(box[1], within[1]), std::max(box[2], within[2]), std::min(box[3], within[3])};
+  return box[0] < box[1] && box[2] < box[3] ? box : within;
+}
+
 /// "Nice" contour levels spanning [lo, hi] (pC).
 std::vector<double> nice_levels(double lo, double hi, int target) {
   std::vector<double> levels;
@@ -165,6 +183,8 @@ void write_isocharge_png(const Locator& locator, const ChargeMap& map, std::size
       .xlabel("probe x (mm)")
       .ylabel("probe y (mm)")
       .equal_aspect();
+  const auto box = covered_box_mm(map, {g.x0, g.x1, g.y0, g.y1});
+  ax.xlim(box[0], box[1]).ylim(box[2], box[3]);
   mark_electrodes(ax, map);
   fig.save(path);
 }
@@ -192,15 +212,18 @@ void write_intersection_png(const Locator& locator, const ChargeMap& map, const 
                plot::Color{200, 0, 0}, plot::Marker::plus, 14);
   }
   mark_electrodes(ax, map);
-  // The axes span the map (where contours can be), the legend sits beside the panel, off the data.
+  // The axes span the map's covered nodes (where contours can be), the legend sits beside the
+  // panel, off the data.
+  const auto box = covered_box_mm(map, {map.x_m.front() * 1e3, map.x_m.back() * 1e3, map.y_m.front() * 1e3,
+                                        map.y_m.back() * 1e3});
   // A force given to the lookup (locate/isocharge --force-N) has no σ: name it as given, not located.
   const bool force_given = result.sigma_F_N == 0;
   ax.title(std::string("Isocharge contours Q$_k$ = q$_k$ of the given charges, at the ") +
            (force_given ? "given force" : "located force"))
       .xlabel("probe x (mm)")
       .ylabel("probe y (mm)")
-      .xlim(map.x_m.front() * 1e3, map.x_m.back() * 1e3)
-      .ylim(map.y_m.front() * 1e3, map.y_m.back() * 1e3)
+      .xlim(box[0], box[1])
+      .ylim(box[2], box[3])
       .equal_aspect()
       .grid_lines()
       .legend("outside right");
@@ -276,14 +299,15 @@ void write_isocharge_overlay_png(const Locator& locator, const ChargeMap& map, d
                "electrode " + map.electrode_names[k] + " (pC)");
   }
   mark_electrodes(ax, map);
+  const auto box = covered_box_mm(map, {x0, x1, y0, y1});
   ax.title("Isocharge contours of all electrodes at " + format_number("%.3g", force_N) + " N (" + map.model + " map)")
       .xlabel("probe x (mm)")
       .ylabel("probe y (mm)")
       .equal_aspect()
       .grid_lines()
       .legend("outside below")
-      .xlim(x0, x1)  // the drawn window (the zoom clipped to the map): no empty bands
-      .ylim(y0, y1);
+      .xlim(box[0], box[1])  // the drawn window (the zoom clipped to the map's covered nodes): no empty bands
+      .ylim(box[2], box[3]);
   fig.save(path);
 }
 
