@@ -211,7 +211,7 @@ int run_identify(const IdentifyOptions& o) {
     for (std::size_t i = 0; i < scans.size(); ++i) {
       const auto forces = r::restore_scan(f, scans[i].scan);
       r::plot_restored(o.plot_dir + "/fig14_restored" + std::to_string(i + 1) + ".png", forces, scans[i].scan,
-                       "Restored forces, identification scan " + std::to_string(i + 1), f.resolution_m);
+                       "Restored forces, identification scan " + std::to_string(i + 1), f);
     }
     std::printf("plots written to %s\n", o.plot_dir.c_str());
   }
@@ -281,7 +281,9 @@ int run_apply(const ApplyOptions& o) {
                 f.lobe_force_fraction, f.regularization.c_str());
   }
   if (!o.plot.empty()) {
-    r::plot_restored(o.plot, forces, scan, "Restored forces: " + file_name(o.scan), f.resolution_m);
+    // The title names the filter file and what it is (regularization, beta, target resolution):
+    // two figures restoring one scan with two filters must be told apart by their titles.
+    r::plot_restored(o.plot, forces, scan, "Restored forces: " + file_name(o.scan) + " with " + file_name(o.filter), f);
     std::printf("plot written to %s\n", o.plot.c_str());
   }
   return pvdf::exit_code::success;

@@ -184,6 +184,17 @@ Axes& Axes::log_color(bool on) {
   impl_->log_color = on;
   return *this;
 }
+Axes& Axes::field_domain(const std::vector<std::array<double, 2>>& outline, double inset) {
+  impl_->domain.clear();
+  if (outline.size() >= 3) {
+    for (const auto& v : outline) {
+      if (!finite(v[0]) || !finite(v[1])) throw InputError("plot field_domain: the outline holds a non-finite vertex");
+    }
+    impl_->domain = outline;
+  }
+  impl_->domain_inset = finite(inset) ? inset : 0;
+  return *this;
+}
 Axes& Axes::colorbar(bool on) {
   impl_->colorbar = on;
   return *this;

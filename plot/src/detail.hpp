@@ -65,6 +65,8 @@ struct Axes::Impl {
   bool log_x = false, log_y = false, equal = false, grid = false, colorbar = true;
   bool integer_x = false;
   bool log_color = false;  // field coloured by log10, colour bar a log axis in the field's units
+  std::vector<detail::P2> domain;  // fields drawn only inside this outline, at least domain_inset from it
+  double domain_inset = 0;
   std::string legend_where = "best";
   std::size_t color_index = 0;
   std::optional<Color> last_color;

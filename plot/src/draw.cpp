@@ -7,7 +7,9 @@
 #include "interpolate.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <limits>
 
 namespace pvdf::plot::detail {
 namespace {
@@ -314,7 +316,7 @@ void PanelPainter::draw_panel(const Axes::Impl& a, const PanelLayout& p) {
   cairo_rectangle(cr_, L, T, R - L, B - T);
   cairo_clip(cr_);
   for (const auto& it : a.items)
-    if (it.kind == Kind::field) draw_field(it, p, a.log_color);
+    if (it.kind == Kind::field) draw_field(it, p, a.log_color, a.domain, a.domain_inset);
   if (a.grid) {
     for (const auto& t : p.xt)
       if (t.major) segment({pixel_center(p.xs.to_px(t.value)), T}, {pixel_center(p.xs.to_px(t.value)), B}, 1, kGrid);
@@ -362,7 +364,48 @@ void PanelPainter::draw_panel(const Axes::Impl& a, const PanelLayout& p) {
   draw_legend(a, p, data_points);
 }
 
-void PanelPainter::draw_field(const Item& it, const PanelLayout& p, bool log) {
+namespace {
+
+/// Signed distance from (x, y) to the closed polygon `v` (positive inside, even–odd rule).
+double signed_distance(const std::vector<P2>& v, double x, double y) {
+  double d2 = std::numeric_limits<double>::infinity();
+  bool inside = false;
+  for (std::size_t i = 0, j = v.size() - 1; i < v.size(); j = i++) {
+    const double ax = v[j][0], ay = v[j][1], ex = v[i][0] - ax, ey = v[i][1] - ay;
+    const double len2 = ex * ex + ey * ey;
+    const double t = len2 > 0 ? std::clamp(((x - ax) * ex + (y - ay) * ey) / len2, 0.0, 1.0) : 0.0;
+    const double dx = x - ax - t * ex, dy = y - ay - t * ey;
+    d2 = std::min(d2, dx * dx + dy * dy);
+    if ((v[i][1] > y) != (v[j][1] > y) && x < ax + (y - ay) * ex / ey) inside = !inside;
+  }
+  return inside ? std::sqrt(d2) : -std::sqrt(d2);
+}
+
+/// One ring of extrapolation: every NaN node with a finite 8-neighbour takes their mean.
+void extend_one_ring(Grid& g) {
+  const std::vector<double> original = g.values;
+  for (std::size_t j = 0; j < g.ny; ++j) {
+    for (std::size_t i = 0; i < g.nx; ++i) {
+      if (!std::isnan(original[j * g.nx + i])) continue;
+      double sum = 0;
+      int n = 0;
+      for (long dj = -1; dj <= 1; ++dj) {
+        for (long di = -1; di <= 1; ++di) {
+          const long ii = long(i) + di, jj = long(j) + dj;
+          if (ii < 0 || jj < 0 || ii >= long(g.nx) || jj >= long(g.ny)) continue;
+          const double v = original[std::size_t(jj) * g.nx + std::size_t(ii)];
+          if (std::isfinite(v)) sum += v, ++n;
+        }
+      }
+      if (n > 0) g.values[j * g.nx + i] = sum / n;
+    }
+  }
+}
+
+}  // namespace
+
+void PanelPainter::draw_field(const Item& it, const PanelLayout& p, bool log, const std::vector<P2>& domain,
+                              double inset) {
   const Grid& g = *it.grid;
   if (g.nx < 2 || g.ny < 2 || !(g.x1 != g.x0) || !(g.y1 != g.y0)) return;
   const auto range = field_range(it, log);
@@ -397,6 +440,15 @@ void PanelPainter::draw_field(const Item& it, const PanelLayout& p, bool log) {
     }
     source = &logged;
   }
+  Grid extended;
+  if (domain.size() >= 3) {
+    extended = *source;
+    extend_one_ring(extended);
+    source = &extended;
+  }
+  // Data units per pixel, for the anti-aliased edge of the domain (a one-pixel ramp of coverage).
+  const double unit_per_px = std::max(std::abs(p.xs.from_px(p.L + 1) - p.xs.from_px(p.L)),
+                                      std::abs(p.ys.from_px(p.T + 1) - p.ys.from_px(p.T)));
   const double nxm = static_cast<double>(g.nx - 1), nym = static_cast<double>(g.ny - 1);
   std::vector<double> fi(static_cast<std::size_t>(W));
   for (int i = 0; i < W; ++i) fi[static_cast<std::size_t>(i)] = (p.xs.from_px(p.L + i + 0.5) - g.x0) / (g.x1 - g.x0) * nxm;
@@ -408,7 +460,17 @@ void PanelPainter::draw_field(const Item& it, const PanelLayout& p, bool log) {
       const double f = interpolate_field(*source, fi[static_cast<std::size_t>(i)], b);
       if (std::isnan(f)) continue;
       const double t = std::clamp((f - lo) * inv, 0.0, 1.0);
-      row[i] = lut[static_cast<std::size_t>(t * (kLut - 1) + 0.5)];
+      const std::uint32_t c = lut[static_cast<std::size_t>(t * (kLut - 1) + 0.5)];
+      if (domain.size() < 3) {
+        row[i] = c;
+        continue;
+      }
+      const double d = signed_distance(domain, p.xs.from_px(p.L + i + 0.5), p.ys.from_px(p.T + j + 0.5)) - inset;
+      const double cover = std::clamp(d / unit_per_px + 0.5, 0.0, 1.0);
+      if (cover <= 0) continue;
+      // Cairo's ARGB32 is premultiplied by alpha.
+      const auto scaled = [cover](std::uint32_t v) { return std::uint32_t(double(v & 0xFFu) * cover + 0.5); };
+      row[i] = (scaled(0xFFu) << 24) | (scaled(c >> 16) << 16) | (scaled(c >> 8) << 8) | scaled(c);
     }
   }
   cairo_surface_mark_dirty(img);

@@ -20,7 +20,7 @@ class PanelPainter {
   void segment(P2 a, P2 b, double width, Color c);
   void marker(P2 q, Marker m, double size, Color c);
   void fill_polygon(const std::vector<P2>& pts, Color c);
-  void draw_field(const Item& it, const PanelLayout& p, bool log);
+  void draw_field(const Item& it, const PanelLayout& p, bool log, const std::vector<P2>& domain, double inset);
   void draw_line(const Item& it, const PanelLayout& p, std::vector<P2>& pts);
   void draw_error_bars(const Item& it, const PanelLayout& p, std::vector<P2>& pts);
   void draw_polygon(const Item& it, const PanelLayout& p, std::vector<P2>& pts);

@@ -18,6 +18,9 @@
 #include <fstream>
 #include <sstream>
 #include <limits>
+#include <array>
+#include <utility>
+#include <vector>
 
 namespace fs = std::filesystem;
 using pvdf::plot::Color;
@@ -689,4 +692,55 @@ TEST_CASE("a log colour scale interpolates the logarithm: no dark blots between 
   CHECK(darkest == 0);
   const auto mid = fig.data_to_pixel(0, 0, -0.5, 0.5);  // halfway between the columns at x = -1 and 0
   CHECK(colour_distance(png.at(static_cast<int>(mid[0]), static_cast<int>(mid[1])), pvdf::plot::colormap(0.5)) <= 12);
+}
+
+TEST_CASE("a field domain ends the field on the mapped area's curve, not on the grid's steps", "[plot]") {
+  // A map of the unit disc less a rim margin of 0.3: nodes of an h = 0.2 grid within r <= 0.7 hold
+  // values, the others are NaN. Without a domain the field ends halfway between valid and missing
+  // nodes — a rounded staircase between r = 0.7 and 0.8; with the domain (the disc as a 256-gon,
+  // inset 0.3) the colour must end at r = 0.7 within 1.5 px at every angle.
+  pvdf::plot::Grid g;
+  g.nx = g.ny = 11;
+  g.x0 = g.y0 = -1;
+  g.x1 = g.y1 = 1;
+  for (std::size_t j = 0; j < g.ny; ++j)
+    for (std::size_t i = 0; i < g.nx; ++i) {
+      const double x = -1 + 0.2 * double(i), y = -1 + 0.2 * double(j);
+      g.values.push_back(std::hypot(x, y) <= 0.7 + 1e-9 ? x + 2 : std::numeric_limits<double>::quiet_NaN());
+    }
+  std::vector<std::array<double, 2>> disc;
+  for (int k = 0; k < 256; ++k) disc.push_back({std::cos(2 * M_PI * k / 256), std::sin(2 * M_PI * k / 256)});
+  const auto edge_radii = [&](bool with_domain) {
+    pvdf::plot::Figure fig(600, 600);
+    auto& ax = fig.axes();
+    ax.field(g, "value", false, 1.0, 3.0).equal_aspect().colorbar(false);
+    if (with_domain) ax.field_domain(disc, 0.3);
+    const auto path = (temp_dir() / (with_domain ? "domain_on.png" : "domain_off.png")).string();
+    fig.save(path);
+    const Png png = read_png(path);
+    const auto c = fig.data_to_pixel(0, 0, 0, 0), e = fig.data_to_pixel(0, 0, 1, 0);
+    const double px_per_unit = e[0] - c[0];
+    std::vector<double> radii;  // per angle: the last coloured radius along the ray, in px
+    for (int a = 0; a < 72; ++a) {
+      const double t = 2 * M_PI * (a + 0.37) / 72;
+      double last = 0;
+      for (double r = 0.3 * px_per_unit; r < 0.95 * px_per_unit; r += 0.25) {
+        const int x = static_cast<int>(c[0] + r * std::cos(t)), y = static_cast<int>(c[1] - r * std::sin(t));
+        if (colour_distance(png.at(x, y), Color{255, 255, 255}) > 128) last = r;
+      }
+      radii.push_back(last / px_per_unit);
+    }
+    return std::make_pair(radii, px_per_unit);
+  };
+  const auto [off, ppu_off] = edge_radii(false);
+  const auto [on, ppu] = edge_radii(true);
+  double worst_off = 0, worst_on = 0;
+  for (double r : off) worst_off = std::max(worst_off, std::abs(r - 0.7) * ppu_off);
+  for (double r : on) worst_on = std::max(worst_on, std::abs(r - 0.7) * ppu);
+  CHECK(worst_off > 8);    // the staircase: the edge strays from the curve by many pixels
+  CHECK(worst_on <= 1.5);  // the domain: on the curve
+  // An outline of fewer than 3 points clears the domain; a non-finite vertex is an InputError.
+  pvdf::plot::Figure fig(300, 300);
+  CHECK_NOTHROW(fig.axes().field_domain({{0, 0}, {1, 1}}));
+  CHECK_THROWS_AS(fig.axes().field_domain({{0, 0}, {1, 0}, {std::nan(""), 1}}), pvdf::InputError);
 }

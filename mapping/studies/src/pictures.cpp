@@ -4,9 +4,11 @@
 #include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
+#include "pvdf/core/scene.hpp"
 #include "pvdf/plot/plot.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <cmath>
 #include <cstdint>
@@ -69,13 +71,55 @@ plot::Grid charge_grid_pC(const Locator& locator, const ChargeMap& map, std::siz
   return g;
 }
 
+/// The electrodes as they lie on the film — rectangles at their angle, circles as 96-gons,
+/// polygons — read from the scene the map was computed for, with the name beside the outline's
+/// upper right; a map without a readable scene (or whose scene names other electrodes) shows
+/// 2 mm squares at the electrode centres, as maps have always been drawn.
 void mark_electrodes(plot::Axes& ax, const ChargeMap& map) {
-  for (std::size_t k = 0; k < map.ne(); ++k) {
-    const double x = map.electrode_centers_m[k][0] * 1e3, y = map.electrode_centers_m[k][1] * 1e3;
-    ax.polygon({{x - 1, y - 1}, {x + 1, y - 1}, {x + 1, y + 1}, {x - 1, y + 1}}, plot::Color{40, 40, 40},
-               plot::Color{0, 0, 0}, 1.0);
-    ax.text(x + 1.5, y + 1.5, map.electrode_names[k], plot::Color{0, 0, 0}, 11);
+  std::vector<std::vector<std::array<double, 2>>> outlines(map.ne());
+  try {
+    const Scene scene = parse_scene(nlohmann::json::parse(map.scene_json), "the map's scene");
+    if (scene.electrodes.size() == map.ne()) {
+      for (std::size_t k = 0; k < map.ne(); ++k) {
+        if (scene.electrodes[k].name != map.electrode_names[k]) {
+          outlines.assign(map.ne(), {});
+          break;
+        }
+        for (const auto& p : scene.electrodes[k].outline(96)) outlines[k].push_back({p[0] * 1e3, p[1] * 1e3});
+      }
+    }
+  } catch (const std::exception&) {
+    outlines.assign(map.ne(), {});  // drawn as squares below
   }
+  for (std::size_t k = 0; k < map.ne(); ++k) {
+    auto& v = outlines[k];
+    if (v.size() < 3) {
+      const double x = map.electrode_centers_m[k][0] * 1e3, y = map.electrode_centers_m[k][1] * 1e3;
+      v = {{x - 1, y - 1}, {x + 1, y - 1}, {x + 1, y + 1}, {x - 1, y + 1}};
+    }
+    double x_max = -std::numeric_limits<double>::infinity(), y_max = x_max;
+    for (const auto& p : v) x_max = std::max(x_max, p[0]), y_max = std::max(y_max, p[1]);
+    ax.polygon(v, plot::Color{40, 40, 40}, plot::Color{0, 0, 0}, 1.0);
+    ax.text(x_max + 0.5, y_max + 0.5, map.electrode_names[k], plot::Color{0, 0, 0}, 11);
+  }
+}
+
+/// The box [x0, x1, y0, y1] (mm) of the nodes the map covers (mask = 1), within the box `within`:
+/// the axes of a picture span where the data are, not the grid's masked corners beyond the film's
+/// rim margin. `within` unchanged when the map has no mask or no covered node inside it.
+std::array<double, 4> covered_box_mm(const ChargeMap& map, const std::array<double, 4>& within) {
+  if (map.mask.size() != map.nx() * map.ny()) return within;
+  std::array<double, 4> box{std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity(),
+                            std::numeric_limits<double>::infinity(), -std::numeric_limits<double>::infinity()};
+  for (std::size_t j = 0; j < map.ny(); ++j) {
+    for (std::size_t i = 0; i < map.nx(); ++i) {
+      if (!map.mask[j * map.nx() + i]) continue;
+      const double x = map.x_m[i] * 1e3, y = map.y_m[j] * 1e3;
+      box = {std::min(box[0], x), std::max(box[1], x), std::min(box[2], y), std::max(box[3], y)};
+    }
+  }
+  box = {std::max(box[0], within[0]), std::min(box[1], within[1]), std::max(box[2], within[2]), std::min(box[3], within[3])};
+  return box[0] < box[1] && box[2] < box[3] ? box : within;
 }
 
 /// "Nice" contour levels spanning [lo, hi] (pC).
@@ -139,6 +183,8 @@ void write_isocharge_png(const Locator& locator, const ChargeMap& map, std::size
       .xlabel("probe x (mm)")
       .ylabel("probe y (mm)")
       .equal_aspect();
+  const auto box = covered_box_mm(map, {g.x0, g.x1, g.y0, g.y1});
+  ax.xlim(box[0], box[1]).ylim(box[2], box[3]);
   mark_electrodes(ax, map);
   fig.save(path);
 }
@@ -157,7 +203,8 @@ void write_intersection_png(const Locator& locator, const ChargeMap& map, const 
   }
   ax.scatter({result.x_m * 1e3}, {result.y_m * 1e3}, "located: (" + format_number("%.2f", result.x_m * 1e3) + ", " +
                                                          format_number("%.2f", result.y_m * 1e3) + ") mm, " +
-                                                         format_number("%.3g", result.force_N) + " N",
+                                                         format_number("%.3g", result.force_N) + " N" +
+                                                         (result.sigma_F_N == 0 ? " (given)" : ""),
              plot::Color{0, 0, 0}, plot::Marker::cross, 14);
   for (int a = 0; a < result.n_alternatives; ++a) {
     const auto& alt = result.alternatives[std::size_t(a)];
@@ -165,12 +212,18 @@ void write_intersection_png(const Locator& locator, const ChargeMap& map, const 
                plot::Color{200, 0, 0}, plot::Marker::plus, 14);
   }
   mark_electrodes(ax, map);
-  // The axes span the map (where contours can be), the legend sits beside the panel, off the data.
-  ax.title("Isocharge contours Q$_k$ = q$_k$ of the given charges, at the located force")
+  // The axes span the map's covered nodes (where contours can be), the legend sits beside the
+  // panel, off the data.
+  const auto box = covered_box_mm(map, {map.x_m.front() * 1e3, map.x_m.back() * 1e3, map.y_m.front() * 1e3,
+                                        map.y_m.back() * 1e3});
+  // A force given to the lookup (locate/isocharge --force-N) has no σ: name it as given, not located.
+  const bool force_given = result.sigma_F_N == 0;
+  ax.title(std::string("Isocharge contours Q$_k$ = q$_k$ of the given charges, at the ") +
+           (force_given ? "given force" : "located force"))
       .xlabel("probe x (mm)")
       .ylabel("probe y (mm)")
-      .xlim(map.x_m.front() * 1e3, map.x_m.back() * 1e3)
-      .ylim(map.y_m.front() * 1e3, map.y_m.back() * 1e3)
+      .xlim(box[0], box[1])
+      .ylim(box[2], box[3])
       .equal_aspect()
       .grid_lines()
       .legend("outside right");
@@ -226,7 +279,9 @@ void write_isocharge_overlay_png(const Locator& locator, const ChargeMap& map, d
                                  double half_width_m) {
   if (!(force_N > 0)) throw InputError("isocharge picture: force " + std::to_string(force_N) + " N must be > 0");
   if (!(half_width_m >= 0)) throw InputError("isocharge picture: half width " + std::to_string(half_width_m) + " m must be >= 0");
-  plot::Figure fig(990, 760);
+  // The legend under the panel, entries side by side: the panel takes the figure's width and
+  // no empty column is left beside it (a legend at the right would leave one under itself).
+  plot::Figure fig(820, 860);
   auto& ax = fig.axes();
   double x0 = std::numeric_limits<double>::infinity(), x1 = -x0, y0 = x0, y1 = -x0;
   for (std::size_t k = 0; k < map.ne(); ++k) {
@@ -244,14 +299,15 @@ void write_isocharge_overlay_png(const Locator& locator, const ChargeMap& map, d
                "electrode " + map.electrode_names[k] + " (pC)");
   }
   mark_electrodes(ax, map);
+  const auto box = covered_box_mm(map, {x0, x1, y0, y1});
   ax.title("Isocharge contours of all electrodes at " + format_number("%.3g", force_N) + " N (" + map.model + " map)")
       .xlabel("probe x (mm)")
       .ylabel("probe y (mm)")
       .equal_aspect()
       .grid_lines()
-      .legend("outside right")
-      .xlim(x0, x1)  // the drawn window (the zoom clipped to the map): no empty bands
-      .ylim(y0, y1);
+      .legend("outside below")
+      .xlim(box[0], box[1])  // the drawn window (the zoom clipped to the map's covered nodes): no empty bands
+      .ylim(box[2], box[3]);
   fig.save(path);
 }
 

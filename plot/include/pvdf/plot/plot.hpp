@@ -103,6 +103,13 @@ class Axes {
   /// the fewest data points, and "outside below" for a panel with a filled field, which a legend
   /// inside would always hide.
   Axes& legend(const std::string& where = "best");
+  /// Colour this panel's fields only inside the closed polygon `outline` (data units, either
+  /// orientation) and at least `inset` from it, with an anti-aliased edge. The area a charge map
+  /// covers — the film less its rim margin — then ends on that smooth curve, not on the grid's
+  /// steps: missing nodes next to finite ones first take the mean of their finite neighbours (one
+  /// ring of extrapolation, so the interpolant reaches the curve), then the curve cuts it. Round
+  /// outlines are given as polygons of enough vertices (≥ 128). An outline of < 3 points clears it.
+  Axes& field_domain(const std::vector<std::array<double, 2>>& outline, double inset = 0);
   /// Show (default) or hide this panel's colour bar.
   Axes& colorbar(bool on = true);
   /// Colour the field by log10 of its values (which stay in physical units, e.g. mm): the colour
