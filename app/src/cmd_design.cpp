@@ -346,53 +346,6 @@ std::vector<std::array<double, 2>> outline_mm(const pvdf::FilmOutline& o) {
   return v;
 }
 
-/// A smooth edge for the mapped area of a round film: that area is the film's disc (or ellipse)
-/// inset by the rim margin, which the square grid of the map can only follow in steps of its
-/// spacing. Each missing node next to an evaluated one takes the mean of its evaluated neighbours
-/// (half a cell of extrapolation), and the returned polygon — a box around film and grid with a hole
-/// the shape of the film's outline scaled through the outermost evaluated nodes plus half a cell —
-/// masks the field outside that curve when filled in the background colour. Empty when nothing is
-/// evaluated.
-std::vector<std::array<double, 2>> smooth_round_edge(pvdf::plot::Grid& g, const DesignMaps& m, const pvdf::FilmOutline& o) {
-  const bool circle = o.shape == pvdf::FilmOutline::Shape::circle;
-  const double a = 1e3 * (circle ? o.radius_m : o.semi_axes_m[0]), b = 1e3 * (circle ? o.radius_m : o.semi_axes_m[1]);
-  const double h = g.nx > 1 ? (g.x1 - g.x0) / double(g.nx - 1) : 1.0;
-  double rho_max = 0;
-  for (std::size_t p = 0; p < g.values.size(); ++p) {
-    if (!m.evaluated[p]) continue;
-    const double x = g.x0 + h * double(p % g.nx), y = g.y0 + h * double(p / g.nx);
-    rho_max = std::max(rho_max, std::hypot(x / a, y / b));
-  }
-  if (!(rho_max > 0)) return {};
-  const std::vector<double> original = g.values;
-  for (std::size_t j = 0; j < g.ny; ++j) {
-    for (std::size_t i = 0; i < g.nx; ++i) {
-      if (m.evaluated[j * g.nx + i]) continue;
-      double sum = 0;
-      int n = 0;
-      for (int dj = -1; dj <= 1; ++dj) {
-        for (int di = -1; di <= 1; ++di) {
-          const long ii = long(i) + di, jj = long(j) + dj;
-          if (ii < 0 || jj < 0 || ii >= long(g.nx) || jj >= long(g.ny)) continue;
-          const std::size_t q = std::size_t(jj) * g.nx + std::size_t(ii);
-          if (m.evaluated[q] && std::isfinite(original[q])) sum += original[q], ++n;
-        }
-      }
-      if (n > 0) g.values[j * g.nx + i] = sum / n;
-    }
-  }
-  const double rho_edge = std::min(1.0, rho_max + 0.5 * h / std::min(a, b));
-  // The box covers the film and the grid (the field ends at the grid's last nodes at most).
-  const double x0 = std::min(-a, g.x0), x1 = std::max(a, g.x1), y0 = std::min(-b, g.y0), y1 = std::max(b, g.y1);
-  std::vector<std::array<double, 2>> mask = {{x1, 0}, {x1, y1}, {x0, y1}, {x0, y0}, {x1, y0}, {x1, 0}};
-  const int n = 256;
-  for (int k = 0; k <= n; ++k) {  // the hole, traced the other way round
-    const double t = -2 * pvdf::pi * k / n;
-    mask.push_back({rho_edge * a * std::cos(t), rho_edge * b * std::sin(t)});
-  }
-  return mask;
-}
-
 /// One panel: `values` × `scale` (m → mm, or a fraction → %) over the map on a log colour scale
 /// labelled in those units, the target contour, ambiguous (red ×) and dead (grey) nodes, the
 /// electrodes and the film outline; the legend below the panel, off the data.
@@ -434,12 +387,10 @@ void map_panel(pvdf::plot::Axes& ax, const Candidate& c, const std::vector<doubl
   } catch (const std::exception&) {
     // a map without a readable scene: no outline, electrodes as squares (below)
   }
-  const bool round = scene && (scene->membrane.outline.shape == pvdf::FilmOutline::Shape::circle ||
-                               scene->membrane.outline.shape == pvdf::FilmOutline::Shape::ellipse);
-  std::vector<std::array<double, 2>> mask;
-  if (round) mask = smooth_round_edge(g, m, scene->membrane.outline);
   ax.field(g, bar_label, false, vmin, vmax).log_color();
-  if (!mask.empty()) ax.polygon(mask, pvdf::plot::Color{255, 255, 255}, std::nullopt);
+  // The mapped area (film less the rim margin) ends on its own curve, any film shape, not on the
+  // grid's steps (plot::Axes::field_domain).
+  if (scene) ax.field_domain(outline_mm(scene->membrane.outline), 1e3 * c.map.rim_margin_m);
   if (!ax_x.empty()) ax.scatter(ax_x, ax_y, "ambiguous", pvdf::plot::Color{220, 30, 30}, pvdf::plot::Marker::cross, 2.0);
   if (!dx.empty()) ax.scatter(dx, dy, "dead zone", pvdf::plot::Color{150, 150, 150}, pvdf::plot::Marker::square, 2.0);
   // The target line last, so that the markers do not hide it.
