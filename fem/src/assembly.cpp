@@ -23,8 +23,9 @@ using namespace dealii;
 // M(w) = D κ(w), κ = ∇²w (Voigt [w,xx, w,yy, 2w,xy]), M_nn = n·M·n; rim faces impose ∂_n w = 0
 // weakly with the same terms (one-sided). Linear in w, so it is assembled once per mesh.
 void FilmSolver::assemble_bending_matrix() {
+  const bool raw = !bending_raw_.empty();  // empty in the enriched space (setup_system)
   bending_ = 0;
-  bending_raw_ = 0;
+  if (raw) bending_raw_ = 0;
   if (!options_.include_bending && !bending_pattern_) return;
   const unsigned int p = form_degree();  // the primal degree, also in the enriched space (consistent forms)
   const QGauss<dim> quadrature(p + 1);
@@ -43,7 +44,8 @@ void FilmSolver::assemble_bending_matrix() {
     const std::array<double, 3> m = D.apply({hess[0][0], hess[1][1], 2 * hess[0][1]});
     return n[0] * n[0] * m[0] + n[1] * n[1] * m[1] + 2 * n[0] * n[1] * m[2];
   };
-  auto add_raw = [this](const FullMatrix<double>& m, const std::vector<types::global_dof_index>& idx) {
+  auto add_raw = [this, raw](const FullMatrix<double>& m, const std::vector<types::global_dof_index>& idx) {
+    if (!raw) return;
     for (unsigned int i = 0; i < idx.size(); ++i)
       for (unsigned int j = 0; j < idx.size(); ++j)
         if (m(i, j) != 0) bending_raw_.add(idx[i], idx[j], m(i, j));
@@ -399,7 +401,9 @@ void FilmSolver::assemble(const Vector<double>& u, Model model, double artificia
     Vector<double> bu(u.size());
     bending_.vmult(bu, u);
     residual += bu;
-    energy += 0.5 * bending_raw_.matrix_norm_square(u);  // raw: the condensed matrix has diagonals on constrained rows
+    // raw: the condensed matrix has diagonals on constrained rows (absent in the enriched space,
+    // whose potential is never used)
+    if (!bending_raw_.empty()) energy += 0.5 * bending_raw_.matrix_norm_square(u);
     if (want_matrix) tangent_.add(1.0, bending_);
   }
   energy -= load_ * u;

@@ -9,6 +9,8 @@
 #include <chrono>
 #include <cmath>
 
+#include <malloc.h>
+
 namespace pvdf::mapping::detail {
 
 // The sweep mesh is graded to the electrodes and the centre, not under every probe, and the rim
@@ -18,6 +20,9 @@ namespace pvdf::mapping::detail {
 // replaces the sweep's when its estimate is the smaller (and keeps the tolerance_not_met status
 // when it is still above).
 void Generator::improve_by_direct_solve(double x_m, double y_m, fem::ProbeSolution& s) {
+  // Waits while another thread's direct solve runs (memory, not time: they are rare, and the
+  // waiting thread's CPU time is not counted as solve time).
+  std::unique_lock<std::mutex> one_at_a_time(direct_solve_mutex_);
   const auto t0 = std::chrono::steady_clock::now();
   fem::Options options = sweep_options_.solver;
   options.model = sweeps_[0]->setup().model;
@@ -35,7 +40,9 @@ void Generator::improve_by_direct_solve(double x_m, double y_m, fem::ProbeSoluti
   } catch (const NumericalError&) {
     r.summary.status = fem::Status::no_convergence;
   }
+  malloc_trim(0);  // its meshes, matrices and factors (GBs near the clamp) go back to the system now
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  one_at_a_time.unlock();
   {
     std::lock_guard<std::mutex> lock(mutex_);
     ++direct_solves_;

@@ -206,6 +206,9 @@ class Generator {
   std::string first_failure_;
   std::size_t direct_solves_ = 0;        // direct adaptive solves (this process), under mutex_
   double direct_s_ = 0;                  // their thread-seconds
+  // One direct solve at a time in this process: near the clamp each holds GBs (2.6 GB at 128k DOFs,
+  // docs/bench-fem.md "Memory"), and two at once on two threads were the README design's peak.
+  std::mutex direct_solve_mutex_;
 
   // adaptive placement
   bool adaptive_ = false;

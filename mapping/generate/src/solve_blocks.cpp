@@ -12,6 +12,7 @@
 #include <limits>
 #include <thread>
 
+#include <malloc.h>
 #include <time.h>
 
 namespace pvdf::mapping::detail {
@@ -208,6 +209,10 @@ void Generator::run_blocks(const std::vector<Block>& blocks) {
         solve_block(*sweeps_[std::size_t(t)], blocks[b], records, abandoned);
         if (abandoned) break;
         commit(records, blocks[b].size(), thread_cpu_s() - cpu0_s, start_s);
+        // A row's solves free what its probe meshes, rim engines and direct solves held, but glibc
+        // keeps freed pages below its mmap threshold in each thread's arena; handing them back after
+        // every row keeps the resident memory that of the live solvers (docs/bench-fem.md, "Memory").
+        malloc_trim(0);
         std::lock_guard<std::mutex> lock(mutex_);
         maybe_checkpoint(false);
       }
