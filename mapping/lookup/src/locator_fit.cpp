@@ -637,7 +637,18 @@ double Locator::log_posterior_weight(const Query& Q, const Fit& f) const {
     det = a00 * (a11 * a22 - a12 * a12) - a01 * (a01 * a22 - a12 * a02) + a02 * (a01 * a12 - a11 * a02);
     floor *= rl;
   }
-  return -0.5 * f.chi2 - 0.5 * std::log(std::max(det, floor)) + f.log_widen + (Q.fixed_force ? 0.0 : f.l);
+  // The likelihood's normalisation ∏_k (σ_k² + e_k²)^(−½): with the map's own error e_k it
+  // differs between solutions (none without it, where it is the same for all and dropped). Left
+  // out, a solution where the map is poor gains its width (det A ∝ 1/s^(2·k)) for free, without
+  // paying for the broader likelihood it stands on: it outranked exact fits where the map is good.
+  double log_norm = 0;
+  if (f.has_variance) {
+    for (std::size_t k = 0; k < ne_; ++k) {
+      const double sigma = 1.0 / Q.w[k];
+      log_norm -= 0.5 * std::log((sigma * sigma + f.variance[k]) / (sigma * sigma));
+    }
+  }
+  return -0.5 * f.chi2 + log_norm - 0.5 * std::log(std::max(det, floor)) + f.log_widen + (Q.fixed_force ? 0.0 : f.l);
 }
 
 int Locator::distinct_solutions(const Query& Q, const std::array<Fit, 8>& fits, int n_starts, int best,
