@@ -67,6 +67,9 @@ int run_atlas(const AtlasCommandOptions& o) {
     j["output"] = o.output;
     j["n_positions"] = report.n_positions;
     j["n_points"] = report.n_points;
+    j["n_solved_positions"] = report.n_solved_positions;
+    j["mirror_x"] = report.mirror_x;
+    j["mirror_y"] = report.mirror_y;
     j["n_failed"] = report.n_failed;
     j["n_tolerance_not_met"] = report.n_tolerance_not_met;
     j["estimated_relative_error"] = report.estimated_relative_error;
@@ -88,6 +91,8 @@ int run_atlas(const AtlasCommandOptions& o) {
     std::printf("%s: %zu positions x %zu force levels, %zu x %zu atlas cells of %g mm\n", o.output.c_str(), report.n_positions,
                 atlas.nf(), atlas.grid.nx, atlas.grid.ny, 1e3 * atlas.grid.cell_m);
     std::printf("model %s: %s\n", atlas.model.c_str(), atlas.model_reason.c_str());
+    std::printf("%zu positions solved, the others mirror images (x -> -x: %s, y -> -y: %s)\n", report.n_solved_positions,
+                report.mirror_x ? "yes" : "no", report.mirror_y ? "yes" : "no");
     std::printf("FE mesh: %zu DOFs, cells of %g mm over the whole film; largest per-press estimate %.2g %% "
                 "(%zu presses above the tolerance %g)\n",
                 atlas.n_dofs, 1e3 * atlas.fe_size_m, 100 * report.estimated_relative_error, report.n_tolerance_not_met,

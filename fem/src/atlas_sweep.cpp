@@ -93,6 +93,7 @@ struct AtlasSweep::Impl {
   std::unique_ptr<detail::FilmSolver> copy;  // the sweep mesh again (see the file comment)
   Model model = Model::large_rotation;
   std::size_t presses = 0;
+  std::string model_reason;
 };
 
 AtlasSweep::AtlasSweep(const pvdf::Scene& scene, const AtlasSweepOptions& options) : impl_(std::make_unique<Impl>()) {
@@ -119,6 +120,18 @@ AtlasSweep::AtlasSweep(const pvdf::Scene& scene, const AtlasSweepOptions& option
   so.probe_size_m = -1;
   so.rim_model = SweepOptions::RimModel::never;
   so.estimate_errors = true;
+  // The kinematics of the `auto` rule over the force range, with bending kept at every press and the
+  // mesh graded toward the whole clamp to its bending layer: the direct map's rim model, everywhere.
+  const double f_min = options.forces_N.empty() ? 1.0 : *std::min_element(options.forces_N.begin(), options.forces_N.end());
+  const double f_max = options.forces_N.empty() ? 1.0 : *std::max_element(options.forces_N.begin(), options.forces_N.end());
+  const detail::ForceRange range{f_min, f_max};
+  const detail::ModelChoice choice = detail::choose_model(im.scene, detail::with_clamp_layer_switch(options.solver), &range);
+  so.solver.model = choice.model;
+  so.solver.include_bending = true;
+  so.sweep_rim_size_m = detail::rim_boundary_layer_m(im.scene, f_min);
+  so.rim_grading = 0.5;
+  im.model_reason = choice.reason + "; bending kept at every press, mesh graded toward the clamp to " +
+                    std::to_string(so.sweep_rim_size_m * 1e3) + " mm";
   im.sweep = std::make_unique<ProbeSweep>(im.scene, so);
   const SweepSetup& setup = im.sweep->setup();
   im.fe_size_m = setup.electrode_size_m;  // the setup may have halved it
@@ -129,7 +142,9 @@ AtlasSweep::AtlasSweep(const pvdf::Scene& scene, const AtlasSweepOptions& option
   sizes.electrode_size_m = setup.electrode_size_m;
   sizes.probe_size_m = 0;
   sizes.grading = 1.0;
-  Options o = detail::with_clamp_layer_switch(options.solver);
+  sizes.rim_size_m = so.sweep_rim_size_m;
+  sizes.rim_grading = so.rim_grading;
+  Options o = detail::with_clamp_layer_switch(so.solver);
   o.model = setup.model;
   o.include_bending = setup.include_bending;
   o.adaptive = false;
@@ -154,6 +169,7 @@ AtlasSweep::AtlasSweep(const pvdf::Scene& scene, const AtlasSweepOptions& option
 AtlasSweep::~AtlasSweep() = default;
 
 const SweepSetup& AtlasSweep::setup() const { return impl_->sweep->setup(); }
+const std::string& AtlasSweep::model_reason() const { return impl_->model_reason; }
 const AtlasGrid& AtlasSweep::grid() const { return impl_->grid; }
 const std::vector<pvdf::Electrode>& AtlasSweep::reference_electrodes() const { return impl_->scene.electrodes; }
 const std::vector<double>& AtlasSweep::cell_geometry() const { return impl_->geometry; }

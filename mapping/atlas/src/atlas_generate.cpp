@@ -4,11 +4,13 @@
 // one AtlasSweep per thread, rows handed out in order.
 #include "pvdf/mapping/atlas.hpp"
 
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/fem/solver.hpp"
 #include "pvdf/version.hpp"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -44,6 +46,17 @@ std::array<double, 4> outline_box(const pvdf::FilmOutline& o) {
     b[3] = std::max(b[3], v[1]);
   }
   return b;
+}
+
+
+// Mirror symmetry of the film (docs/atlas.md §3): a circle, rectangle or ellipse centred at the
+// origin with the material's draw direction along x or y is its own mirror image about both axes,
+// so the press at (−x, y) is the mirror image of the press at (x, y) (and likewise in y). Polygons
+// are not examined (no symmetry used).
+bool film_mirror_symmetric(const pvdf::Scene& scene) {
+  if (scene.membrane.outline.shape == pvdf::FilmOutline::Shape::polygon) return false;
+  const double quarter = std::remainder(scene.material.draw_angle_rad, 0.5 * pvdf::pi);
+  return std::abs(quarter) <= 1e-12;
 }
 
 }  // namespace
@@ -94,6 +107,12 @@ ChargeAtlas generate_atlas(const pvdf::Scene& scene, const AtlasOptions& o, Atla
         atlas.mask[j * nx + i] = 1;
         ++n_positions;
       }
+  // Mirror images: solved only at x >= 0 (and y >= 0), the rest copied (step 4).
+  const bool symmetric = film_mirror_symmetric(scene);
+  const bool mirror_x = symmetric && i0 == -i1, mirror_y = symmetric && j0 == -j1;
+  auto canonical = [&](std::size_t i, std::size_t j) {
+    return (!mirror_x || atlas.x_m[i] >= 0) && (!mirror_y || atlas.y_m[j] >= 0);
+  };
   atlas.forces_N = forces;
   atlas.spacing_m = s;
   atlas.rim_margin_m = margin;
@@ -119,7 +138,7 @@ ChargeAtlas generate_atlas(const pvdf::Scene& scene, const AtlasOptions& o, Atla
   atlas.fe_size_m = first.fe_size_m();
   atlas.n_dofs = setup.n_dofs;
   atlas.model = pvdf::fem::model_name(setup.model);
-  atlas.model_reason = setup.model_reason + (setup.include_bending ? "" : "; bending left out, its estimated effect in the error");
+  atlas.model_reason = first.model_reason();
   atlas.error_estimator =
       "per press: the sweep's adjoint-weighted residual estimates (discretization + bending left out, by magnitude) of the "
       "charges of the reference electrodes Q1..Q4 (the film's quadrants); estimated_relative_error = max_k err_k / max_k |Q_k|";
@@ -147,6 +166,9 @@ ChargeAtlas generate_atlas(const pvdf::Scene& scene, const AtlasOptions& o, Atla
   const double setup_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
 
   // 3. Rows, each position all levels; results written to disjoint slots of the atlas.
+  std::size_t n_canonical = 0;
+  for (std::size_t j = 0; j < ny; ++j)
+    for (std::size_t i = 0; i < nx; ++i) n_canonical += atlas.mask[j * nx + i] && canonical(i, j);
   std::atomic<std::size_t> next_row{0}, done{0};
   std::mutex report_mutex;
   std::string first_failure;
@@ -156,7 +178,7 @@ ChargeAtlas generate_atlas(const pvdf::Scene& scene, const AtlasOptions& o, Atla
       for (std::size_t j = next_row++; j < ny; j = next_row++) {
         std::vector<pvdf::fem::SweepState> along(nf);  // last state of the row at each level
         for (std::size_t i = 0; i < nx; ++i) {
-          if (!atlas.mask[j * nx + i]) continue;
+          if (!atlas.mask[j * nx + i] || !canonical(i, j)) continue;
           for (std::size_t f = 0; f < nf; ++f) {
             const pvdf::fem::SweepState* warm = !along[f].dofs.empty() ? &along[f] : (f > 0 && !along[f - 1].dofs.empty() ? &along[f - 1] : nullptr);
             pvdf::fem::SweepState next;
@@ -184,7 +206,7 @@ ChargeAtlas generate_atlas(const pvdf::Scene& scene, const AtlasOptions& o, Atla
           const std::size_t d = ++done;
           if (o.progress) {
             std::lock_guard<std::mutex> lock(report_mutex);
-            o.progress(d, n_positions);
+            o.progress(d, n_canonical);
           }
         }
       }
@@ -200,6 +222,38 @@ ChargeAtlas generate_atlas(const pvdf::Scene& scene, const AtlasOptions& o, Atla
   for (auto& th : pool) th.join();
   if (error) std::rethrow_exception(error);
 
+  // 4. Mirror images: cell (ci, cj) of the image is cell (ncx−1−ci, cj) of the source under x → −x
+  // (m1 changes sign), likewise in y; the reference quadrants are permuted (Q1 ↔ Q2, Q3 ↔ Q4 under
+  // x → −x; Q1 ↔ Q4, Q2 ↔ Q3 under y → −y). The atlas grid is centred on the origin (atlas_grid_for).
+  const std::size_t cx = atlas.grid.nx, cy = atlas.grid.ny;
+  for (std::size_t f = 0; f < nf; ++f)
+    for (std::size_t j = 0; j < ny; ++j)
+      for (std::size_t i = 0; i < nx; ++i) {
+        if (!atlas.mask[j * nx + i] || canonical(i, j)) continue;
+        const bool fx = mirror_x && atlas.x_m[i] < 0, fy = mirror_y && atlas.y_m[j] < 0;
+        const std::size_t si = fx ? nx - 1 - i : i, sj = fy ? ny - 1 - j : j;
+        const std::size_t p = atlas.point(f, j, i), sp = atlas.point(f, sj, si);
+        atlas.status[p] = atlas.status[sp];
+        atlas.deflection_at_load_m[p] = atlas.deflection_at_load_m[sp];
+        atlas.estimated_relative_error[p] = atlas.estimated_relative_error[sp];
+        for (std::size_t k = 0; k < nr; ++k) {
+          std::size_t sk = k;
+          if (nr == 4 && fx) sk = std::size_t(std::array<int, 4>{1, 0, 3, 2}[sk]);
+          if (nr == 4 && fy) sk = std::size_t(std::array<int, 4>{3, 2, 1, 0}[sk]);
+          atlas.reference_charge_C[p * nr + k] = atlas.reference_charge_C[sp * nr + sk];
+          atlas.reference_charge_error_C[p * nr + k] = atlas.reference_charge_error_C[sp * nr + sk];
+        }
+        for (std::size_t cj = 0; cj < cy; ++cj)
+          for (std::size_t ci = 0; ci < cx; ++ci) {
+            const std::size_t sc = (fy ? cy - 1 - cj : cj) * cx + (fx ? cx - 1 - ci : ci), c = cj * cx + ci;
+            const double* src = &atlas.moments[(sp * nc + sc) * 3];
+            double* dst = &atlas.moments[(p * nc + c) * 3];
+            dst[0] = src[0];
+            dst[1] = fx ? -src[1] : src[1];
+            dst[2] = fy ? -src[2] : src[2];
+          }
+      }
+
   if (report) {
     AtlasReport r;
     r.n_positions = n_positions;
@@ -213,6 +267,9 @@ ChargeAtlas generate_atlas(const pvdf::Scene& scene, const AtlasOptions& o, Atla
       }
     }
     r.first_failure = first_failure;
+    r.n_solved_positions = n_canonical;
+    r.mirror_x = mirror_x;
+    r.mirror_y = mirror_y;
     r.setup_s = setup_s;
     r.threads = threads;
     r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();

@@ -48,7 +48,7 @@ ChargeMap map_from_atlas(const ChargeAtlas& atlas, const pvdf::Scene& scene, con
   map.y_m = atlas.y_m;
   map.mask = atlas.mask;
   map.forces_N = atlas.forces_N;
-  const std::size_t ne = scene.electrodes.size(), nr = atlas.nr(), nc = atlas.n_cells();
+  const std::size_t ne = scene.electrodes.size(), nc = atlas.n_cells();
   std::vector<pvdf::fem::AtlasElectrode> readings;
   for (const auto& e : scene.electrodes) {
     map.electrode_names.push_back(e.name);
@@ -81,18 +81,19 @@ ChargeMap map_from_atlas(const ChargeAtlas& atlas, const pvdf::Scene& scene, con
         map.status[p] = atlas.status[p];
         map.deflection_at_load_m[p] = atlas.deflection_at_load_m[p];
         if (atlas.status[p] != std::uint8_t(PointStatus::ok)) continue;
-        // The press's FE error: the largest absolute estimate of its reference electrodes (each a
-        // quarter of the film), taken for every electrode of the layout.
-        double fe_error = 0;
-        for (std::size_t k = 0; k < nr; ++k) fe_error = std::max(fe_error, std::abs(atlas.reference_charge_error_C[p * nr + k]));
-        if (!std::isfinite(fe_error)) fe_error = nan;
+        // The press's FE error, relative to its largest charge (the reference electrodes' estimate,
+        // max_r err_r / max_r |Q_r|), applied to the layout's largest charge at that press.
+        const double relative_fe = atlas.estimated_relative_error[p];
         const double* m = &atlas.moments[p * nc * 3];
         double scale = 0, largest_error = 0;
         for (std::size_t k = 0; k < ne; ++k) {
           pvdf::fem::integrate_atlas_electrode(readings[k], m, q[k], err[k]);
+          scale = std::max(scale, std::abs(q[k]));
+        }
+        const double fe_error = std::isfinite(relative_fe) ? relative_fe * scale : nan;
+        for (std::size_t k = 0; k < ne; ++k) {
           map.charge_C[map.charge_index(f, j, i, k)] = q[k];
           map.estimated_charge_error_C[map.charge_index(f, j, i, k)] = fe_error + err[k];
-          scale = std::max(scale, std::abs(q[k]));
           largest_error = std::max(largest_error, fe_error + err[k]);
         }
         if (scale > 0) worst = std::max(worst, largest_error / scale);

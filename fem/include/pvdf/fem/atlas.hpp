@@ -10,6 +10,7 @@
 #include <array>
 #include <cstddef>
 #include <memory>
+#include <string>
 #include <vector>
 
 namespace pvdf::fem {
@@ -60,8 +61,9 @@ struct AtlasPress {
 /// The scene's electrodes are replaced by `reference_electrodes` (the film cut into four quadrants,
 /// which sets the FE mesh to fe_size_m over the whole film and carries the press's error estimate);
 /// every probe is solved on that one mesh (no per-probe refinement: the footprint is already at
-/// fe_size_m) and with the sweep's model only (no rim model: bending's estimated effect is in the
-/// estimate instead), so that the density the moments integrate is the one the estimate is for.
+/// fe_size_m), with the `auto` rule's kinematics and bending kept, the mesh graded toward the whole
+/// clamp to its bending layer (no rim model: every press is solved on the one mesh, so the density
+/// the moments integrate is the one the estimate is for).
 /// Not thread-safe: one instance per thread.
 class AtlasSweep {
  public:
@@ -71,6 +73,8 @@ class AtlasSweep {
   AtlasSweep& operator=(const AtlasSweep&) = delete;
 
   const SweepSetup& setup() const;
+  /// Why this model (the `auto` rule's reason, and bending kept with the rim grading).
+  const std::string& model_reason() const;
   const AtlasGrid& grid() const;
   /// The reference electrodes (the film's quadrants) whose charges and estimates every press carries.
   const std::vector<pvdf::Electrode>& reference_electrodes() const;

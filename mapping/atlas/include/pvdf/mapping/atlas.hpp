@@ -77,6 +77,8 @@ struct AtlasOptions {
 /// What a generation did.
 struct AtlasReport {
   std::size_t n_positions = 0, n_points = 0, n_failed = 0, n_tolerance_not_met = 0;
+  std::size_t n_solved_positions = 0;   ///< positions solved (the others are mirror images)
+  bool mirror_x = false, mirror_y = false;  ///< mirror images used under x → −x, y → −y
   double estimated_relative_error = 0;  ///< largest per-press estimate
   double setup_s = 0, wall_s = 0;
   int threads = 1;
@@ -97,7 +99,7 @@ void check_atlas_fits_scene(const ChargeAtlas& atlas, const std::string& atlas_p
 
 /// The charge map of `scene`'s electrodes from the atlas: per press and electrode, the integral of
 /// the per-cell linear reconstruction of q over the electrode (fem::AtlasElectrode); each node's
-/// error = the press's FE error (the largest reference electrode's absolute estimate) + the
+/// error = the press's FE error (its relative estimate times the layout's largest charge) + the
 /// integration error of the partially covered cells. An ordinary map (write_map, `locate`).
 ChargeMap map_from_atlas(const ChargeAtlas& atlas, const pvdf::Scene& scene, const std::string& atlas_path);
 
