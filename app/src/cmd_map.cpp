@@ -13,12 +13,15 @@
 #include "pvdf/mapping/ambiguity.hpp"
 #include "pvdf/mapping/ramp.hpp"
 #include "pvdf/mapping/generate.hpp"
+#include "pvdf/mapping/atlas.hpp"
+#include "pvdf/mapping/map_io.hpp"
 #include "pvdf/mesh/mesher.hpp"
 
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
@@ -66,6 +69,8 @@ struct MapCommandOptions {
   std::size_t stop_after = 0;
   bool quiet = false;
   std::string mesh_path;
+  std::string atlas_path;
+  std::vector<std::string> solve_flags_given;  // flags of the FEM sweep given together with --atlas
 };
 
 /// The generator's options from the command's flags, each flag checked against its rule before any
@@ -292,7 +297,52 @@ void print_map_text(const MapCommandOptions& o, const ChargeMap& map, const MapR
   }
 }
 
+/// `map SCENE --atlas FILE`: the scene's electrodes integrated over the atlas (docs/atlas.md §4),
+/// no solve; the atlas decides the grid, the forces and the FEM settings.
+int run_map_from_atlas(const MapCommandOptions& o) {
+  if (!o.solve_flags_given.empty()) {
+    throw pvdf::InputError(o.solve_flags_given.front() + " with --atlas " + o.atlas_path +
+                           ": the atlas fixes the grid, forces and FEM settings; drop the flag or make another atlas");
+  }
+  const pvdf::Scene scene = pvdf::load_scene(o.scene_path);
+  for (const auto& w : scene.warnings) pvdf::app::warn(w);
+  const auto t0 = std::chrono::steady_clock::now();
+  const pvdf::mapping::ChargeAtlas atlas = pvdf::mapping::read_atlas(o.atlas_path);
+  pvdf::mapping::ChargeMap map = pvdf::mapping::map_from_atlas(atlas, scene, o.atlas_path);
+  if (!o.noise.empty()) map.noise_C = map_options(o, scene).noise_C;
+  pvdf::app::OutputLock output_lock(o.output, "-o/--output");
+  pvdf::mapping::write_map(o.output, map);
+  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::size_t ok = 0, failed = 0;
+  for (const auto st : map.status) {
+    ok += st == std::uint8_t(PointStatus::ok);
+    failed += st == std::uint8_t(PointStatus::not_converged);
+  }
+  if (o.json) {
+    nlohmann::json j;
+    j["output"] = o.output;
+    j["atlas"] = o.atlas_path;
+    j["nx"] = map.nx();
+    j["ny"] = map.ny();
+    j["forces_N"] = map.forces_N;
+    j["n_points"] = ok + failed;
+    j["n_failed"] = failed;
+    j["model"] = map.model;
+    j["tolerance"] = map.tolerance;
+    j["estimated_relative_error"] = map.estimated_relative_error;
+    j["wall_s"] = wall_s;
+    std::cout << j.dump(2) << '\n';
+  } else {
+    std::printf("%s: %zu x %zu grid x %zu force levels from the atlas %s (%zu points, %zu not converged in the atlas)\n",
+                o.output.c_str(), map.nx(), map.ny(), map.nf(), o.atlas_path.c_str(), ok + failed, failed);
+    std::printf("estimated error (largest per node, FE + atlas integration): %.2g %% of the press's largest charge; %.2f s\n",
+                100 * map.estimated_relative_error, wall_s);
+  }
+  return failed > 0 ? pvdf::exit_code::numerical : pvdf::exit_code::success;
+}
+
 int run_map(const MapCommandOptions& o) {
+  if (!o.atlas_path.empty()) return run_map_from_atlas(o);
   // MPI only when launched by mpirun (or asked for): a plain run needs no MPI runtime.
   std::optional<MpiSession> mpi;
   if (o.force_mpi || MpiSession::launched_by_mpirun()) mpi.emplace();
@@ -426,11 +476,19 @@ PVDF_COMMAND(35, [](CLI::App& root) {
   sub->add_option("--mesh", o->mesh_path,
                   "Start the sweep mesh from this Gmsh mesh (.msh from `pvdfkit mesh`, physical groups of docs/mesh.md); "
                   "it is refined to the sweep's sizes, never coarsened");
+  sub->add_option("--atlas", o->atlas_path,
+                  "Integrate the scene's electrodes over this charge-density atlas (`pvdfkit atlas`, docs/atlas.md) "
+                  "instead of solving: seconds; the atlas fixes grid, forces and FEM settings");
   sub->add_flag("--json", o->json, "Print a JSON summary (counts, model, timings)");
   sub->add_flag("--quiet", o->quiet, "No progress bar");
   sub->add_flag("--mpi", o->force_mpi, "Initialize MPI even when not started by mpirun (singleton)");
   sub->add_option("--stop-after-positions", o->stop_after,
                   "Testing: stop as if killed after N solved positions (checkpoint kept, no map written)")
       ->check(pvdf::app::integer_in(1, 1000000000));
-  return pvdf::app::Subcommand{sub, [o] { return run_map(*o); }};
+  return pvdf::app::Subcommand{sub, [o, sub] {
+    for (const char* flag : {"--spacing-m", "--placement", "--adaptive-levels", "--forces-N", "--region", "--rim-margin-m",
+                             "--model", "--tolerance", "--mesh", "--rim-model", "--direct-solves", "--probe-refinement"})
+      if (sub->count(flag) > 0) o->solve_flags_given.push_back(flag);
+    return run_map(*o);
+  }};
 });

@@ -15,6 +15,7 @@
 // deal.II appears here and in those files only; public headers stay std/Eigen/pvdf.
 #pragma once
 
+#include "pvdf/fem/atlas.hpp"
 #include "pvdf/fem/solver.hpp"
 
 #include "sweep_engine.hpp"
@@ -242,7 +243,27 @@ class FilmSolver {
   MembraneForce membrane_force(const Kinematics& k, const Point<dim>& x) const;
   double charge_density(const MembraneForce& n) const;
 
+  // outputs.cpp: the charge-density atlas (pvdf/fem/atlas.hpp, atlas_sweep.cpp, docs/atlas.md).
+  /// Builds, once for this mesh, the quadrature of every FE cell ∩ atlas cell (the exact
+  /// intersection of the cell's straight-sided quadrilateral with the atlas square,
+  /// electrode_cells.hpp) and returns the geometry of each atlas cell ∩ film, [ny][nx][6]:
+  /// ∫dA, ∫dx, ∫dy, ∫dx², ∫dx·dy, ∫dy² with (dx, dy) = (x − xc, y − yc).
+  void prepare_atlas(const AtlasGrid& grid, std::vector<double>& geometry);
+  /// [ny][nx][3]: ∫q dA, ∫q·dx dA, ∫q·dy dA at the state u of `model`, q = charge_density (C/m²).
+  void atlas_moments(const Vector<double>& u, Model model, std::vector<double>& moments) const;
+
  private:
+  // outputs.cpp: the atlas quadrature (prepare_atlas): per FE cell, its points (unit cell) with
+  // their weight (m²), atlas cell index and offsets from that cell's centre (m).
+  struct AtlasCellPoints {
+    DoFHandler<dim>::active_cell_iterator cell;
+    std::unique_ptr<dealii::FEValues<dim>> values;
+    std::vector<double> jxw, dx, dy;
+    std::vector<std::size_t> atlas_cell;
+  };
+  std::vector<AtlasCellPoints> atlas_points_;
+  std::size_t atlas_n_cells_ = 0;
+
   // setup.cpp
   void refine_initial_mesh();
   // adaptivity.cpp: with bending, cells toward the clamped rim down to its boundary layer (once);

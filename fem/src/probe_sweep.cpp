@@ -76,6 +76,10 @@ detail::SweepMeshSizes initial_mesh_sizes(const pvdf::Scene& scene, const SweepO
   if (options.region_size_m > 0) sizes.region_size_m = options.region_size_m;
   if (options.electrode_size_m > 0) sizes.electrode_size_m = options.electrode_size_m;
   if (options.grading > 0) sizes.grading = options.grading;
+  if (options.sweep_rim_size_m > 0) {  // the whole rim (the atlas, docs/atlas.md §3)
+    sizes.rim_size_m = options.sweep_rim_size_m;
+    sizes.rim_grading = options.rim_grading > 0 ? options.rim_grading : 0.5;
+  }
   return sizes;
 }
 

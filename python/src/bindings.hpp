@@ -46,6 +46,8 @@ void bind_errors(py::module_& m);
 void bind_results(py::module_& m);
 void bind_scene(py::module_& m);
 void bind_fem(py::module_& m);
+/// The charge-density atlas (atlas.cpp; only with the FEM).
+void bind_atlas(py::module_& m);
 void bind_maps(py::module_& m);
 void bind_restore(py::module_& m);
 

@@ -33,6 +33,7 @@ PYBIND11_MODULE(_pvdfkit, m) {
   pp::bind_maps(m);
 #ifdef PVDF_PYTHON_WITH_FEM
   pp::bind_fem(m);
+  pp::bind_atlas(m);
   m.attr("has_fem") = true;
 #else
   m.attr("has_fem") = false;

@@ -52,6 +52,10 @@ struct SweepOptions {
   /// from the bending boundary layer sqrt(D/N) (docs/map-generation.md §9).
   double rim_size_m = 0;
   double rim_grading = 0;
+  /// Grade the sweep mesh itself toward the whole clamped rim down to this size (m), with
+  /// `rim_grading` (0 = 0.5); 0 = not (the default). For a sweep that keeps bending at every probe
+  /// (the charge-density atlas, docs/atlas.md §3), which then needs no rim model.
+  double sweep_rim_size_m = 0;
   /// The rim mesh is graded along one arc of the rim only: the rim is cut into this many equal
   /// sectors (seen from the film centre) and a probe uses the mesh graded along its own sector and
   /// the two neighbours, built when first needed (1 = one mesh graded along the whole rim).

@@ -1,0 +1,139 @@
+// `pvdfkit atlas`: the charge-density atlas of a scene's film (docs/atlas.md) — one FEM probe
+// sweep over the map grid that keeps, per press, the moments of the charge density over a regular
+// grid of square cells, from which `pvdfkit map SCENE --atlas FILE` integrates any electrode layout.
+#include "command.hpp"
+
+#include "pvdf/core/error.hpp"
+#include "pvdf/core/io.hpp"
+#include "pvdf/core/progress.hpp"
+#include "pvdf/core/scene.hpp"
+#include "pvdf/mapping/atlas.hpp"
+
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <memory>
+
+namespace {
+
+struct AtlasCommandOptions {
+  std::string scene_path;
+  std::string output;
+  double spacing_m = 0.002;
+  std::string forces = "1";
+  double tolerance = 0;
+  double cell_m = 0.001;
+  double fe_size_m = 0;
+  double rim_margin_m = 0;
+  int threads = 0;
+  int setup_checks = 3;
+  bool json = false;
+  bool quiet = false;
+};
+
+int run_atlas(const AtlasCommandOptions& o) {
+  const pvdf::Scene scene = pvdf::load_scene(o.scene_path);
+  for (const auto& w : scene.warnings) pvdf::app::warn(w);
+  pvdf::mapping::AtlasOptions options;
+  options.spacing_m = o.spacing_m;
+  options.forces_N = pvdf::app::parse_force_levels(o.forces, "--forces-N");
+  options.tolerance = o.tolerance;
+  options.cell_m = o.cell_m;
+  options.fe_size_m = o.fe_size_m;
+  if (o.rim_margin_m != 0 && o.rim_margin_m < 2 * scene.probe.radius_m) {
+    throw pvdf::InputError("--rim-margin-m " + pvdf::format_g(o.rim_margin_m) + " must be 0 (default) or >= " +
+                           pvdf::format_g(2 * scene.probe.radius_m) + " m, two probe radii");
+  }
+  options.rim_margin_m = o.rim_margin_m;
+  options.threads = o.threads;
+  options.n_setup_checks = o.setup_checks;
+  options.description = "pvdfkit atlas " + o.scene_path;
+  std::unique_ptr<pvdf::Progress> bar;
+  if (!o.quiet) {
+    options.progress = [&bar](std::size_t done, std::size_t total) {
+      if (!bar) bar = std::make_unique<pvdf::Progress>("atlas", total);
+      bar->update(done);
+    };
+  }
+  pvdf::app::OutputLock lock(o.output, "-o/--output");
+  pvdf::mapping::AtlasReport report;
+  const pvdf::mapping::ChargeAtlas atlas = pvdf::mapping::generate_atlas(scene, options, &report);
+  if (bar) bar->finish();
+  pvdf::mapping::write_atlas(o.output, atlas);
+  if (o.json) {
+    nlohmann::json j;
+    j["output"] = o.output;
+    j["n_positions"] = report.n_positions;
+    j["n_points"] = report.n_points;
+    j["n_solved_positions"] = report.n_solved_positions;
+    j["mirror_x"] = report.mirror_x;
+    j["mirror_y"] = report.mirror_y;
+    j["n_failed"] = report.n_failed;
+    j["n_tolerance_not_met"] = report.n_tolerance_not_met;
+    j["estimated_relative_error"] = report.estimated_relative_error;
+    j["model"] = atlas.model;
+    j["model_reason"] = atlas.model_reason;
+    j["tolerance"] = atlas.tolerance;
+    j["n_dofs"] = atlas.n_dofs;
+    j["fe_size_m"] = atlas.fe_size_m;
+    j["cell_m"] = atlas.grid.cell_m;
+    j["n_cells"] = atlas.n_cells();
+    j["spacing_m"] = atlas.spacing_m;
+    j["forces_N"] = atlas.forces_N;
+    j["threads"] = report.threads;
+    j["setup_s"] = report.setup_s;
+    j["wall_s"] = report.wall_s;
+    if (!report.first_failure.empty()) j["first_failure"] = report.first_failure;
+    std::cout << j.dump(2) << '\n';
+  } else {
+    std::printf("%s: %zu positions x %zu force levels, %zu x %zu atlas cells of %g mm\n", o.output.c_str(), report.n_positions,
+                atlas.nf(), atlas.grid.nx, atlas.grid.ny, 1e3 * atlas.grid.cell_m);
+    std::printf("model %s: %s\n", atlas.model.c_str(), atlas.model_reason.c_str());
+    std::printf("%zu positions solved, the others mirror images (x -> -x: %s, y -> -y: %s)\n", report.n_solved_positions,
+                report.mirror_x ? "yes" : "no", report.mirror_y ? "yes" : "no");
+    std::printf("FE mesh: %zu DOFs, cells of %g mm over the whole film; largest per-press estimate %.2g %% "
+                "(%zu presses above the tolerance %g)\n",
+                atlas.n_dofs, 1e3 * atlas.fe_size_m, 100 * report.estimated_relative_error, report.n_tolerance_not_met,
+                atlas.tolerance);
+    std::printf("%d thread(s), setup %.1f s, %.1f s in all\n", report.threads, report.setup_s, report.wall_s);
+  }
+  if (report.n_failed > 0) {
+    std::cerr << "error: " << report.n_failed << " press(es) did not converge and are marked not_converged in " << o.output
+              << " (first: " << report.first_failure << ")\n";
+    return pvdf::exit_code::numerical;
+  }
+  return pvdf::exit_code::success;
+}
+
+}  // namespace
+
+PVDF_COMMAND(36, [](CLI::App& root) {
+  auto* sub = root.add_subcommand("atlas", "Charge-density atlas of a film: one FEM probe sweep from which `map --atlas` "
+                                           "gives the charge map of any electrode layout without a solve (docs/atlas.md)");
+  auto o = std::make_shared<AtlasCommandOptions>();
+  sub->add_option("SCENE", o->scene_path, "Scene file (JSON, docs/scene.md); its electrodes and loads are ignored")->required();
+  sub->add_option("-o,--output", o->output, "Atlas file to write (HDF5, docs/atlas.md)")
+      ->required()
+      ->check(pvdf::app::output_file());
+  sub->add_option("--spacing-m", o->spacing_m, "Probe grid spacing (m); nodes at multiples of it, as `map` (default 0.002)")
+      ->check(pvdf::app::number_in(1e-5, 0.1, "m (the unit is metres: 2 mm is 0.002)"));
+  sub->add_option("--forces-N", o->forces, "Force levels F1,F2,... in N, each in [1e-9, 1e4], distinct (default 1)");
+  sub->add_option("--tolerance", o->tolerance, "Requested relative charge error (default: scene, 0.01)")
+      ->check(pvdf::app::number_in(1e-8, 0.5, "(the rule of the scene key model.tolerance), e.g. 0.01"));
+  sub->add_option("--cell-m", o->cell_m, "Side of the square atlas cells (m) (default 0.001)")
+      ->check(pvdf::app::number_in(1e-5, 0.05, "m (1 mm is 0.001)"));
+  sub->add_option("--fe-size-m", o->fe_size_m,
+                  "FE cell size over the whole film (m) (default 0: min(--cell-m, probe diameter), smaller for tolerances below 0.01)")
+      ->check(pvdf::app::number_in(0, 0.05, "m"));
+  sub->add_option("--rim-margin-m", o->rim_margin_m, "No probe centres closer than this to the rim (m) (default 0: 2 x probe radius)")
+      ->check(pvdf::app::number_in(0, 1, "m"));
+  sub->add_option("--threads", o->threads, "Worker threads (default 0: the cores)")->check(pvdf::app::integer_in(0, 1024));
+  sub->add_option("--setup-checks", o->setup_checks,
+                  "Probe positions at which the setup evaluates its error estimate to size the mesh, 0-3 (default 3)")
+      ->check(pvdf::app::integer_in(0, 3));
+  sub->add_flag("--json", o->json, "Print a JSON summary (counts, model, estimate, timings)");
+  sub->add_flag("--quiet", o->quiet, "No progress bar");
+  return pvdf::app::Subcommand{sub, [o] { return run_atlas(*o); }};
+});

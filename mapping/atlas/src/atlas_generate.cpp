@@ -1,0 +1,281 @@
+// generate_atlas (pvdf/mapping/atlas.hpp, docs/atlas.md §1): the map generator's probe grid (nodes
+// at integer multiples of the spacing inside the film minus the rim margin), swept row by row with
+// warm starts (along the row at each force level; a row's first position warm from the level below),
+// one AtlasSweep per thread, rows handed out in order.
+#include "pvdf/mapping/atlas.hpp"
+
+#include "pvdf/core/constants.hpp"
+#include "pvdf/core/error.hpp"
+#include "pvdf/fem/solver.hpp"
+#include "pvdf/version.hpp"
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <exception>
+#include <limits>
+#include <mutex>
+#include <sstream>
+#include <thread>
+
+namespace pvdf::mapping {
+
+namespace {
+
+std::string num(double v) {
+  std::ostringstream os;
+  os.precision(6);
+  os << v;
+  return os.str();
+}
+
+std::array<double, 4> outline_box(const pvdf::FilmOutline& o) {
+  switch (o.shape) {
+    case pvdf::FilmOutline::Shape::circle: return {-o.radius_m, o.radius_m, -o.radius_m, o.radius_m};
+    case pvdf::FilmOutline::Shape::rectangle: return {-o.size_m[0] / 2, o.size_m[0] / 2, -o.size_m[1] / 2, o.size_m[1] / 2};
+    case pvdf::FilmOutline::Shape::ellipse: return {-o.semi_axes_m[0], o.semi_axes_m[0], -o.semi_axes_m[1], o.semi_axes_m[1]};
+    case pvdf::FilmOutline::Shape::polygon: break;
+  }
+  std::array<double, 4> b{1e300, -1e300, 1e300, -1e300};
+  for (const auto& v : o.vertices_m) {
+    b[0] = std::min(b[0], v[0]);
+    b[1] = std::max(b[1], v[0]);
+    b[2] = std::min(b[2], v[1]);
+    b[3] = std::max(b[3], v[1]);
+  }
+  return b;
+}
+
+
+// Mirror symmetry of the film (docs/atlas.md §3): a circle, rectangle or ellipse centred at the
+// origin with the material's draw direction along x or y is its own mirror image about both axes,
+// so the press at (−x, y) is the mirror image of the press at (x, y) (and likewise in y). Polygons
+// are not examined (no symmetry used).
+bool film_mirror_symmetric(const pvdf::Scene& scene) {
+  if (scene.membrane.outline.shape == pvdf::FilmOutline::Shape::polygon) return false;
+  const double quarter = std::remainder(scene.material.draw_angle_rad, 0.5 * pvdf::pi);
+  return std::abs(quarter) <= 1e-12;
+}
+
+}  // namespace
+
+// The provenance strings check_atlas_fits_scene compares: one home for what "the same film" means.
+void fill_film_provenance(ChargeAtlas& atlas, const pvdf::Scene& scene) {
+  nlohmann::json j = pvdf::scene_to_json(scene);
+  nlohmann::json film = j["membrane"];
+  film.erase("thickness_m");
+  atlas.film_json = film.dump();
+  atlas.material_json = j["material"].dump();
+  atlas.probe_json = j["probe"].dump();
+  atlas.thickness_m = scene.membrane.thickness_m;
+}
+
+ChargeAtlas generate_atlas(const pvdf::Scene& scene, const AtlasOptions& o, AtlasReport* report) {
+  const auto t_start = std::chrono::steady_clock::now();
+  ChargeAtlas atlas;
+  if (!(o.spacing_m > 0) || !std::isfinite(o.spacing_m)) {
+    throw pvdf::InputError("atlas: spacing " + num(o.spacing_m) + " m must be > 0 (e.g. 0.002)");
+  }
+  if (o.forces_N.empty()) throw pvdf::InputError("atlas: no force level; give at least one (e.g. 1 N)");
+  std::vector<double> forces = o.forces_N;
+  std::sort(forces.begin(), forces.end());
+  for (double f : forces) {
+    if (!(f > 0) || !std::isfinite(f)) throw pvdf::InputError("atlas: force level " + num(f) + " N must be > 0");
+  }
+  const double tolerance = o.tolerance > 0 ? o.tolerance : scene.model.tolerance;
+  if (!(tolerance > 0 && tolerance < 1)) throw pvdf::InputError("atlas: tolerance " + num(tolerance) + " must be in (0, 1)");
+  if (!(o.rim_margin_m >= 0)) throw pvdf::InputError("atlas: rim margin " + num(o.rim_margin_m) + " m must be >= 0");
+  const double margin = o.rim_margin_m > 0 ? o.rim_margin_m : 2 * scene.probe.radius_m;
+
+  // 1. The probe grid, as the map generator lays it out.
+  const double s = o.spacing_m;
+  const auto box = outline_box(scene.membrane.outline);
+  const long i0 = long(std::ceil(box[0] / s - 1e-9)), j0 = long(std::ceil(box[2] / s - 1e-9));
+  const long i1 = long(std::floor(box[1] / s + 1e-9)), j1 = long(std::floor(box[3] / s + 1e-9));
+  if (i1 - i0 < 1 || j1 - j0 < 1) throw pvdf::InputError("atlas: spacing " + num(s) + " m leaves fewer than 2 x 2 grid nodes; reduce it");
+  for (long i = i0; i <= i1; ++i) atlas.x_m.push_back(double(i) * s);
+  for (long j = j0; j <= j1; ++j) atlas.y_m.push_back(double(j) * s);
+  const std::size_t nx = atlas.nx(), ny = atlas.ny(), nf = forces.size();
+  if (double(nx) * double(ny) * double(nf) > 2e6) throw pvdf::InputError("atlas: spacing " + num(s) + " m gives too many presses; use a larger one");
+  atlas.mask.assign(nx * ny, 0);
+  std::size_t n_positions = 0;
+  for (std::size_t j = 0; j < ny; ++j)
+    for (std::size_t i = 0; i < nx; ++i)
+      if (scene.membrane.outline.contains({atlas.x_m[i], atlas.y_m[j]}, margin)) {
+        atlas.mask[j * nx + i] = 1;
+        ++n_positions;
+      }
+  // Mirror images: solved only at x >= 0 (and y >= 0), the rest copied (step 4).
+  const bool symmetric = film_mirror_symmetric(scene);
+  const bool mirror_x = symmetric && i0 == -i1, mirror_y = symmetric && j0 == -j1;
+  auto canonical = [&](std::size_t i, std::size_t j) {
+    return (!mirror_x || atlas.x_m[i] >= 0) && (!mirror_y || atlas.y_m[j] >= 0);
+  };
+  atlas.forces_N = forces;
+  atlas.spacing_m = s;
+  atlas.rim_margin_m = margin;
+  atlas.tolerance = tolerance;
+
+  // 2. One sweep per thread; the first here, so that bad input fails before the threads start.
+  pvdf::fem::AtlasSweepOptions so;
+  so.solver = pvdf::fem::options_from_scene(scene);
+  so.solver.tolerance = tolerance;
+  so.forces_N = forces;
+  so.rim_margin_m = margin;
+  so.n_setup_checks = o.n_setup_checks;
+  so.cell_m = o.cell_m;
+  so.fe_size_m = o.fe_size_m;
+  int threads = o.threads > 0 ? o.threads : int(std::max(1u, std::thread::hardware_concurrency()));
+  threads = std::max(1, std::min<int>(threads, int(ny)));
+  std::vector<std::unique_ptr<pvdf::fem::AtlasSweep>> sweeps;
+  sweeps.push_back(std::make_unique<pvdf::fem::AtlasSweep>(scene, so));
+  const pvdf::fem::AtlasSweep& first = *sweeps.front();
+  const pvdf::fem::SweepSetup setup = first.setup();
+  atlas.grid = first.grid();
+  atlas.geometry = first.cell_geometry();
+  atlas.fe_size_m = first.fe_size_m();
+  atlas.n_dofs = setup.n_dofs;
+  atlas.model = pvdf::fem::model_name(setup.model);
+  atlas.model_reason = first.model_reason();
+  atlas.error_estimator =
+      "per press: the sweep's adjoint-weighted residual estimates (discretization + bending left out, by magnitude) of the "
+      "charges of the reference electrodes Q1..Q4 (the film's quadrants); estimated_relative_error = max_k err_k / max_k |Q_k|";
+  atlas.integration_error_rule =
+      "per electrode and press: sum over the atlas cells the electrode covers partly of |linear - constant reconstruction| "
+      "of its share (fully covered cells are exact)";
+  for (const auto& e : first.reference_electrodes()) atlas.reference_names.push_back(e.name);
+  const std::size_t nr = atlas.nr(), nc = atlas.n_cells();
+  atlas.scene_json = scene.original.is_null() ? pvdf::scene_to_json(scene).dump() : scene.original.dump();
+  atlas.pvdfkit_version = pvdf::version_string;
+  atlas.description = o.description.empty() ? "pvdfkit atlas" : o.description;
+  fill_film_provenance(atlas, scene);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const std::size_t n_points = nf * ny * nx;
+  atlas.status.assign(n_points, std::uint8_t(PointStatus::outside));
+  atlas.moments.assign(n_points * nc * 3, nan);
+  atlas.deflection_at_load_m.assign(n_points, nan);
+  atlas.estimated_relative_error.assign(n_points, nan);
+  atlas.reference_charge_C.assign(n_points * nr, nan);
+  atlas.reference_charge_error_C.assign(n_points * nr, nan);
+  for (std::size_t f = 0; f < nf; ++f)
+    for (std::size_t p = 0; p < nx * ny; ++p)
+      if (atlas.mask[p]) atlas.status[f * nx * ny + p] = std::uint8_t(PointStatus::not_computed);
+  for (int t = 1; t < threads; ++t) sweeps.push_back(std::make_unique<pvdf::fem::AtlasSweep>(scene, so));
+  const double setup_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+
+  // 3. Rows, each position all levels; results written to disjoint slots of the atlas.
+  std::size_t n_canonical = 0;
+  for (std::size_t j = 0; j < ny; ++j)
+    for (std::size_t i = 0; i < nx; ++i) n_canonical += atlas.mask[j * nx + i] && canonical(i, j);
+  std::atomic<std::size_t> next_row{0}, done{0};
+  std::mutex report_mutex;
+  std::string first_failure;
+  std::exception_ptr error;
+  auto work = [&](pvdf::fem::AtlasSweep& sweep) {
+    try {
+      for (std::size_t j = next_row++; j < ny; j = next_row++) {
+        std::vector<pvdf::fem::SweepState> along(nf);  // last state of the row at each level
+        for (std::size_t i = 0; i < nx; ++i) {
+          if (!atlas.mask[j * nx + i] || !canonical(i, j)) continue;
+          for (std::size_t f = 0; f < nf; ++f) {
+            const pvdf::fem::SweepState* warm = !along[f].dofs.empty() ? &along[f] : (f > 0 && !along[f - 1].dofs.empty() ? &along[f - 1] : nullptr);
+            pvdf::fem::SweepState next;
+            const pvdf::fem::AtlasPress press = sweep.solve(atlas.x_m[i], atlas.y_m[j], forces[f], warm, &next);
+            const std::size_t p = atlas.point(f, j, i);
+            const auto& sol = press.solution;
+            if (!pvdf::fem::usable(sol.status)) {
+              atlas.status[p] = std::uint8_t(PointStatus::not_converged);
+              std::lock_guard<std::mutex> lock(report_mutex);
+              if (first_failure.empty())
+                first_failure = "(" + num(atlas.x_m[i]) + ", " + num(atlas.y_m[j]) + ") m, " + num(forces[f]) + " N: " + sol.message;
+              along[f] = {};
+              continue;
+            }
+            atlas.status[p] = std::uint8_t(PointStatus::ok);
+            std::copy(press.moments.begin(), press.moments.end(), atlas.moments.begin() + long(p * nc * 3));
+            atlas.deflection_at_load_m[p] = sol.deflection_at_load_m;
+            atlas.estimated_relative_error[p] = sol.estimated_relative_error;
+            for (std::size_t k = 0; k < nr && k < sol.charge_C.size(); ++k) {
+              atlas.reference_charge_C[p * nr + k] = sol.charge_C[k];
+              atlas.reference_charge_error_C[p * nr + k] = k < sol.charge_error_C.size() ? sol.charge_error_C[k] : nan;
+            }
+            along[f] = std::move(next);
+          }
+          const std::size_t d = ++done;
+          if (o.progress) {
+            std::lock_guard<std::mutex> lock(report_mutex);
+            o.progress(d, n_canonical);
+          }
+        }
+      }
+    } catch (...) {
+      std::lock_guard<std::mutex> lock(report_mutex);
+      if (!error) error = std::current_exception();
+      next_row = ny;
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 1; t < threads; ++t) pool.emplace_back(work, std::ref(*sweeps[std::size_t(t)]));
+  work(*sweeps.front());
+  for (auto& th : pool) th.join();
+  if (error) std::rethrow_exception(error);
+
+  // 4. Mirror images: cell (ci, cj) of the image is cell (ncx−1−ci, cj) of the source under x → −x
+  // (m1 changes sign), likewise in y; the reference quadrants are permuted (Q1 ↔ Q2, Q3 ↔ Q4 under
+  // x → −x; Q1 ↔ Q4, Q2 ↔ Q3 under y → −y). The atlas grid is centred on the origin (atlas_grid_for).
+  const std::size_t cx = atlas.grid.nx, cy = atlas.grid.ny;
+  for (std::size_t f = 0; f < nf; ++f)
+    for (std::size_t j = 0; j < ny; ++j)
+      for (std::size_t i = 0; i < nx; ++i) {
+        if (!atlas.mask[j * nx + i] || canonical(i, j)) continue;
+        const bool fx = mirror_x && atlas.x_m[i] < 0, fy = mirror_y && atlas.y_m[j] < 0;
+        const std::size_t si = fx ? nx - 1 - i : i, sj = fy ? ny - 1 - j : j;
+        const std::size_t p = atlas.point(f, j, i), sp = atlas.point(f, sj, si);
+        atlas.status[p] = atlas.status[sp];
+        atlas.deflection_at_load_m[p] = atlas.deflection_at_load_m[sp];
+        atlas.estimated_relative_error[p] = atlas.estimated_relative_error[sp];
+        for (std::size_t k = 0; k < nr; ++k) {
+          std::size_t sk = k;
+          if (nr == 4 && fx) sk = std::size_t(std::array<int, 4>{1, 0, 3, 2}[sk]);
+          if (nr == 4 && fy) sk = std::size_t(std::array<int, 4>{3, 2, 1, 0}[sk]);
+          atlas.reference_charge_C[p * nr + k] = atlas.reference_charge_C[sp * nr + sk];
+          atlas.reference_charge_error_C[p * nr + k] = atlas.reference_charge_error_C[sp * nr + sk];
+        }
+        for (std::size_t cj = 0; cj < cy; ++cj)
+          for (std::size_t ci = 0; ci < cx; ++ci) {
+            const std::size_t sc = (fy ? cy - 1 - cj : cj) * cx + (fx ? cx - 1 - ci : ci), c = cj * cx + ci;
+            const double* src = &atlas.moments[(sp * nc + sc) * 3];
+            double* dst = &atlas.moments[(p * nc + c) * 3];
+            dst[0] = src[0];
+            dst[1] = fx ? -src[1] : src[1];
+            dst[2] = fy ? -src[2] : src[2];
+          }
+      }
+
+  if (report) {
+    AtlasReport r;
+    r.n_positions = n_positions;
+    r.n_points = n_positions * nf;
+    for (std::size_t p = 0; p < n_points; ++p) {
+      if (atlas.status[p] == std::uint8_t(PointStatus::not_converged)) ++r.n_failed;
+      if (atlas.status[p] == std::uint8_t(PointStatus::ok)) {
+        const double e = atlas.estimated_relative_error[p];
+        if (std::isfinite(e)) r.estimated_relative_error = std::max(r.estimated_relative_error, e);
+        if (!(e <= tolerance)) ++r.n_tolerance_not_met;
+      }
+    }
+    r.first_failure = first_failure;
+    r.n_solved_positions = n_canonical;
+    r.mirror_x = mirror_x;
+    r.mirror_y = mirror_y;
+    r.setup_s = setup_s;
+    r.threads = threads;
+    r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+    *report = r;
+  }
+  return atlas;
+}
+
+}  // namespace pvdf::mapping
