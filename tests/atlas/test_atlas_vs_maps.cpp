@@ -23,7 +23,7 @@ using namespace pvdf::mapping;
 
 namespace {
 
-const double tolerance = 0.02;
+const double tolerance = 0.04;
 
 nlohmann::json film_json() {
   return nlohmann::json::parse(R"({
@@ -32,7 +32,7 @@ nlohmann::json film_json() {
                  "draw_angle_deg": 0.0, "d31_C_per_N": 6.5e-12, "d32_C_per_N": 0.65e-12},
     "electrodes": [{"name": "A", "center_m": [0.0, 0.0], "size_m": [0.004, 0.004]}],
     "probe": {"radius_m": 0.00075},
-    "model": {"kinematics": "auto", "tolerance": 0.02, "max_refinements": 0}
+    "model": {"kinematics": "auto", "tolerance": 0.04, "max_refinements": 0}
   })");
 }
 
@@ -72,7 +72,7 @@ TEST_CASE("maps read from the atlas agree with direct FEM maps within their stat
   ao.forces_N = {1.0};
   ao.tolerance = tolerance;
   ao.cell_m = 0.001;
-  ao.threads = 2;
+  ao.threads = 1;  // one sweep setup (a second thread would build its own sweep mesh again)
   AtlasReport ar;
   const double t_atlas = cpu_s();
   const auto wall0 = std::chrono::steady_clock::now();

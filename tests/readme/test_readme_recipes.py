@@ -5,8 +5,10 @@ Reads the fenced `sh` blocks of README.md's section "What do you want to do?", j
 lines, and runs every command with bash from a scratch folder that looks like the repository's top
 folder (`build/` and `examples/` are links to the real ones, `out/` is fresh), so each command runs
 verbatim. Commands listed in NOT_IN_CI are not run here, each for the reason given (they are
-printed); every other command must exit 0. Then the numbers the README quotes for the fit recipe
-are parsed from the README's prose and compared with what that run printed, to the digits quoted.
+printed); every other command must exit 0. The lookup recipe reads the main job's 4 mm map
+`out/seed001/map.h5`: it is made first exactly as scripts/main-job's step 4 makes it (about a minute).
+Then the numbers the README quotes for the fit and lookup recipes are parsed from the README's prose
+and compared with what that run printed, to the digits quoted.
 
 Usage: test_readme_recipes.py SOURCE_DIR BUILD_DIR
 """
@@ -19,8 +21,6 @@ import tempfile
 # Commands of the recipes that CI does not run, matched by a fragment of the command, with why.
 NOT_IN_CI = {
     "pvdfkit design": "two FEM maps at 4 mm: tens of minutes (measured in the README's own paragraph)",
-    "pvdfkit locate out/seed001/map.h5": "reads the main job's 4 mm map (scripts/main-job makes it; minutes of FEM)",
-    "pvdfkit export-map out/seed001/map.h5": "reads the main job's 4 mm map",
     "cmake --install": "installs into $HOME; the deploy build is tested by ctest deploy_example",
     "cmake -S examples/deploy": "the deploy build is tested by ctest deploy_example",
     "build-deploy/locate_flat": "needs the deploy build and the exported map above",
@@ -63,6 +63,13 @@ def main():
         os.symlink(os.path.abspath(build), os.path.join(top, "build"))
         os.symlink(os.path.abspath(os.path.join(source, "examples")), os.path.join(top, "examples"))
         os.mkdir(os.path.join(top, "out"))
+        # The main job's step 4 (scripts/main-job): the 4 mm seed-001 map the lookup recipe reads.
+        main_job_map = ("examples/mapping/seed001-reproduction.sh out/seed001 --spacing-m 0.004 "
+                        "--region -0.024,0.024,-0.024,0.024 --pvdfkit build/app/pvdfkit")
+        print(f"main job's map: {main_job_map}", flush=True)
+        r = subprocess.run(["bash", "-c", main_job_map], cwd=top, capture_output=True, text=True, timeout=900)
+        if r.returncode != 0:
+            failures.append(f"exit {r.returncode}: {main_job_map}\n{r.stderr[-2000:]}")
         for cmd in commands:
             reason = next((why for frag, why in NOT_IN_CI.items() if frag in cmd), None)
             if reason:
@@ -101,10 +108,44 @@ def main():
             print(f"README quotes {label} {text}; this run printed {value * scale:.6g}: {'agrees' if ok else 'DIFFERS'}")
             if not ok:
                 failures.append(f"README quotes {label} = {text}, the run printed {value * scale:.6g}")
+    # The lookup recipe's quoted answers against its run (JSON on stdout).
+    import json
+    locate_cmds = [c for c in commands if "pvdfkit locate out/seed001/map.h5" in c]
+    unknown = next((c for c in locate_cmds if "--force-N" not in c), None)
+    known = next((c for c in locate_cmds if "--force-N" in c), None)
+    checks = []
+    if unknown and known:
+        q = r"With the force unknown it answers \(([−-]?[0-9.]+), ([−-]?[0-9.]+)\) mm at ([0-9.]+) N with σ ([0-9.]+) / ([0-9.]+) mm"
+        m = re.search(q, section)
+        if not m:
+            failures.append(f"README: the force-unknown answer was not found (pattern {q!r}); update this test with the README")
+        else:
+            checks.append((unknown, m.groups(), ["x_m", "y_m", "force_N", "sigma_x_m", "sigma_y_m"], [1e3, 1e3, 1, 1e3, 1e3]))
+        q = r"With the force known it answers \(([−-]?[0-9.]+), ([−-]?[0-9.]+)\) mm with σ ([0-9.]+) / ([0-9.]+) mm"
+        m = re.search(q, section)
+        if not m:
+            failures.append(f"README: the force-known answer was not found (pattern {q!r}); update this test with the README")
+        else:
+            checks.append((known, m.groups(), ["x_m", "y_m", "sigma_x_m", "sigma_y_m"], [1e3, 1e3, 1e3, 1e3]))
+    else:
+        failures.append("README: the two locate commands of the lookup recipe were not found")
+    for cmd, texts, keys, scales in checks:
+        out = outputs.get(cmd, "")
+        try:
+            answer = json.loads(out[out.index("{"):out.rindex("}") + 1])
+        except ValueError:
+            failures.append(f"no JSON answer from: {cmd}")
+            continue
+        for text, key, scale in zip(texts, keys, scales):
+            value = answer.get(key)
+            ok = isinstance(value, (int, float)) and agrees(text, value * scale)
+            print(f"README quotes {key} {text}; `{cmd[-40:]}` printed {value}: {'agrees' if ok else 'DIFFERS'}")
+            if not ok:
+                failures.append(f"README quotes {key} = {text} for `{cmd}`, the run printed {value}")
     if failures:
         print("\nFAILED:\n" + "\n".join(failures))
         return 1
-    print(f"\nall {len(outputs)} recipe commands run in CI exited 0; the fit's quoted numbers agree")
+    print(f"\nall {len(outputs)} recipe commands run in CI exited 0; the fit's and the lookup's quoted numbers agree")
     return 0
 
 
