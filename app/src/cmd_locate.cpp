@@ -135,6 +135,7 @@ void print_location_json(const Location& r, const Locator& locator, const Charge
     j["sigma_x_m"] = r.sigma_x_m;
     j["sigma_y_m"] = r.sigma_y_m;
     j["sigma_F_N"] = r.sigma_F_N;
+    j["map_error_share"] = r.map_error_share;
     j["n_solutions"] = r.n_solutions;
     j["probability"] = r.probability;
     j["p_best"] = r.probability;
@@ -164,6 +165,11 @@ void print_location_text(const LocateOptions& o, const Location& r, const Charge
               o.force_N > 0 ? " (given)" : "");
   std::printf("residual = %.3g (noise units)\nprobability = %.3g\nflags: %s\n", r.residual, r.probability,
               flags_text(r.flags).c_str());
+  if (r.map_error_share > 0.5) {
+    std::printf("the +- are %.0f %% the map's own error between its nodes, not the charge noise: a finer map "
+                "(smaller --spacing-m) would narrow them (docs/lookup.md section 1.10)\n",
+                100 * r.map_error_share);
+  }
   for (int a = 0; a < r.n_alternatives; ++a) {
     const auto& alt = r.alternatives[std::size_t(a)];
     std::printf("also fits: x = %.4f mm, y = %.4f mm, F = %.5g N, residual %.3g, probability %.3g\n",

@@ -251,6 +251,12 @@ void print_map_text(const MapCommandOptions& o, const ChargeMap& map, const MapR
   std::printf("solved %zu, scaled %zu (checks %zu, failed %zu, worst %.3g), mirrored %zu, resumed %zu, failed %zu\n",
               report.n_solved, report.n_scaled, report.n_scaling_checks, report.n_scaling_checks_failed,
               report.max_scaling_check_error, report.n_mirrored, report.n_resumed, report.n_failed);
+  if (report.n_scaling_checks > 0 && report.n_scaled == 0 && report.n_scaling_checks_failed > 0) {
+    // Say what "scaled 0" cost: every level was solved because the membrane law missed the tolerance.
+    std::printf("force scaling (Q ~ F^(2/3), w ~ F^(1/3) from the largest level) not used: %zu of %zu checks off by up to "
+                "%.3g %% (pre-tension or bending breaks the membrane law), so every force level was solved\n",
+                report.n_scaling_checks_failed, report.n_scaling_checks, 100 * report.max_scaling_check_error);
+  }
   std::printf("model %s: %s\n", report.model.c_str(), report.model_reason.c_str());
   std::printf("estimated error (largest per-node estimate): charge %.2g %%, deflection at the load %.2g %%; "
               "%zu points above the tolerance (tolerance_not_met)\n",

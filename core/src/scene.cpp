@@ -152,6 +152,23 @@ double FilmOutline::characteristic_radius_m() const {
   return 0;
 }
 
+std::array<double, 4> FilmOutline::bounding_box_m() const {
+  switch (shape) {
+    case Shape::circle: return {-radius_m, radius_m, -radius_m, radius_m};
+    case Shape::rectangle: return {-size_m[0] / 2, size_m[0] / 2, -size_m[1] / 2, size_m[1] / 2};
+    case Shape::ellipse: return {-semi_axes_m[0], semi_axes_m[0], -semi_axes_m[1], semi_axes_m[1]};
+    case Shape::polygon: break;
+  }
+  std::array<double, 4> b{1e300, -1e300, 1e300, -1e300};
+  for (const auto& v : vertices_m) {
+    b[0] = std::min(b[0], v[0]);
+    b[1] = std::max(b[1], v[0]);
+    b[2] = std::min(b[2], v[1]);
+    b[3] = std::max(b[3], v[1]);
+  }
+  return b;
+}
+
 // ---------------------------------------------------------------------------- Electrode
 
 std::vector<Point2> Electrode::outline(int n_circle) const {

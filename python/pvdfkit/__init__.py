@@ -55,6 +55,7 @@ from ._pvdfkit import (  # noqa: F401  (re-exported API)
 has_fem = _pvdfkit.has_fem
 if has_fem:
     from ._pvdfkit import ProbeSolutions, ProbeSweep, SolveResult, generate_map  # noqa: F401
+    from ._pvdfkit import make_atlas, map_from_atlas  # noqa: F401  (docs/atlas.md)
 
 
 def _json_text(value, source):
@@ -334,4 +335,4 @@ __all__ = [
     "Scene", "default_scene", "design", "flags_text", "grid_points", "load_scene", "rank_designs", "read_map",
     "read_measurements", "restore", "scene_to_dict", "solve", "synthetic_map", "validate_map",
     "write_map",
-] + (["ProbeSolutions", "ProbeSweep", "SolveResult", "generate_map"] if has_fem else [])
+] + (["ProbeSolutions", "ProbeSweep", "SolveResult", "generate_map", "make_atlas", "map_from_atlas"] if has_fem else [])

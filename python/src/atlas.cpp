@@ -2,6 +2,7 @@
 // map_from_atlas (what `pvdfkit map SCENE --atlas FILE` does), same checks and messages.
 #include "arguments.hpp"
 #include "bindings.hpp"
+#include "pvdf/core/io.hpp"
 
 #include "pvdf/core/error.hpp"
 #include "pvdf/mapping/atlas.hpp"
@@ -12,6 +13,7 @@ void bind_atlas(py::module_& m) {
   m.def("make_atlas", [](py::object scene_arg, const std::string& path, double spacing_m, std::vector<double> forces_N,
                          double tolerance, double cell_m, int threads) {
           const pvdf::Scene scene = arg::scene(scene_arg, "make_atlas: scene");
+          pvdf::check_output_path(path, "make_atlas: path");  // before the sweep, not after it
           pvdf::mapping::AtlasOptions o;
           o.spacing_m = spacing_m;
           o.forces_N = std::move(forces_N);

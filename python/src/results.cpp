@@ -45,6 +45,7 @@ Units: m, N; sigmas from the charge-noise model, (J^T W J)^-1.)doc")
       .def_property_readonly("sigma_x_m", [=](const LocationBatch& b) { return column(b.items, [](const Location& l) { return l.sigma_x_m; }, has); }, "1-sigma of x (m), shape (N,); 0 where ill_conditioned")
       .def_property_readonly("sigma_y_m", [=](const LocationBatch& b) { return column(b.items, [](const Location& l) { return l.sigma_y_m; }, has); }, "1-sigma of y (m), shape (N,)")
       .def_property_readonly("sigma_F_N", [=](const LocationBatch& b) { return column(b.items, [](const Location& l) { return l.sigma_F_N; }, has); }, "1-sigma of the force (N), shape (N,)")
+      .def_property_readonly("map_error_share", [=](const LocationBatch& b) { return column(b.items, [](const Location& l) { return l.map_error_share; }, has); }, "share of the sigmas that is the map's own error, not the charge noise: mean over electrodes of e^2/(sigma^2 + e^2) (0..1), shape (N,)")
       .def_property_readonly("residual", [=](const LocationBatch& b) { return column(b.items, [](const Location& l) { return l.residual; }, always); }, "chi = sqrt(sum((Q_k - q_k)/sigma_k)^2) at the solution (noise units), shape (N,)")
       .def_property_readonly("flags", [](const LocationBatch& b) {
         py::array_t<std::uint32_t> out(py::ssize_t(b.items.size()));

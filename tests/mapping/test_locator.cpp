@@ -504,6 +504,10 @@ TEST_CASE("the map's own charge error widens the reported sigma, and only where 
   CHECK(b.y_m == a.y_m);
   CHECK(b.sigma_x_m == Approx(std::sqrt(10.0) * a.sigma_x_m).epsilon(1e-2));
   CHECK(b.sigma_y_m == Approx(std::sqrt(10.0) * a.sigma_y_m).epsilon(1e-2));
+  // And the answer says how much of its σ that error is: e²/(σ² + e²) = 9/10 at every electrode,
+  // none without it.
+  CHECK(a.map_error_share == 0.0);
+  CHECK(b.map_error_share == Approx(0.9).epsilon(1e-3));
   // A wrong size is refused.
   map.estimated_charge_error_C.resize(3);
   CHECK_THROWS_AS(Locator(map), pvdf::InputError);

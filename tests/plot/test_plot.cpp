@@ -2,6 +2,7 @@
 // the data must land (Figure::data_to_pixel) and against the colour maps; contour extraction
 // against an analytic circle; degenerate data must never throw; SVG and PDF files open and hold
 // the figure's text.
+#include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/plot/plot.hpp"
 
@@ -709,7 +710,7 @@ TEST_CASE("a field domain ends the field on the mapped area's curve, not on the 
       g.values.push_back(std::hypot(x, y) <= 0.7 + 1e-9 ? x + 2 : std::numeric_limits<double>::quiet_NaN());
     }
   std::vector<std::array<double, 2>> disc;
-  for (int k = 0; k < 256; ++k) disc.push_back({std::cos(2 * M_PI * k / 256), std::sin(2 * M_PI * k / 256)});
+  for (int k = 0; k < 256; ++k) disc.push_back({std::cos(2 * pvdf::pi * k / 256), std::sin(2 * pvdf::pi * k / 256)});
   const auto edge_radii = [&](bool with_domain) {
     pvdf::plot::Figure fig(600, 600);
     auto& ax = fig.axes();
@@ -722,7 +723,7 @@ TEST_CASE("a field domain ends the field on the mapped area's curve, not on the 
     const double px_per_unit = e[0] - c[0];
     std::vector<double> radii;  // per angle: the last coloured radius along the ray, in px
     for (int a = 0; a < 72; ++a) {
-      const double t = 2 * M_PI * (a + 0.37) / 72;
+      const double t = 2 * pvdf::pi * (a + 0.37) / 72;
       double last = 0;
       for (double r = 0.3 * px_per_unit; r < 0.95 * px_per_unit; r += 0.25) {
         const int x = static_cast<int>(c[0] + r * std::cos(t)), y = static_cast<int>(c[1] - r * std::sin(t));

@@ -215,3 +215,14 @@ def test_to_dict_is_the_command_line_json(tmp_path):
     assert not {"assembly_s", "linear_solve_s", "setup_s"} & set(summary)
     for key in ("status", "model", "n_dofs", "n_cells", "newton_iterations", "refinement_cycles", "error_estimator"):
         assert summary[key] == cl[key], key
+
+
+def test_atlas_functions_refuse_bad_input_before_any_work(tmp_path):
+    """make_atlas / map_from_atlas (docs/atlas.md) are exported and refuse bad paths at once (their
+    agreement with direct maps is tests/atlas/test_atlas_vs_maps, in C++)."""
+    scene = pvdfkit.default_scene()
+    missing = str(tmp_path / "no-such.atlas.h5")
+    with pytest.raises(pvdfkit.InputError, match="no-such.atlas.h5"):
+        pvdfkit.map_from_atlas(scene, missing)
+    with pytest.raises(pvdfkit.InputError, match="make_atlas: path"):
+        pvdfkit.make_atlas(scene, str(tmp_path / "no-such-folder" / "film.atlas.h5"))

@@ -31,24 +31,6 @@ std::string num(double v) {
   return os.str();
 }
 
-std::array<double, 4> outline_box(const pvdf::FilmOutline& o) {
-  switch (o.shape) {
-    case pvdf::FilmOutline::Shape::circle: return {-o.radius_m, o.radius_m, -o.radius_m, o.radius_m};
-    case pvdf::FilmOutline::Shape::rectangle: return {-o.size_m[0] / 2, o.size_m[0] / 2, -o.size_m[1] / 2, o.size_m[1] / 2};
-    case pvdf::FilmOutline::Shape::ellipse: return {-o.semi_axes_m[0], o.semi_axes_m[0], -o.semi_axes_m[1], o.semi_axes_m[1]};
-    case pvdf::FilmOutline::Shape::polygon: break;
-  }
-  std::array<double, 4> b{1e300, -1e300, 1e300, -1e300};
-  for (const auto& v : o.vertices_m) {
-    b[0] = std::min(b[0], v[0]);
-    b[1] = std::max(b[1], v[0]);
-    b[2] = std::min(b[2], v[1]);
-    b[3] = std::max(b[3], v[1]);
-  }
-  return b;
-}
-
-
 // Mirror symmetry of the film (docs/atlas.md §3): a circle, rectangle or ellipse centred at the
 // origin with the material's draw direction along x or y is its own mirror image about both axes,
 // so the press at (−x, y) is the mirror image of the press at (x, y) (and likewise in y). Polygons
@@ -91,7 +73,7 @@ ChargeAtlas generate_atlas(const pvdf::Scene& scene, const AtlasOptions& o, Atla
 
   // 1. The probe grid, as the map generator lays it out.
   const double s = o.spacing_m;
-  const auto box = outline_box(scene.membrane.outline);
+  const auto box = scene.membrane.outline.bounding_box_m();
   const long i0 = long(std::ceil(box[0] / s - 1e-9)), j0 = long(std::ceil(box[2] / s - 1e-9));
   const long i1 = long(std::floor(box[1] / s + 1e-9)), j1 = long(std::floor(box[3] / s + 1e-9));
   if (i1 - i0 < 1 || j1 - j0 < 1) throw pvdf::InputError("atlas: spacing " + num(s) + " m leaves fewer than 2 x 2 grid nodes; reduce it");

@@ -66,8 +66,6 @@ struct Grid {
   double spacing = 0;
 };
 
-/// Bounding box {xmin, xmax, ymin, ymax} (m) of the film outline.
-std::array<double, 4> outline_box(const FilmOutline& o);
 
 // Row blocks of tasks: the unit of work, of checkpointing and of distribution.
 struct Task {

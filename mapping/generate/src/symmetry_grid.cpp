@@ -83,26 +83,6 @@ Symmetry detect_symmetry(const pvdf::Scene& scene, bool wanted) {
   return s;
 }
 
-std::array<double, 4> outline_box(const FilmOutline& o) {
-  switch (o.shape) {
-    case FilmOutline::Shape::circle: return {-o.radius_m, o.radius_m, -o.radius_m, o.radius_m};
-    case FilmOutline::Shape::rectangle: return {-o.size_m[0] / 2, o.size_m[0] / 2, -o.size_m[1] / 2, o.size_m[1] / 2};
-    case FilmOutline::Shape::ellipse:
-      return {-o.semi_axes_m[0], o.semi_axes_m[0], -o.semi_axes_m[1], o.semi_axes_m[1]};
-    case FilmOutline::Shape::polygon: {
-      std::array<double, 4> b{1e300, -1e300, 1e300, -1e300};
-      for (const auto& v : o.vertices_m) {
-        b[0] = std::min(b[0], v[0]);
-        b[1] = std::max(b[1], v[0]);
-        b[2] = std::min(b[2], v[1]);
-        b[3] = std::max(b[3], v[1]);
-      }
-      return b;
-    }
-  }
-  return {0, 0, 0, 0};
-}
-
 void Generator::validate_options() {
   if (!(o_.spacing_m > 0) || !std::isfinite(o_.spacing_m)) {
     throw InputError("map: grid spacing " + num(o_.spacing_m) + " m must be > 0, e.g. 0.001 (MapOptions::spacing_m)");
@@ -151,7 +131,7 @@ void Generator::validate_options() {
 
 void Generator::build_grid() {
   const double s = o_.spacing_m;
-  const auto box = o_.region_m ? *o_.region_m : outline_box(scene_.membrane.outline);
+  const auto box = o_.region_m ? *o_.region_m : scene_.membrane.outline.bounding_box_m();
   grid_.spacing = s;
   grid_.i0 = long(std::ceil(box[0] / s - 1e-9));
   grid_.j0 = long(std::ceil(box[2] / s - 1e-9));

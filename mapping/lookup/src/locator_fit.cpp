@@ -518,7 +518,7 @@ PVDF_CLONES Location Locator::finish(const Query& Q, std::array<Fit, 8>& fits, i
   }
   Fit& b = fits[std::size_t(best)];
   if (b.chi2 <= limit) b.log_widen = valley_sigma(Q, b);
-  fill_main(b, out);
+  fill_main(Q, b, out);
   if (b.chi2 > limit) {
     if (b.blocked) {
       out = Location{};
@@ -568,7 +568,7 @@ PVDF_CLONES Location Locator::finish(const Query& Q, std::array<Fit, 8>& fits, i
   if (group[0] != best) {  // its σ's are known (above)
     out = Location{};
     out.n_starts = n_starts_made;
-    fill_main(main, out);
+    fill_main(Q, main, out);
   }
   out.flags |= flag::ambiguous;
   out.n_solutions = n_group;
@@ -596,7 +596,7 @@ bool Locator::without_position(const Fit& f, const Query& Q) const {
   return (on_bound && sigma > cell) || sigma > half_map;
 }
 
-void Locator::fill_main(const Fit& b, Location& out) const {
+void Locator::fill_main(const Query& Q, const Fit& b, Location& out) const {
   out.x_m = b.x;
   out.y_m = b.y;
   out.force_N = std::exp(b.l);
@@ -604,6 +604,15 @@ void Locator::fill_main(const Fit& b, Location& out) const {
   out.sigma_x_m = b.sigma[0];
   out.sigma_y_m = b.sigma[1];
   out.sigma_F_N = out.force_N * b.sigma[2];
+  out.map_error_share = 0;
+  if (b.has_variance) {  // Q.w = 1/σ per electrode; b.variance = e² at the answer
+    double share = 0;
+    for (std::size_t k = 0; k < ne_; ++k) {
+      const double noise2 = 1.0 / (Q.w[k] * Q.w[k]);
+      share += b.variance[k] / (noise2 + b.variance[k]);
+    }
+    out.map_error_share = ne_ > 0 ? share / double(ne_) : 0.0;
+  }
   out.iterations = b.iterations;
   out.n_solutions = 1;
   out.probability = 1.0;

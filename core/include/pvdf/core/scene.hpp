@@ -31,6 +31,8 @@ struct FilmOutline {
   double inscribed_radius_m() const;
   /// Half the largest extent (m), used for default mesh sizes.
   double characteristic_radius_m() const;
+  /// Bounding box {xmin, xmax, ymin, ymax} (m).
+  std::array<double, 4> bounding_box_m() const;
   /// True when p lies strictly inside, at least `margin_m` from the outline.
   bool contains(const Point2& p, double margin_m = 0.0) const;
   /// Signed distance from p to the outline: positive inside (m).

@@ -84,6 +84,11 @@ struct Location {
   double x_m = 0, y_m = 0, force_N = 0;
   double residual = 0;                ///< χ = √Σ((Q_k − q_k)/σ_k)² at the solution (noise units)
   double sigma_x_m = 0, sigma_y_m = 0, sigma_F_N = 0;
+  /// How much of the σ's is the map's own error rather than the charge noise: the mean over the
+  /// electrodes of e_k²/(σ_k² + e_k²) at the answer (e: the map's error there, docs/lookup.md §1.10;
+  /// σ: the charge noise). 0 = the noise alone (or a map without errors); near 1 = a finer map
+  /// would narrow the answer, a quieter front end would not.
+  double map_error_share = 0;
   std::uint32_t flags = 0;
   int iterations = 0;                 ///< LM iterations of the reported solution
   int n_starts = 0;                   ///< LM runs made
@@ -256,7 +261,7 @@ class Locator {
   /// Needs fit.sigma (covariance).
   bool without_position(const Fit& fit, const Query& query) const;
   /// Position, force, σ's and flags of the main answer from its fit (σ's computed).
-  void fill_main(const Fit& fit, Location& out) const;
+  void fill_main(const Query& query, const Fit& fit, Location& out) const;
   /// The best fit (index `best`, within noise) and every other fit within noise that is a
   /// distinct solution (group[0] = best); returns their number.
   int distinct_solutions(const Query& query, const std::array<Fit, 8>& fits, int n_fits, int best,
