@@ -317,7 +317,9 @@ int run_map_from_atlas(const MapCommandOptions& o) {
   pvdf::mapping::ChargeMap map = pvdf::mapping::map_from_atlas(atlas, scene, o.atlas_path);
   if (!o.noise.empty()) map.noise_C = map_options(o, scene).noise_C;
   pvdf::app::OutputLock output_lock(o.output, "-o/--output");
-  pvdf::mapping::write_map(o.output, map);
+  std::size_t n_tolerance_not_met = 0;
+  const std::vector<std::uint8_t> flags = pvdf::mapping::atlas_map_provenance(map, &n_tolerance_not_met);
+  write_generated_map(o.output, map, flags, {});
   const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   std::size_t ok = 0, failed = 0;
   for (const auto st : map.status) {
@@ -336,13 +338,15 @@ int run_map_from_atlas(const MapCommandOptions& o) {
     j["model"] = map.model;
     j["tolerance"] = map.tolerance;
     j["estimated_relative_error"] = map.estimated_relative_error;
+    j["n_tolerance_not_met"] = n_tolerance_not_met;
     j["wall_s"] = wall_s;
     std::cout << j.dump(2) << '\n';
   } else {
     std::printf("%s: %zu x %zu grid x %zu force levels from the atlas %s (%zu points, %zu not converged in the atlas)\n",
                 o.output.c_str(), map.nx(), map.ny(), map.nf(), o.atlas_path.c_str(), ok + failed, failed);
-    std::printf("estimated error (largest per node, FE + atlas integration): %.2g %% of the press's largest charge; %.2f s\n",
-                100 * map.estimated_relative_error, wall_s);
+    std::printf("estimated error (largest per node, FE + atlas integration): %.2g %% of the press's largest charge; "
+                "%zu points above the tolerance %.2g %% (tolerance_not_met in /provenance); %.2f s\n",
+                100 * map.estimated_relative_error, n_tolerance_not_met, 100 * map.tolerance, wall_s);
   }
   return failed > 0 ? pvdf::exit_code::numerical : pvdf::exit_code::success;
 }
@@ -383,6 +387,12 @@ int run_map(const MapCommandOptions& o) {
     options.progress = [&bar](std::size_t done, std::size_t total) {
       if (!bar) bar = std::make_unique<pvdf::Progress>("map", total);
       bar->update(done);
+    };
+    // The generator's own estimate of its time left (each position's cost predicted from its
+    // distance to the clamp, pvdf::ItemCostEta) replaces the bar's items-over-rate ETA, which
+    // is wrong early on: the positions near the clamp cost several times those in the middle.
+    options.time_left = [&bar](double seconds_left) {
+      if (bar) bar->set_eta_s(seconds_left);
     };
   }
   // One writer per output: a second `map` to the same file (or checkpoint) refuses at once.

@@ -4,10 +4,13 @@
 // integration-error estimate vanishes for a constant density and is positive where a cut cell
 // sees a gradient.
 #include "pvdf/fem/atlas.hpp"
+#include "pvdf/mapping/atlas.hpp"
+#include "pvdf/mapping/generate.hpp"
 
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <limits>
 
 namespace {
 
@@ -116,4 +119,33 @@ TEST_CASE("fully covered cells are exact and carry no integration error", "[atla
   pvdf::fem::integrate_atlas_electrode(cut, mc.data(), q, err);
   CHECK(std::abs(q - 1e-4 * 0.0025 * 0.0013) <= 1e-12 * 1e-4 * 0.0025 * 0.0013);
   CHECK(err <= 1e-15 * std::abs(q));
+}
+
+// The tolerance flags of a map from the atlas: a hand-made 1 × 1 × 3 map with two electrodes,
+// tolerance 1 %: a press whose largest error is 0.5 % of its largest charge is not flagged, one at
+// 2 % is, one without an estimate (NaN) is (the tolerance is not shown to be met), and a press that
+// was not computed is left alone.
+TEST_CASE("atlas maps flag the presses whose stated error exceeds the tolerance", "[atlas]") {
+  pvdf::mapping::ChargeMap map;
+  map.tolerance = 0.01;
+  map.x_m = {-1e-3, 0.0, 1e-3, 2e-3};
+  map.y_m = {0.0};
+  map.mask = {1, 1, 1, 1};
+  map.forces_N = {1.0};
+  map.electrode_names = {"A", "B"};
+  map.electrode_centers_m = {{0, 0}, {1e-3, 0}};
+  map.noise_C = {5e-14, 5e-14};
+  map.allocate();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  map.charge_C = {-2e-12, 1e-12, -2e-12, 1e-12, -2e-12, 1e-12, nan, nan};
+  map.estimated_charge_error_C = {0.5e-14, 1e-14, 1e-14, 4e-14, nan, 1e-15, nan, nan};
+  for (std::size_t p = 0; p < 3; ++p) map.status[p] = std::uint8_t(pvdf::mapping::PointStatus::ok);
+  std::size_t n = 99;
+  const auto flags = pvdf::mapping::atlas_map_provenance(map, &n);
+  REQUIRE(flags.size() == 4);
+  CHECK(flags[0] == 0);
+  CHECK(flags[1] == pvdf::mapping::provenance::tolerance_not_met);
+  CHECK(flags[2] == pvdf::mapping::provenance::tolerance_not_met);
+  CHECK(flags[3] == 0);
+  CHECK(n == 2);
 }

@@ -5,6 +5,7 @@
 #include "pvdf/mapping/atlas.hpp"
 
 #include "pvdf/core/error.hpp"
+#include "pvdf/mapping/generate.hpp"
 #include "pvdf/version.hpp"
 
 #include <algorithm>
@@ -96,13 +97,39 @@ ChargeMap map_from_atlas(const ChargeAtlas& atlas, const pvdf::Scene& scene, con
           map.estimated_charge_error_C[map.charge_index(f, j, i, k)] = fe_error + err[k];
           largest_error = std::max(largest_error, fe_error + err[k]);
         }
-        if (scale > 0) worst = std::max(worst, largest_error / scale);
+        // A press without an FE estimate leaves the map's largest error unknown (NaN), not smaller.
+        if (!std::isfinite(fe_error)) worst = nan;
+        if (scale > 0 && !std::isnan(worst)) worst = std::max(worst, largest_error / scale);
       }
     }
   }
   map.estimated_relative_error = worst;
   validate(map, "map from " + atlas_path);
   return map;
+}
+
+std::vector<std::uint8_t> atlas_map_provenance(const ChargeMap& map, std::size_t* n_flagged) {
+  const std::size_t n_points = map.nf() * map.ny() * map.nx(), ne = map.ne();
+  std::vector<std::uint8_t> flags(n_points, 0);
+  std::size_t n = 0;
+  if (map.estimated_charge_error_C.size() == map.charge_C.size()) {
+    for (std::size_t p = 0; p < n_points; ++p) {
+      if (map.status[p] != std::uint8_t(PointStatus::ok)) continue;
+      double largest_charge = 0, largest_error = 0;
+      for (std::size_t k = 0; k < ne; ++k) {
+        largest_charge = std::max(largest_charge, std::abs(map.charge_C[p * ne + k]));
+        const double e = map.estimated_charge_error_C[p * ne + k];
+        largest_error = std::isnan(e) || std::isnan(largest_error) ? e + largest_error : std::max(largest_error, e);
+      }
+      // NaN errors (no estimate) are flagged too: the tolerance is then not shown to be met.
+      if (!(largest_error <= map.tolerance * largest_charge)) {
+        flags[p] |= provenance::tolerance_not_met;
+        ++n;
+      }
+    }
+  }
+  if (n_flagged != nullptr) *n_flagged = n;
+  return flags;
 }
 
 }  // namespace pvdf::mapping

@@ -103,4 +103,10 @@ void check_atlas_fits_scene(const ChargeAtlas& atlas, const std::string& atlas_p
 /// integration error of the partially covered cells. An ordinary map (write_map, `locate`).
 ChargeMap map_from_atlas(const ChargeAtlas& atlas, const pvdf::Scene& scene, const std::string& atlas_path);
 
+/// The /provenance flags of a map from the atlas, per point [nf][ny][nx]: provenance::
+/// tolerance_not_met (pvdf/mapping/generate.hpp) where a computed press's largest stated error
+/// exceeds map.tolerance × its largest |charge|, as the map generator flags its nodes; 0 elsewhere.
+/// `n_flagged` (optional) receives their number.
+std::vector<std::uint8_t> atlas_map_provenance(const ChargeMap& map, std::size_t* n_flagged = nullptr);
+
 }  // namespace pvdf::mapping
