@@ -18,6 +18,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include "../test_worst.hpp"
 
 using namespace pvdf::mapping;
 
@@ -117,7 +118,7 @@ TEST_CASE("maps read from the atlas agree with direct FEM maps within their stat
           REQUIRE(int(direct.status[p]) == int(PointStatus::ok));
           REQUIRE(int(from_atlas.status[p]) == int(PointStatus::ok));
           double largest = 0;
-          for (std::size_t k = 0; k < direct.ne(); ++k) largest = std::max(largest, std::abs(direct.charge_C[direct.charge_index(f, j, i, k)]));
+          for (std::size_t k = 0; k < direct.ne(); ++k) largest = pvdf::testing::worst_of(largest, std::abs(direct.charge_C[direct.charge_index(f, j, i, k)]));
           REQUIRE(largest > 0);
           for (std::size_t k = 0; k < direct.ne(); ++k) {
             const std::size_t c = direct.charge_index(f, j, i, k);
@@ -128,9 +129,9 @@ TEST_CASE("maps read from the atlas agree with direct FEM maps within their stat
                        << from_atlas.estimated_charge_error_C[c] << " + " << direct.estimated_charge_error_C[c]);
             CHECK(diff <= stated);                   // false for NaN
             CHECK(diff <= tolerance * largest);
-            worst_vs_errors = std::max(worst_vs_errors, diff / stated);
-            worst_vs_tolerance = std::max(worst_vs_tolerance, diff / (tolerance * largest));
-            worst_atlas_error = std::max(worst_atlas_error, from_atlas.estimated_charge_error_C[c] / largest);
+            worst_vs_errors = pvdf::testing::worst_of(worst_vs_errors, diff / stated);
+            worst_vs_tolerance = pvdf::testing::worst_of(worst_vs_tolerance, diff / (tolerance * largest));
+            worst_atlas_error = pvdf::testing::worst_of(worst_atlas_error, from_atlas.estimated_charge_error_C[c] / largest);
           }
           ++nodes;
         }

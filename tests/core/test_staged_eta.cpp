@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdint>
 #include <vector>
+#include "../test_worst.hpp"
 
 TEST_CASE("staged ETA: setup and rate measured per stage, stages to come predicted from them", "[core][progress]") {
   pvdf::StagedEta eta({20, 30});
@@ -123,7 +124,7 @@ TEST_CASE("item-cost ETA: dear rim positions early in the run do not inflate the
     if (std::abs(predicted / truth - 1) <= 0.3) ++within;
     const double naive = double(features.size() - items_done) / (double(items_done) / end[r]);
     if (std::abs(naive / truth - 1) <= 0.3) ++naive_within;
-    worst_naive = std::max(worst_naive, naive / truth);
+    worst_naive = pvdf::testing::worst_of(worst_naive, naive / truth);
   }
   REQUIRE(reports >= 10);
   CHECK(within == reports);                // every report within ±30 %

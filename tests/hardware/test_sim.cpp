@@ -8,6 +8,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include "../test_worst.hpp"
 
 using namespace pvdf::hardware;
 
@@ -38,8 +39,8 @@ TEST_CASE("sim: noiseless output equals the ideal amplifier voltage within half 
       const double t = b.time_s(i, info.sample_rate_Hz);
       for (int c = 0; c < 3; ++c) {
         const double v = b.frame.counts[static_cast<std::size_t>(i * 3 + c)] * lsb;
-        worst = std::max(worst, std::abs(v - scene.ideal_output_V(c, t)));
-        peak = std::max(peak, v);
+        worst = pvdf::testing::worst_of(worst, std::abs(v - scene.ideal_output_V(c, t)));
+        peak = pvdf::testing::worst_of(peak, v);
       }
     }
   }

@@ -16,6 +16,7 @@
 #include <cmath>
 #include <filesystem>
 #include <limits>
+#include "../test_worst.hpp"
 
 using namespace pvdf::mapping;
 
@@ -68,8 +69,8 @@ std::size_t index_of(const std::vector<double>& axis, double v) {
 double charge_difference(const ChargeMap& m, std::size_t f, std::size_t j, std::size_t i, const std::vector<double>& reference) {
   double diff = 0, scale = 0;
   for (std::size_t k = 0; k < m.ne(); ++k) {
-    diff = std::max(diff, std::abs(m.charge_C[m.charge_index(f, j, i, k)] - reference[k]));
-    scale = std::max(scale, std::abs(reference[k]));
+    diff = pvdf::testing::worst_of(diff, std::abs(m.charge_C[m.charge_index(f, j, i, k)] - reference[k]));
+    scale = pvdf::testing::worst_of(scale, std::abs(reference[k]));
   }
   return diff / scale;
 }
@@ -281,7 +282,7 @@ TEST_CASE("kill and resume gives the uninterrupted map; a foreign checkpoint is 
   for (std::size_t n = 0; n < resumed.charge_C.size(); ++n) {
     const double a = resumed.charge_C[n], b = uninterrupted.charge_C[n];
     bitwise = bitwise && a == b;
-    worst = std::max(worst, std::abs(a - b) / std::abs(b));
+    worst = pvdf::testing::worst_of(worst, std::abs(a - b) / std::abs(b));
   }
   INFO("largest relative difference resumed vs uninterrupted: " << worst << (bitwise ? " (bitwise equal)" : ""));
   CHECK(worst < 1e-9);
@@ -320,11 +321,11 @@ TEST_CASE("generated map file round trip with /provenance and the per-node error
       const double v = m.estimated_charge_error_C[p * m.ne() + k];
       REQUIRE(std::isfinite(v));
       CHECK(v >= 0);
-      e = std::max(e, v);
-      q = std::max(q, std::abs(m.charge_C[p * m.ne() + k]));
+      e = pvdf::testing::worst_of(e, v);
+      q = pvdf::testing::worst_of(q, std::abs(m.charge_C[p * m.ne() + k]));
       sum += v;
     }
-    largest = std::max(largest, e / q);
+    largest = pvdf::testing::worst_of(largest, e / q);
   }
   CHECK(sum > 0);
   CHECK(m.estimated_relative_error == Approx(largest).epsilon(1e-12));

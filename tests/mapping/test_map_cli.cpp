@@ -14,6 +14,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include "../test_worst.hpp"
 
 using pvdf::test::run_pvdfkit;
 using namespace pvdf::mapping;
@@ -49,7 +50,7 @@ void require_same_map(const ChargeMap& a, const ChargeMap& b) {
   for (std::size_t n = 0; n < a.charge_C.size(); ++n) {
     if (std::isnan(a.charge_C[n]) && std::isnan(b.charge_C[n])) continue;
     bitwise = bitwise && a.charge_C[n] == b.charge_C[n];
-    worst = std::max(worst, std::abs(a.charge_C[n] - b.charge_C[n]) / std::abs(b.charge_C[n]));
+    worst = pvdf::testing::worst_of(worst, std::abs(a.charge_C[n] - b.charge_C[n]) / std::abs(b.charge_C[n]));
   }
   INFO("largest relative charge difference " << worst << (bitwise ? " (bitwise equal)" : ""));
   CHECK(worst < 1e-9);

@@ -22,6 +22,7 @@
 #include <array>
 #include <utility>
 #include <vector>
+#include "../test_worst.hpp"
 
 namespace fs = std::filesystem;
 using pvdf::plot::Color;
@@ -183,7 +184,7 @@ TEST_CASE("contour lines of x^2 + y^2 at r^2 lie on the circle of radius r", "[p
     CHECK(loop.size() > 100);
     CHECK(std::hypot(loop.front()[0] - loop.back()[0], loop.front()[1] - loop.back()[1]) < 1e-12);
     double worst = 0;
-    for (const auto& p : loop) worst = std::max(worst, std::abs(std::hypot(p[0], p[1]) - r));
+    for (const auto& p : loop) worst = pvdf::testing::worst_of(worst, std::abs(std::hypot(p[0], p[1]) - r));
     CHECK(worst < half_pixel);
     CHECK(worst < 2e-4);
   }
@@ -347,8 +348,8 @@ TEST_CASE("best legend avoids the data; the y label is rotated; text lands at it
     for (int px = 0; px < static_cast<int>(lo[0]) - 40; ++px) {
       const Color c = png.at(px, py);
       if (c.r < 100 && c.g < 100 && c.b < 100) {
-        minx = std::min(minx, px), maxx = std::max(maxx, px);
-        miny = std::min(miny, py), maxy = std::max(maxy, py);
+        minx = std::min(minx, px), maxx = pvdf::testing::worst_of(maxx, px);
+        miny = std::min(miny, py), maxy = pvdf::testing::worst_of(maxy, py);
       }
     }
   }
@@ -550,7 +551,7 @@ TEST_CASE("refine_grid passes through the nodes, is exact for quadratics and res
     for (std::size_t i = 0; i < fine.nx; ++i) {
       const double x = fine.x0 + (fine.x1 - fine.x0) * double(i) / double(fine.nx - 1);
       const double y = fine.y0 + (fine.y1 - fine.y0) * double(j) / double(fine.ny - 1);
-      worst = std::max(worst, std::abs(fine.at(i, j) - quadratic(x, y)));
+      worst = pvdf::testing::worst_of(worst, std::abs(fine.at(i, j) - quadratic(x, y)));
     }
   CHECK(worst < 1e-12);  // interior and edge cells alike (quadratic ghost nodes)
   for (std::size_t j = 0; j < g.ny; ++j)
@@ -578,7 +579,7 @@ TEST_CASE("contours of a coarse grid follow the smooth interpolant, not the cell
   for (const auto& line : chords)
     for (std::size_t i = 1; i < line.size(); ++i) {
       const double mx = (line[i][0] + line[i - 1][0]) / 2, my = (line[i][1] + line[i - 1][1]) / 2;
-      chord_error = std::max(chord_error, std::abs(std::hypot(mx, my) - 0.5));
+      chord_error = pvdf::testing::worst_of(chord_error, std::abs(std::hypot(mx, my) - 0.5));
     }
   CHECK(chord_error > 5e-3);  // the grid-linear lines are visibly polygonal
   const auto smooth = pvdf::plot::contour_lines(pvdf::plot::refine_grid(g, 8), 0.25);
@@ -586,7 +587,7 @@ TEST_CASE("contours of a coarse grid follow the smooth interpolant, not the cell
   double smooth_error = 0;
   for (std::size_t i = 1; i < smooth[0].size(); ++i) {
     const double mx = (smooth[0][i][0] + smooth[0][i - 1][0]) / 2, my = (smooth[0][i][1] + smooth[0][i - 1][1]) / 2;
-    smooth_error = std::max(smooth_error, std::abs(std::hypot(mx, my) - 0.5));
+    smooth_error = pvdf::testing::worst_of(smooth_error, std::abs(std::hypot(mx, my) - 0.5));
   }
   CHECK(smooth_error < 5e-4);
   // What the panel draws: its pixels lie on the circle (within 1.5 px), not on the 8-sided chord polygon.
@@ -736,8 +737,8 @@ TEST_CASE("a field domain ends the field on the mapped area's curve, not on the 
   const auto [off, ppu_off] = edge_radii(false);
   const auto [on, ppu] = edge_radii(true);
   double worst_off = 0, worst_on = 0;
-  for (double r : off) worst_off = std::max(worst_off, std::abs(r - 0.7) * ppu_off);
-  for (double r : on) worst_on = std::max(worst_on, std::abs(r - 0.7) * ppu);
+  for (double r : off) worst_off = pvdf::testing::worst_of(worst_off, std::abs(r - 0.7) * ppu_off);
+  for (double r : on) worst_on = pvdf::testing::worst_of(worst_on, std::abs(r - 0.7) * ppu);
   CHECK(worst_off > 8);    // the staircase: the edge strays from the curve by many pixels
   CHECK(worst_on <= 1.5);  // the domain: on the curve
   // An outline of fewer than 3 points clears the domain; a non-finite vertex is an InputError.

@@ -10,6 +10,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include "../test_worst.hpp"
 
 using namespace pvdf::restore;
 
@@ -51,7 +52,7 @@ double flat_level(const RestoredForces& r, const Scan& scan, double clear_m) {
 
 double peak(const std::vector<double>& v) {
   double p = 0;
-  for (double x : v) p = std::max(p, x);
+  for (double x : v) p = pvdf::testing::worst_of(p, x);
   return p;
 }
 
@@ -258,8 +259,8 @@ TEST_CASE("The family's scans are its own model: the point-strip kernel agrees w
     const double x_rel = scan.x_m[i] + strip.offset_m;
     const double v = 0.3 * strip_signal_per_N(strip, sc.scanner.poisson_ratio, 1e9, sc.scanner.speed_m_per_s, ForceComponent::x, x_rel) +
                      strip_signal_per_N(strip, sc.scanner.poisson_ratio, 1e9, sc.scanner.speed_m_per_s, ForceComponent::z, x_rel);
-    peak_v = std::max(peak_v, std::abs(v));
-    worst = std::max(worst, std::abs(v - scan.m1_V[i]));
+    peak_v = pvdf::testing::worst_of(peak_v, std::abs(v));
+    worst = pvdf::testing::worst_of(worst, std::abs(v - scan.m1_V[i]));
   }
   INFO("worst difference " << worst << " V against a peak of " << peak_v << " V");
   CHECK(worst < 1e-3 * peak_v);
