@@ -17,9 +17,14 @@ std::size_t ItemCostEta::plan(const std::vector<double>& features) {
   const std::size_t first = feature_.size();
   for (double f : features) {
     feature_.push_back(std::isfinite(f) ? std::max(0.0, f) : 0.0);
+    units_.push_back(1.0);
     done_.push_back(0);
   }
   return first;
+}
+
+void ItemCostEta::set_units(std::size_t id, double units) {
+  if (id < units_.size() && std::isfinite(units) && units > 0) units_[id] = units;
 }
 
 std::size_t ItemCostEta::bin_of(double feature) const {
@@ -38,11 +43,14 @@ void ItemCostEta::block_done(const std::vector<std::size_t>& items, const std::v
     if (b >= bin_items_.size()) {
       bin_items_.resize(b + 1, 0);
       bin_work_.resize(b + 1, std::vector<double>(n_kinds_, 0.0));
+      bin_units_.resize(b + 1, 0.0);
     }
     ++bin_items_[b];
     for (std::size_t c = 0; c < n_kinds_ && c < work[n].size(); ++c) {
-      bin_work_[b][c] += work[n][c];
-      sum[c] += work[n][c];
+      const double w = std::isfinite(work[n][c]) ? std::max(0.0, work[n][c]) : 0.0;
+      bin_work_[b][c] += w;
+      bin_units_[b] += w;
+      sum[c] += w;
     }
   }
   if (!(cpu_s >= 0) || !std::isfinite(cpu_s)) cpu_s = 0;
@@ -140,7 +148,10 @@ double ItemCostEta::seconds_left(double t_s) const {
       else if (d <= start && bin_items_[start - d] > 0) best = start - d;
     }
     if (best == nb) continue;
-    for (std::size_t c = 0; c < n_kinds_; ++c) cpu_left += cost_[c] * bin_work_[best][c] / double(bin_items_[best]);
+    // Per unit of the bin's items done, times this item's units; a bin whose items did no counted
+    // work (nothing to learn a mix from) gives its per-item mean.
+    const double per = bin_units_[best] > 0 ? units_[id] / bin_units_[best] : 1.0 / double(bin_items_[best]);
+    for (std::size_t c = 0; c < n_kinds_; ++c) cpu_left += cost_[c] * bin_work_[best][c] * per;
   }
   const double per_thread = cpu_done_s_ / wall_done_s_;  // CPU-s per wall-s of one thread
   if (!(per_thread > 0)) return std::numeric_limits<double>::quiet_NaN();

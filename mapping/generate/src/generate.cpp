@@ -34,9 +34,9 @@ ChargeMap Generator::run(MapReport& report) {
   hash_ = run_hash();
   resume();
   last_checkpoint_ = std::chrono::steady_clock::now();
+  scaling_ = o_.use_force_scaling && layout_.nf > 1;
   count_progress_total();
 
-  scaling_ = o_.use_force_scaling && layout_.nf > 1;
   bool stopped_anywhere = run_scaling_checks(report);      // phase A
   if (!stopped_anywhere) {
     // phase B: every other position, or level by level where the interpolant needs them
@@ -199,7 +199,13 @@ void Generator::plan_time_left() {
     points.push_back(p);
   }
   const std::size_t first = time_left_.plan(features);
-  for (std::size_t k = 0; k < points.size(); ++k) time_left_id_[points[k]] = first + k;
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    time_left_id_[points[k]] = first + k;
+    // The force levels it will solve: all at a scaling check (and without scaling), else the
+    // largest only — corrected when its cell's verdict is known (run_blocks).
+    const bool check = is_lattice(points[k] % grid_.nx, points[k] / grid_.nx);
+    time_left_.set_units(first + k, !scaling_ || check ? double(layout_.nf) : 1.0);
+  }
 }
 
 // Phase A: the force-scaling check positions (every level solved), their verdicts shared by

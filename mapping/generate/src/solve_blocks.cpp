@@ -186,6 +186,15 @@ void Generator::commit(const std::vector<double>& records, std::size_t n_positio
 }
 
 void Generator::run_blocks(const std::vector<Block>& blocks) {
+  // The time left learns which positions solve every force level and which the largest only.
+  for (const auto& block : blocks) {
+    for (const auto& t : block) {
+      const std::size_t p = t.j * grid_.nx + t.i;
+      if (p < time_left_id_.size() && time_left_id_[p] != std::size_t(-1)) {
+        time_left_.set_units(time_left_id_[p], t.all_levels ? double(layout_.nf) : 1.0);
+      }
+    }
+  }
   std::atomic<std::size_t> next{0};
   std::exception_ptr error;
   std::mutex error_mutex;

@@ -15,8 +15,11 @@ namespace pvdf {
 /// - cost: an item that needed n_c units of work kind c costs Σ_c n_c k_c CPU-seconds; the k_c ≥ 0
 ///   are fitted by least squares to the CPU seconds of the blocks done (a small ridge pulls them
 ///   toward the mean cost per unit of work, so that one block already gives an answer);
-/// - work of an item still to do: the mean n_c of the items done whose feature lies in the same
-///   bin (bins of `bin_width` in the feature), else in the nearest bin that has items done;
+/// - work of an item still to do: its expected number of units (set_units; default 1: e.g. the
+///   force levels a map position will solve) × the mix of kinds per unit of the items done whose
+///   feature lies in the same bin (bins of `bin_width` in the feature), else in the nearest bin
+///   that has items done — so items that do three units each (a map's force-scaling checks) do not
+///   make the one-unit items to come look three times as dear;
 /// - wall time: the CPU seconds left over the throughput `threads` × e, with e the CPU seconds
 ///   per wall second of the blocks done (their CPU over their own wall durations), which holds the
 ///   load of the machine as it was.
@@ -29,6 +32,8 @@ class ItemCostEta {
   /// The items to do (their features); returns the id of the first (ids are consecutive). Items
   /// may be planned while others are being solved (a later phase of the same work).
   std::size_t plan(const std::vector<double>& features);
+  /// The expected units of work (> 0; e.g. solves) of planned item `id` not yet done (default 1).
+  void set_units(std::size_t id, double units);
   /// A block started at wall time `start_s` is done at `end_s`: its items (ids from plan), the
   /// work each needed ([item][kind], counts), and the CPU seconds it took.
   void block_done(const std::vector<std::size_t>& items, const std::vector<std::vector<double>>& work,
@@ -44,10 +49,12 @@ class ItemCostEta {
   std::size_t n_kinds_;
   double bin_width_;
   std::vector<double> feature_;
+  std::vector<double> units_;  ///< expected units of each item (set_units)
   std::vector<char> done_;
   // per feature bin: items done and their summed work per kind
   std::vector<std::size_t> bin_items_;
   std::vector<std::vector<double>> bin_work_;
+  std::vector<double> bin_units_;  ///< summed units (Σ_c work) of the items done in each bin
   // per block done: work per kind and CPU seconds (the least-squares rows)
   std::vector<std::vector<double>> block_work_;
   std::vector<double> block_cpu_s_;
