@@ -11,6 +11,7 @@
 #include "pvdf/fem/probe_sweep.hpp"
 #include "pvdf/fem/solver.hpp"
 #include "pvdf/mapping/generate.hpp"
+#include "pvdf/mapping/map_report.hpp"
 
 #include <cmath>
 #include <algorithm>
@@ -145,73 +146,7 @@ SweepBatch sweep_solve(pvdf::fem::ProbeSweep& sweep, std::size_t n_electrodes, p
 /// The report with the keys of `pvdfkit map --json` (the command's output path and mesh aside),
 /// plus setup_s, which the command does not print.
 py::dict report_dict(const pvdf::mapping::MapReport& r, const pvdf::mapping::ChargeMap& map) {
-  py::dict d;
-  d["n_positions"] = r.n_positions;
-  d["n_points"] = r.n_points;
-  d["n_solved"] = r.n_solved;
-  d["n_scaled"] = r.n_scaled;
-  d["n_mirrored"] = r.n_mirrored;
-  d["n_resumed"] = r.n_resumed;
-  d["n_failed"] = r.n_failed;
-  d["n_scaling_checks"] = r.n_scaling_checks;
-  d["n_scaling_checks_failed"] = r.n_scaling_checks_failed;
-  d["max_scaling_check_error"] = r.max_scaling_check_error;
-  d["mirror_x"] = r.mirror_x;
-  d["mirror_y"] = r.mirror_y;
-  d["symmetry_reason"] = r.symmetry_reason;
-  d["model"] = r.model;
-  d["model_reason"] = r.model_reason;
-  d["tolerance"] = map.tolerance;
-  d["estimated_relative_error"] = r.estimated_relative_error;
-  const double w_error = map.estimated_deflection_relative_error;
-  d["estimated_deflection_relative_error"] = std::isfinite(w_error) ? py::object(py::float_(w_error)) : py::object(py::none());
-  d["n_tolerance_not_met"] = r.n_tolerance_not_met;
-  d["n_rim_model"] = r.n_rim_model;
-  d["rim_solves"] = r.rim_solves;
-  d["rim_s"] = r.rim_s;
-  d["n_clamp_layer"] = r.n_clamp_layer;
-  d["clamp_layer_solves"] = r.clamp_layer_solves;
-  d["clamp_layer_s"] = r.clamp_layer_s;
-  d["clamp_layer_condition"] = r.clamp_layer_condition;
-  d["estimate_s"] = r.estimate_s;
-  d["probe_size_m"] = r.probe_size_m;
-  d["probe_mesh_s"] = r.probe_mesh_s;
-  d["probe_mesh_dofs"] = r.probe_mesh_dofs;
-  d["n_direct"] = r.n_direct;
-  d["direct_solves"] = r.direct_solves;
-  d["direct_s"] = r.direct_s;
-  d["rim_n_dofs"] = r.rim_n_dofs;
-  d["n_dofs"] = r.n_dofs;
-  d["ranks"] = r.ranks;
-  d["threads"] = r.threads;
-  d["placement"] = r.placement;
-  if (r.placement == "adaptive") {  // as `pvdfkit map --json`
-    py::list levels;
-    for (std::size_t l = 0; l < r.level_solves.size(); ++l) {
-      py::dict level;
-      level["spacing_m"] = r.level_spacing_m[l];
-      level["positions"] = r.level_positions[l];
-      level["solves"] = r.level_solves[l];
-      levels.append(level);
-    }
-    d["levels"] = levels;
-    d["n_interpolated"] = r.n_interpolated;
-    d["placement_s"] = r.placement_s;
-  }
-  const double total_error = map.estimated_total_relative_error;
-  d["estimated_total_relative_error"] = std::isfinite(total_error) ? py::object(py::float_(total_error)) : py::object(py::none());
-  d["solve_cpu_s"] = r.solve_cpu_s;
-  const std::size_t solves = r.n_solved;  // FEM solves of this run (resumed points are not counted)
-  d["cpu_s_per_solve"] = solves > 0 ? py::object(py::float_(r.solve_cpu_s / double(solves))) : py::object(py::none());
-  d["estimate_share"] = r.solve_cpu_s > 0 ? py::object(py::float_(r.estimate_s / r.solve_cpu_s)) : py::object(py::none());
-  d["wall_s"] = r.wall_s;
-  d["per_position_s"] = r.per_position_s;
-  d["nx"] = map.nx();
-  d["ny"] = map.ny();
-  d["forces_N"] = map.forces_N;
-  d["rim_margin_m"] = map.rim_margin_m;
-  d["checkpoint_hash"] = r.checkpoint_hash;
-  if (!r.first_failure.empty()) d["first_failure"] = r.first_failure;
+  py::dict d = py::module_::import("json").attr("loads")(pvdf::mapping::map_report_json(r, map).dump());
   d["setup_s"] = r.setup_s;
   return d;
 }
