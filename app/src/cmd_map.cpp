@@ -139,19 +139,9 @@ MapOptions map_options(const MapCommandOptions& o, const pvdf::Scene& scene) {
   options.use_force_scaling = !o.no_force_scaling;
   options.scaling_check_stride = o.scaling_check_stride;
   options.n_setup_checks = o.setup_checks;
-  if (o.rim_model != "by-estimate" && o.rim_model != "never" && o.rim_model != "always") {
-    throw pvdf::InputError("--rim-model " + pvdf::escape_control_bytes(o.rim_model) + ": use by-estimate, never or always");
-  }
-  options.rim_model = o.rim_model;
-  if (o.direct_solves != "by-estimate" && o.direct_solves != "never") {
-    throw pvdf::InputError("--direct-solves " + pvdf::escape_control_bytes(o.direct_solves) + ": use by-estimate or never");
-  }
-  options.direct_solves = o.direct_solves;
-  if (o.probe_refinement != "footprint" && o.probe_refinement != "none") {
-    throw pvdf::InputError("--probe-refinement " + pvdf::escape_control_bytes(o.probe_refinement) +
-                           ": use footprint or none");
-  }
-  options.probe_refinement = o.probe_refinement;
+  options.rim_model = pvdf::mapping::parse_rim_model(o.rim_model, "--rim-model");
+  options.direct_solves = pvdf::mapping::parse_direct_solves(o.direct_solves, "--direct-solves");
+  options.probe_refinement = pvdf::mapping::parse_probe_refinement(o.probe_refinement, "--probe-refinement");
   if (!o.noise.empty()) {
     options.noise_C = pvdf::parse_number_list(o.noise, "--noise-C");
     if (options.noise_C.size() != scene.electrodes.size()) {

@@ -64,8 +64,8 @@ TEST_CASE("adaptive map: the stated total error holds between nodes and force le
   o.tolerance = 0.05;
   o.threads = 2;
   o.n_setup_checks = 0;
-  o.rim_model = "never";
-  o.direct_solves = "never";
+  o.rim_model = pvdf::mapping::RimModel::never;
+  o.direct_solves = pvdf::mapping::DirectSolves::never;
   MapReport report;
   const ChargeMap map = generate_map(scene, o, &report);
   REQUIRE(report.n_failed == 0);

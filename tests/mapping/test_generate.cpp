@@ -194,8 +194,8 @@ TEST_CASE("force scaling is used only where its check passes", "[mapping][genera
   SECTION("pure membrane: Q ~ F^(2/3) holds, the shortcut is taken and is right") {
     // The cheap model everywhere: where the rim model or a direct solve (bending kept) solves a
     // level, the levels are not one pure membrane and the check rightly fails.
-    o.rim_model = "never";
-    o.direct_solves = "never";
+    o.rim_model = pvdf::mapping::RimModel::never;
+    o.direct_solves = pvdf::mapping::DirectSolves::never;
     const auto scene = small_scene(0.0);
     MapReport report;
     const ChargeMap m = generate_map(scene, o, &report);
@@ -357,15 +357,15 @@ TEST_CASE("nodes the sweep leaves above the tolerance are solved again on their 
   const auto scene = small_scene();
   MapOptions o = cheap_options({0.004, 0.008, -0.004, 0.0});
   o.tolerance = 0.01;
-  o.rim_model = "never";
-  o.direct_solves = "never";
+  o.rim_model = pvdf::mapping::RimModel::never;
+  o.direct_solves = pvdf::mapping::DirectSolves::never;
   MapReport flagged;
   const ChargeMap sweep_only = generate_map(scene, o, &flagged);
   REQUIRE(flagged.n_tolerance_not_met > 0);  // else this scene does not exercise the direct solves
   CHECK(flagged.n_direct == 0);
   CHECK(flagged.direct_solves == 0);
 
-  o.direct_solves = "by-estimate";
+  o.direct_solves = pvdf::mapping::DirectSolves::by_estimate;
   MapReport report;
   const ChargeMap m = generate_map(scene, o, &report);
   CHECK(report.n_direct >= flagged.n_tolerance_not_met - report.n_tolerance_not_met);

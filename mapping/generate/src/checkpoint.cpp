@@ -236,7 +236,7 @@ std::string Generator::run_hash() const {
   key << "|model " << fem::model_name(sweep_options_.solver.model) << "|tol " << tolerance_ << "|margin " << margin_
       << "|scaling " << o_.use_force_scaling << ' ' << o_.scaling_check_stride << "|sym " << sym_.about_x << sym_.about_y
       << "|rim " << int(sweep_options_.rim_model) << ' ' << sweep_options_.rim_size_m << ' ' << sweep_options_.rim_grading
-      << "|direct " << o_.direct_solves << "|probe " << sweep_options_.probe_size_m;
+      << "|direct " << option_name(o_.direct_solves) << "|probe " << sweep_options_.probe_size_m;
   // The clamp-layer condition (off with PVDF_CLAMP_LAYER=rim-graded) changes near-clamp values.
   const fem::SweepSetup& setup = sweeps_[0]->setup();
   if (setup.rim_model_available) key << "|clamp " << setup.clamp_layer_condition;

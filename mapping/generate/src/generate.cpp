@@ -144,20 +144,11 @@ void Generator::setup_sweeps() {
   sweep_options_.rim_margin_m = margin_;
   sweep_options_.forces_N = o_.forces_N;
   sweep_options_.n_setup_checks = o_.n_setup_checks;
-  if (o_.rim_model == "never") sweep_options_.rim_model = fem::SweepOptions::RimModel::never;
-  else if (o_.rim_model == "always") sweep_options_.rim_model = fem::SweepOptions::RimModel::always;
-  else if (o_.rim_model != "by-estimate") {
-    throw InputError("map: rim model '" + o_.rim_model + "' is not one of by-estimate, never, always (MapOptions::rim_model)");
-  }
-  if (o_.direct_solves != "by-estimate" && o_.direct_solves != "never") {
-    throw InputError("map: direct solves '" + o_.direct_solves + "' is not one of by-estimate, never (MapOptions::direct_solves)");
-  }
+  // The choices are enums: checked where they were parsed (parse_rim_model, ...).
+  if (o_.rim_model == RimModel::never) sweep_options_.rim_model = fem::SweepOptions::RimModel::never;
+  else if (o_.rim_model == RimModel::always) sweep_options_.rim_model = fem::SweepOptions::RimModel::always;
   sweep_options_.mesh = o_.mesh;
-  if (o_.probe_refinement == "none") sweep_options_.probe_size_m = -1;
-  else if (o_.probe_refinement != "footprint") {
-    throw InputError("map: probe refinement '" + o_.probe_refinement +
-                     "' is not one of footprint, none (MapOptions::probe_refinement)");
-  }
+  if (o_.probe_refinement == ProbeRefinement::none) sweep_options_.probe_size_m = -1;
   sweeps_.resize(std::size_t(threads_));
   sweeps_[0] = std::make_unique<fem::ProbeSweep>(scene_, sweep_options_);
 }

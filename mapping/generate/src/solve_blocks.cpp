@@ -98,7 +98,7 @@ void Generator::solve_block(fem::ProbeSweep& sweep, const Block& block, std::vec
         s.force_N = o_.forces_N[f];
         s.message = e.what();
       }
-      if (s.status == fem::Status::tolerance_not_met && o_.direct_solves == "by-estimate") improve_by_direct_solve(x, y, s);
+      if (s.status == fem::Status::tolerance_not_met && o_.direct_solves == DirectSolves::by_estimate) improve_by_direct_solve(x, y, s);
       const double cpu = thread_cpu_s() - cpu0;
       std::lock_guard<std::mutex> lock(mutex_);
       solve_cpu_s_ += cpu;

@@ -23,6 +23,31 @@ struct FilmMesh;  // pvdf/mesh/film_mesh.hpp
 
 namespace pvdf::mapping {
 
+/// Where the rim model (bending kept, mesh graded toward the clamp) solves a node.
+enum class RimModel {
+  by_estimate,  ///< where the cheap model's estimated model error exceeds half the tolerance
+  never,
+  always
+};
+/// What happens to a node whose estimate still exceeds the tolerance after the sweep.
+enum class DirectSolves {
+  by_estimate,  ///< solved again by the adaptive solver at that press alone (node model 2)
+  never         ///< the sweep's values kept, flagged tolerance_not_met
+};
+/// The mesh each probe is solved on.
+enum class ProbeRefinement {
+  footprint,  ///< the sweep mesh refined around the probe's own footprint
+  none        ///< the sweep mesh alone
+};
+/// The names the command line and the checkpoint hash use ("by-estimate", "never", ...).
+std::string option_name(RimModel value);
+std::string option_name(DirectSolves value);
+std::string option_name(ProbeRefinement value);
+/// Parses a name; throws pvdf::InputError "`flag` `text`: use …" (the choices) otherwise.
+RimModel parse_rim_model(const std::string& text, const std::string& flag);
+DirectSolves parse_direct_solves(const std::string& text, const std::string& flag);
+ProbeRefinement parse_probe_refinement(const std::string& text, const std::string& flag);
+
 /// Where a map generation solves (docs/map-generation.md §10).
 enum class Placement {
   /// Every grid node is solved (the stored error is each node's own estimate; the lookup adds
@@ -74,19 +99,17 @@ struct MapOptions {
   /// mesh (0..4, pvdf::fem::SweepOptions::n_setup_checks); 0 = keep the first mesh. Every node
   /// carries its own estimate either way (/estimated_charge_error_C).
   int n_setup_checks = 3;
-  /// Where the rim model (bending kept, mesh graded toward the clamp) solves a node:
-  /// "by-estimate" (where the cheap model's estimated model error exceeds half the tolerance),
-  /// "never", "always".
-  std::string rim_model = "by-estimate";
+  /// Where the rim model (bending kept, mesh graded toward the clamp) solves a node.
+  RimModel rim_model = RimModel::by_estimate;
   /// Nodes whose estimate still exceeds the tolerance after the sweep (and the rim model):
-  /// "by-estimate" solves each again with the adaptive solver at that press alone (its own
-  /// goal-oriented mesh, bending kept; node model 2), "never" keeps the sweep's values flagged
+  /// by_estimate solves each again with the adaptive solver at that press alone (its own
+  /// goal-oriented mesh, bending kept; node model 2), never keeps the sweep's values flagged
   /// tolerance_not_met.
-  std::string direct_solves = "by-estimate";
-  /// "footprint": each probe is solved on the sweep mesh refined around its own footprint
-  /// (pvdf::fem::SweepOptions::probe_size_m); "none": on the sweep mesh alone (faster, but its
+  DirectSolves direct_solves = DirectSolves::by_estimate;
+  /// footprint: each probe is solved on the sweep mesh refined around its own footprint
+  /// (pvdf::fem::SweepOptions::probe_size_m); none: on the sweep mesh alone (faster, but its
   /// charges then carry the footprint's discretization error, which the estimate does not see).
-  std::string probe_refinement = "footprint";
+  ProbeRefinement probe_refinement = ProbeRefinement::footprint;
   /// Worker threads in this process (one ProbeSweep each); 0 = hardware concurrency.
   int threads = 0;
   /// Checkpoint file ("" = none). Completed rows are saved periodically (atomically); an
