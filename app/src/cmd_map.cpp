@@ -198,7 +198,7 @@ void print_map_text(const MapCommandOptions& o, const ChargeMap& map, const MapR
                 report.n_interpolated, 100 * map.estimated_total_relative_error);
   }
   std::printf("rim model (bending, rim-graded mesh, %zu DOFs): %zu points\n", report.rim_n_dofs, report.n_rim_model);
-  std::printf("direct adaptive solves (own mesh, bending kept) where the sweep missed the tolerance: %zu points "
+  std::printf("direct adaptive solves (own mesh, as `solve` at that press) where the sweep missed the tolerance: %zu points "
               "(%zu solves, %.1f s)\n", report.n_direct, report.direct_solves, report.direct_s);
   std::printf("symmetry: %s\n", report.symmetry_reason.c_str());
   std::printf("%d rank(s) x %d thread(s), %.1f s, %.3g s per solved position and core\n", report.ranks,

@@ -87,8 +87,9 @@ void write_generated_map(const std::string& path, const ChargeMap& map, const st
         put_bytes(file, model_path, map, node_model,
                   "per point [nf][ny][nx]: model that solved it, 0 = the root attribute model as the sweep chose it "
                   "(bending dropped when its estimate allowed), 1 = the same kinematics with bending on a mesh graded "
-                  "toward the clamped rim, 2 = a direct adaptive solve at this press alone (its own goal-oriented mesh, "
-                  "bending kept) where the sweep's estimate exceeded the tolerance, 3 = the model of 0 with the clamp's "
+                  "toward the clamped rim, 2 = a direct adaptive solve at this press alone (its own goal-oriented mesh; "
+                  "with the model auto as `pvdfkit solve`: bending and the clamp layer by estimate; else bending kept) where the "
+                  "sweep's estimate exceeded the tolerance, 3 = the model of 0 with the clamp's "
                   "bending layer as a boundary condition (docs/fem.md 3.4) on the probe's own mesh");
       }
     } catch (...) {
