@@ -72,8 +72,8 @@ struct DesignCommandOptions {
   double size_min_m = 0.001, size_max_m = 0.004;
   bool square = false, no_rotation = false;
   double min_gap_m = 0.0005, clamp_margin_m = 0.001;
-  std::uint64_t seed = 1;
-  std::size_t budget = 300;
+  long long seed = 1;     // signed here, so that a negative value is refused, not wrapped
+  long long budget = 300;
   int search_stride = 1;
   bool verify = false;
 };
@@ -725,8 +725,13 @@ OptimizeOptions optimize_options(const DesignCommandOptions& o, const DesignOpti
   oo.rotate = !o.no_rotation;
   oo.min_gap_m = o.min_gap_m;
   oo.clamp_margin_m = o.clamp_margin_m;
-  oo.seed = o.seed;
-  oo.budget = o.budget;
+  if (o.seed < 0) throw pvdf::InputError("--seed " + std::to_string(o.seed) + " must be >= 0; give e.g. 1");
+  if (o.budget < 1 || o.budget > 1000000) {
+    throw pvdf::InputError("--budget " + std::to_string(o.budget) +
+                           " must lie in [1, 1000000] (evaluations per electrode count); give e.g. 300");
+  }
+  oo.seed = std::uint64_t(o.seed);
+  oo.budget = std::size_t(o.budget);
   oo.search_stride = o.search_stride;
   oo.design = d;
   check_optimize_options(oo);
