@@ -1089,7 +1089,7 @@ PVDF_COMMAND(75, [](CLI::App& root) {
   sub->add_flag("--json", o->json, "Print the ranking as JSON");
   sub->add_flag("--optimize", o->optimize,
                 "Search electrode layouts (counts, centres, sizes, angles) on the SCENE's film instead of ranking typed "
-                "ones; maps from --atlas (or --synthetic); docs/design.md section 8");
+                "ones; maps from --atlas (or --synthetic); docs/design.md section 7");
   sub->add_option("--atlas", o->atlas_path, "--optimize: charge-density atlas of the film (`pvdfkit atlas`)");
   sub->add_option("--electrodes-min", o->electrodes_min, "--optimize: fewest electrodes (default 3)");
   sub->add_option("--electrodes-max", o->electrodes_max, "--optimize: most electrodes (default 6)");

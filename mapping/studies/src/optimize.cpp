@@ -1,4 +1,4 @@
-// Electrode layout search (optimize.hpp, docs/design.md §8).
+// Electrode layout search (optimize.hpp, docs/design.md §7).
 #include "pvdf/mapping/optimize.hpp"
 
 #include "pvdf/core/constants.hpp"

@@ -1,6 +1,6 @@
 // A small self-contained differential evolution (DE/current-to-pbest/1/bin, Zhang & Sanderson's
 // JADE mutation with fixed dithered parameters) over the unit cube, with constraints handled by
-// Deb's feasibility rules. Used by the layout optimizer (optimize.hpp); docs/design.md §8 says why.
+// Deb's feasibility rules. Used by the layout optimizer (optimize.hpp); docs/design.md §7 says why.
 #pragma once
 
 #include <cstddef>

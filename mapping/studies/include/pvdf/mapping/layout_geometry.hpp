@@ -1,6 +1,6 @@
 // Rotated rectangular electrodes as the layout optimizer sees them: corners, the signed distance
 // between two rectangles (separating axes), and the clearance of a rectangle from the clamp.
-// Pure geometry, no maps; docs/design.md §8 states the constraints these functions check.
+// Pure geometry, no maps; docs/design.md §7 states the constraints these functions check.
 #pragma once
 
 #include "pvdf/core/scene.hpp"

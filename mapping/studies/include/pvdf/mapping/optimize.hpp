@@ -1,4 +1,4 @@
-// Electrode layout search (`pvdfkit design --optimize`, docs/design.md §8): for each electrode
+// Electrode layout search (`pvdfkit design --optimize`, docs/design.md §7): for each electrode
 // count in a range, the rectangles (centres, sizes, angles) that rank best by the design objective
 // (mapping::ranks_before: usable area, then coverage, then median σ_pos) under no-overlap, gap and
 // clamp-margin constraints, found by differential evolution. The charge map of a candidate comes
