@@ -65,7 +65,7 @@ struct DesignCommandOptions {
   bool no_plots = false;
   bool include_map_error = false;
   bool quiet = false;
-  // --optimize (docs/design.md §8)
+  // --optimize (docs/design.md §7)
   bool optimize = false;
   std::string atlas_path;
   int electrodes_min = 3, electrodes_max = 6;
