@@ -897,6 +897,9 @@ int run_optimize(const DesignCommandOptions& o) {
     if (!winners.empty()) {
       std::vector<const Candidate*> shown;
       for (const auto& w : winners) shown.push_back(&w);
+      // Panels best first, so that each panel's "#k" is the winner's rank (mapping::ranks_before).
+      std::stable_sort(shown.begin(), shown.end(),
+                       [](const Candidate* a, const Candidate* b) { return ranks_before(a->summary, b->summary); });
       std::string noise_text;
       for (std::size_t k = 0; k < d.noise_C.size(); ++k) noise_text += (k ? "/" : "") + fmt("%.3g", d.noise_C[k] * 1e12);
       noise_text = "σ = " + noise_text + " pC" + (o.adc_bits > 0 ? ", " + std::to_string(o.adc_bits) + "-bit ADC" : "");
