@@ -320,6 +320,7 @@ nlohmann::json optimize_summary_json(const OptimizeSummary& s, const OptimizeOpt
       r["coverage"] = c.summary.coverage;
       r["median_sigma_pos_m"] = finite_or_null(c.summary.median_sigma_pos_m);
       r["search_usable_fraction"] = c.search_usable_fraction;
+      r["n_mapped"] = c.summary.n_mapped;  // grid nodes the fractions count
       r["layout"] = nlohmann::json::array();
       for (const auto& rect : c.layout) r["layout"].push_back(rect_json(rect));
     }
