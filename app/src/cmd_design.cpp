@@ -820,6 +820,10 @@ int run_optimize(const DesignCommandOptions& o) {
                            "FILE`) or --synthetic (the analytic stand-in, a preview)");
   }
   if (!o.atlas_path.empty() && o.synthetic) throw pvdf::InputError("--atlas and --synthetic: give one of them");
+  if (!o.atlas_path.empty() && (o.spacing_m > 0 || o.tolerance > 0)) {
+    throw pvdf::InputError(std::string(o.spacing_m > 0 ? "--spacing-m" : "--tolerance") + " with --atlas " + o.atlas_path +
+                           ": the atlas fixes the grid and the tolerance; drop the flag or make another atlas");
+  }
   if (!o.atlas_path.empty() && !std::filesystem::is_regular_file(o.atlas_path)) {
     throw pvdf::InputError("--atlas " + o.atlas_path + ": no such file; make one with `pvdfkit atlas SCENE -o " +
                            o.atlas_path + "`");
