@@ -207,7 +207,8 @@ FilmSolver::GoalErrors FilmSolver::estimate_goal_errors(const Vector<double>& u,
   // misses its source and the estimate took the wrong sign (effectivity −0.4 … 3.4), the Q(p+1)
   // adjoint gives 0.8 … 1.15; for w at a probe's centre the extrapolation did better (0.6 … 0.8,
   // against 3.0 at 2e-4 true error with the Q(p+1) adjoint, whose point source is singular).
-  assemble(u, model, 0.0, true, r);
+  if (ge.model_estimated) tangent_.add(-1.0, bending_);  // K again, without a second assembly
+  else assemble(u, model, 0.0, true, r);
   bool patches = true;
   for (const auto& cell : triangulation_.active_cell_iterators()) patches = patches && cell->level() > 0;
   auto solved_in_richer_space = [&](std::size_t j) { return !patches || (higher_order_adjoint && j < ne); };
