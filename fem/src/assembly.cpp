@@ -278,28 +278,14 @@ void add_point_residual(const MembranePoint& p, const double* G, unsigned int nb
   }
 }
 
-// The positive part of the symmetric 2×2 tensor [[S0, S2], [S2, S1]] (Voigt): its compressive
-// eigenvalue set to zero. A geometric stiffness built from it is positive semi-definite.
-std::array<double, 3> positive_part(const std::array<double, 3>& S) {
-  const double mean = 0.5 * (S[0] + S[1]), half = 0.5 * (S[0] - S[1]);
-  const double radius = std::sqrt(half * half + S[2] * S[2]);
-  const double l1 = mean + radius, l2 = mean - radius;
-  if (l2 >= 0) return S;
-  if (l1 <= 0) return {0, 0, 0};
-  // Eigenvector of l1: (cos t, sin t) with tan 2t = 2 S2 / (S0 − S1); l1·n⊗n.
-  const double c2 = radius > 0 ? half / radius : 1.0, s2 = radius > 0 ? S[2] / radius : 0.0;  // cos 2t, sin 2t
-  return {l1 * 0.5 * (1 + c2), l1 * 0.5 * (1 - c2), l1 * 0.5 * s2};
-}
-
 // Tangent block (c, d): ∇φ_a·(B_cᵀ C B_d + δ_cd G)∇φ_b, with B_c the 3×2 map ∇φ ↦ δE (Voigt)
 // and the geometric stiffness G = S (w–w; also u–u of the same component for large rotation;
 // N_tot·I for w in the linear model). The 2×2 block matrices are formed once per point and
 // added to Kb[(c·3 + d)·nb² + a·nb + b].
 void add_point_tangent(const MembranePoint& p, const double* G, unsigned int nb, double jxw, Model model,
-                       double N_tot, const Stiffness3& stiffness, double* Kb, bool tension_only) {
+                       double N_tot, const Stiffness3& stiffness, double* Kb) {
   const auto& C = stiffness.c;
-  std::array<double, 3> S = p.S;
-  if (tension_only) S = positive_part(S);
+  const auto& S = p.S;
   const auto& v = p.v;
   const bool geometric_inplane = model == Model::large_rotation;
   // B_c (3×2): δE = (v0 φx, v1 φy, v0 φy + v1 φx) → columns for φx, φy.
@@ -388,7 +374,7 @@ void FilmSolver::assemble(const Vector<double>& u, Model model, double artificia
         tangent_C = &relaxed_C;
       }
       add_point_residual(point, G, nb, jxw, model, N_tot, rb.data());
-      if (want_matrix) add_point_tangent(point, G, nb, jxw, model, N_tot, *tangent_C, Kb.data(), tension_only_tangent_);
+      if (want_matrix) add_point_tangent(point, G, nb, jxw, model, N_tot, *tangent_C, Kb.data());
     }
     // Back to the FE's local (system) order.
     for (unsigned int i = 0; i < n; ++i) dofs[i] = cd[i];

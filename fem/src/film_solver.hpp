@@ -414,10 +414,6 @@ class FilmSolver {
   // Chord steps (probe sweeps): keep the last factorized tangent while Newton contracts fast.
   bool reuse_factorization_ = false;
   bool chord_first_step_ = false;     // the first step of the next newton() may use the old factorization
-  // Continuation stages (newton.cpp): the geometric stiffness from the positive part of S only, so the
-  // tangent stays positive definite (Cholesky) where a stage's start is still compressed; the
-  // residual is unchanged, so the converged state is the same.
-  bool tension_only_tangent_ = false;
 
   // Per-mesh assembly cache (build_geometry_cache): scalar shape gradients [cell][q][base][2],
   // JxW [cell][q], DOF indices [cell][i]; system_index[c·n_base + a] = local index of (component c, base a).
