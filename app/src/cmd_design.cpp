@@ -795,6 +795,21 @@ void write_pareto_figure(const OptimizeSummary& s, const DesignCommandOptions& o
                 pvdf::plot::Marker::square, 10);
     }
   }
+  // Whole electrode counts on x, half a count of room either side; on the log y of the median bound
+  // room for every point (the scene's layout included) so that no marker sits on the frame.
+  double n_lo = n.empty() ? 3 : n.front(), n_hi = n.empty() ? 3 : n.back();
+  double m_lo = std::numeric_limits<double>::infinity(), m_hi = 0;
+  for (double m : median)
+    if (std::isfinite(m) && m > 0) m_lo = std::min(m_lo, m), m_hi = std::max(m_hi, m);
+  if (s.reference_evaluated) {
+    n_lo = std::min(n_lo, double(s.reference.electrodes.size()));
+    n_hi = std::max(n_hi, double(s.reference.electrodes.size()));
+    const double r = 1e3 * s.reference.median_sigma_pos_m;
+    if (std::isfinite(r) && r > 0) m_lo = std::min(m_lo, r), m_hi = std::max(m_hi, r);
+  }
+  a.integer_x().xlim(n_lo - 0.5, n_hi + 0.5);
+  b.integer_x().xlim(n_lo - 0.5, n_hi + 0.5);
+  if (m_hi > 0 && std::isfinite(m_lo)) b.ylim(m_lo / 1.25, m_hi * 1.25);
   a.xlabel("electrodes").ylabel("area fraction (%)").title(fmt("usable area (σ$_{pos}$ ≤ %.3g mm)", o.target_mm)).grid_lines().legend("best");
   b.xlabel("electrodes").ylabel("median σ$_{pos}$ (mm)").log_y().title("median position bound").grid_lines().legend("best");
   fig.suptitle("design --optimize: best layout per electrode count (seed " + std::to_string(o.seed) + ", budget " +
