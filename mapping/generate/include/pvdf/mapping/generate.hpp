@@ -103,7 +103,8 @@ struct MapOptions {
   RimModel rim_model = RimModel::by_estimate;
   /// Nodes whose estimate still exceeds the tolerance after the sweep (and the rim model):
   /// by_estimate solves each again with the adaptive solver at that press alone (its own
-  /// goal-oriented mesh, bending kept; node model 2), never keeps the sweep's values flagged
+  /// goal-oriented mesh; with model auto as `pvdfkit solve` decides bending and the clamp layer,
+  /// else bending kept; node model 2), never keeps the sweep's values flagged
   /// tolerance_not_met.
   DirectSolves direct_solves = DirectSolves::by_estimate;
   /// footprint: each probe is solved on the sweep mesh refined around its own footprint
