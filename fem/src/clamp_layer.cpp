@@ -5,11 +5,12 @@
 // membrane sees a clamp moved inward by l_b. The in-plane field: the layer stretches less (½ w'²
 // with w' → 0 at the clamp) than the outer field assumes; over the layer the difference is
 // ¾ l_b (∂_n w)², an inward shift of the outer field's rim displacement.
-// Both are imposed as Dirichlet values of the rim DOFs, lagged: from a converged state, ∂_n w at each
-// rim node from its nodal reaction (internal − external force = ∮ N_nn ∂_n w φ_i ds, variationally
-// consistent; the FE gradient at the rim is a poor slope), N_nn and l_b there; then Newton with those
-// values held (an SPD tangent, Newton increments zero on the rim), and again until the outputs stop
-// changing. With bending kept, the rim's C0IP terms (∂_n w = 0) are dropped: a simply supported rim
+// Both are imposed as Dirichlet values of the rim DOFs, lagged: from a converged state, ∂_n w along the
+// rim from its nodal reactions (internal − external force = ∮ N_nn ∂_n w φ_i ds, variationally
+// consistent; the FE gradient at the rim is a poor slope) through the consistent rim mass, filtered
+// along the rim (update_clamp_layer says why), N_nn and l_b held from the first pass; then Newton with
+// those values held (an SPD tangent, Newton increments zero on the rim), and again until the outputs
+// stop changing. With bending kept, the rim's C0IP terms (∂_n w = 0) are dropped: a simply supported rim
 // leaves no layer to resolve.
 #include "clamp_layer.hpp"
 #include "film_solver.hpp"
@@ -19,6 +20,8 @@
 
 #include <deal.II/base/quadrature_lib.h>
 #include <deal.II/fe/fe_values.h>
+
+#include <Eigen/Sparse>
 
 #include <algorithm>
 #include <cmath>
@@ -101,7 +104,7 @@ void FilmSolver::update_clamp_layer(const Vector<double>& u, Model model) {
   };
   std::map<types::global_dof_index, Node> nodes;                                          // rim w DOFs
   std::map<types::global_dof_index, std::pair<types::global_dof_index, unsigned int>> partner;  // in-plane → (w DOF, component)
-  Vector<double> mass(dof_handler_.n_dofs());
+  Vector<double> mass(dof_handler_.n_dofs()), force_N(dof_handler_.n_dofs());  // ∮ φ_i ds, ∮ N_nn φ_i ds
   double num = 0, den = 0, n_max = 0;
   clamp_l_over_h_ = 0;
   summary_.clamp_layer_width_m = 0;
@@ -136,10 +139,13 @@ void FilmSolver::update_clamp_layer(const Vector<double>& u, Model model) {
       cell->get_dof_indices(cell_dofs);
       const double h = cell->extent_in_direction(GeometryInfo<dim>::unit_normal_direction[f]);
       for (unsigned int q = 0; q < fq.size(); ++q) {
-        for (unsigned int i = 0; i < cell_dofs.size(); ++i)
-          if (fe_->system_to_component_index(i).first == 2) mass(cell_dofs[i]) += fv.shape_value(i, q) * fv.JxW(q);
         const Tensor<1, dim>& n = fv.normal_vector(q);
         const double N = normal_force(membrane_C_, kinematics_from(gu[q], gw[q]), model, pretension_, n);
+        for (unsigned int i = 0; i < cell_dofs.size(); ++i)
+          if (fe_->system_to_component_index(i).first == 2) {
+            mass(cell_dofs[i]) += fv.shape_value(i, q) * fv.JxW(q);
+            force_N(cell_dofs[i]) += N * fv.shape_value(i, q) * fv.JxW(q);
+          }
         n_max = std::max(n_max, N);
         if (!(N > 0)) continue;
         const double l = std::sqrt(bending_nn(bending_D_, n) / N);
@@ -157,6 +163,10 @@ void FilmSolver::update_clamp_layer(const Vector<double>& u, Model model) {
     return;
   }
   const double n_floor = n_max > 0 ? floor_fraction * n_max : 1e-300;
+  const bool first_pass = clamp_N_.empty();
+  if (first_pass)
+    for (const auto& [d, node] : nodes)
+      if (mass(d) > 0) clamp_N_[d] = std::max(force_N(d) / mass(d), n_floor);
 
   // 2. The slope ∂_n w of the converged state from the rim's nodal reaction (variationally
   // consistent: internal − external force of a rim w DOF = ∮ N_nn ∂_n w φ_i ds), the w values
@@ -168,25 +178,92 @@ void FilmSolver::update_clamp_layer(const Vector<double>& u, Model model) {
   force -= load_raw_;
   hanging_constraints_.condense(force);
   hanging_constraints_.condense(mass);
+  // The held w values solve P w = b on the rim's w DOFs, with P = ∮ φ_i φ_j + ½ l_b² ∂_tφ_i ∂_tφ_j ds
+  // and b_i = l_i R_i / N_i (R_i the nodal reaction). For a rim slope g, R = N M g with M the
+  // consistent rim mass, so P w = l M g: the local condition w = l_b ∂_n w filtered along the rim.
+  // Why the filter: for a slope varying as e^{ikt} along a straight clamp the plate equation
+  // D ∇⁴w − N ∇²w = 0 has the layer root q = √(k² + 1/l_b²), and w = ∂_s w = 0 at the clamp give
+  // w_out = ∂_n w_out / q = l_b (1 + k² l_b²)^(−½) ∂_n w_out: the local condition is its k → 0
+  // limit. (1 + ½ k² l_b²)^(−1) matches it to first order in k² l_b². The lagged update's gain on a
+  // rim mode k is about k l_b times that factor (the outer field's flux per unit w is N k): at most
+  // 1/√2 for every k, where the local condition's k l_b exceeds 1 for the short rim modes a refined
+  // rim cell carries. The consistent mass replaces the lumped ∮ φ_i ds (h/6 at a Q2 vertex against
+  // 2h/3 at a mid-side node). The discrete outer field is stiffer than N k for rim modes at the node
+  // spacing s = h/p (it cannot decay faster than one cell), so those modes still grew by ~10× per
+  // pass at a rim size transition (docs/fem.md §3.4); P therefore also holds s² ∂_tφ_i ∂_tφ_j: held
+  // values do not vary along the rim on scales shorter than its node spacing. Measured on the case
+  // that diverged: s² → ¼ s² or 4 s² moves the charges by < 0.1 %, the layer's whole effect is 1.4 %.
   struct Slope {
-    double slope = 0, l = 0, n[2] = {0, 0};
+    double slope = 0, l = 0, N = 0, n[2] = {0, 0};
   };
   std::map<types::global_dof_index, Slope> slopes;
-  clamp_shift_.clear();
+  std::map<types::global_dof_index, int> row;  // rim w DOF → row of P
   for (const auto& [d, node] : nodes) {
     if (hanging_constraints_.is_constrained(d) || !constraints_.is_constrained(d) || !(mass(d) > 0)) continue;
-    const double N = std::max(node.N / node.count, n_floor);
+    Slope s;
+    const auto held_N = clamp_N_.find(d);
+    s.N = held_N != clamp_N_.end() ? held_N->second : std::max(node.N / node.count, n_floor);
     Tensor<1, dim> n;
     n[0] = node.n[0];
     n[1] = node.n[1];
     n /= n.norm();
-    Slope s;
-    s.l = std::sqrt(bending_nn(bending_D_, n) / N);
-    s.slope = force(d) / (N * mass(d));
+    s.l = std::sqrt(bending_nn(bending_D_, n) / s.N);
     s.n[0] = n[0];
     s.n[1] = n[1];
     slopes[d] = s;
-    clamp_shift_.emplace_back(d, s.l * s.slope);
+    const int r = int(row.size());
+    row[d] = r;
+  }
+  const int n_rim = int(row.size());
+  std::vector<Eigen::Triplet<double>> mass_entries, layer_entries, mesh_entries;
+  for (const auto& cell : dof_handler_.active_cell_iterators())
+    for (const unsigned int f : cell->face_indices()) {
+      if (!cell->face(f)->at_boundary()) continue;
+      fv.reinit(cell, f);
+      cell->get_dof_indices(cell_dofs);
+      std::vector<std::pair<unsigned int, int>> local;  // (cell DOF, row) of the face's rim w DOFs
+      for (unsigned int i = 0; i < cell_dofs.size(); ++i) {
+        if (fe_->system_to_component_index(i).first != 2) continue;
+        const auto it = row.find(cell_dofs[i]);
+        if (it != row.end()) local.emplace_back(i, it->second);
+      }
+      if (local.empty()) continue;
+      double l2 = 0;  // the face's mean l_b², from its nodes
+      for (const auto& [i, ri] : local) l2 += slopes[cell_dofs[i]].l * slopes[cell_dofs[i]].l / local.size();
+      const double spacing = cell->face(f)->measure() / p;  // of the face's nodes
+      for (unsigned int q = 0; q < fq.size(); ++q) {
+        const Tensor<1, dim>& n = fv.normal_vector(q);
+        Tensor<1, dim> t;
+        t[0] = -n[1];
+        t[1] = n[0];
+        for (const auto& [i, ri] : local)
+          for (const auto& [j, rj] : local) {
+            const double m = fv[w].value(i, q) * fv[w].value(j, q);
+            const double a = (fv[w].gradient(i, q) * t) * (fv[w].gradient(j, q) * t);
+            mass_entries.emplace_back(ri, rj, m * fv.JxW(q));
+            layer_entries.emplace_back(ri, rj, 0.5 * l2 * a * fv.JxW(q));
+            mesh_entries.emplace_back(ri, rj, spacing * spacing * a * fv.JxW(q));
+          }
+      }
+    }
+  Eigen::SparseMatrix<double> M(n_rim, n_rim), L(n_rim, n_rim), H(n_rim, n_rim);
+  M.setFromTriplets(mass_entries.begin(), mass_entries.end());
+  L.setFromTriplets(layer_entries.begin(), layer_entries.end());
+  H.setFromTriplets(mesh_entries.begin(), mesh_entries.end());
+  Eigen::VectorXd b(n_rim);
+  for (const auto& [d, r] : row) b[r] = slopes[d].l * force(d) / slopes[d].N;
+  using Factor = Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>>;
+  const Eigen::SparseMatrix<double> P = M + L + H;
+  const Factor factor(P);
+  Eigen::VectorXd held;
+  if (factor.info() == Eigen::Success) held = factor.solve(b);
+  clamp_shift_.clear();
+  for (const auto& [d, r] : row) {
+    Slope& s = slopes[d];
+    // P is SPD whenever the rim has a face; the lumped form is only a fallback.
+    const double wd = held.size() == n_rim ? held[r] : s.l * force(d) / (s.N * mass(d));
+    s.slope = wd / s.l;
+    clamp_shift_.emplace_back(d, wd);
   }
   if (options_.clamp_layer_inplane_shift) {
     for (const auto& [d, wd] : partner) {
@@ -225,6 +302,7 @@ NewtonOutcome FilmSolver::solve_with_clamp_layer(Model model, Vector<double>& u)
   OutputVector previous;
   summary_.clamp_layer_passes = 0;
   clamp_settled_ = false;
+  clamp_N_.clear();
   for (int pass = 0; pass < 8; ++pass) {
     update_clamp_layer(u, model);
     o = newton(model, 0.0, u);

@@ -446,6 +446,9 @@ class FilmSolver {
   std::vector<std::pair<dealii::types::global_dof_index, double>> clamp_shift_;  // rim values of u (m)
   double clamp_ratio_ = 0;          // weighted l_b |∂_nn w| / |∂_n w| along the rim (the estimate's factor)
   double clamp_l_over_h_ = 0;       // largest l_b / (rim cell size)
+  // Rim N_nn per w DOF, face-averaged (∮ N_nn φ_i ds / ∮ φ_i ds), taken at the first pass of
+  // solve_with_clamp_layer and held over its passes (docs/fem.md §3.4: a lagged N_nn fed back).
+  std::map<dealii::types::global_dof_index, double> clamp_N_;
   bool clamp_settled_ = false;      // the lagged rim values settled (solve_with_clamp_layer)
   bool clamp_failed_ = false;       // the condition's Newton failed once: the reference path
   std::vector<double> clamp_correction_C_;  // per electrode: Q(condition) − Q(plain clamp), where switched on
