@@ -215,7 +215,7 @@ NewtonOutcome FilmSolver::refine_until_tolerance(Model model, std::string& where
     const double other_model =
         (goal_.model_estimated && std::isfinite(goal_.relative_model) ? goal_.relative_model : 0.0) + kinematics_model_error_;
     const double clamp_share = clamp_layer_share(options_.tolerance, other_model);
-    if (clamp_layer_ && clamp_estimate > clamp_share) {
+    if (clamp_layer_ && clamp_estimate > clamp_share && !clamp_layer_accepted()) {
       clamp_reason_ += "; its estimated error " + fmt(clamp_estimate) + " > its share of the tolerance " +
                        fmt(clamp_share) + ": bending kept, rim graded to l_b instead";
       set_clamp_layer(false, solution_);

@@ -442,6 +442,16 @@ double clamp_layer_share(double tolerance, double other_model_error) {
   return 0.75 * tolerance - (std::isfinite(other_model_error) ? other_model_error : tolerance);
 }
 
+// PVDF_CLAMP_LAYER=accept (bench only): solve keeps the condition even where its estimate exceeds
+// its share, so that the estimate's effectivity can be measured there against the rim-graded path.
+bool clamp_layer_accepted() {
+  static const bool accepted = [] {
+    const char* v = std::getenv("PVDF_CLAMP_LAYER");
+    return v && std::string(v) == "accept";
+  }();
+  return accepted;
+}
+
 // The bench switch, read like PVDF_FACTORIZATION (bench/fem/bench_clamp_layer.sh,
 // bench/mapping/bench_clamp_layer_map.sh).
 Options with_clamp_layer_switch(Options options) {
@@ -450,8 +460,8 @@ Options with_clamp_layer_switch(Options options) {
   const std::string mode = v;
   if (mode == "rim-graded") options.clamp_layer_condition = false;
   else if (mode == "no-shift") options.clamp_layer_inplane_shift = false;
-  else if (!mode.empty())
-    throw InputError("PVDF_CLAMP_LAYER = '" + mode + "' is not a mode; use rim-graded or no-shift, or unset it");
+  else if (!mode.empty() && mode != "accept")
+    throw InputError("PVDF_CLAMP_LAYER = '" + mode + "' is not a mode; use rim-graded, no-shift or accept, or unset it");
   return options;
 }
 

@@ -18,4 +18,8 @@ double clamp_layer_share(double tolerance, double other_model_error);
 /// shift, unset or empty = as given; another value throws pvdf::InputError.
 Options with_clamp_layer_switch(Options options);
 
+/// PVDF_CLAMP_LAYER=accept (bench only): `solve` keeps the condition where its estimate exceeds its
+/// share (instead of the rim-graded path), so its effectivity can be measured there.
+bool clamp_layer_accepted();
+
 }  // namespace pvdf::fem::detail
