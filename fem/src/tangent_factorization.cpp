@@ -80,15 +80,25 @@ struct TangentFactorization::Impl {
 // fixed 4 threads (compiled in, `num_threads` clauses that OMP_NUM_THREADS cannot lower). On the
 // 10k-DOF seed-001 tangent the wake-ups and spin-waits of those threads cost 4x the arithmetic
 // (measured: 0.12 s against 0.028 s CPU per factorization). Allowing no active parallel level
-// runs every OpenMP region of the process on the calling thread; pvdfkit's own parallelism is by
-// std::thread (map generation, estimates) and by processes (MPI), never by OpenMP.
-//
+// runs every OpenMP region on the calling thread; pvdfkit's own parallelism is by std::thread (map
+// generation, estimates) and by processes (MPI), never by OpenMP. The setting is per thread in
+// GCC's libgomp (max-active-levels is a data-environment ICV since OpenMP 5.0): set once in the
+// main thread it left every map worker thread at the default, with CHOLMOD's teams of 4 (r12,
+// checked with a std::thread: 0 in main, 1 in the thread). So every thread that factorizes or
+// solves sets it for itself, once.
+static void openmp_serial_on_this_thread() {
+  thread_local const bool set = [] {
+    omp_set_max_active_levels(0);
+    return true;
+  }();
+  (void)set;
+}
+
 // PVDF_FACTORIZATION=simplicial-ldlt in the environment selects the method used before CHOLMOD,
 // so that benchmarks can compare both in one run on one machine (docs/bench-fem.md).
-// Both are settled once per process (a map builds a factorization for every probe mesh).
+// Settled once per process (a map builds a factorization for every probe mesh).
 static bool simplicial_requested() {
   static const bool requested = [] {
-    omp_set_max_active_levels(0);
     const char* env = std::getenv("PVDF_FACTORIZATION");
     return env && std::string(env) == "simplicial-ldlt";
   }();
@@ -140,6 +150,7 @@ void TangentFactorization::set_pattern(const dealii::SparsityPattern& pattern) {
 }
 
 bool TangentFactorization::factorize(const dealii::SparseMatrix<double>& matrix) {
+  openmp_serial_on_this_thread();
   Impl& m = *impl_;
   double* values = m.matrix.valuePtr();
   std::size_t k = 0;
@@ -186,6 +197,7 @@ void TangentFactorization::forget_history() {
 }
 
 void TangentFactorization::solve(const double* b, double* x, std::size_t n) const {
+  openmp_serial_on_this_thread();
   const Eigen::Map<const Eigen::VectorXd> bv(b, static_cast<Eigen::Index>(n));
   Eigen::Map<Eigen::VectorXd> xv(x, static_cast<Eigen::Index>(n));
   if (impl_->last_was_cholesky)
