@@ -151,10 +151,15 @@ PVDF_CLONES Locator::Fit Locator::levenberg_marquardt(const double* q, const dou
   Vec w_map{};
   if (!map_error_.empty()) {
     // The map's own error joins the charge noise (σ_k² + e_k², e at the start: the weights are
-    // held during the fit; finish() takes χ² with e at the end point).
+    // held during the fit; finish() takes χ² with e at the end point). The fit's weights are
+    // diagonal: the common scale share enters as its variance on each electrode, σ_α²·q_k²
+    // (the measured charges stand for the map's there); finish() uses the full model.
     Vec variance{};
-    if (map_variance_at(x, y, l, variance.data())) {
-      for (std::size_t k = 0; k < ne_; ++k) w_map[k] = 1.0 / std::sqrt(1.0 / (w[k] * w[k]) + variance[k]);
+    double scale2 = 0;
+    if (map_variance_at(x, y, l, variance.data(), scale2)) {
+      for (std::size_t k = 0; k < ne_; ++k) {
+        w_map[k] = 1.0 / std::sqrt(1.0 / (w[k] * w[k]) + variance[k] + scale2 * q[k] * q[k]);
+      }
       w = w_map.data();
     }
   }
@@ -261,12 +266,15 @@ PVDF_CLONES Locator::Fit Locator::levenberg_marquardt(const double* q, const dou
   return fit;
 }
 
-PVDF_CLONES bool Locator::map_variance_at(double x, double y, double l, double* variance_C2) const {
+PVDF_CLONES bool Locator::map_variance_at(double x, double y, double l, double* variance_C2, double& scale2) const {
   // Per electrode, in quadrature (independent shares, docs/lookup.md §1.10): the nodes' own
   // estimate, the interpolation error between nodes × the bubble 1 − (1 − 4t(1−t))(1 − 4s(1−s))
   // (zero at the nodes, one on the cell's mid-lines), between levels × 4w(1−w), and beyond them
   // the slope × the distance in ln F. Each share bilinear in the cell's corners and linear in
-  // ln F between the levels (absolute errors; beyond the levels scaled by the F^p law).
+  // ln F between the levels (absolute errors; beyond the levels scaled by the F^p law). With
+  // correlated_map_error the shares between nodes and levels are their parts independent between
+  // electrodes, and their common relative scales combine the same way into scale2 (§1.11).
+  scale2 = 0;
   const std::size_t nx = interp_.nx(), ny = interp_.ny(), ne = ne_, nf = interp_.n_levels();
   const double u = (x - interp_.x0()) * interp_.inv_hx(), v = (y - interp_.y0()) * interp_.inv_hy();
   if (!(u >= 0 && v >= 0 && u <= double(nx - 1) && v <= double(ny - 1))) return false;
@@ -315,6 +323,20 @@ PVDF_CLONES bool Locator::map_variance_at(double x, double y, double l, double* 
   } else if (scale != 1) {
     for (std::size_t k = 0; k < ne; ++k) variance_C2[k] *= scale * scale;
   }
+  if (!map_scale_.empty()) {  // relative: no F^p scaling beyond the levels
+    const float* s0 = &map_scale_[(cell * nf + f0) * 12];
+    const float* s1 = &map_scale_[(cell * nf + f1) * 12];
+    const double between_nodes = bubble * ((1 - w) * corners(s0) + w * corners(s1));
+    scale2 = between_nodes * between_nodes;
+    if (level_share > 0) {
+      const double between_levels = level_share * corners(s0 + 4);
+      scale2 += between_levels * between_levels;
+    }
+    if (beyond > 0) {
+      const double off_levels = beyond * corners(&map_scale_[(cell * nf + f_end) * 12 + 8]);
+      scale2 += off_levels * off_levels;
+    }
+  }
   return true;
 }
 
@@ -324,8 +346,13 @@ bool Locator::charge_error(double x_m, double y_m, double force_N, double* error
     for (std::size_t k = 0; k < ne_; ++k) error_C[k] = 0.0;
     return true;
   }
-  if (!map_variance_at(x_m, y_m, std::log(force_N), error_C)) return false;
-  for (std::size_t k = 0; k < ne_; ++k) error_C[k] = std::sqrt(error_C[k]) * std::abs(gain_[k]);
+  double scale2 = 0;
+  if (!map_variance_at(x_m, y_m, std::log(force_N), error_C, scale2)) return false;
+  Vec model{};
+  if (scale2 > 0 && !interp_.evaluate(x_m, y_m, std::log(force_N), model.data(), nullptr)) return false;
+  for (std::size_t k = 0; k < ne_; ++k) {
+    error_C[k] = std::sqrt(error_C[k] + scale2 * model[k] * model[k]) * std::abs(gain_[k]);
+  }
   return true;
 }
 
@@ -348,13 +375,25 @@ void Locator::set_map_error(const ChargeMap& map) {
   if (map.charge_error_is_total() && node_estimate) {
     between.between_nodes_C.clear();
     between.between_levels_C.clear();
+    between.between_nodes_rest_C.clear();
+    between.between_levels_rest_C.clear();
+    between.between_nodes_scale.clear();
+    between.between_levels_scale.clear();
   }
+  // Correlated (§1.11): each share's rest per electrode in map_error_, its common scale in
+  // map_scale_; otherwise the totals per electrode, as independent errors.
+  const bool correlated = options_.correlated_map_error && options_.interpolation_error;
+  const std::vector<double>& nodes_C = correlated ? between.between_nodes_rest_C : between.between_nodes_C;
+  const std::vector<double>& levels_C = correlated ? between.between_levels_rest_C : between.between_levels_C;
+  const std::vector<double>& beyond_C = correlated ? between.beyond_levels_rest_C : between.beyond_levels_C;
   auto share = [](const std::vector<double>& values, std::size_t at) {
     if (values.empty()) return 0.0f;
     const double e = values[at];
     return std::isfinite(e) && e > 0 ? float(e) : 0.0f;
   };
   map_error_.assign((nx - 1) * (ny - 1) * nf * ne * 16, 0.0f);
+  map_scale_.clear();
+  if (correlated) map_scale_.assign((nx - 1) * (ny - 1) * nf * 12, 0.0f);
   for (std::size_t j = 0; j + 1 < ny; ++j) {
     for (std::size_t i = 0; i + 1 < nx; ++i) {
       if (!interp_.cell_usable(i, j)) continue;
@@ -365,9 +404,18 @@ void Locator::set_map_error(const ChargeMap& map) {
           for (std::size_t c = 0; c < 4; ++c) {
             const std::size_t at = map.charge_index(f, j + c / 2, i + c % 2, k);
             out[c] = node_estimate ? share(map.estimated_charge_error_C, at) : 0.0f;
-            out[4 + c] = share(between.between_nodes_C, at);
-            out[8 + c] = share(between.between_levels_C, at);
-            out[12 + c] = share(between.beyond_levels_C, at);
+            out[4 + c] = share(nodes_C, at);
+            out[8 + c] = share(levels_C, at);
+            out[12 + c] = share(beyond_C, at);
+          }
+        }
+        if (correlated) {
+          float* out = &map_scale_[(cell * nf + f) * 12];
+          for (std::size_t c = 0; c < 4; ++c) {
+            const std::size_t at = map.point(f, j + c / 2, i + c % 2);
+            out[c] = share(between.between_nodes_scale, at);
+            out[4 + c] = share(between.between_levels_scale, at);
+            out[8 + c] = share(between.beyond_levels_scale, at);
           }
         }
       }
@@ -379,19 +427,38 @@ std::array<double, 6> Locator::reported_jtj(const Fit& fit, const Query& Q) cons
   // JᵀWJ for the reported σ's: with the map's own error, each electrode's weight is
   // 1 / (σ_k² + e_k²), e_k the map error at the solution (docs/lookup.md §1.10), the Jacobian
   // the fit's last evaluated one (no evaluation here).
+  // With a common scale share (§1.11) the weight is the inverse of diag(σ_k² + e_k²) + σ_α² Q Qᵀ
+  // (Q the model's charges there): by Sherman–Morrison JᵀWJ = JᵀD⁻¹J − c·(JᵀD⁻¹Q)(JᵀD⁻¹Q)ᵀ,
+  // c = σ_α² / (1 + σ_α² QᵀD⁻¹Q).
   if (map_error_.empty() || !fit.has_variance) return fit.jtj;
   const auto& grad = fit.grad;
   std::array<double, 6> m{0, 0, 0, 0, 0, 0};
+  std::array<double, 3> p{0, 0, 0};
+  double qq = 0;
   for (std::size_t k = 0; k < ne_; ++k) {
     const double sigma = 1.0 / Q.w[k];
     const double w = 1.0 / std::sqrt(sigma * sigma + fit.variance[k]);
     const double g0 = grad[k][0] * w, g1 = grad[k][1] * w, g2 = Q.fixed_force ? 0.0 : grad[k][2] * w;
+    const double mw = fit.model[k] * w;
     m[0] += g0 * g0;
     m[1] += g0 * g1;
     m[2] += g0 * g2;
     m[3] += g1 * g1;
     m[4] += g1 * g2;
     m[5] += g2 * g2;
+    p[0] += g0 * mw;
+    p[1] += g1 * mw;
+    p[2] += g2 * mw;
+    qq += mw * mw;
+  }
+  if (fit.scale2 > 0) {
+    const double c = fit.scale2 / (1.0 + fit.scale2 * qq);
+    m[0] -= c * p[0] * p[0];
+    m[1] -= c * p[0] * p[1];
+    m[2] -= c * p[0] * p[2];
+    m[3] -= c * p[1] * p[1];
+    m[4] -= c * p[1] * p[2];
+    m[5] -= c * p[2] * p[2];
   }
   return m;
 }
@@ -463,15 +530,20 @@ void Locator::add_map_error(const Query& Q, std::array<Fit, 8>& fits, int n_fits
   // fits, and a second solution is not hidden behind the first one's map error (§1.6).
   for (int s = 0; s < n_fits; ++s) {
     Fit& f = fits[std::size_t(s)];
-    if (!f.ok || f.duplicate || !map_variance_at(f.x, f.y, f.l, f.variance.data())) continue;
+    if (!f.ok || f.duplicate || !map_variance_at(f.x, f.y, f.l, f.variance.data(), f.scale2)) continue;
     f.has_variance = true;
-    double chi2 = 0;
+    // χ² = rᵀ(D + σ_α² Q Qᵀ)⁻¹r = rᵀD⁻¹r − c (QᵀD⁻¹r)², c as in reported_jtj (§1.11).
+    double chi2 = 0, qr = 0, qq = 0;
     for (std::size_t k = 0; k < ne_; ++k) {
       const double sigma = 1.0 / Q.w[k];
+      const double d = sigma * sigma + f.variance[k];
       const double r = f.model[k] - Q.q[k];
-      chi2 += r * r / (sigma * sigma + f.variance[k]);
+      chi2 += r * r / d;
+      qr += f.model[k] * r / d;
+      qq += f.model[k] * f.model[k] / d;
     }
-    f.chi2 = chi2;
+    if (f.scale2 > 0) chi2 -= f.scale2 / (1.0 + f.scale2 * qq) * qr * qr;
+    f.chi2 = std::max(chi2, 0.0);
   }
 }
 
@@ -609,7 +681,8 @@ void Locator::fill_main(const Query& Q, const Fit& b, Location& out) const {
     double share = 0;
     for (std::size_t k = 0; k < ne_; ++k) {
       const double noise2 = 1.0 / (Q.w[k] * Q.w[k]);
-      share += b.variance[k] / (noise2 + b.variance[k]);
+      const double e2 = b.variance[k] + b.scale2 * b.model[k] * b.model[k];
+      share += e2 / (noise2 + e2);
     }
     out.map_error_share = ne_ > 0 ? share / double(ne_) : 0.0;
   }
@@ -652,10 +725,13 @@ double Locator::log_posterior_weight(const Query& Q, const Fit& f) const {
   // paying for the broader likelihood it stands on: it outranked exact fits where the map is good.
   double log_norm = 0;
   if (f.has_variance) {
+    double qq = 0;  // with the common scale share, det(D + σ_α² Q Qᵀ) = det D · (1 + σ_α² QᵀD⁻¹Q)
     for (std::size_t k = 0; k < ne_; ++k) {
       const double sigma = 1.0 / Q.w[k];
       log_norm -= 0.5 * std::log((sigma * sigma + f.variance[k]) / (sigma * sigma));
+      qq += f.model[k] * f.model[k] / (sigma * sigma + f.variance[k]);
     }
+    log_norm -= 0.5 * std::log1p(f.scale2 * qq);
   }
   return -0.5 * f.chi2 + log_norm - 0.5 * std::log(std::max(det, floor)) + f.log_widen + (Q.fixed_force ? 0.0 : f.l);
 }
