@@ -151,15 +151,13 @@ PVDF_CLONES Locator::Fit Locator::levenberg_marquardt(const double* q, const dou
   Vec w_map{};
   if (!map_error_.empty()) {
     // The map's own error joins the charge noise (σ_k² + e_k², e at the start: the weights are
-    // held during the fit; finish() takes χ² with e at the end point). The fit's weights are
-    // diagonal: the common scale share enters as its variance on each electrode, σ_α²·q_k²
-    // (the measured charges stand for the map's there); finish() uses the full model.
-    Vec variance{};
-    double scale2 = 0;
-    if (map_variance_at(x, y, l, variance.data(), scale2)) {
-      for (std::size_t k = 0; k < ne_; ++k) {
-        w_map[k] = 1.0 / std::sqrt(1.0 / (w[k] * w[k]) + variance[k] + scale2 * q[k] * q[k]);
-      }
+    // held during the fit; finish() takes χ² with e at the end point). The fit weighs each
+    // electrode by its total (independent + shared share, §1.11: the weights of the lookup
+    // before the split, so the fits end where they did); finish() takes χ², σ's and
+    // probabilities under the full model with the shared share's correlation.
+    Vec variance{}, shared{};
+    if (map_variance_at(x, y, l, variance.data(), shared.data())) {
+      for (std::size_t k = 0; k < ne_; ++k) w_map[k] = 1.0 / std::sqrt(1.0 / (w[k] * w[k]) + variance[k] + shared[k]);
       w = w_map.data();
     }
   }
@@ -266,15 +264,14 @@ PVDF_CLONES Locator::Fit Locator::levenberg_marquardt(const double* q, const dou
   return fit;
 }
 
-PVDF_CLONES bool Locator::map_variance_at(double x, double y, double l, double* variance_C2, double& scale2) const {
+PVDF_CLONES bool Locator::map_variance_at(double x, double y, double l, double* variance_C2, double* shared_C2) const {
   // Per electrode, in quadrature (independent shares, docs/lookup.md §1.10): the nodes' own
   // estimate, the interpolation error between nodes × the bubble 1 − (1 − 4t(1−t))(1 − 4s(1−s))
   // (zero at the nodes, one on the cell's mid-lines), between levels × 4w(1−w), and beyond them
   // the slope × the distance in ln F. Each share bilinear in the cell's corners and linear in
   // ln F between the levels (absolute errors; beyond the levels scaled by the F^p law). With
-  // correlated_map_error the shares between nodes and levels are their parts independent between
-  // electrodes, and their common relative scales combine the same way into scale2 (§1.11).
-  scale2 = 0;
+  // correlated_map_error the fraction ρ of each interpolation share that is a common scale of
+  // all charges (bilinear too) goes to the shared part, 1 − ρ stays independent (§1.11).
   const std::size_t nx = interp_.nx(), ny = interp_.ny(), ne = ne_, nf = interp_.n_levels();
   const double u = (x - interp_.x0()) * interp_.inv_hx(), v = (y - interp_.y0()) * interp_.inv_hy();
   if (!(u >= 0 && v >= 0 && u <= double(nx - 1) && v <= double(ny - 1))) return false;
@@ -299,42 +296,46 @@ PVDF_CLONES bool Locator::map_variance_at(double x, double y, double l, double* 
     level_share = 4.0 * w * (1.0 - w);
   }
   const std::size_t cell = j * (nx - 1) + i;
+  auto corners = [&](const float* c) { return wc[0] * c[0] + wc[1] * c[1] + wc[2] * c[2] + wc[3] * c[3]; };
+  // The common-scale fractions of the three interpolation shares (0 without the split).
+  double rho_nodes = 0, rho_levels = 0, rho_beyond = 0;
+  if (!map_scale_.empty()) {
+    const float* s0 = &map_scale_[(cell * nf + f0) * 12];
+    const float* s1 = &map_scale_[(cell * nf + f1) * 12];
+    rho_nodes = (1 - w) * corners(s0) + w * corners(s1);
+    rho_levels = corners(s0 + 4);
+    rho_beyond = corners(&map_scale_[(cell * nf + f_end) * 12 + 8]);
+  }
   const float* c0 = &map_error_[(cell * nf + f0) * ne * 16];
   const float* c1 = &map_error_[(cell * nf + f1) * ne * 16];
-  auto corners = [&](const float* c) { return wc[0] * c[0] + wc[1] * c[1] + wc[2] * c[2] + wc[3] * c[3]; };
   for (std::size_t k = 0; k < ne; ++k, c0 += 16, c1 += 16) {
     const double node = (1 - w) * corners(c0) + w * corners(c1);
     const double between_nodes = bubble * ((1 - w) * corners(c0 + 4) + w * corners(c1 + 4));
-    variance_C2[k] = node * node + between_nodes * between_nodes;
+    const double b2 = between_nodes * between_nodes;
+    variance_C2[k] = node * node + (1 - rho_nodes) * b2;
+    shared_C2[k] = rho_nodes * b2;
   }
   if (level_share > 0) {
     const float* c = &map_error_[(cell * nf + f0) * ne * 16];
     for (std::size_t k = 0; k < ne; ++k, c += 16) {
       const double between_levels = level_share * corners(c + 8);
-      variance_C2[k] += between_levels * between_levels;
+      const double l2 = between_levels * between_levels;
+      variance_C2[k] += (1 - rho_levels) * l2;
+      shared_C2[k] += rho_levels * l2;
     }
   }
   if (beyond > 0) {
     const float* c = &map_error_[(cell * nf + f_end) * ne * 16];
     for (std::size_t k = 0; k < ne; ++k, c += 16) {
       const double off_levels = beyond * corners(c + 12);
-      variance_C2[k] = scale * scale * (variance_C2[k] + off_levels * off_levels);
+      const double o2 = off_levels * off_levels;
+      variance_C2[k] = scale * scale * (variance_C2[k] + (1 - rho_beyond) * o2);
+      shared_C2[k] = scale * scale * (shared_C2[k] + rho_beyond * o2);
     }
   } else if (scale != 1) {
-    for (std::size_t k = 0; k < ne; ++k) variance_C2[k] *= scale * scale;
-  }
-  if (!map_scale_.empty()) {  // relative: no F^p scaling beyond the levels
-    const float* s0 = &map_scale_[(cell * nf + f0) * 12];
-    const float* s1 = &map_scale_[(cell * nf + f1) * 12];
-    const double between_nodes = bubble * ((1 - w) * corners(s0) + w * corners(s1));
-    scale2 = between_nodes * between_nodes;
-    if (level_share > 0) {
-      const double between_levels = level_share * corners(s0 + 4);
-      scale2 += between_levels * between_levels;
-    }
-    if (beyond > 0) {
-      const double off_levels = beyond * corners(&map_scale_[(cell * nf + f_end) * 12 + 8]);
-      scale2 += off_levels * off_levels;
+    for (std::size_t k = 0; k < ne; ++k) {
+      variance_C2[k] *= scale * scale;
+      shared_C2[k] *= scale * scale;
     }
   }
   return true;
@@ -346,13 +347,9 @@ bool Locator::charge_error(double x_m, double y_m, double force_N, double* error
     for (std::size_t k = 0; k < ne_; ++k) error_C[k] = 0.0;
     return true;
   }
-  double scale2 = 0;
-  if (!map_variance_at(x_m, y_m, std::log(force_N), error_C, scale2)) return false;
-  Vec model{};
-  if (scale2 > 0 && !interp_.evaluate(x_m, y_m, std::log(force_N), model.data(), nullptr)) return false;
-  for (std::size_t k = 0; k < ne_; ++k) {
-    error_C[k] = std::sqrt(error_C[k] + scale2 * model[k] * model[k]) * std::abs(gain_[k]);
-  }
+  Vec shared{};
+  if (!map_variance_at(x_m, y_m, std::log(force_N), error_C, shared.data())) return false;
+  for (std::size_t k = 0; k < ne_; ++k) error_C[k] = std::sqrt(error_C[k] + shared[k]) * std::abs(gain_[k]);
   return true;
 }
 
@@ -380,16 +377,26 @@ void Locator::set_map_error(const ChargeMap& map) {
     between.between_nodes_scale.clear();
     between.between_levels_scale.clear();
   }
-  // Correlated (§1.11): each share's rest per electrode in map_error_, its common scale in
-  // map_scale_; otherwise the totals per electrode, as independent errors.
-  const bool correlated = options_.correlated_map_error && options_.interpolation_error;
-  const std::vector<double>& nodes_C = correlated ? between.between_nodes_rest_C : between.between_nodes_C;
-  const std::vector<double>& levels_C = correlated ? between.between_levels_rest_C : between.between_levels_C;
-  const std::vector<double>& beyond_C = correlated ? between.beyond_levels_rest_C : between.beyond_levels_C;
   auto share = [](const std::vector<double>& values, std::size_t at) {
     if (values.empty()) return 0.0f;
     const double e = values[at];
     return std::isfinite(e) && e > 0 ? float(e) : 0.0f;
+  };
+  const bool correlated = options_.correlated_map_error && options_.interpolation_error;
+  // The common-scale fraction of a share at a node (§1.11): ρ = α²|Q|² / (α²|Q|² + |rest|²),
+  // the split of one and the same error vector (|s|² = α²|Q|² + |rest|²); 0 where it is empty.
+  auto scale_fraction = [&](const std::vector<double>& alpha, const std::vector<double>& rest_C, std::size_t f,
+                            std::size_t jj, std::size_t ii) {
+    if (alpha.empty() || rest_C.empty()) return 0.0f;
+    const double a = alpha[map.point(f, jj, ii)];
+    double qq = 0, rr = 0;
+    for (std::size_t k = 0; k < ne; ++k) {
+      const double q = map.charge_C[map.charge_index(f, jj, ii, k)], r = rest_C[map.charge_index(f, jj, ii, k)];
+      qq += q * q;
+      rr += std::isfinite(r) ? r * r : 0.0;
+    }
+    const double s = std::isfinite(a) ? a * a * qq : 0.0;
+    return s + rr > 0 ? float(s / (s + rr)) : 0.0f;
   };
   map_error_.assign((nx - 1) * (ny - 1) * nf * ne * 16, 0.0f);
   map_scale_.clear();
@@ -404,18 +411,18 @@ void Locator::set_map_error(const ChargeMap& map) {
           for (std::size_t c = 0; c < 4; ++c) {
             const std::size_t at = map.charge_index(f, j + c / 2, i + c % 2, k);
             out[c] = node_estimate ? share(map.estimated_charge_error_C, at) : 0.0f;
-            out[4 + c] = share(nodes_C, at);
-            out[8 + c] = share(levels_C, at);
-            out[12 + c] = share(beyond_C, at);
+            out[4 + c] = share(between.between_nodes_C, at);
+            out[8 + c] = share(between.between_levels_C, at);
+            out[12 + c] = share(between.beyond_levels_C, at);
           }
         }
         if (correlated) {
           float* out = &map_scale_[(cell * nf + f) * 12];
           for (std::size_t c = 0; c < 4; ++c) {
-            const std::size_t at = map.point(f, j + c / 2, i + c % 2);
-            out[c] = share(between.between_nodes_scale, at);
-            out[4 + c] = share(between.between_levels_scale, at);
-            out[8 + c] = share(between.beyond_levels_scale, at);
+            const std::size_t jj = j + c / 2, ii = i + c % 2;
+            out[c] = scale_fraction(between.between_nodes_scale, between.between_nodes_rest_C, f, jj, ii);
+            out[4 + c] = scale_fraction(between.between_levels_scale, between.between_levels_rest_C, f, jj, ii);
+            out[8 + c] = scale_fraction(between.beyond_levels_scale, between.beyond_levels_rest_C, f, jj, ii);
           }
         }
       }
@@ -427,9 +434,8 @@ std::array<double, 6> Locator::reported_jtj(const Fit& fit, const Query& Q) cons
   // JᵀWJ for the reported σ's: with the map's own error, each electrode's weight is
   // 1 / (σ_k² + e_k²), e_k the map error at the solution (docs/lookup.md §1.10), the Jacobian
   // the fit's last evaluated one (no evaluation here).
-  // With a common scale share (§1.11) the weight is the inverse of diag(σ_k² + e_k²) + σ_α² Q Qᵀ
-  // (Q the model's charges there): by Sherman–Morrison JᵀWJ = JᵀD⁻¹J − c·(JᵀD⁻¹Q)(JᵀD⁻¹Q)ᵀ,
-  // c = σ_α² / (1 + σ_α² QᵀD⁻¹Q).
+  // With a shared share (§1.11) the weight is the inverse of D + u uᵀ, D = diag(σ_k² + e_k²):
+  // by Sherman–Morrison JᵀWJ = JᵀD⁻¹J − c·(JᵀD⁻¹u)(JᵀD⁻¹u)ᵀ, c = 1 / (1 + uᵀD⁻¹u).
   if (map_error_.empty() || !fit.has_variance) return fit.jtj;
   const auto& grad = fit.grad;
   std::array<double, 6> m{0, 0, 0, 0, 0, 0};
@@ -439,7 +445,7 @@ std::array<double, 6> Locator::reported_jtj(const Fit& fit, const Query& Q) cons
     const double sigma = 1.0 / Q.w[k];
     const double w = 1.0 / std::sqrt(sigma * sigma + fit.variance[k]);
     const double g0 = grad[k][0] * w, g1 = grad[k][1] * w, g2 = Q.fixed_force ? 0.0 : grad[k][2] * w;
-    const double mw = fit.model[k] * w;
+    const double mw = std::copysign(std::sqrt(fit.shared2[k]), fit.model[k]) * w;
     m[0] += g0 * g0;
     m[1] += g0 * g1;
     m[2] += g0 * g2;
@@ -451,8 +457,8 @@ std::array<double, 6> Locator::reported_jtj(const Fit& fit, const Query& Q) cons
     p[2] += g2 * mw;
     qq += mw * mw;
   }
-  if (fit.scale2 > 0) {
-    const double c = fit.scale2 / (1.0 + fit.scale2 * qq);
+  if (fit.has_shared) {
+    const double c = 1.0 / (1.0 + qq);
     m[0] -= c * p[0] * p[0];
     m[1] -= c * p[0] * p[1];
     m[2] -= c * p[0] * p[2];
@@ -530,19 +536,21 @@ void Locator::add_map_error(const Query& Q, std::array<Fit, 8>& fits, int n_fits
   // fits, and a second solution is not hidden behind the first one's map error (§1.6).
   for (int s = 0; s < n_fits; ++s) {
     Fit& f = fits[std::size_t(s)];
-    if (!f.ok || f.duplicate || !map_variance_at(f.x, f.y, f.l, f.variance.data(), f.scale2)) continue;
+    if (!f.ok || f.duplicate || !map_variance_at(f.x, f.y, f.l, f.variance.data(), f.shared2.data())) continue;
     f.has_variance = true;
-    // χ² = rᵀ(D + σ_α² Q Qᵀ)⁻¹r = rᵀD⁻¹r − c (QᵀD⁻¹r)², c as in reported_jtj (§1.11).
-    double chi2 = 0, qr = 0, qq = 0;
+    // χ² = rᵀ(D + u uᵀ)⁻¹r = rᵀD⁻¹r − c (uᵀD⁻¹r)², c as in reported_jtj (§1.11).
+    double chi2 = 0, ur = 0, uu = 0;
     for (std::size_t k = 0; k < ne_; ++k) {
       const double sigma = 1.0 / Q.w[k];
       const double d = sigma * sigma + f.variance[k];
       const double r = f.model[k] - Q.q[k];
+      const double u = std::copysign(std::sqrt(f.shared2[k]), f.model[k]);
       chi2 += r * r / d;
-      qr += f.model[k] * r / d;
-      qq += f.model[k] * f.model[k] / d;
+      ur += u * r / d;
+      uu += u * u / d;
     }
-    if (f.scale2 > 0) chi2 -= f.scale2 / (1.0 + f.scale2 * qq) * qr * qr;
+    f.has_shared = uu > 0;
+    if (f.has_shared) chi2 -= ur * ur / (1.0 + uu);
     f.chi2 = std::max(chi2, 0.0);
   }
 }
@@ -681,7 +689,7 @@ void Locator::fill_main(const Query& Q, const Fit& b, Location& out) const {
     double share = 0;
     for (std::size_t k = 0; k < ne_; ++k) {
       const double noise2 = 1.0 / (Q.w[k] * Q.w[k]);
-      const double e2 = b.variance[k] + b.scale2 * b.model[k] * b.model[k];
+      const double e2 = b.variance[k] + b.shared2[k];
       share += e2 / (noise2 + e2);
     }
     out.map_error_share = ne_ > 0 ? share / double(ne_) : 0.0;
@@ -725,13 +733,13 @@ double Locator::log_posterior_weight(const Query& Q, const Fit& f) const {
   // paying for the broader likelihood it stands on: it outranked exact fits where the map is good.
   double log_norm = 0;
   if (f.has_variance) {
-    double qq = 0;  // with the common scale share, det(D + σ_α² Q Qᵀ) = det D · (1 + σ_α² QᵀD⁻¹Q)
+    double uu = 0;  // with the shared share, det(D + u uᵀ) = det D · (1 + uᵀD⁻¹u)
     for (std::size_t k = 0; k < ne_; ++k) {
       const double sigma = 1.0 / Q.w[k];
       log_norm -= 0.5 * std::log((sigma * sigma + f.variance[k]) / (sigma * sigma));
-      qq += f.model[k] * f.model[k] / (sigma * sigma + f.variance[k]);
+      uu += f.shared2[k] / (sigma * sigma + f.variance[k]);
     }
-    log_norm -= 0.5 * std::log1p(f.scale2 * qq);
+    log_norm -= 0.5 * std::log1p(uu);
   }
   return -0.5 * f.chi2 + log_norm - 0.5 * std::log(std::max(det, floor)) + f.log_widen + (Q.fixed_force ? 0.0 : f.l);
 }

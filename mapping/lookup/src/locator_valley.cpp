@@ -27,12 +27,16 @@ bool Locator::valley_point(const Query& Q, const double* w, const Fit& f, const 
                            double& s, double& l, double& chi2) const {
   // Minimises χ² over the offset s across the valley (unit vector u ⟂ v) and ln F (unless the
   // force is known) at the fixed offset t along v: three Gauss–Newton steps from (s, l). The
-  // map's common scale share (§1.11) is held at the solution, σ_α² Q Qᵀ with Q the solution's
-  // charges, as the per-electrode weights are: χ² = rᵀD⁻¹r − c (QᵀD⁻¹r)² (Sherman–Morrison).
+  // map's shared error (§1.11) is held at the solution's, u uᵀ, as the per-electrode weights
+  // are: χ² = rᵀD⁻¹r − c (uᵀD⁻¹r)², c = 1 / (1 + uᵀD⁻¹u) (Sherman–Morrison).
   const std::array<double, 2> u{-v[1], v[0]};
-  double qq = 0;
-  for (std::size_t k = 0; k < ne_; ++k) qq += f.model[k] * w[k] * f.model[k] * w[k];
-  const double c = f.scale2 > 0 ? f.scale2 / (1.0 + f.scale2 * qq) : 0.0;
+  std::array<double, max_electrodes> uw{};
+  double uu = 0;
+  for (std::size_t k = 0; k < ne_; ++k) {
+    uw[k] = f.has_shared ? std::copysign(std::sqrt(f.shared2[k]), f.model[k]) * w[k] : 0.0;
+    uu += uw[k] * uw[k];
+  }
+  const double c = uu > 0 ? 1.0 / (1.0 + uu) : 0.0;
   Vec model{};
   std::array<std::array<double, 3>, max_electrodes> grad{};
   for (int it = 0; it <= 3; ++it) {
@@ -44,7 +48,7 @@ bool Locator::valley_point(const Query& Q, const double* w, const Fit& f, const 
       const double r = (model[k] - Q.q[k]) * w[k];
       const double js = (grad[k][0] * u[0] + grad[k][1] * u[1]) * w[k];
       const double jl = Q.fixed_force ? 0.0 : grad[k][2] * w[k];
-      const double mw = f.model[k] * w[k];
+      const double mw = uw[k];
       chi2 += r * r;
       a00 += js * js;
       a01 += js * jl;

@@ -82,7 +82,7 @@ struct LocatorOptions {
   /// absorbs without moving the position) enters the noise model as one shared term
   /// σ_α²·Q Qᵀ, the rest per electrode. false = every share independent per electrode (the
   /// lookup before version 12: with the force unknown, σ's several times too wide).
-  bool correlated_map_error = false;
+  bool correlated_map_error = true;
 };
 
 /// A located press. Values are SI; σ's are 1-σ from the charge-noise model, (JᵀWJ)⁻¹.
@@ -215,9 +215,10 @@ class Locator {
     /// map's own error² at the end point (set by add_map_error when has_variance).
     std::array<std::array<double, 3>, max_electrodes> grad;
     std::array<double, max_electrodes> variance;
-    /// The map's common relative scale error² at the end point (σ_α², unitless; §1.11): the
-    /// noise model is diag(σ_k² + variance_k) + scale2·model modelᵀ.
-    double scale2 = 0;
+    /// The map's error² at the end point that is shared between the electrodes (C², §1.11): the
+    /// noise model is diag(σ_k² + variance_k) + u uᵀ, u_k = sign(model_k)·√shared2_k.
+    std::array<double, max_electrodes> shared2{};
+    bool has_shared = false;
     bool has_variance = false;
   };
   Fit levenberg_marquardt(const double* q, const double* inv_sigma, double x, double y, double l, bool fixed_force,
@@ -246,10 +247,10 @@ class Locator {
   std::array<double, 6> reported_jtj(const Fit& fit, const Query& query) const;
   /// Replaces each fit's χ² by the one under the charge noise plus the map's own error.
   void add_map_error(const Query& query, std::array<Fit, 8>& fits, int n_fits) const;
-  /// The square of the map's charge error (C²) at (x, y, ln F), per electrode — with
-  /// correlated_map_error only its part independent between electrodes — and the square of its
-  /// common relative scale (unitless; 0 without correlated_map_error); false off the grid.
-  bool map_variance_at(double x, double y, double l, double* variance_C2, double& scale2) const;
+  /// The square of the map's charge error (C²) at (x, y, ln F), per electrode, in two parts: the
+  /// one independent between electrodes and the one they share (a common relative scale of all
+  /// charges, §1.11; 0 without correlated_map_error). Their sum is the total. False off the grid.
+  bool map_variance_at(double x, double y, double l, double* variance_C2, double* shared_C2) const;
   Location locate_impl(const double* charges_C, bool fixed_force, double log_known_force,
                        const std::array<double, 3>* hints = nullptr, int n_hints = 0, bool held = false) const;
   /// A query prepared for fitting: calibration undone, weights, unit direction, force bounds.
@@ -341,9 +342,9 @@ class Locator {
   /// ln F) at the cell's four corners (i, j), (i+1, j), (i, j+1), (i+1, j+1); C at the level's
   /// force, float (empty: none; map_variance_at combines them).
   std::vector<float> map_error_;
-  /// With correlated_map_error: the common relative scale of the same shares (between nodes,
-  /// between level f and f + 1, beyond the end level per unit ln F) at the four corners, per
-  /// usable cell and level (12 floats, unitless); map_error_ then holds the rest of each share.
+  /// With correlated_map_error: the fraction of each share's variance that is a common relative
+  /// scale of all charges (between nodes, between level f and f + 1, beyond the end level) at
+  /// the four corners, per usable cell and level (12 floats in [0, 1]; §1.11).
   std::vector<float> map_scale_;
   bool calibrated_ = false;
   LocatorOptions options_;
