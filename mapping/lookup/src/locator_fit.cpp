@@ -152,12 +152,13 @@ PVDF_CLONES Locator::Fit Locator::levenberg_marquardt(const double* q, const dou
   if (!map_error_.empty()) {
     // The map's own error joins the charge noise (σ_k² + e_k², e at the start: the weights are
     // held during the fit; finish() takes χ² with e at the end point). The fit weighs each
-    // electrode by its total (independent + shared share, §1.11: the weights of the lookup
-    // before the split, so the fits end where they did); finish() takes χ², σ's and
-    // probabilities under the full model with the shared share's correlation.
-    Vec variance{}, shared{};
-    if (map_variance_at(x, y, l, variance.data(), shared.data())) {
-      for (std::size_t k = 0; k < ne_; ++k) w_map[k] = 1.0 / std::sqrt(1.0 / (w[k] * w[k]) + variance[k] + shared[k]);
+    // electrode by its total e_k² (the weights before the split, §1.11: the fits, and the 3σ
+    // test between their end points, are those of the lookup before it); finish() takes χ²,
+    // σ's and probabilities under the split model, with the common scale's correlation.
+    Vec variance{}, total{};
+    double scale2 = 0;
+    if (map_variance_at(x, y, l, variance.data(), scale2, total.data())) {
+      for (std::size_t k = 0; k < ne_; ++k) w_map[k] = 1.0 / std::sqrt(1.0 / (w[k] * w[k]) + total[k]);
       w = w_map.data();
     }
   }
@@ -264,14 +265,16 @@ PVDF_CLONES Locator::Fit Locator::levenberg_marquardt(const double* q, const dou
   return fit;
 }
 
-PVDF_CLONES bool Locator::map_variance_at(double x, double y, double l, double* variance_C2, double* shared_C2) const {
+PVDF_CLONES bool Locator::map_variance_at(double x, double y, double l, double* variance_C2, double& scale2,
+                                          double* total_C2) const {
   // Per electrode, in quadrature (independent shares, docs/lookup.md §1.10): the nodes' own
   // estimate, the interpolation error between nodes × the bubble 1 − (1 − 4t(1−t))(1 − 4s(1−s))
   // (zero at the nodes, one on the cell's mid-lines), between levels × 4w(1−w), and beyond them
   // the slope × the distance in ln F. Each share bilinear in the cell's corners and linear in
   // ln F between the levels (absolute errors; beyond the levels scaled by the F^p law). With
-  // correlated_map_error the fraction ρ of each interpolation share that is a common scale of
-  // all charges (bilinear too) goes to the shared part, 1 − ρ stays independent (§1.11).
+  // correlated_map_error each interpolation share is split (§1.11): its common relative scale α
+  // (bilinear too) into scale2 = Σ α², and 1 − ρ of its variance stays independent per
+  // electrode, ρ the scale's fraction of it at the nodes (so the total is kept).
   const std::size_t nx = interp_.nx(), ny = interp_.ny(), ne = ne_, nf = interp_.n_levels();
   const double u = (x - interp_.x0()) * interp_.inv_hx(), v = (y - interp_.y0()) * interp_.inv_hy();
   if (!(u >= 0 && v >= 0 && u <= double(nx - 1) && v <= double(ny - 1))) return false;
@@ -299,12 +302,24 @@ PVDF_CLONES bool Locator::map_variance_at(double x, double y, double l, double* 
   auto corners = [&](const float* c) { return wc[0] * c[0] + wc[1] * c[1] + wc[2] * c[2] + wc[3] * c[3]; };
   // The common-scale fractions of the three interpolation shares (0 without the split).
   double rho_nodes = 0, rho_levels = 0, rho_beyond = 0;
-  if (!map_scale_.empty()) {
-    const float* s0 = &map_scale_[(cell * nf + f0) * 12];
-    const float* s1 = &map_scale_[(cell * nf + f1) * 12];
+  scale2 = 0;
+  if (!map_scale_.empty()) {  // per corner: ρ nodes, levels, beyond, then α nodes, levels, beyond
+    const float* s0 = &map_scale_[(cell * nf + f0) * 24];
+    const float* s1 = &map_scale_[(cell * nf + f1) * 24];
+    const float* se = &map_scale_[(cell * nf + f_end) * 24];
     rho_nodes = (1 - w) * corners(s0) + w * corners(s1);
-    rho_levels = corners(s0 + 4);
-    rho_beyond = corners(&map_scale_[(cell * nf + f_end) * 12 + 8]);
+    const double alpha_nodes = bubble * ((1 - w) * corners(s0 + 12) + w * corners(s1 + 12));
+    scale2 = alpha_nodes * alpha_nodes;
+    if (level_share > 0) {
+      rho_levels = corners(s0 + 4);
+      const double alpha_levels = level_share * corners(s0 + 16);
+      scale2 += alpha_levels * alpha_levels;
+    }
+    if (beyond > 0) {  // relative: no F^p scaling beyond the levels
+      rho_beyond = corners(se + 8);
+      const double alpha_beyond = beyond * corners(se + 20);
+      scale2 += alpha_beyond * alpha_beyond;
+    }
   }
   const float* c0 = &map_error_[(cell * nf + f0) * ne * 16];
   const float* c1 = &map_error_[(cell * nf + f1) * ne * 16];
@@ -313,7 +328,7 @@ PVDF_CLONES bool Locator::map_variance_at(double x, double y, double l, double* 
     const double between_nodes = bubble * ((1 - w) * corners(c0 + 4) + w * corners(c1 + 4));
     const double b2 = between_nodes * between_nodes;
     variance_C2[k] = node * node + (1 - rho_nodes) * b2;
-    shared_C2[k] = rho_nodes * b2;
+    if (total_C2) total_C2[k] = node * node + b2;
   }
   if (level_share > 0) {
     const float* c = &map_error_[(cell * nf + f0) * ne * 16];
@@ -321,7 +336,7 @@ PVDF_CLONES bool Locator::map_variance_at(double x, double y, double l, double* 
       const double between_levels = level_share * corners(c + 8);
       const double l2 = between_levels * between_levels;
       variance_C2[k] += (1 - rho_levels) * l2;
-      shared_C2[k] += rho_levels * l2;
+      if (total_C2) total_C2[k] += l2;
     }
   }
   if (beyond > 0) {
@@ -330,12 +345,12 @@ PVDF_CLONES bool Locator::map_variance_at(double x, double y, double l, double* 
       const double off_levels = beyond * corners(c + 12);
       const double o2 = off_levels * off_levels;
       variance_C2[k] = scale * scale * (variance_C2[k] + (1 - rho_beyond) * o2);
-      shared_C2[k] = scale * scale * (shared_C2[k] + rho_beyond * o2);
+      if (total_C2) total_C2[k] = scale * scale * (total_C2[k] + o2);
     }
   } else if (scale != 1) {
     for (std::size_t k = 0; k < ne; ++k) {
       variance_C2[k] *= scale * scale;
-      shared_C2[k] *= scale * scale;
+      if (total_C2) total_C2[k] *= scale * scale;
     }
   }
   return true;
@@ -347,9 +362,10 @@ bool Locator::charge_error(double x_m, double y_m, double force_N, double* error
     for (std::size_t k = 0; k < ne_; ++k) error_C[k] = 0.0;
     return true;
   }
-  Vec shared{};
-  if (!map_variance_at(x_m, y_m, std::log(force_N), error_C, shared.data())) return false;
-  for (std::size_t k = 0; k < ne_; ++k) error_C[k] = std::sqrt(error_C[k] + shared[k]) * std::abs(gain_[k]);
+  Vec rest{};
+  double scale2 = 0;
+  if (!map_variance_at(x_m, y_m, std::log(force_N), rest.data(), scale2, error_C)) return false;
+  for (std::size_t k = 0; k < ne_; ++k) error_C[k] = std::sqrt(error_C[k]) * std::abs(gain_[k]);
   return true;
 }
 
@@ -400,7 +416,7 @@ void Locator::set_map_error(const ChargeMap& map) {
   };
   map_error_.assign((nx - 1) * (ny - 1) * nf * ne * 16, 0.0f);
   map_scale_.clear();
-  if (correlated) map_scale_.assign((nx - 1) * (ny - 1) * nf * 12, 0.0f);
+  if (correlated) map_scale_.assign((nx - 1) * (ny - 1) * nf * 24, 0.0f);
   for (std::size_t j = 0; j + 1 < ny; ++j) {
     for (std::size_t i = 0; i + 1 < nx; ++i) {
       if (!interp_.cell_usable(i, j)) continue;
@@ -417,12 +433,18 @@ void Locator::set_map_error(const ChargeMap& map) {
           }
         }
         if (correlated) {
-          float* out = &map_scale_[(cell * nf + f) * 12];
+          float* out = &map_scale_[(cell * nf + f) * 24];
+          auto alpha = [](const std::vector<double>& values, std::size_t at) {
+            return values.empty() || !std::isfinite(values[at]) ? 0.0f : float(std::abs(values[at]));
+          };
           for (std::size_t c = 0; c < 4; ++c) {
-            const std::size_t jj = j + c / 2, ii = i + c % 2;
+            const std::size_t jj = j + c / 2, ii = i + c % 2, at = map.point(f, jj, ii);
             out[c] = scale_fraction(between.between_nodes_scale, between.between_nodes_rest_C, f, jj, ii);
             out[4 + c] = scale_fraction(between.between_levels_scale, between.between_levels_rest_C, f, jj, ii);
             out[8 + c] = scale_fraction(between.beyond_levels_scale, between.beyond_levels_rest_C, f, jj, ii);
+            out[12 + c] = alpha(between.between_nodes_scale, at);
+            out[16 + c] = alpha(between.between_levels_scale, at);
+            out[20 + c] = alpha(between.beyond_levels_scale, at);
           }
         }
       }
@@ -536,8 +558,10 @@ void Locator::add_map_error(const Query& Q, std::array<Fit, 8>& fits, int n_fits
   // fits, and a second solution is not hidden behind the first one's map error (§1.6).
   for (int s = 0; s < n_fits; ++s) {
     Fit& f = fits[std::size_t(s)];
-    if (!f.ok || f.duplicate || !map_variance_at(f.x, f.y, f.l, f.variance.data(), f.shared2.data())) continue;
+    double scale2 = 0;
+    if (!f.ok || f.duplicate || !map_variance_at(f.x, f.y, f.l, f.variance.data(), scale2)) continue;
     f.has_variance = true;
+    for (std::size_t k = 0; k < ne_; ++k) f.shared2[k] = scale2 * f.model[k] * f.model[k];  // u = σ_α·Q
     // χ² = rᵀ(D + u uᵀ)⁻¹r = rᵀD⁻¹r − c (uᵀD⁻¹r)², c as in reported_jtj (§1.11).
     double chi2 = 0, ur = 0, uu = 0;
     for (std::size_t k = 0; k < ne_; ++k) {
