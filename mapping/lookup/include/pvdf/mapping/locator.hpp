@@ -81,7 +81,7 @@ struct LocatorOptions {
   /// (docs/lookup.md §1.11): its common relative scale of all charges (which a free force
   /// absorbs without moving the position) enters the noise model as one shared term
   /// σ_α²·Q Qᵀ, the rest per electrode. false = every share independent per electrode (the
-  /// lookup before version 12: with the force unknown, σ's several times too wide).
+  /// lookup before r12: with the force unknown, σ's too wide, docs/lookup.md §7c).
   bool correlated_map_error = true;
 };
 
