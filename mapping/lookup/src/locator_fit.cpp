@@ -151,10 +151,14 @@ PVDF_CLONES Locator::Fit Locator::levenberg_marquardt(const double* q, const dou
   Vec w_map{};
   if (!map_error_.empty()) {
     // The map's own error joins the charge noise (σ_k² + e_k², e at the start: the weights are
-    // held during the fit; finish() takes χ² with e at the end point).
-    Vec variance{};
-    if (map_variance_at(x, y, l, variance.data())) {
-      for (std::size_t k = 0; k < ne_; ++k) w_map[k] = 1.0 / std::sqrt(1.0 / (w[k] * w[k]) + variance[k]);
+    // held during the fit; finish() takes χ² with e at the end point). The fit weighs each
+    // electrode by its total e_k² (the weights before the split, §1.11: the fits, and the 3σ
+    // test between their end points, are those of the lookup before it); finish() takes χ²,
+    // σ's and probabilities under the split model, with the common scale's correlation.
+    Vec variance{}, total{};
+    double scale2 = 0;
+    if (map_variance_at(x, y, l, variance.data(), scale2, total.data())) {
+      for (std::size_t k = 0; k < ne_; ++k) w_map[k] = 1.0 / std::sqrt(1.0 / (w[k] * w[k]) + total[k]);
       w = w_map.data();
     }
   }
@@ -261,12 +265,16 @@ PVDF_CLONES Locator::Fit Locator::levenberg_marquardt(const double* q, const dou
   return fit;
 }
 
-PVDF_CLONES bool Locator::map_variance_at(double x, double y, double l, double* variance_C2) const {
+PVDF_CLONES bool Locator::map_variance_at(double x, double y, double l, double* variance_C2, double& scale2,
+                                          double* total_C2) const {
   // Per electrode, in quadrature (independent shares, docs/lookup.md §1.10): the nodes' own
   // estimate, the interpolation error between nodes × the bubble 1 − (1 − 4t(1−t))(1 − 4s(1−s))
   // (zero at the nodes, one on the cell's mid-lines), between levels × 4w(1−w), and beyond them
   // the slope × the distance in ln F. Each share bilinear in the cell's corners and linear in
-  // ln F between the levels (absolute errors; beyond the levels scaled by the F^p law).
+  // ln F between the levels (absolute errors; beyond the levels scaled by the F^p law). With
+  // correlated_map_error each interpolation share is split (§1.11): its common relative scale α
+  // (bilinear too) into scale2 = Σ α², and 1 − ρ of its variance stays independent per
+  // electrode, ρ the scale's fraction of it at the nodes (so the total is kept).
   const std::size_t nx = interp_.nx(), ny = interp_.ny(), ne = ne_, nf = interp_.n_levels();
   const double u = (x - interp_.x0()) * interp_.inv_hx(), v = (y - interp_.y0()) * interp_.inv_hy();
   if (!(u >= 0 && v >= 0 && u <= double(nx - 1) && v <= double(ny - 1))) return false;
@@ -291,29 +299,59 @@ PVDF_CLONES bool Locator::map_variance_at(double x, double y, double l, double* 
     level_share = 4.0 * w * (1.0 - w);
   }
   const std::size_t cell = j * (nx - 1) + i;
+  auto corners = [&](const float* c) { return wc[0] * c[0] + wc[1] * c[1] + wc[2] * c[2] + wc[3] * c[3]; };
+  // The common-scale fractions of the three interpolation shares (0 without the split).
+  double rho_nodes = 0, rho_levels = 0, rho_beyond = 0;
+  scale2 = 0;
+  if (!map_scale_.empty()) {  // per corner: ρ nodes, levels, beyond, then α nodes, levels, beyond
+    const float* s0 = &map_scale_[(cell * nf + f0) * 24];
+    const float* s1 = &map_scale_[(cell * nf + f1) * 24];
+    const float* se = &map_scale_[(cell * nf + f_end) * 24];
+    rho_nodes = (1 - w) * corners(s0) + w * corners(s1);
+    const double alpha_nodes = bubble * ((1 - w) * corners(s0 + 12) + w * corners(s1 + 12));
+    scale2 = alpha_nodes * alpha_nodes;
+    if (level_share > 0) {
+      rho_levels = corners(s0 + 4);
+      const double alpha_levels = level_share * corners(s0 + 16);
+      scale2 += alpha_levels * alpha_levels;
+    }
+    if (beyond > 0) {  // relative: no F^p scaling beyond the levels
+      rho_beyond = corners(se + 8);
+      const double alpha_beyond = beyond * corners(se + 20);
+      scale2 += alpha_beyond * alpha_beyond;
+    }
+  }
   const float* c0 = &map_error_[(cell * nf + f0) * ne * 16];
   const float* c1 = &map_error_[(cell * nf + f1) * ne * 16];
-  auto corners = [&](const float* c) { return wc[0] * c[0] + wc[1] * c[1] + wc[2] * c[2] + wc[3] * c[3]; };
   for (std::size_t k = 0; k < ne; ++k, c0 += 16, c1 += 16) {
     const double node = (1 - w) * corners(c0) + w * corners(c1);
     const double between_nodes = bubble * ((1 - w) * corners(c0 + 4) + w * corners(c1 + 4));
-    variance_C2[k] = node * node + between_nodes * between_nodes;
+    const double b2 = between_nodes * between_nodes;
+    variance_C2[k] = node * node + (1 - rho_nodes) * b2;
+    if (total_C2) total_C2[k] = node * node + b2;
   }
   if (level_share > 0) {
     const float* c = &map_error_[(cell * nf + f0) * ne * 16];
     for (std::size_t k = 0; k < ne; ++k, c += 16) {
       const double between_levels = level_share * corners(c + 8);
-      variance_C2[k] += between_levels * between_levels;
+      const double l2 = between_levels * between_levels;
+      variance_C2[k] += (1 - rho_levels) * l2;
+      if (total_C2) total_C2[k] += l2;
     }
   }
   if (beyond > 0) {
     const float* c = &map_error_[(cell * nf + f_end) * ne * 16];
     for (std::size_t k = 0; k < ne; ++k, c += 16) {
       const double off_levels = beyond * corners(c + 12);
-      variance_C2[k] = scale * scale * (variance_C2[k] + off_levels * off_levels);
+      const double o2 = off_levels * off_levels;
+      variance_C2[k] = scale * scale * (variance_C2[k] + (1 - rho_beyond) * o2);
+      if (total_C2) total_C2[k] = scale * scale * (total_C2[k] + o2);
     }
   } else if (scale != 1) {
-    for (std::size_t k = 0; k < ne; ++k) variance_C2[k] *= scale * scale;
+    for (std::size_t k = 0; k < ne; ++k) {
+      variance_C2[k] *= scale * scale;
+      if (total_C2) total_C2[k] *= scale * scale;
+    }
   }
   return true;
 }
@@ -324,7 +362,9 @@ bool Locator::charge_error(double x_m, double y_m, double force_N, double* error
     for (std::size_t k = 0; k < ne_; ++k) error_C[k] = 0.0;
     return true;
   }
-  if (!map_variance_at(x_m, y_m, std::log(force_N), error_C)) return false;
+  Vec rest{};
+  double scale2 = 0;
+  if (!map_variance_at(x_m, y_m, std::log(force_N), rest.data(), scale2, error_C)) return false;
   for (std::size_t k = 0; k < ne_; ++k) error_C[k] = std::sqrt(error_C[k]) * std::abs(gain_[k]);
   return true;
 }
@@ -348,13 +388,35 @@ void Locator::set_map_error(const ChargeMap& map) {
   if (map.charge_error_is_total() && node_estimate) {
     between.between_nodes_C.clear();
     between.between_levels_C.clear();
+    between.between_nodes_rest_C.clear();
+    between.between_levels_rest_C.clear();
+    between.between_nodes_scale.clear();
+    between.between_levels_scale.clear();
   }
   auto share = [](const std::vector<double>& values, std::size_t at) {
     if (values.empty()) return 0.0f;
     const double e = values[at];
     return std::isfinite(e) && e > 0 ? float(e) : 0.0f;
   };
+  const bool correlated = options_.correlated_map_error && options_.interpolation_error;
+  // The common-scale fraction of a share at a node (§1.11): ρ = α²|Q|² / (α²|Q|² + |rest|²),
+  // the split of one and the same error vector (|s|² = α²|Q|² + |rest|²); 0 where it is empty.
+  auto scale_fraction = [&](const std::vector<double>& alpha, const std::vector<double>& rest_C, std::size_t f,
+                            std::size_t jj, std::size_t ii) {
+    if (alpha.empty() || rest_C.empty()) return 0.0f;
+    const double a = alpha[map.point(f, jj, ii)];
+    double qq = 0, rr = 0;
+    for (std::size_t k = 0; k < ne; ++k) {
+      const double q = map.charge_C[map.charge_index(f, jj, ii, k)], r = rest_C[map.charge_index(f, jj, ii, k)];
+      qq += q * q;
+      rr += std::isfinite(r) ? r * r : 0.0;
+    }
+    const double s = std::isfinite(a) ? a * a * qq : 0.0;
+    return s + rr > 0 ? float(s / (s + rr)) : 0.0f;
+  };
   map_error_.assign((nx - 1) * (ny - 1) * nf * ne * 16, 0.0f);
+  map_scale_.clear();
+  if (correlated) map_scale_.assign((nx - 1) * (ny - 1) * nf * 24, 0.0f);
   for (std::size_t j = 0; j + 1 < ny; ++j) {
     for (std::size_t i = 0; i + 1 < nx; ++i) {
       if (!interp_.cell_usable(i, j)) continue;
@@ -370,6 +432,21 @@ void Locator::set_map_error(const ChargeMap& map) {
             out[12 + c] = share(between.beyond_levels_C, at);
           }
         }
+        if (correlated) {
+          float* out = &map_scale_[(cell * nf + f) * 24];
+          auto alpha = [](const std::vector<double>& values, std::size_t at) {
+            return values.empty() || !std::isfinite(values[at]) ? 0.0f : float(std::abs(values[at]));
+          };
+          for (std::size_t c = 0; c < 4; ++c) {
+            const std::size_t jj = j + c / 2, ii = i + c % 2, at = map.point(f, jj, ii);
+            out[c] = scale_fraction(between.between_nodes_scale, between.between_nodes_rest_C, f, jj, ii);
+            out[4 + c] = scale_fraction(between.between_levels_scale, between.between_levels_rest_C, f, jj, ii);
+            out[8 + c] = scale_fraction(between.beyond_levels_scale, between.beyond_levels_rest_C, f, jj, ii);
+            out[12 + c] = alpha(between.between_nodes_scale, at);
+            out[16 + c] = alpha(between.between_levels_scale, at);
+            out[20 + c] = alpha(between.beyond_levels_scale, at);
+          }
+        }
       }
     }
   }
@@ -379,19 +456,37 @@ std::array<double, 6> Locator::reported_jtj(const Fit& fit, const Query& Q) cons
   // JᵀWJ for the reported σ's: with the map's own error, each electrode's weight is
   // 1 / (σ_k² + e_k²), e_k the map error at the solution (docs/lookup.md §1.10), the Jacobian
   // the fit's last evaluated one (no evaluation here).
+  // With a shared share (§1.11) the weight is the inverse of D + u uᵀ, D = diag(σ_k² + e_k²):
+  // by Sherman–Morrison JᵀWJ = JᵀD⁻¹J − c·(JᵀD⁻¹u)(JᵀD⁻¹u)ᵀ, c = 1 / (1 + uᵀD⁻¹u).
   if (map_error_.empty() || !fit.has_variance) return fit.jtj;
   const auto& grad = fit.grad;
   std::array<double, 6> m{0, 0, 0, 0, 0, 0};
+  std::array<double, 3> p{0, 0, 0};
+  double qq = 0;
   for (std::size_t k = 0; k < ne_; ++k) {
     const double sigma = 1.0 / Q.w[k];
     const double w = 1.0 / std::sqrt(sigma * sigma + fit.variance[k]);
     const double g0 = grad[k][0] * w, g1 = grad[k][1] * w, g2 = Q.fixed_force ? 0.0 : grad[k][2] * w;
+    const double mw = std::copysign(std::sqrt(fit.shared2[k]), fit.model[k]) * w;
     m[0] += g0 * g0;
     m[1] += g0 * g1;
     m[2] += g0 * g2;
     m[3] += g1 * g1;
     m[4] += g1 * g2;
     m[5] += g2 * g2;
+    p[0] += g0 * mw;
+    p[1] += g1 * mw;
+    p[2] += g2 * mw;
+    qq += mw * mw;
+  }
+  if (fit.has_shared) {
+    const double c = 1.0 / (1.0 + qq);
+    m[0] -= c * p[0] * p[0];
+    m[1] -= c * p[0] * p[1];
+    m[2] -= c * p[0] * p[2];
+    m[3] -= c * p[1] * p[1];
+    m[4] -= c * p[1] * p[2];
+    m[5] -= c * p[2] * p[2];
   }
   return m;
 }
@@ -463,15 +558,24 @@ void Locator::add_map_error(const Query& Q, std::array<Fit, 8>& fits, int n_fits
   // fits, and a second solution is not hidden behind the first one's map error (§1.6).
   for (int s = 0; s < n_fits; ++s) {
     Fit& f = fits[std::size_t(s)];
-    if (!f.ok || f.duplicate || !map_variance_at(f.x, f.y, f.l, f.variance.data())) continue;
+    double scale2 = 0;
+    if (!f.ok || f.duplicate || !map_variance_at(f.x, f.y, f.l, f.variance.data(), scale2)) continue;
     f.has_variance = true;
-    double chi2 = 0;
+    for (std::size_t k = 0; k < ne_; ++k) f.shared2[k] = scale2 * f.model[k] * f.model[k];  // u = σ_α·Q
+    // χ² = rᵀ(D + u uᵀ)⁻¹r = rᵀD⁻¹r − c (uᵀD⁻¹r)², c as in reported_jtj (§1.11).
+    double chi2 = 0, ur = 0, uu = 0;
     for (std::size_t k = 0; k < ne_; ++k) {
       const double sigma = 1.0 / Q.w[k];
+      const double d = sigma * sigma + f.variance[k];
       const double r = f.model[k] - Q.q[k];
-      chi2 += r * r / (sigma * sigma + f.variance[k]);
+      const double u = std::copysign(std::sqrt(f.shared2[k]), f.model[k]);
+      chi2 += r * r / d;
+      ur += u * r / d;
+      uu += u * u / d;
     }
-    f.chi2 = chi2;
+    f.has_shared = uu > 0;
+    if (f.has_shared) chi2 -= ur * ur / (1.0 + uu);
+    f.chi2 = std::max(chi2, 0.0);
   }
 }
 
@@ -609,7 +713,8 @@ void Locator::fill_main(const Query& Q, const Fit& b, Location& out) const {
     double share = 0;
     for (std::size_t k = 0; k < ne_; ++k) {
       const double noise2 = 1.0 / (Q.w[k] * Q.w[k]);
-      share += b.variance[k] / (noise2 + b.variance[k]);
+      const double e2 = b.variance[k] + b.shared2[k];
+      share += e2 / (noise2 + e2);
     }
     out.map_error_share = ne_ > 0 ? share / double(ne_) : 0.0;
   }
@@ -652,10 +757,13 @@ double Locator::log_posterior_weight(const Query& Q, const Fit& f) const {
   // paying for the broader likelihood it stands on: it outranked exact fits where the map is good.
   double log_norm = 0;
   if (f.has_variance) {
+    double uu = 0;  // with the shared share, det(D + u uᵀ) = det D · (1 + uᵀD⁻¹u)
     for (std::size_t k = 0; k < ne_; ++k) {
       const double sigma = 1.0 / Q.w[k];
       log_norm -= 0.5 * std::log((sigma * sigma + f.variance[k]) / (sigma * sigma));
+      uu += f.shared2[k] / (sigma * sigma + f.variance[k]);
     }
+    log_norm -= 0.5 * std::log1p(uu);
   }
   return -0.5 * f.chi2 + log_norm - 0.5 * std::log(std::max(det, floor)) + f.log_widen + (Q.fixed_force ? 0.0 : f.l);
 }

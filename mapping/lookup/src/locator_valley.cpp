@@ -26,25 +26,46 @@ bool inverse_spd3(const std::array<double, 6>& m, std::array<double, 6>& c) {
 bool Locator::valley_point(const Query& Q, const double* w, const Fit& f, const std::array<double, 2>& v, double t,
                            double& s, double& l, double& chi2) const {
   // Minimises χ² over the offset s across the valley (unit vector u ⟂ v) and ln F (unless the
-  // force is known) at the fixed offset t along v: three Gauss–Newton steps from (s, l).
+  // force is known) at the fixed offset t along v: three Gauss–Newton steps from (s, l). The
+  // map's shared error (§1.11) is held at the solution's, u uᵀ, as the per-electrode weights
+  // are: χ² = rᵀD⁻¹r − c (uᵀD⁻¹r)², c = 1 / (1 + uᵀD⁻¹u) (Sherman–Morrison).
   const std::array<double, 2> u{-v[1], v[0]};
+  std::array<double, max_electrodes> uw{};
+  double uu = 0;
+  for (std::size_t k = 0; k < ne_; ++k) {
+    uw[k] = f.has_shared ? std::copysign(std::sqrt(f.shared2[k]), f.model[k]) * w[k] : 0.0;
+    uu += uw[k] * uw[k];
+  }
+  const double c = uu > 0 ? 1.0 / (1.0 + uu) : 0.0;
   Vec model{};
   std::array<std::array<double, 3>, max_electrodes> grad{};
   for (int it = 0; it <= 3; ++it) {
     const double x = f.x + t * v[0] + s * u[0], y = f.y + t * v[1] + s * u[1];
     if (!interp_.evaluate(x, y, l, model.data(), grad.data())) return false;
-    double a00 = 0, a01 = 0, a11 = 0, b0 = 0, b1 = 0;
+    double a00 = 0, a01 = 0, a11 = 0, b0 = 0, b1 = 0, ps = 0, pl = 0, pr = 0;
     chi2 = 0;
     for (std::size_t k = 0; k < ne_; ++k) {
       const double r = (model[k] - Q.q[k]) * w[k];
       const double js = (grad[k][0] * u[0] + grad[k][1] * u[1]) * w[k];
       const double jl = Q.fixed_force ? 0.0 : grad[k][2] * w[k];
+      const double mw = uw[k];
       chi2 += r * r;
       a00 += js * js;
       a01 += js * jl;
       a11 += jl * jl;
       b0 += js * r;
       b1 += jl * r;
+      ps += mw * js;
+      pl += mw * jl;
+      pr += mw * r;
+    }
+    if (c > 0) {
+      chi2 = std::max(0.0, chi2 - c * pr * pr);
+      a00 -= c * ps * ps;
+      a01 -= c * ps * pl;
+      a11 -= c * pl * pl;
+      b0 -= c * ps * pr;
+      b1 -= c * pl * pr;
     }
     if (it == 3) break;
     double ds = 0, dl = 0;

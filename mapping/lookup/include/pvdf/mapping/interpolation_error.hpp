@@ -26,6 +26,17 @@ struct InterpolationError {
   /// scaling law); the error grows like this × |ln F − ln F_level| (C per unit of ln F; 0 at
   /// the other levels and for a one-level map).
   std::vector<double> beyond_levels_C;
+
+  /// The same errors split into a common relative scale of all of a node's charges and the rest
+  /// (docs/lookup.md §1.11). Each error is a signed vector over the electrodes s (G units, the
+  /// same coarser grid or the same levels for every electrode); its least-squares scale of the
+  /// node's reduced charges G is α = s·G / G·G, and s − α·G the rest. A scale error moves every
+  /// charge by the same factor, which a free force absorbs (∂Q/∂ln F ≈ p·Q) without moving
+  /// (x, y); the rest does not. Scale: [nf][ny][nx], unitless (beyond the levels: per unit of
+  /// ln F); the rest: [nf][ny][nx][ne], C at the level's force, like the totals above. Each is
+  /// the largest over the coarser grids (levels) it is taken from, as the totals are.
+  std::vector<double> between_nodes_scale, between_levels_scale, beyond_levels_scale;
+  std::vector<double> between_nodes_rest_C, between_levels_rest_C, beyond_levels_rest_C;
 };
 
 /// Estimates the map's interpolation error from its own charges (any ChargeMap the Locator

@@ -77,6 +77,12 @@ struct LocatorOptions {
   /// weights, χ², flags, σ's and probabilities use σ_k² + e_k². false = the per-node estimate
   /// alone (the lookup before version 5: σ's that cover the noise, not the map's error).
   bool interpolation_error = true;
+  /// The map's error between nodes and levels as it is correlated between the electrodes
+  /// (docs/lookup.md §1.11): its common relative scale of all charges (which a free force
+  /// absorbs without moving the position) enters the noise model as one shared term
+  /// σ_α²·Q Qᵀ, the rest per electrode. false = every share independent per electrode (the
+  /// lookup before r12: with the force unknown, σ's too wide, docs/lookup.md §7c).
+  bool correlated_map_error = true;
 };
 
 /// A located press. Values are SI; σ's are 1-σ from the charge-noise model, (JᵀWJ)⁻¹.
@@ -209,6 +215,10 @@ class Locator {
     /// map's own error² at the end point (set by add_map_error when has_variance).
     std::array<std::array<double, 3>, max_electrodes> grad;
     std::array<double, max_electrodes> variance;
+    /// The map's common-scale error² at the end point per electrode, σ_α²·model_k² (C², §1.11):
+    /// the noise model is diag(σ_k² + variance_k) + u uᵀ, u_k = σ_α·model_k = sign(model_k)·√shared2_k.
+    std::array<double, max_electrodes> shared2{};
+    bool has_shared = false;
     bool has_variance = false;
   };
   Fit levenberg_marquardt(const double* q, const double* inv_sigma, double x, double y, double l, bool fixed_force,
@@ -237,8 +247,13 @@ class Locator {
   std::array<double, 6> reported_jtj(const Fit& fit, const Query& query) const;
   /// Replaces each fit's χ² by the one under the charge noise plus the map's own error.
   void add_map_error(const Query& query, std::array<Fit, 8>& fits, int n_fits) const;
-  /// The square of the map's charge error (C²) at (x, y, ln F), per electrode; false off the grid.
-  bool map_variance_at(double x, double y, double l, double* variance_C2) const;
+  /// The map's charge error at (x, y, ln F) in two parts (§1.11): per electrode the square of the
+  /// part independent between electrodes (C²), and the square of the common relative scale of
+  /// all charges, σ_α² (unitless; 0 without correlated_map_error): the error's covariance is
+  /// diag(variance_C2) + σ_α² Q Qᵀ, Q the map's charges there. False off the grid.
+  /// `total_C2` (optional): per electrode the total e_k² before the split.
+  bool map_variance_at(double x, double y, double l, double* variance_C2, double& scale2,
+                       double* total_C2 = nullptr) const;
   Location locate_impl(const double* charges_C, bool fixed_force, double log_known_force,
                        const std::array<double, 3>* hints = nullptr, int n_hints = 0, bool held = false) const;
   /// A query prepared for fitting: calibration undone, weights, unit direction, force bounds.
@@ -330,6 +345,11 @@ class Locator {
   /// ln F) at the cell's four corners (i, j), (i+1, j), (i, j+1), (i+1, j+1); C at the level's
   /// force, float (empty: none; map_variance_at combines them).
   std::vector<float> map_error_;
+  /// With correlated_map_error, per usable cell and level, at the four corners: the fraction ρ of
+  /// each share's variance that is a common relative scale of all charges (between nodes,
+  /// between level f and f + 1, beyond the end level; 12 floats in [0, 1]), then that scale α
+  /// itself (12 floats, unitless; beyond the levels per unit ln F); §1.11.
+  std::vector<float> map_scale_;
   bool calibrated_ = false;
   LocatorOptions options_;
   double chi2_limit_ = 0, chi2_limit_free_ = 0, chi2_limit_fixed_ = 0;
