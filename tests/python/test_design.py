@@ -62,3 +62,32 @@ def test_rank_designs_orders_as_the_command_rule():
         pvdfkit.rank_designs([quiet, 3])
     with pytest.raises(pvdfkit.InputError, match="list"):
         pvdfkit.rank_designs("quiet")
+
+
+def test_summary_is_the_command_line_json(tmp_path):
+    """DesignSummary.summary and a layout of `pvdfkit design --map FILE --json` on the same map and
+    settings: the same keys (the command adds its ranking and file keys) and the same values; one
+    serializer (pvdf::mapping::design_summary_json) behind both."""
+    import json
+    import os
+    import subprocess
+    binary = os.environ.get("PVDF_BINARY_DIR")
+    cli = os.path.join(binary, "app", "pvdfkit") if binary else None
+    if not cli or not os.path.exists(cli):
+        pytest.fail("PVDF_BINARY_DIR/app/pvdfkit not found: run through ctest (tests/python/CMakeLists.txt)")
+    amap = analytic_map(spacing=0.002)
+    path = tmp_path / "analytic.h5"
+    pvdfkit.write_map(str(path), amap)
+    d = pvdfkit.design(pvdfkit.read_map(str(path)), force_N=1.5, min_force_N=0.5, max_force_N=3.0, noise_C=NOISE_C,
+                       target_m=0.4e-3, adc_bits=10)
+    out = subprocess.run([cli, "design", "--map", str(path), "--force-N", "1.5", "--force-range-N", "0.5,3",
+                          "--noise-C", repr(NOISE_C), "--target-mm", "0.4", "--adc-bits", "10", "--json", "--no-plots",
+                          "--quiet"], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    layouts = json.loads(out.stdout)["layouts"]
+    assert len(layouts) == 1
+    cl, py = layouts[0], d.summary
+    command_keys = {"rank", "label", "source", "map_source", "map_file", "refined"}
+    assert set(py) == set(cl) - command_keys, set(py) ^ (set(cl) - command_keys)
+    assert py == {k: v for k, v in cl.items() if k not in command_keys}
+    assert py["status"] == "ok" and 0 < py["usable_fraction"] <= 1 and len(py["electrodes"]) == 3
