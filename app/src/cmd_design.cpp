@@ -18,6 +18,7 @@
 #include "pvdf/mapping/optimize.hpp"
 #ifdef PVDF_HAVE_MAP_GENERATION
 #include "pvdf/mapping/atlas.hpp"
+#include "pvdf/mapping/atlas_provider.hpp"
 #include "pvdf/mapping/generate.hpp"
 #endif
 
@@ -714,9 +715,18 @@ void print_design_text(const DesignCommandOptions& o, const DesignOptions& d, st
 // ---------------------------------------------------------------------------------------------
 // --optimize: search layouts (mapping::optimize_layouts) instead of ranking typed ones.
 
-/// The search settings from the flags (each checked by the library's rule).
+/// How the library's checks name an option: as this command's flag ("--size-min-m 0", "--synthetic").
+std::string flag_named(const std::string& key, const std::string& value) {
+  std::string flag = "--" + key;
+  std::replace(flag.begin(), flag.end(), '_', '-');
+  return value.empty() ? flag : flag + " " + value;
+}
+
+/// The search settings from the flags (each checked by the library's rule, check_optimize_options,
+/// which the Python optimize_layouts shares).
 OptimizeOptions optimize_options(const DesignCommandOptions& o, const DesignOptions& d) {
   OptimizeOptions oo;
+  oo.naming = flag_named;
   oo.electrodes_min = o.electrodes_min;
   oo.electrodes_max = o.electrodes_max;
   oo.size_min_m = o.size_min_m;
@@ -726,7 +736,7 @@ OptimizeOptions optimize_options(const DesignCommandOptions& o, const DesignOpti
   oo.min_gap_m = o.min_gap_m;
   oo.clamp_margin_m = o.clamp_margin_m;
   if (o.seed < 0) throw pvdf::InputError("--seed " + std::to_string(o.seed) + " must be >= 0; give e.g. 1");
-  if (o.budget < 1 || o.budget > 1000000) {
+  if (o.budget < 0) {  // not representable below; 0 and the top of the range are the library's check
     throw pvdf::InputError("--budget " + std::to_string(o.budget) +
                            " must lie in [1, 1000000] (evaluations per electrode count); give e.g. 300");
   }
@@ -830,33 +840,21 @@ int run_optimize(const DesignCommandOptions& o) {
   if (!o.vary.empty() || !o.maps.empty() || o.refine_best > 0) {
     throw pvdf::InputError("--optimize searches layouts itself: drop --vary, --map and --refine-best");
   }
-  if (o.atlas_path.empty() && !o.synthetic) {
-    throw pvdf::InputError("--optimize needs --atlas FILE (a charge-density atlas of the film, `pvdfkit atlas SCENE -o "
-                           "FILE`) or --synthetic (the analytic stand-in, a preview)");
-  }
-  if (!o.atlas_path.empty() && o.synthetic) throw pvdf::InputError("--atlas and --synthetic: give one of them");
-  if (!o.atlas_path.empty() && (o.spacing_m > 0 || o.tolerance > 0)) {
-    throw pvdf::InputError(std::string(o.spacing_m > 0 ? "--spacing-m" : "--tolerance") + " with --atlas " + o.atlas_path +
-                           ": the atlas fixes the grid and the tolerance; drop the flag or make another atlas");
-  }
-  if (!o.atlas_path.empty() && !std::filesystem::is_regular_file(o.atlas_path)) {
-    throw pvdf::InputError("--atlas " + o.atlas_path + ": no such file; make one with `pvdfkit atlas SCENE -o " +
-                           o.atlas_path + "`");
-  }
+  OptimizeMaps maps;
+  maps.atlas_path = o.atlas_path;
+  maps.synthetic = o.synthetic;
+  maps.spacing_m = o.spacing_m;
+  maps.tolerance = o.tolerance;
+  check_optimize_maps(maps, flag_named);
   DesignCommandOptions so = o;
   const DesignOptions d = design_options(so);
   const OptimizeOptions oo_checked = optimize_options(o, d);
   const pvdf::Scene scene = pvdf::load_scene(o.scenes.front());
   for (const auto& w : scene.warnings) pvdf::app::warn(w);
-  const double spacing = o.spacing_m > 0 ? o.spacing_m : 0.001;
   MapProvider provider;
 #ifdef PVDF_HAVE_MAP_GENERATION
-  std::shared_ptr<ChargeAtlas> atlas;
-  if (!o.atlas_path.empty()) {
-    atlas = std::make_shared<ChargeAtlas>(read_atlas(o.atlas_path));
-    check_atlas_fits_scene(*atlas, o.atlas_path, scene);
-    provider = [atlas, path = o.atlas_path](const pvdf::Scene& s) { return map_from_atlas(*atlas, s, path); };
-  }
+  std::shared_ptr<const ChargeAtlas> atlas;
+  if (!o.atlas_path.empty()) provider = atlas_map_provider(o.atlas_path, scene, &atlas);
 #else
   if (!o.atlas_path.empty()) {
     throw pvdf::InputError("--atlas: this pvdfkit was built without the FEM (PVDF_WITH_FEM=OFF) and cannot read atlases; "
@@ -867,9 +865,7 @@ int run_optimize(const DesignCommandOptions& o) {
 #ifndef PVDF_HAVE_MAP_GENERATION
   if (o.verify) throw pvdf::InputError("--verify: this pvdfkit was built without FEM map generation; drop --verify");
 #endif
-  if (o.synthetic) {
-    provider = [spacing, force = o.force_N](const pvdf::Scene& s) { return synthetic_map_for_scene(s, spacing, force, 5e-14); };
-  }
+  if (o.synthetic) provider = synthetic_map_provider(o.spacing_m, o.force_N);
   if (!o.no_plots && std::filesystem::is_directory(o.out_dir)) {
     for (const char* name : {"/optimize.json", "/optimize.txt", "/optimize_pareto.png", "/optimize_pareto.svg",
                              "/design_position.png", "/design_force.png"}) {
@@ -889,10 +885,7 @@ int run_optimize(const DesignCommandOptions& o) {
   if (bar) bar->finish();
 
   // Step 3: files — the winners as scenes, the table, the figures.
-  nlohmann::json j = optimize_summary_json(s, oo);
-  j["scene"] = o.scenes.front();
-  j["maps"] = o.synthetic ? "synthetic" : "atlas";
-  if (!o.atlas_path.empty()) j["atlas"] = o.atlas_path;
+  nlohmann::json j = optimize_summary_json(s, oo, maps, o.scenes.front());
   std::vector<std::string> written;
   std::vector<Candidate> winners;
   for (const auto& c : s.counts) {

@@ -11,6 +11,10 @@
 #include <string>
 #include <vector>
 
+namespace pvdf::mapping {
+struct DesignOptions;
+}
+
 namespace pvdf::python {
 
 namespace py = pybind11;
@@ -49,6 +53,14 @@ void bind_fem(py::module_& m);
 /// The charge-density atlas (atlas.cpp; only with the FEM).
 void bind_atlas(py::module_& m);
 void bind_maps(py::module_& m);
+/// The layout search, `design --optimize` (optimize.cpp; atlases only with the FEM).
+void bind_optimize(py::module_& m);
+
+/// pvdfkit.design's evaluation settings, each argument checked by the rule of `pvdfkit design`'s
+/// flag (maps.cpp); `f` prefixes the messages ("design: "). Shared by design and optimize_layouts.
+pvdf::mapping::DesignOptions design_options_arg(py::object force_N, py::object min_force_N, py::object max_force_N,
+                                                py::object noise_C, py::object target_m, py::object force_known,
+                                                py::object adc_bits, py::object full_scale_C, const std::string& f);
 void bind_restore(py::module_& m);
 
 }  // namespace pvdf::python
