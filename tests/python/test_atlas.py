@@ -146,3 +146,25 @@ def test_optimize_layouts_refuses_as_the_command(film, tmp_path):
         pvdfkit.optimize_layouts(scene, synthetic=True, seed=-1)
     with pytest.raises(pvdfkit.InputError, match="optimize_layouts: spacing_m"):
         pvdfkit.optimize_layouts(scene, atlas=str(film["atlas"]), spacing_m=0.001)
+
+
+def test_make_atlas_refuses_as_the_command(tmp_path):
+    """Each argument by the rule of `pvdfkit atlas`'s flag, refused before any solve."""
+    path = str(tmp_path / "refused.atlas.h5")
+    cases = [
+        ({"spacing_m": 2.0}, "make_atlas: spacing_m = 2", "--spacing-m", "2.0"),
+        ({"cell_m": 0.0}, "make_atlas: cell_m = 0", "--cell-m", "0"),
+        ({"tolerance": 0.7}, "make_atlas: tolerance = 0.7", "--tolerance", "0.7"),
+        ({"forces_N": [1.0, 1.0]}, "make_atlas: forces_N", "--forces-N", "1,1"),
+        ({"threads": -1}, "make_atlas: threads = -1", "--threads", "-1"),
+        ({"n_setup_checks": 4}, "make_atlas: n_setup_checks = 4", "--setup-checks", "4"),
+    ]
+    scene_path = tmp_path / "film.json"
+    scene_path.write_text(json.dumps(FILM))
+    for kwargs, message, flag, value in cases:
+        with pytest.raises(pvdfkit.InputError, match=message.replace(".", r"\.")):
+            pvdfkit.make_atlas(FILM, path, **kwargs)
+        out = subprocess.run([cli(), "atlas", str(scene_path), "-o", path, flag, value, "--quiet"],
+                             capture_output=True, text=True, timeout=60)
+        assert out.returncode == 2, (flag, out.stderr)
+    assert not os.path.exists(path)
