@@ -567,6 +567,13 @@ DesignOptions design_options(const DesignCommandOptions& o) {
   return d;
 }
 
+/// The figures' noise label: "σ = 0.05 pC, 12-bit ADC" (per electrode "0.05/0.1" when they differ).
+std::string noise_label(const DesignOptions& d, const DesignCommandOptions& o) {
+  std::string text;
+  for (std::size_t k = 0; k < d.noise_C.size(); ++k) text += (k ? "/" : "") + fmt("%.3g", d.noise_C[k] * 1e12);
+  return "σ = " + text + " pC" + (o.adc_bits > 0 ? ", " + std::to_string(o.adc_bits) + "-bit ADC" : "");
+}
+
 /// The candidates: each scene (or each value of the swept key on each scene), then each ready map.
 /// `series_names` gets one name per scene.
 std::vector<Candidate> collect_candidates(const DesignCommandOptions& o, const std::optional<SceneSweep>& sweep,
@@ -831,6 +838,94 @@ void write_pareto_figure(const OptimizeSummary& s, const DesignCommandOptions& o
   }
 }
 
+/// The winner of each count that found one, as a candidate (label best-N, its map from `provider`).
+std::vector<Candidate> optimize_winners(const OptimizeSummary& s, const DesignCommandOptions& o, const MapProvider& provider) {
+  std::vector<Candidate> winners;
+  for (const auto& c : s.counts) {
+    if (!c.found) continue;
+    Candidate w;
+    w.label = "best-" + std::to_string(c.n_electrodes);
+    w.source = o.out_dir + "/" + w.label + ".json";
+    w.scene = c.scene;
+    w.map_source = o.synthetic ? "synthetic" : "atlas";
+    w.map = provider(pvdf::parse_scene(c.scene, w.source));
+    w.summary = c.summary;
+    w.summary.synthetic = o.synthetic;
+    winners.push_back(std::move(w));
+  }
+  return winners;
+}
+
+/// The winners as scenes (best-N.json), their error maps and the Pareto figure, in --out-dir.
+void write_optimize_files(const std::vector<Candidate>& winners, const OptimizeSummary& s, const DesignCommandOptions& o,
+                          const DesignOptions& d, std::vector<std::string>& written) {
+  pvdf::make_directories(o.out_dir);
+  for (const auto& w : winners) {
+    pvdf::write_file_atomically(w.source, [&w](std::ostream& out) { out << w.scene->dump(2) << '\n'; });
+    written.push_back(w.source);
+  }
+  if (winners.empty()) return;
+  std::vector<const Candidate*> shown;
+  for (const auto& w : winners) shown.push_back(&w);
+  // Panels best first, so that each panel's "#k" is the winner's rank (mapping::ranks_before).
+  std::stable_sort(shown.begin(), shown.end(),
+                   [](const Candidate* a, const Candidate* b) { return ranks_before(a->summary, b->summary); });
+  write_map_figures(shown, o, noise_label(d, o), written);
+  write_pareto_figure(s, o, o.synthetic, written);
+}
+
+#ifdef PVDF_HAVE_MAP_GENERATION
+/// --verify: each winner's FEM map at the atlas's grid and tolerance, evaluated again (optimize.json's `verify`).
+nlohmann::json verify_winners(const std::vector<Candidate>& winners, const DesignCommandOptions& o, const DesignOptions& d,
+                              const ChargeAtlas& atlas) {
+  std::vector<const Candidate*> to_verify;
+  for (const auto& w : winners) to_verify.push_back(&w);
+  DesignCommandOptions vo = o;
+  vo.spacing_m = atlas.spacing_m;
+  vo.tolerance = atlas.tolerance;
+  MapsProgress progress("design --optimize --verify: FEM maps, positions", planned_positions(to_verify, vo, atlas.spacing_m),
+                        o.quiet);
+  nlohmann::json verify = nlohmann::json::array();
+  for (std::size_t i = 0; i < winners.size(); ++i) {
+    Candidate v = winners[i];
+    v.map = make_map(v, vo, atlas.spacing_m, v.map_file, v.map_source, progress, i);
+    evaluate(v, d);
+    verify.push_back({{"n_electrodes", v.summary.electrodes.size()},
+                      {"map_file", v.map_file},
+                      {"usable_fraction_fem", v.summary.usable_fraction},
+                      {"usable_fraction_atlas", winners[i].summary.usable_fraction},
+                      {"coverage_fem", v.summary.coverage},
+                      {"coverage_atlas", winners[i].summary.coverage}});
+  }
+  progress.finish();
+  return verify;
+}
+#endif
+
+/// The search as text: settings, objective, the table, the verification and the files written.
+void print_optimize_text(const DesignCommandOptions& o, const OptimizeOptions& oo, const DesignOptions& d,
+                         const std::string& table, const nlohmann::json& j, const std::vector<std::string>& written) {
+  std::printf("pvdfkit design --optimize %s: %d-%d electrodes, sides %.3g-%.3g mm%s%s, gap >= %.3g mm, clamp margin >= "
+              "%.3g mm; maps: %s\n",
+              o.scenes.front().c_str(), oo.electrodes_min, oo.electrodes_max, 1e3 * oo.size_min_m, 1e3 * oo.size_max_m,
+              oo.square ? " (squares)" : "", oo.rotate ? ", rotated" : ", unrotated", 1e3 * oo.min_gap_m,
+              1e3 * oo.clamp_margin_m, o.synthetic ? "SYNTHETIC stand-in" : ("atlas " + o.atlas_path).c_str());
+  std::printf("objective: usable area (σpos <= %.3g mm, force %s), then coverage, then median σpos; differential "
+              "evolution, seed %llu, budget %zu evaluations per count\n",
+              o.target_mm, d.force_known ? "known" : "unknown", static_cast<unsigned long long>(oo.seed), oo.budget);
+  std::fputs(table.c_str(), stdout);
+  if (j.contains("verify")) {
+    for (const auto& v : j["verify"]) {
+      std::printf("verify %d electrodes: FEM map usable %s (atlas %s), coverage %s (atlas %s), %s\n",
+                  v["n_electrodes"].get<int>(), pct(v["usable_fraction_fem"].get<double>()).c_str(),
+                  pct(v["usable_fraction_atlas"].get<double>()).c_str(), pct(v["coverage_fem"].get<double>()).c_str(),
+                  pct(v["coverage_atlas"].get<double>()).c_str(), v["map_file"].get<std::string>().c_str());
+    }
+  }
+  for (const auto& w : written) std::printf("wrote %s\n", w.c_str());
+  if (!o.no_plots) std::printf("wrote %s/optimize.txt\nwrote %s/optimize.json\n", o.out_dir.c_str(), o.out_dir.c_str());
+}
+
 int run_optimize(const DesignCommandOptions& o) {
   // Step 1: every input checked before the search.
   if (o.scenes.size() != 1) {
@@ -887,63 +982,12 @@ int run_optimize(const DesignCommandOptions& o) {
   // Step 3: files — the winners as scenes, the table, the figures.
   nlohmann::json j = optimize_summary_json(s, oo, maps, o.scenes.front());
   std::vector<std::string> written;
-  std::vector<Candidate> winners;
-  for (const auto& c : s.counts) {
-    if (!c.found) continue;
-    Candidate w;
-    w.label = "best-" + std::to_string(c.n_electrodes);
-    w.source = o.out_dir + "/" + w.label + ".json";
-    w.scene = c.scene;
-    w.map_source = o.synthetic ? "synthetic" : "atlas";
-    w.map = provider(pvdf::parse_scene(c.scene, w.source));
-    w.summary = c.summary;
-    w.summary.synthetic = o.synthetic;
-    winners.push_back(std::move(w));
-  }
-  if (!o.no_plots) {
-    pvdf::make_directories(o.out_dir);
-    for (const auto& w : winners) {
-      pvdf::write_file_atomically(w.source, [&w](std::ostream& out) { out << w.scene->dump(2) << '\n'; });
-      written.push_back(w.source);
-    }
-    if (!winners.empty()) {
-      std::vector<const Candidate*> shown;
-      for (const auto& w : winners) shown.push_back(&w);
-      // Panels best first, so that each panel's "#k" is the winner's rank (mapping::ranks_before).
-      std::stable_sort(shown.begin(), shown.end(),
-                       [](const Candidate* a, const Candidate* b) { return ranks_before(a->summary, b->summary); });
-      std::string noise_text;
-      for (std::size_t k = 0; k < d.noise_C.size(); ++k) noise_text += (k ? "/" : "") + fmt("%.3g", d.noise_C[k] * 1e12);
-      noise_text = "σ = " + noise_text + " pC" + (o.adc_bits > 0 ? ", " + std::to_string(o.adc_bits) + "-bit ADC" : "");
-      write_map_figures(shown, o, noise_text, written);
-      write_pareto_figure(s, o, o.synthetic, written);
-    }
-  }
+  const std::vector<Candidate> winners = optimize_winners(s, o, provider);
+  if (!o.no_plots) write_optimize_files(winners, s, o, d, written);
 
   // Step 4 (opt-in): each winner's FEM map at the atlas's grid, evaluated again.
 #ifdef PVDF_HAVE_MAP_GENERATION
-  if (o.verify && !winners.empty()) {
-    std::vector<const Candidate*> to_verify;
-    for (const auto& w : winners) to_verify.push_back(&w);
-    DesignCommandOptions vo = o;
-    vo.spacing_m = atlas->spacing_m;
-    vo.tolerance = atlas->tolerance;
-    MapsProgress progress("design --optimize --verify: FEM maps, positions", planned_positions(to_verify, vo, atlas->spacing_m),
-                          o.quiet);
-    j["verify"] = nlohmann::json::array();
-    for (std::size_t i = 0; i < winners.size(); ++i) {
-      Candidate v = winners[i];
-      v.map = make_map(v, vo, atlas->spacing_m, v.map_file, v.map_source, progress, i);
-      evaluate(v, d);
-      j["verify"].push_back({{"n_electrodes", v.summary.electrodes.size()},
-                             {"map_file", v.map_file},
-                             {"usable_fraction_fem", v.summary.usable_fraction},
-                             {"usable_fraction_atlas", winners[i].summary.usable_fraction},
-                             {"coverage_fem", v.summary.coverage},
-                             {"coverage_atlas", winners[i].summary.coverage}});
-    }
-    progress.finish();
-  }
+  if (o.verify && !winners.empty()) j["verify"] = verify_winners(winners, o, d, *atlas);
 #endif
   j["files"] = written;
   const std::string table = optimize_table(s);
@@ -954,25 +998,7 @@ int run_optimize(const DesignCommandOptions& o) {
   if (o.json) {
     std::cout << j.dump(2) << '\n';
   } else {
-    std::printf("pvdfkit design --optimize %s: %d-%d electrodes, sides %.3g-%.3g mm%s%s, gap >= %.3g mm, clamp margin >= "
-                "%.3g mm; maps: %s\n",
-                o.scenes.front().c_str(), oo.electrodes_min, oo.electrodes_max, 1e3 * oo.size_min_m, 1e3 * oo.size_max_m,
-                oo.square ? " (squares)" : "", oo.rotate ? ", rotated" : ", unrotated", 1e3 * oo.min_gap_m,
-                1e3 * oo.clamp_margin_m, o.synthetic ? "SYNTHETIC stand-in" : ("atlas " + o.atlas_path).c_str());
-    std::printf("objective: usable area (σpos <= %.3g mm, force %s), then coverage, then median σpos; differential "
-                "evolution, seed %llu, budget %zu evaluations per count\n",
-                o.target_mm, d.force_known ? "known" : "unknown", static_cast<unsigned long long>(oo.seed), oo.budget);
-    std::fputs(table.c_str(), stdout);
-    if (j.contains("verify")) {
-      for (const auto& v : j["verify"]) {
-        std::printf("verify %d electrodes: FEM map usable %s (atlas %s), coverage %s (atlas %s), %s\n",
-                    v["n_electrodes"].get<int>(), pct(v["usable_fraction_fem"].get<double>()).c_str(),
-                    pct(v["usable_fraction_atlas"].get<double>()).c_str(), pct(v["coverage_fem"].get<double>()).c_str(),
-                    pct(v["coverage_atlas"].get<double>()).c_str(), v["map_file"].get<std::string>().c_str());
-      }
-    }
-    for (const auto& w : written) std::printf("wrote %s\n", w.c_str());
-    if (!o.no_plots) std::printf("wrote %s/optimize.txt\nwrote %s/optimize.json\n", o.out_dir.c_str(), o.out_dir.c_str());
+    print_optimize_text(o, oo, d, table, j, written);
   }
   if (winners.empty()) {
     std::cerr << "error: no layout of " << oo.electrodes_min << "-" << oo.electrodes_max
@@ -1026,9 +1052,7 @@ int run_design(const DesignCommandOptions& o) {
   // Step 4: report.
   bool any_synthetic = false;
   for (const auto& c : all) any_synthetic |= c.summary.synthetic;
-  std::string noise_text;
-  for (std::size_t k = 0; k < d.noise_C.size(); ++k) noise_text += (k ? "/" : "") + fmt("%.3g", d.noise_C[k] * 1e12);
-  noise_text = "σ = " + noise_text + " pC" + (o.adc_bits > 0 ? ", " + std::to_string(o.adc_bits) + "-bit ADC" : "");
+  const std::string noise_text = noise_label(d, o);
   std::vector<std::string> written;
   if (!o.no_plots) {
     pvdf::make_directories(o.out_dir);
