@@ -8,8 +8,7 @@
 #include "pvdf/core/progress.hpp"
 #include "pvdf/core/scene.hpp"
 #include "pvdf/mapping/atlas.hpp"
-
-#include <nlohmann/json.hpp>
+#include "pvdf/mapping/atlas_report.hpp"
 
 #include <cmath>
 #include <cstdio>
@@ -63,30 +62,7 @@ int run_atlas(const AtlasCommandOptions& o) {
   if (bar) bar->finish();
   pvdf::mapping::write_atlas(o.output, atlas);
   if (o.json) {
-    nlohmann::json j;
-    j["output"] = o.output;
-    j["n_positions"] = report.n_positions;
-    j["n_points"] = report.n_points;
-    j["n_solved_positions"] = report.n_solved_positions;
-    j["mirror_x"] = report.mirror_x;
-    j["mirror_y"] = report.mirror_y;
-    j["n_failed"] = report.n_failed;
-    j["n_tolerance_not_met"] = report.n_tolerance_not_met;
-    j["estimated_relative_error"] = report.estimated_relative_error;
-    j["model"] = atlas.model;
-    j["model_reason"] = atlas.model_reason;
-    j["tolerance"] = atlas.tolerance;
-    j["n_dofs"] = atlas.n_dofs;
-    j["fe_size_m"] = atlas.fe_size_m;
-    j["cell_m"] = atlas.grid.cell_m;
-    j["n_cells"] = atlas.n_cells();
-    j["spacing_m"] = atlas.spacing_m;
-    j["forces_N"] = atlas.forces_N;
-    j["threads"] = report.threads;
-    j["setup_s"] = report.setup_s;
-    j["wall_s"] = report.wall_s;
-    if (!report.first_failure.empty()) j["first_failure"] = report.first_failure;
-    std::cout << j.dump(2) << '\n';
+    std::cout << pvdf::mapping::atlas_report_json(report, atlas, o.output).dump(2) << '\n';
   } else {
     std::printf("%s: %zu positions x %zu force levels, %zu x %zu atlas cells of %g mm\n", o.output.c_str(), report.n_positions,
                 atlas.nf(), atlas.grid.nx, atlas.grid.ny, 1e3 * atlas.grid.cell_m);

@@ -1,7 +1,9 @@
 // `pvdfkit design`: compare candidate sensor layouts before fabrication. Each layout's
 // charge map (FEM preview, synthetic stand-in, or a ready map file) → Cramér–Rao error maps,
 // ambiguity, sensitivity, dynamic range, dead zones → a ranking, side-by-side PNG maps, and for
-// a sweep of one scene key the figure of merit against the swept value. docs/design.md.
+// a sweep of one scene key the figure of merit against the swept value. docs/design.md. The
+// layout search (--optimize) is cmd_design_optimize.cpp; what both share, cmd_design.hpp.
+#include "cmd_design.hpp"
 #include "command.hpp"
 
 #include "pvdf/core/constants.hpp"
@@ -15,9 +17,7 @@
 #include "pvdf/core/scene.hpp"
 #include "pvdf/mapping/design.hpp"
 #include "pvdf/mapping/map.hpp"
-#include "pvdf/mapping/optimize.hpp"
 #ifdef PVDF_HAVE_MAP_GENERATION
-#include "pvdf/mapping/atlas.hpp"
 #include "pvdf/mapping/generate.hpp"
 #endif
 
@@ -38,148 +38,9 @@
 #include <optional>
 #include <sstream>
 
-namespace {
+namespace pvdf::app::design {
 
 using namespace pvdf::mapping;
-
-struct DesignCommandOptions {
-  std::vector<std::string> scenes;
-  std::vector<std::string> maps;
-  std::string vary;
-  std::string noise = "5e-14";
-  double target_mm = 0.5;
-  double force_N = 1.0;
-  std::string force_range = "0.25,4";
-  bool force_known = false;
-  double spacing_m = 0;  // 0: 1 mm synthetic, 3 mm FEM
-  bool synthetic = false;
-  int refine_best = 0;
-  double refine_spacing_m = 0;  // 0: half the preview spacing
-  double tolerance = 0;         // 0: the scene's
-  int threads = 0;
-  int adc_bits = 12;
-  double full_scale_C = 0;
-  double ambiguity_min_distance_m = 0;
-  bool json = false;
-  std::string out_dir = "design-out";
-  bool no_plots = false;
-  bool include_map_error = false;
-  bool quiet = false;
-  // --optimize (docs/design.md §7)
-  bool optimize = false;
-  std::string atlas_path;
-  int electrodes_min = 3, electrodes_max = 6;
-  double size_min_m = 0.001, size_max_m = 0.004;
-  bool square = false, no_rotation = false;
-  double min_gap_m = 0.0005, clamp_margin_m = 0.001;
-  long long seed = 1;     // signed here, so that a negative value is refused, not wrapped
-  long long budget = 300;
-  int search_stride = 1;
-  bool verify = false;
-};
-
-/// One progress report over the FEM maps of a phase (the previews, or the refined winners), so
-/// that its ETA is the phase's: the total is the positions of the maps done, of the map in
-/// progress, and the planned positions of each map still to come (mapping::planned_positions:
-/// layouts differ, e.g. a mirror-symmetric one solves half its grid). The ETA is pvdf::StagedEta's:
-/// each map's setup (mesh, setup checks) and its rate per position are measured apart, the map in
-/// progress is finished by its own estimate (MapOptions::time_left: each position's cost predicted
-/// from its distance to the clamp) or else at its own rate, and the maps to come are predicted with
-/// the measured mean setup and the pooled rate (docs/design.md §6).
-/// The process's resident memory after each block of map positions (design.json's `memory`).
-struct MemorySample {
-  std::string phase;
-  std::size_t positions = 0;  ///< positions solved in the phase so far
-  std::uint64_t resident_bytes = 0;
-};
-
-class MapsProgress {
- public:
-  /// The clock (and a heartbeat line every 10 s off a terminal) starts now, before the first setup.
-  /// `planned`: the positions of each map of the phase, in the order they run. `memory`: where the
-  /// resident memory after each block is appended (also when quiet), or null.
-  MapsProgress(std::string label, std::vector<std::size_t> planned, bool quiet, std::string phase = {},
-               std::vector<MemorySample>* memory = nullptr)
-      : label_(std::move(label)), planned_(std::move(planned)), n_maps_(planned_.size()), quiet_(quiet),
-        phase_(std::move(phase)), memory_(memory), eta_(planned_), t0_(std::chrono::steady_clock::now()) {
-    if (!quiet_ && n_maps_ > 0) bar_ = std::make_unique<pvdf::Progress>(label_, 0);
-  }
-  /// Map number `index` (0-based) starts its setup now.
-  void start_map(std::size_t index) {
-    if (quiet_) return;
-    eta_.start_stage(index, now_s());
-    if (bar_) bar_->set_eta_s(eta_.seconds_left(now_s()));
-  }
-  /// The callback of MapOptions::progress for map number `index` (0-based) of the phase.
-  std::function<void(std::size_t, std::size_t)> for_map(std::size_t index) {
-    if (quiet_ && memory_ == nullptr) return {};
-    return [this, index](std::size_t done, std::size_t total) {
-      if (index != current_) {  // the previous map ended: its positions are done
-        done_before_ += current_total_;
-        current_ = index;
-      }
-      current_total_ = total;
-      std::size_t all = done_before_ + total;
-      for (std::size_t k = index + 1; k < n_maps_; ++k) all += planned_[k];
-      if (memory_ != nullptr) memory_->push_back({phase_, done_before_ + done, pvdf::current_resident_bytes()});
-      if (!bar_) return;
-      const double t = now_s();
-      eta_.items_done(index, done, total, t);
-      bar_->set_total(all);
-      bar_->set_eta_s(eta_.seconds_left(t));
-      bar_->update(done_before_ + done);
-    };
-  }
-  /// The callback of MapOptions::time_left for map number `index`: the map's own estimate of its
-  /// time left (its positions' costs predicted by their distance to the clamp) replaces its rate's.
-  std::function<void(double)> time_left_for_map(std::size_t index) {
-    if (quiet_) return {};
-    return [this, index](double seconds_left) {
-      if (!bar_) return;
-      const double t = now_s();
-      eta_.stage_seconds_left(index, seconds_left, t);
-      bar_->set_eta_s(eta_.seconds_left(t));
-    };
-  }
-  void finish() {
-    if (bar_) bar_->finish();
-  }
-  /// A line of its own on stderr (the terminal bar continues below it); nothing when quiet.
-  void note(const std::string& text) {
-    if (quiet_) return;
-    if (bar_ && bar_->on_terminal()) std::fputc('\n', stderr);
-    std::fputs((text + "\n").c_str(), stderr);
-    std::fflush(stderr);
-  }
-
- private:
-  double now_s() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count(); }
-  std::string label_;
-  std::vector<std::size_t> planned_;
-  std::size_t n_maps_;
-  bool quiet_;
-  std::string phase_;
-  std::vector<MemorySample>* memory_;
-  pvdf::StagedEta eta_;
-  std::chrono::steady_clock::time_point t0_;
-  std::size_t current_ = 0, current_total_ = 0, done_before_ = 0;
-  std::unique_ptr<pvdf::Progress> bar_;
-};
-
-/// One candidate layout and what the analysis found.
-struct Candidate {
-  std::string label;            ///< shown in tables and plots
-  std::string source;           ///< scene or map file
-  std::optional<nlohmann::json> scene;  ///< null for a ready map
-  std::string sweep_key;
-  double sweep_value = 0;
-  int series = 0;               ///< which SCENE of the command line (sweep curves)
-  std::string map_source;       ///< "fem" | "synthetic" | "file"
-  std::string map_file;         ///< written or read map (empty for synthetic)
-  ChargeMap map;
-  DesignSummary summary;
-  bool refined = false;
-};
 
 std::string stem(const std::string& path) {
   std::string s = path.substr(path.find_last_of('/') + 1);
@@ -566,6 +427,13 @@ DesignOptions design_options(const DesignCommandOptions& o) {
   return d;
 }
 
+/// The figures' noise label: "σ = 0.05 pC, 12-bit ADC" (per electrode "0.05/0.1" when they differ).
+std::string noise_label(const DesignOptions& d, const DesignCommandOptions& o) {
+  std::string text;
+  for (std::size_t k = 0; k < d.noise_C.size(); ++k) text += (k ? "/" : "") + fmt("%.3g", d.noise_C[k] * 1e12);
+  return "σ = " + text + " pC" + (o.adc_bits > 0 ? ", " + std::to_string(o.adc_bits) + "-bit ADC" : "");
+}
+
 /// The candidates: each scene (or each value of the swept key on each scene), then each ready map.
 /// `series_names` gets one name per scene.
 std::vector<Candidate> collect_candidates(const DesignCommandOptions& o, const std::optional<SceneSweep>& sweep,
@@ -711,285 +579,6 @@ void print_design_text(const DesignCommandOptions& o, const DesignOptions& d, st
   if (!o.no_plots) std::printf("wrote %s/design.json\n", o.out_dir.c_str());
 }
 
-// ---------------------------------------------------------------------------------------------
-// --optimize: search layouts (mapping::optimize_layouts) instead of ranking typed ones.
-
-/// The search settings from the flags (each checked by the library's rule).
-OptimizeOptions optimize_options(const DesignCommandOptions& o, const DesignOptions& d) {
-  OptimizeOptions oo;
-  oo.electrodes_min = o.electrodes_min;
-  oo.electrodes_max = o.electrodes_max;
-  oo.size_min_m = o.size_min_m;
-  oo.size_max_m = o.size_max_m;
-  oo.square = o.square;
-  oo.rotate = !o.no_rotation;
-  oo.min_gap_m = o.min_gap_m;
-  oo.clamp_margin_m = o.clamp_margin_m;
-  if (o.seed < 0) throw pvdf::InputError("--seed " + std::to_string(o.seed) + " must be >= 0; give e.g. 1");
-  if (o.budget < 1 || o.budget > 1000000) {
-    throw pvdf::InputError("--budget " + std::to_string(o.budget) +
-                           " must lie in [1, 1000000] (evaluations per electrode count); give e.g. 300");
-  }
-  oo.seed = std::uint64_t(o.seed);
-  oo.budget = std::size_t(o.budget);
-  oo.search_stride = o.search_stride;
-  oo.design = d;
-  check_optimize_options(oo);
-  return oo;
-}
-
-/// The table of the winners (text): one row per count, the reference layout first.
-std::string optimize_table(const OptimizeSummary& s) {
-  std::string t;
-  char line[256];
-  std::snprintf(line, sizeof line, "%-10s %8s %9s %12s %11s %8s %9s  %s\n", "electrodes", "usable", "coverage",
-                "median σpos", "evaluations", "rejected", "seconds", "status");
-  t += line;
-  if (s.reference_evaluated) {
-    std::snprintf(line, sizeof line, "%-10s %8s %9s %12s %11s %8s %9s  %s\n",
-                  ("ref " + std::to_string(s.reference.electrodes.size())).c_str(), pct(s.reference.usable_fraction).c_str(),
-                  pct(s.reference.coverage).c_str(), mm(s.reference.median_sigma_pos_m).c_str(), "-", "-", "-",
-                  "the scene's own layout");
-    t += line;
-  }
-  for (std::size_t i = 0; i < s.counts.size(); ++i) {
-    const CountResult& c = s.counts[i];
-    if (c.found) {
-      std::snprintf(line, sizeof line, "%-10d %8s %9s %12s %11zu %8zu %9.2f  %s%s\n", c.n_electrodes,
-                    pct(c.summary.usable_fraction).c_str(), pct(c.summary.coverage).c_str(),
-                    mm(c.summary.median_sigma_pos_m).c_str(), c.n_evaluations, c.n_rejected, c.seconds,
-                    differential_evolution_status_name(c.status).c_str(), i == s.best ? "  BEST" : "");
-    } else {
-      std::snprintf(line, sizeof line, "%-10d %8s %9s %12s %11zu %8zu %9.2f  %s\n", c.n_electrodes, "-", "-", "-",
-                    c.n_evaluations, c.n_rejected, c.seconds, "no layout meets the constraints");
-    }
-    t += line;
-  }
-  return t;
-}
-
-/// Usable area (and coverage) against the electrode count, and the median bound: the Pareto view
-/// (more electrodes cost channels and wiring).
-void write_pareto_figure(const OptimizeSummary& s, const DesignCommandOptions& o, bool synthetic,
-                         std::vector<std::string>& written) {
-  pvdf::plot::Figure fig(1200, 520, 1, 2);
-  auto& a = fig.axes(0, 0);
-  auto& b = fig.axes(0, 1);
-  std::vector<double> n, usable, coverage, median;
-  for (const auto& c : s.counts) {
-    if (!c.found) continue;
-    n.push_back(c.n_electrodes);
-    usable.push_back(100 * c.summary.usable_fraction);
-    coverage.push_back(100 * c.summary.coverage);
-    median.push_back(std::isfinite(c.summary.median_sigma_pos_m) ? 1e3 * c.summary.median_sigma_pos_m : std::nan(""));
-  }
-  a.line(n, usable, "usable (best found)", pvdf::plot::cycle_color(0), pvdf::plot::LineStyle::solid, pvdf::plot::Marker::circle);
-  a.line(n, coverage, "coverage", pvdf::plot::cycle_color(0), pvdf::plot::LineStyle::dashed, pvdf::plot::Marker::none);
-  b.line(n, median, "best found", pvdf::plot::cycle_color(0), pvdf::plot::LineStyle::solid, pvdf::plot::Marker::circle);
-  if (s.reference_evaluated) {
-    const double nr = double(s.reference.electrodes.size());
-    a.scatter({nr}, {100 * s.reference.usable_fraction}, "the scene's layout", pvdf::plot::Color{220, 30, 30},
-              pvdf::plot::Marker::square, 10);
-    if (std::isfinite(s.reference.median_sigma_pos_m)) {
-      b.scatter({nr}, {1e3 * s.reference.median_sigma_pos_m}, "the scene's layout", pvdf::plot::Color{220, 30, 30},
-                pvdf::plot::Marker::square, 10);
-    }
-  }
-  // Whole electrode counts on x, half a count of room either side; on the log y of the median bound
-  // room for every point (the scene's layout included) so that no marker sits on the frame.
-  double n_lo = n.empty() ? 3 : n.front(), n_hi = n.empty() ? 3 : n.back();
-  double m_lo = std::numeric_limits<double>::infinity(), m_hi = 0;
-  for (double m : median)
-    if (std::isfinite(m) && m > 0) m_lo = std::min(m_lo, m), m_hi = std::max(m_hi, m);
-  if (s.reference_evaluated) {
-    n_lo = std::min(n_lo, double(s.reference.electrodes.size()));
-    n_hi = std::max(n_hi, double(s.reference.electrodes.size()));
-    const double r = 1e3 * s.reference.median_sigma_pos_m;
-    if (std::isfinite(r) && r > 0) m_lo = std::min(m_lo, r), m_hi = std::max(m_hi, r);
-  }
-  a.integer_x().xlim(n_lo - 0.5, n_hi + 0.5);
-  b.integer_x().xlim(n_lo - 0.5, n_hi + 0.5);
-  if (m_hi > 0 && std::isfinite(m_lo)) b.ylim(m_lo / 1.25, m_hi * 1.25);
-  a.xlabel("electrodes").ylabel("area fraction (%)").title(fmt("usable area (σ$_{pos}$ ≤ %.3g mm)", o.target_mm)).grid_lines().legend("best");
-  b.xlabel("electrodes").ylabel("median σ$_{pos}$ (mm)").log_y().title("median position bound").grid_lines().legend("best");
-  fig.suptitle("design --optimize: best layout per electrode count (seed " + std::to_string(o.seed) + ", budget " +
-               std::to_string(o.budget) + ")" + (synthetic ? " — SYNTHETIC stand-in maps, not FEM" : ", maps from the atlas"));
-  for (const char* ext : {".png", ".svg"}) {
-    const std::string path = o.out_dir + "/optimize_pareto" + ext;
-    fig.save(path);
-    written.push_back(path);
-  }
-}
-
-int run_optimize(const DesignCommandOptions& o) {
-  // Step 1: every input checked before the search.
-  if (o.scenes.size() != 1) {
-    throw pvdf::InputError("--optimize takes one SCENE (the film, settings and starting layout), got " +
-                           std::to_string(o.scenes.size()) + "; give exactly one");
-  }
-  if (!o.vary.empty() || !o.maps.empty() || o.refine_best > 0) {
-    throw pvdf::InputError("--optimize searches layouts itself: drop --vary, --map and --refine-best");
-  }
-  if (o.atlas_path.empty() && !o.synthetic) {
-    throw pvdf::InputError("--optimize needs --atlas FILE (a charge-density atlas of the film, `pvdfkit atlas SCENE -o "
-                           "FILE`) or --synthetic (the analytic stand-in, a preview)");
-  }
-  if (!o.atlas_path.empty() && o.synthetic) throw pvdf::InputError("--atlas and --synthetic: give one of them");
-  if (!o.atlas_path.empty() && (o.spacing_m > 0 || o.tolerance > 0)) {
-    throw pvdf::InputError(std::string(o.spacing_m > 0 ? "--spacing-m" : "--tolerance") + " with --atlas " + o.atlas_path +
-                           ": the atlas fixes the grid and the tolerance; drop the flag or make another atlas");
-  }
-  if (!o.atlas_path.empty() && !std::filesystem::is_regular_file(o.atlas_path)) {
-    throw pvdf::InputError("--atlas " + o.atlas_path + ": no such file; make one with `pvdfkit atlas SCENE -o " +
-                           o.atlas_path + "`");
-  }
-  DesignCommandOptions so = o;
-  const DesignOptions d = design_options(so);
-  const OptimizeOptions oo_checked = optimize_options(o, d);
-  const pvdf::Scene scene = pvdf::load_scene(o.scenes.front());
-  for (const auto& w : scene.warnings) pvdf::app::warn(w);
-  const double spacing = o.spacing_m > 0 ? o.spacing_m : 0.001;
-  MapProvider provider;
-#ifdef PVDF_HAVE_MAP_GENERATION
-  std::shared_ptr<ChargeAtlas> atlas;
-  if (!o.atlas_path.empty()) {
-    atlas = std::make_shared<ChargeAtlas>(read_atlas(o.atlas_path));
-    check_atlas_fits_scene(*atlas, o.atlas_path, scene);
-    provider = [atlas, path = o.atlas_path](const pvdf::Scene& s) { return map_from_atlas(*atlas, s, path); };
-  }
-#else
-  if (!o.atlas_path.empty()) {
-    throw pvdf::InputError("--atlas: this pvdfkit was built without the FEM (PVDF_WITH_FEM=OFF) and cannot read atlases; "
-                           "use --synthetic for a preview");
-  }
-#endif
-  if (o.verify && o.synthetic) throw pvdf::InputError("--verify checks atlas winners with FEM maps: drop --synthetic");
-#ifndef PVDF_HAVE_MAP_GENERATION
-  if (o.verify) throw pvdf::InputError("--verify: this pvdfkit was built without FEM map generation; drop --verify");
-#endif
-  if (o.synthetic) {
-    provider = [spacing, force = o.force_N](const pvdf::Scene& s) { return synthetic_map_for_scene(s, spacing, force, 5e-14); };
-  }
-  if (!o.no_plots && std::filesystem::is_directory(o.out_dir)) {
-    for (const char* name : {"/optimize.json", "/optimize.txt", "/optimize_pareto.png", "/optimize_pareto.svg",
-                             "/design_position.png", "/design_force.png"}) {
-      pvdf::app::check_output_file(o.out_dir + name, "--out-dir");
-    }
-  }
-
-  // Step 2: the search, with progress and an ETA on stderr.
-  OptimizeOptions oo = oo_checked;
-  const std::size_t n_counts = std::size_t(oo.electrodes_max - oo.electrodes_min + 1);
-  std::unique_ptr<pvdf::Progress> bar;
-  if (!o.quiet) bar = std::make_unique<pvdf::Progress>("design --optimize: evaluations", n_counts * oo.budget);
-  oo.progress = [&bar](std::size_t count, std::size_t, std::size_t done, std::size_t budget) {
-    if (bar) bar->update(count * budget + done);
-  };
-  const OptimizeSummary s = optimize_layouts(scene.original, o.scenes.front(), provider, oo);
-  if (bar) bar->finish();
-
-  // Step 3: files — the winners as scenes, the table, the figures.
-  nlohmann::json j = optimize_summary_json(s, oo);
-  j["scene"] = o.scenes.front();
-  j["maps"] = o.synthetic ? "synthetic" : "atlas";
-  if (!o.atlas_path.empty()) j["atlas"] = o.atlas_path;
-  std::vector<std::string> written;
-  std::vector<Candidate> winners;
-  for (const auto& c : s.counts) {
-    if (!c.found) continue;
-    Candidate w;
-    w.label = "best-" + std::to_string(c.n_electrodes);
-    w.source = o.out_dir + "/" + w.label + ".json";
-    w.scene = c.scene;
-    w.map_source = o.synthetic ? "synthetic" : "atlas";
-    w.map = provider(pvdf::parse_scene(c.scene, w.source));
-    w.summary = c.summary;
-    w.summary.synthetic = o.synthetic;
-    winners.push_back(std::move(w));
-  }
-  if (!o.no_plots) {
-    pvdf::make_directories(o.out_dir);
-    for (const auto& w : winners) {
-      pvdf::write_file_atomically(w.source, [&w](std::ostream& out) { out << w.scene->dump(2) << '\n'; });
-      written.push_back(w.source);
-    }
-    if (!winners.empty()) {
-      std::vector<const Candidate*> shown;
-      for (const auto& w : winners) shown.push_back(&w);
-      // Panels best first, so that each panel's "#k" is the winner's rank (mapping::ranks_before).
-      std::stable_sort(shown.begin(), shown.end(),
-                       [](const Candidate* a, const Candidate* b) { return ranks_before(a->summary, b->summary); });
-      std::string noise_text;
-      for (std::size_t k = 0; k < d.noise_C.size(); ++k) noise_text += (k ? "/" : "") + fmt("%.3g", d.noise_C[k] * 1e12);
-      noise_text = "σ = " + noise_text + " pC" + (o.adc_bits > 0 ? ", " + std::to_string(o.adc_bits) + "-bit ADC" : "");
-      write_map_figures(shown, o, noise_text, written);
-      write_pareto_figure(s, o, o.synthetic, written);
-    }
-  }
-
-  // Step 4 (opt-in): each winner's FEM map at the atlas's grid, evaluated again.
-#ifdef PVDF_HAVE_MAP_GENERATION
-  if (o.verify && !winners.empty()) {
-    std::vector<const Candidate*> to_verify;
-    for (const auto& w : winners) to_verify.push_back(&w);
-    DesignCommandOptions vo = o;
-    vo.spacing_m = atlas->spacing_m;
-    vo.tolerance = atlas->tolerance;
-    MapsProgress progress("design --optimize --verify: FEM maps, positions", planned_positions(to_verify, vo, atlas->spacing_m),
-                          o.quiet);
-    j["verify"] = nlohmann::json::array();
-    for (std::size_t i = 0; i < winners.size(); ++i) {
-      Candidate v = winners[i];
-      v.map = make_map(v, vo, atlas->spacing_m, v.map_file, v.map_source, progress, i);
-      evaluate(v, d);
-      j["verify"].push_back({{"n_electrodes", v.summary.electrodes.size()},
-                             {"map_file", v.map_file},
-                             {"usable_fraction_fem", v.summary.usable_fraction},
-                             {"usable_fraction_atlas", winners[i].summary.usable_fraction},
-                             {"coverage_fem", v.summary.coverage},
-                             {"coverage_atlas", winners[i].summary.coverage}});
-    }
-    progress.finish();
-  }
-#endif
-  j["files"] = written;
-  const std::string table = optimize_table(s);
-  if (!o.no_plots) {
-    pvdf::write_file_atomically(o.out_dir + "/optimize.txt", [&table](std::ostream& out) { out << table; });
-    pvdf::write_file_atomically(o.out_dir + "/optimize.json", [&j](std::ostream& out) { out << j.dump(2) << '\n'; });
-  }
-  if (o.json) {
-    std::cout << j.dump(2) << '\n';
-  } else {
-    std::printf("pvdfkit design --optimize %s: %d-%d electrodes, sides %.3g-%.3g mm%s%s, gap >= %.3g mm, clamp margin >= "
-                "%.3g mm; maps: %s\n",
-                o.scenes.front().c_str(), oo.electrodes_min, oo.electrodes_max, 1e3 * oo.size_min_m, 1e3 * oo.size_max_m,
-                oo.square ? " (squares)" : "", oo.rotate ? ", rotated" : ", unrotated", 1e3 * oo.min_gap_m,
-                1e3 * oo.clamp_margin_m, o.synthetic ? "SYNTHETIC stand-in" : ("atlas " + o.atlas_path).c_str());
-    std::printf("objective: usable area (σpos <= %.3g mm, force %s), then coverage, then median σpos; differential "
-                "evolution, seed %llu, budget %zu evaluations per count\n",
-                o.target_mm, d.force_known ? "known" : "unknown", static_cast<unsigned long long>(oo.seed), oo.budget);
-    std::fputs(table.c_str(), stdout);
-    if (j.contains("verify")) {
-      for (const auto& v : j["verify"]) {
-        std::printf("verify %d electrodes: FEM map usable %s (atlas %s), coverage %s (atlas %s), %s\n",
-                    v["n_electrodes"].get<int>(), pct(v["usable_fraction_fem"].get<double>()).c_str(),
-                    pct(v["usable_fraction_atlas"].get<double>()).c_str(), pct(v["coverage_fem"].get<double>()).c_str(),
-                    pct(v["coverage_atlas"].get<double>()).c_str(), v["map_file"].get<std::string>().c_str());
-      }
-    }
-    for (const auto& w : written) std::printf("wrote %s\n", w.c_str());
-    if (!o.no_plots) std::printf("wrote %s/optimize.txt\nwrote %s/optimize.json\n", o.out_dir.c_str(), o.out_dir.c_str());
-  }
-  if (winners.empty()) {
-    std::cerr << "error: no layout of " << oo.electrodes_min << "-" << oo.electrodes_max
-              << " electrodes meets the size, gap and margin constraints on this film; relax --size-min-m, --min-gap-m or "
-                 "--clamp-margin-m\n";
-    return pvdf::exit_code::numerical;
-  }
-  return pvdf::exit_code::success;
-}
-
 int run_design(const DesignCommandOptions& o) {
   if (o.optimize) return run_optimize(o);
   const DesignOptions d = design_options(o);
@@ -1033,9 +622,7 @@ int run_design(const DesignCommandOptions& o) {
   // Step 4: report.
   bool any_synthetic = false;
   for (const auto& c : all) any_synthetic |= c.summary.synthetic;
-  std::string noise_text;
-  for (std::size_t k = 0; k < d.noise_C.size(); ++k) noise_text += (k ? "/" : "") + fmt("%.3g", d.noise_C[k] * 1e12);
-  noise_text = "σ = " + noise_text + " pC" + (o.adc_bits > 0 ? ", " + std::to_string(o.adc_bits) + "-bit ADC" : "");
+  const std::string noise_text = noise_label(d, o);
   std::vector<std::string> written;
   if (!o.no_plots) {
     pvdf::make_directories(o.out_dir);
@@ -1066,9 +653,11 @@ int run_design(const DesignCommandOptions& o) {
   return pvdf::exit_code::numerical;
 }
 
-}  // namespace
+}  // namespace pvdf::app::design
 
 PVDF_COMMAND(75, [](CLI::App& root) {
+  using pvdf::app::design::DesignCommandOptions;
+  using pvdf::app::design::run_design;
   auto* sub = root.add_subcommand(
       "design",
       "Compare candidate sensor layouts before fabrication: Cramer-Rao error maps, coverage, ambiguity, "

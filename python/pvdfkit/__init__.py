@@ -39,11 +39,13 @@ from ._pvdfkit import (  # noqa: F401  (re-exported API)
     Locations,
     Locator,
     NumericalError,
+    OptimizeSummary,
     Scene,
     __version__,
     default_scene,
     design,
     flags_text,
+    optimize_layouts,
     rank_designs,
     read_map,
     read_measurements,
@@ -317,6 +319,7 @@ def _made_elsewhere(cls, how):
 _made_elsewhere(Scene, "pvdfkit.load_scene(path or dict) or pvdfkit.default_scene()")
 _made_elsewhere(Locations, "Locator.locate(charges_C)")
 _made_elsewhere(DesignSummary, "pvdfkit.design(map)")
+_made_elsewhere(OptimizeSummary, "pvdfkit.optimize_layouts(scene, atlas=...)")
 if has_fem:
     _made_elsewhere(SolveResult, "pvdfkit.solve(scene)")
     _made_elsewhere(ProbeSolutions, "ProbeSweep.solve(x_m, y_m, force_N)")
@@ -332,7 +335,8 @@ from . import restore  # noqa: E402,F401  (after the helpers restore.py uses)
 
 __all__ = [
     "FLAGS", "ChargeMap", "DesignSummary", "InputError", "Locations", "Locator", "NumericalError",
-    "Scene", "default_scene", "design", "flags_text", "grid_points", "load_scene", "rank_designs", "read_map",
+    "OptimizeSummary", "Scene", "default_scene", "design", "flags_text", "grid_points", "load_scene",
+    "optimize_layouts", "rank_designs", "read_map",
     "read_measurements", "restore", "scene_to_dict", "solve", "synthetic_map", "validate_map",
     "write_map",
 ] + (["ProbeSolutions", "ProbeSweep", "SolveResult", "generate_map", "make_atlas", "map_from_atlas"] if has_fem else [])

@@ -6,39 +6,45 @@
 
 #include "pvdf/core/error.hpp"
 #include "pvdf/mapping/atlas.hpp"
+#include "pvdf/mapping/atlas_report.hpp"
 
 namespace pvdf::python {
 
 void bind_atlas(py::module_& m) {
-  m.def("make_atlas", [](py::object scene_arg, const std::string& path, double spacing_m, std::vector<double> forces_N,
-                         double tolerance, double cell_m, int threads) {
-          const pvdf::Scene scene = arg::scene(scene_arg, "make_atlas: scene");
-          pvdf::check_output_path(path, "make_atlas: path");  // before the sweep, not after it
+  m.def("make_atlas", [](py::object scene_arg, py::object path_arg, py::object spacing_m, py::object forces_N,
+                         py::object tolerance, py::object cell_m, py::object threads, py::object n_setup_checks) {
+          // Each argument by the rule of `pvdfkit atlas`'s flag (app/src/cmd_atlas.cpp).
+          const std::string f = "make_atlas: ";
+          const pvdf::Scene scene = arg::scene(scene_arg, f + "scene");
+          const std::string path = arg::path(path_arg, f + "path");
+          pvdf::check_output_path(path, f + "path");  // before the sweep, not after it
           pvdf::mapping::AtlasOptions o;
-          o.spacing_m = spacing_m;
-          o.forces_N = std::move(forces_N);
-          o.tolerance = tolerance;
-          o.cell_m = cell_m;
-          o.threads = threads;
+          o.spacing_m = arg::number_in(spacing_m, f + "spacing_m", 1e-5, 0.1, "m (the unit is metres: 2 mm is 0.002)");
+          o.forces_N = force_levels(forces_N, f + "forces_N", scene);
+          o.tolerance = tolerance_arg(tolerance, f + "tolerance").value_or(0.0);  // 0: the scene's model.tolerance
+          o.cell_m = arg::number_in(cell_m, f + "cell_m", 1e-5, 0.05, "m (1 mm is 0.001)");
+          o.threads = int(arg::integer_in(threads, f + "threads", 0, 1024, "(0 = all cores)"));
+          o.n_setup_checks = int(arg::integer_in(n_setup_checks, f + "n_setup_checks", 0, 3, "(as pvdfkit atlas --setup-checks)"));
+          o.description = "pvdfkit.make_atlas " + path;
           pvdf::mapping::AtlasReport r;
+          nlohmann::json report;
           {
             py::gil_scoped_release release;
             const pvdf::mapping::ChargeAtlas atlas = pvdf::mapping::generate_atlas(scene, o, &r);
             pvdf::mapping::write_atlas(path, atlas);
+            report = pvdf::mapping::atlas_report_json(r, atlas, path);
           }
-          py::dict d;
-          d["n_positions"] = r.n_positions;
-          d["n_solved_positions"] = r.n_solved_positions;
-          d["n_failed"] = r.n_failed;
-          d["n_tolerance_not_met"] = r.n_tolerance_not_met;
-          d["estimated_relative_error"] = r.estimated_relative_error;
-          d["wall_s"] = r.wall_s;
-          return d;
+          // The dict of `pvdfkit atlas --json`, key for key (one serializer).
+          return py::module_::import("json").attr("loads")(report.dump());
         },
         py::arg("scene"), py::arg("path"), py::arg("spacing_m") = 0.002, py::arg("forces_N") = std::vector<double>{1.0},
-        py::arg("tolerance") = 0.0, py::arg("cell_m") = 0.001, py::arg("threads") = 0,
-        "Charge-density atlas of the scene's film written to `path` (HDF5, docs/atlas.md); returns a report dict. "
-        "tolerance 0 = the scene's; threads 0 = all cores.");
+        py::arg("tolerance") = py::none(), py::arg("cell_m") = 0.001, py::arg("threads") = 0,
+        py::arg("n_setup_checks") = 3,
+        "Charge-density atlas of the scene's film written to `path` (HDF5, docs/atlas.md), with the defaults and "
+        "checks of ``pvdfkit atlas``; returns the report dict of ``pvdfkit atlas --json`` (same keys: counts, model, "
+        "tolerance, mesh, cells, timings in s, output). spacing_m (m, in [1e-5, 0.1]); forces_N (N, each in (0, 1e4], "
+        "distinct); tolerance None = the scene's, else in [1e-8, 0.5]; cell_m (m, in [1e-5, 0.05]); threads 0 = all "
+        "cores; n_setup_checks 0-3 as --setup-checks.");
   m.def("map_from_atlas", [](py::object scene_arg, const std::string& atlas_path) {
           const pvdf::Scene scene = arg::scene(scene_arg, "map_from_atlas: scene");
           const pvdf::mapping::ChargeAtlas atlas = pvdf::mapping::read_atlas(atlas_path);

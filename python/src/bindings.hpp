@@ -8,8 +8,16 @@
 #include <algorithm>
 #include <array>
 #include <cstddef>
+#include <optional>
 #include <string>
 #include <vector>
+
+namespace pvdf {
+struct Scene;
+}
+namespace pvdf::mapping {
+struct DesignOptions;
+}
 
 namespace pvdf::python {
 
@@ -49,6 +57,21 @@ void bind_fem(py::module_& m);
 /// The charge-density atlas (atlas.cpp; only with the FEM).
 void bind_atlas(py::module_& m);
 void bind_maps(py::module_& m);
+/// The layout search, `design --optimize` (optimize.cpp; atlases only with the FEM).
+void bind_optimize(py::module_& m);
+
+/// The rule of the scene key model.tolerance, as `pvdfkit solve/map/atlas --tolerance` apply it
+/// (None: not given). fem.cpp.
+std::optional<double> tolerance_arg(py::object value, const std::string& what);
+/// Force levels (N) as `pvdfkit map/atlas --forces-N` take them: each in (0, 1e4], resolved by the
+/// film, distinct. fem.cpp.
+std::vector<double> force_levels(py::object value, const std::string& what, const pvdf::Scene& scene);
+
+/// pvdfkit.design's evaluation settings, each argument checked by the rule of `pvdfkit design`'s
+/// flag (maps.cpp); `f` prefixes the messages ("design: "). Shared by design and optimize_layouts.
+pvdf::mapping::DesignOptions design_options_arg(py::object force_N, py::object min_force_N, py::object max_force_N,
+                                                py::object noise_C, py::object target_m, py::object force_known,
+                                                py::object adc_bits, py::object full_scale_C, const std::string& f);
 void bind_restore(py::module_& m);
 
 }  // namespace pvdf::python

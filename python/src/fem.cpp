@@ -19,7 +19,6 @@
 #include <optional>
 
 namespace pvdf::python {
-namespace {
 
 /// The rule of the scene key model.tolerance, as `pvdfkit solve/map --tolerance` apply it.
 std::optional<double> tolerance_arg(py::object value, const std::string& what) {
@@ -41,6 +40,8 @@ std::vector<double> force_levels(py::object value, const std::string& what, cons
   }
   return forces;
 }
+
+namespace {
 
 /// `loads`: probe presses replacing the scene's, each checked with the rules of loads[] (as
 /// `pvdfkit solve --load` does): |force_N| <= 1e4, the footprint clear of the rim.

@@ -403,21 +403,8 @@ void bind_design_and_measurements(py::module_& m) {
           const std::string f = "design: ";
           const ChargeMap& map = arg::object<ChargeMap>(map_arg, f + "map", map_expected);
           pvdf::mapping::validate(map, f + "map");  // as Locator: a map assembled in Python may be inconsistent
-          pvdf::mapping::DesignOptions o;
-          // The rules of `pvdfkit design`'s flags (app/src/cmd_design.cpp).
-          o.force_N = arg::number_in(force_N, f + "force_N", 0, 1e4, "N (the rule of loads[].force_N, pushing)", true);
-          o.min_force_N = arg::number_in(min_force_N, f + "min_force_N", 0, 1e4, "N", true);
-          o.max_force_N = arg::number_in(max_force_N, f + "max_force_N", 0, 1e4, "N", true);
-          if (!(o.min_force_N < o.max_force_N)) {
-            throw pvdf::InputError(f + "min_force_N = " + pvdf::format_g(o.min_force_N) + " and max_force_N = " +
-                                   pvdf::format_g(o.max_force_N) + ": need 0 < min_force_N < max_force_N (N)");
-          }
-          o.noise_C = noise_list(noise_C, f + "noise_C", true);
-          o.target_m = arg::number_in(target_m, f + "target_m", 0, 1, "m (the position-error target)", true);
-          o.force_known = arg::flag(force_known, f + "force_known");
-          o.adc_bits = int(arg::integer_in(adc_bits, f + "adc_bits", 0, 32, "(0 = ideal)"));
-          if (o.adc_bits == 1) throw pvdf::InputError(f + "adc_bits = 1: use 0 (ideal) or 2..32 bits");
-          o.full_scale_C = arg::number_in(full_scale_C, f + "full_scale_C", 0, 1e-3, "C (0 = 1.25 x the largest charge at max_force_N)");
+          pvdf::mapping::DesignOptions o = design_options_arg(force_N, min_force_N, max_force_N, noise_C, target_m,
+                                                             force_known, adc_bits, full_scale_C, f);
           o.check_ambiguity = arg::flag(check_ambiguity, f + "check_ambiguity");
           py::gil_scoped_release release;
           return pvdf::mapping::evaluate_design(map, o);
@@ -483,6 +470,27 @@ DesignSummary (pvdfkit.design). Returns the list of indices, best first.)doc");
 }
 
 }  // namespace
+
+pvdf::mapping::DesignOptions design_options_arg(py::object force_N, py::object min_force_N, py::object max_force_N,
+                                                py::object noise_C, py::object target_m, py::object force_known,
+                                                py::object adc_bits, py::object full_scale_C, const std::string& f) {
+  pvdf::mapping::DesignOptions o;
+  // The rules of `pvdfkit design`'s flags (app/src/cmd_design.cpp).
+  o.force_N = arg::number_in(force_N, f + "force_N", 0, 1e4, "N (the rule of loads[].force_N, pushing)", true);
+  o.min_force_N = arg::number_in(min_force_N, f + "min_force_N", 0, 1e4, "N", true);
+  o.max_force_N = arg::number_in(max_force_N, f + "max_force_N", 0, 1e4, "N", true);
+  if (!(o.min_force_N < o.max_force_N)) {
+    throw pvdf::InputError(f + "min_force_N = " + pvdf::format_g(o.min_force_N) + " and max_force_N = " +
+                           pvdf::format_g(o.max_force_N) + ": need 0 < min_force_N < max_force_N (N)");
+  }
+  o.noise_C = noise_list(noise_C, f + "noise_C", true);
+  o.target_m = arg::number_in(target_m, f + "target_m", 0, 1, "m (the position-error target)", true);
+  o.force_known = arg::flag(force_known, f + "force_known");
+  o.adc_bits = int(arg::integer_in(adc_bits, f + "adc_bits", 0, 32, "(0 = ideal)"));
+  if (o.adc_bits == 1) throw pvdf::InputError(f + "adc_bits = 1: use 0 (ideal) or 2..32 bits");
+  o.full_scale_C = arg::number_in(full_scale_C, f + "full_scale_C", 0, 1e-3, "C (0 = 1.25 x the largest charge at max_force_N)");
+  return o;
+}
 
 void bind_maps(py::module_& m) {
   bind_charge_map(m);

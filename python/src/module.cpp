@@ -31,6 +31,7 @@ PYBIND11_MODULE(_pvdfkit, m) {
   pp::bind_results(m);
   pp::bind_scene(m);
   pp::bind_maps(m);
+  pp::bind_optimize(m);
 #ifdef PVDF_PYTHON_WITH_FEM
   pp::bind_fem(m);
   pp::bind_atlas(m);

@@ -7,6 +7,8 @@
 #include "pvdf/mapping/locator.hpp"
 #include "pvdf/mapping/synthetic.hpp"
 
+#include "../test_worst.hpp"
+
 #include <catch2/catch.hpp>
 
 #include <cmath>
@@ -236,7 +238,7 @@ TEST_CASE("rotating a layout (electrodes and draw direction) rotates its error m
       ++finiteness_mismatch;
       return;
     }
-    worst = std::max(worst, d);
+    worst = pvdf::testing::worst_of(worst, d);
   };
   for (std::size_t j = 0; j < n; ++j) {
     for (std::size_t i = 0; i < n; ++i) {
@@ -269,7 +271,7 @@ TEST_CASE("rotating a layout (electrodes and draw direction) rotates its error m
     for (std::size_t i = 0; i < n; ++i) {
       const std::size_t p = da.maps.index(i, j), r = dc.maps.index(n - 1 - j, i);
       if (da.maps.evaluated[p] && std::isfinite(da.maps.sigma_pos_m[p]) && std::isfinite(dc.maps.sigma_pos_m[r])) {
-        differs = std::max(differs, std::abs(da.maps.sigma_pos_m[p] - dc.maps.sigma_pos_m[r]) / da.maps.sigma_pos_m[p]);
+        differs = pvdf::testing::worst_of(differs, std::abs(da.maps.sigma_pos_m[p] - dc.maps.sigma_pos_m[r]) / da.maps.sigma_pos_m[p]);
       }
     }
   }

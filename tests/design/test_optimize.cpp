@@ -10,6 +10,8 @@
 #include "pvdf/mapping/layout_geometry.hpp"
 #include "pvdf/mapping/optimize.hpp"
 
+#include "../test_worst.hpp"
+
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
@@ -21,6 +23,10 @@
 using namespace pvdf::mapping;
 
 namespace {
+
+/// The running least of a test's distances and margins, NaN-propagating (pvdf::testing::worst_of
+/// mirrored): std::min(least, NaN) would return least, and a NaN distance would pass the checks.
+double least_of(double least, double v) { return -pvdf::testing::worst_of(-least, -v); }
 
 /// A rectangle's points: a grid of n × n over its area, boundary included.
 std::vector<pvdf::Point2> sample_rect(const OrientedRect& r, int n) {
@@ -49,7 +55,7 @@ double sampled_distance(const OrientedRect& a, const OrientedRect& b, int n) {
   double d = 1e9;
   const auto pa = sample_rect(a, n), pb = sample_rect(b, n);
   for (const auto& p : pa)
-    for (const auto& q : pb) d = std::min(d, std::hypot(p[0] - q[0], p[1] - q[1]));
+    for (const auto& q : pb) d = least_of(d, std::hypot(p[0] - q[0], p[1] - q[1]));
   return d;
 }
 
@@ -178,7 +184,7 @@ TEST_CASE("every layout the optimizer evaluates keeps the gap and the clamp marg
         CHECK(r.height_m <= o.size_max_m + 1e-15);
         // Margin: every sampled point of the electrode at least `margin` inside the circle.
         double worst = 1;
-        for (const auto& p : sample_rect(r, 8)) worst = std::min(worst, radius - std::hypot(p[0], p[1]));
+        for (const auto& p : sample_rect(r, 8)) worst = least_of(worst, radius - std::hypot(p[0], p[1]));
         CHECK(worst >= margin - 1e-12);
         for (std::size_t j = i + 1; j < layout.size(); ++j) {
           // Gap: sampled distance (≥ the true one) at least the gap; no point of one inside the other.
@@ -216,7 +222,7 @@ TEST_CASE("the search matches a brute-force scan of symmetric three-electrode la
       tri.push_back({{r * std::cos(a), r * std::sin(a)}, 0.002, 0.002, 0});
     }
     const DesignSummary s = evaluate_design(provider(pvdf::parse_scene(scene_with_layout(base, tri), "scan")), d);
-    worst_usable = std::min(worst_usable, s.usable_fraction);
+    worst_usable = least_of(worst_usable, s.usable_fraction);
     if (best_r == 0 || ranks_before(s, best_scan)) {
       best_scan = s;
       best_r = r;

@@ -8,6 +8,7 @@
 // estimated from the bending-free solution, against the oracle with minus the oracle without
 // bending. Lines starting "EFFECTIVITY" are the tables of docs/fem.md.
 #include "oracle_compare.hpp"
+#include "../test_worst.hpp"
 
 #include "pvdf/fem/probe_sweep.hpp"
 
@@ -236,7 +237,7 @@ TEST_CASE("probe sweep charges and their per-probe estimate against the integrat
     double worst = 0;
     for (std::size_t k = 0; k < s.electrodes.size(); ++k) {
       const double truth = q_oracle[k] - p.charge_C[k];
-      worst = std::max(worst, std::abs(truth) / q_scale);
+      worst = pvdf::testing::worst_of(worst, std::abs(truth) / q_scale);
       const std::string what = "sweep, " + mesh + ", Q_" + s.electrodes[k].name;
       if (probe_size < 0) {  // reported only: the estimate cannot see an unresolved footprint
         std::printf("EFFECTIVITY %-40s estimate %.3e  true %+.3e  (relative %.2e)  not asserted\n", what.c_str(),

@@ -62,3 +62,78 @@ def test_rank_designs_orders_as_the_command_rule():
         pvdfkit.rank_designs([quiet, 3])
     with pytest.raises(pvdfkit.InputError, match="list"):
         pvdfkit.rank_designs("quiet")
+
+
+def test_summary_is_the_command_line_json(tmp_path):
+    """DesignSummary.summary and a layout of `pvdfkit design --map FILE --json` on the same map and
+    settings: the same keys (the command adds its ranking and file keys) and the same values; one
+    serializer (pvdf::mapping::design_summary_json) behind both."""
+    import json
+    import os
+    import subprocess
+    binary = os.environ.get("PVDF_BINARY_DIR")
+    cli = os.path.join(binary, "app", "pvdfkit") if binary else None
+    if not cli or not os.path.exists(cli):
+        pytest.fail("PVDF_BINARY_DIR/app/pvdfkit not found: run through ctest (tests/python/CMakeLists.txt)")
+    amap = analytic_map(spacing=0.002)
+    path = tmp_path / "analytic.h5"
+    pvdfkit.write_map(str(path), amap)
+    d = pvdfkit.design(pvdfkit.read_map(str(path)), force_N=1.5, min_force_N=0.5, max_force_N=3.0, noise_C=NOISE_C,
+                       target_m=0.4e-3, adc_bits=10)
+    out = subprocess.run([cli, "design", "--map", str(path), "--force-N", "1.5", "--force-range-N", "0.5,3",
+                          "--noise-C", repr(NOISE_C), "--target-mm", "0.4", "--adc-bits", "10", "--json", "--no-plots",
+                          "--quiet"], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    layouts = json.loads(out.stdout)["layouts"]
+    assert len(layouts) == 1
+    cl, py = layouts[0], d.summary
+    command_keys = {"rank", "label", "source", "map_source", "map_file", "refined"}
+    assert set(py) == set(cl) - command_keys, set(py) ^ (set(cl) - command_keys)
+    assert py == {k: v for k, v in cl.items() if k not in command_keys}
+    assert py["status"] == "ok" and 0 < py["usable_fraction"] <= 1 and len(py["electrodes"]) == 3
+
+
+def test_optimize_layouts_synthetic_is_design_optimize(tmp_path):
+    """pvdfkit.optimize_layouts(synthetic=True) and `pvdfkit design --optimize --synthetic` with the same
+    settings and seed: the same JSON key for key (the command adds its files), the same best layout
+    (the atlas case, with FEM maps, is tests/python/test_atlas.py)."""
+    import json
+    import os
+    import subprocess
+    binary = os.environ.get("PVDF_BINARY_DIR")
+    cli = os.path.join(binary, "app", "pvdfkit") if binary else None
+    if not cli or not os.path.exists(cli):
+        pytest.fail("PVDF_BINARY_DIR/app/pvdfkit not found: run through ctest (tests/python/CMakeLists.txt)")
+    film = {
+        "membrane": {"shape": "circle", "radius_m": 0.012, "thickness_m": 25e-6},
+        "material": {"E1_Pa": 2.2e9, "E2_Pa": 1.8e9, "G12_Pa": 0.58e9, "nu12": 0.35, "draw_angle_deg": 0.0,
+                     "d31_C_per_N": 6.5e-12, "d32_C_per_N": 0.65e-12},
+        "electrodes": [{"name": "A", "center_m": [0.0, 0.004], "size_m": [0.002, 0.002]},
+                       {"name": "B", "center_m": [-0.0035, -0.002], "size_m": [0.002, 0.002]},
+                       {"name": "C", "center_m": [0.0035, -0.002], "size_m": [0.002, 0.002]}],
+        "probe": {"radius_m": 0.00075},
+    }
+    path = tmp_path / "film.json"
+    path.write_text(json.dumps(film))
+    r = pvdfkit.optimize_layouts(str(path), synthetic=True, spacing_m=0.0015, electrodes_min=3, electrodes_max=4,
+                                 budget=40, seed=5, square=True)
+    out = subprocess.run([cli, "design", "--optimize", str(path), "--synthetic", "--spacing-m", "0.0015",
+                          "--electrodes-min", "3", "--electrodes-max", "4", "--budget", "40", "--seed", "5", "--square",
+                          "--json", "--no-plots", "--quiet"], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    cl = json.loads(out.stdout)
+    py = r.to_dict()
+    assert set(py) == set(cl) - {"files"}
+    for j in (py, cl):
+        j.pop("seconds", None)
+        j.pop("files", None)
+        for c in j["counts"]:
+            c.pop("seconds")
+    assert py == cl
+    assert py["maps"] == "synthetic" and "atlas" not in py
+    best = r.best_n_electrodes
+    assert best == cl["best_n_electrodes"]
+    layout = r.best_layout
+    assert layout.shape == (best, 5) and np.allclose(layout[:, 2], layout[:, 3])  # squares
+    assert r.scenes[list(r.n_electrodes).index(best)] == r.best_scene
+    assert isinstance(r.reference, pvdfkit.DesignSummary)

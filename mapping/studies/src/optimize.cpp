@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <limits>
 #include <random>
 
@@ -87,37 +88,76 @@ nlohmann::json rect_json(const OrientedRect& r) {
 
 nlohmann::json finite_or_null(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
+/// The option as `naming` spells it, or by its field name when none is given.
+std::string named(const OptionNaming& naming, const std::string& key, const std::string& value) {
+  if (naming) return naming(key, value);
+  return value.empty() ? key : key + " = " + value;
+}
+
 }  // namespace
 
 void check_optimize_options(const OptimizeOptions& o) {
+  const auto name = [&o](const std::string& key, const std::string& value) { return named(o.naming, key, value); };
+  const auto integer = [](long long v) { return std::to_string(v); };
   if (o.electrodes_min < 3) {
-    throw InputError("--electrodes-min " + std::to_string(o.electrodes_min) +
+    throw InputError(name("electrodes_min", integer(o.electrodes_min)) +
                      " must be >= 3 (a press has three unknowns x, y, F); give 3 or more");
   }
   if (o.electrodes_max < o.electrodes_min) {
-    throw InputError("--electrodes-max " + std::to_string(o.electrodes_max) + " is below --electrodes-min " +
-                     std::to_string(o.electrodes_min) + "; give max >= min");
+    throw InputError(name("electrodes_max", integer(o.electrodes_max)) + " is below " +
+                     name("electrodes_min", integer(o.electrodes_min)) + "; give max >= min");
   }
   if (o.electrodes_max > 16) {
-    throw InputError("--electrodes-max " + std::to_string(o.electrodes_max) + " must be <= 16 (the search space grows "
+    throw InputError(name("electrodes_max", integer(o.electrodes_max)) + " must be <= 16 (the search space grows "
                      "5 variables per electrode); give 16 or fewer");
   }
   if (!(o.size_min_m > 0) || !std::isfinite(o.size_min_m)) {
-    throw InputError("--size-min-m " + num(o.size_min_m) + " must be > 0 (m), e.g. 0.001");
+    throw InputError(name("size_min_m", num(o.size_min_m)) + " must be > 0 (m), e.g. 0.001");
   }
   if (!(o.size_max_m >= o.size_min_m) || !std::isfinite(o.size_max_m)) {
-    throw InputError("--size-max-m " + num(o.size_max_m) + " must be >= --size-min-m " + num(o.size_min_m) + " (m)");
+    throw InputError(name("size_max_m", num(o.size_max_m)) + " must be >= " + name("size_min_m", num(o.size_min_m)) + " (m)");
   }
   if (!(o.min_gap_m >= 0) || !std::isfinite(o.min_gap_m)) {
-    throw InputError("--min-gap-m " + num(o.min_gap_m) + " must be >= 0 (m), e.g. 0.0005");
+    throw InputError(name("min_gap_m", num(o.min_gap_m)) + " must be >= 0 (m), e.g. 0.0005");
   }
   if (!(o.clamp_margin_m >= 0) || !std::isfinite(o.clamp_margin_m)) {
-    throw InputError("--clamp-margin-m " + num(o.clamp_margin_m) + " must be >= 0 (m), e.g. 0.001");
+    throw InputError(name("clamp_margin_m", num(o.clamp_margin_m)) + " must be >= 0 (m), e.g. 0.001");
   }
-  if (o.budget < 1) throw InputError("--budget 0 must be >= 1 (evaluations per electrode count), e.g. 300");
+  if (o.budget < 1 || o.budget > 1000000) {
+    throw InputError(name("budget", std::to_string(o.budget)) +
+                     " must lie in [1, 1000000] (evaluations per electrode count); give e.g. 300");
+  }
   if (o.search_stride < 1) {
-    throw InputError("--search-stride " + std::to_string(o.search_stride) + " must be >= 1 (1 = the full map)");
+    throw InputError(name("search_stride", integer(o.search_stride)) + " must be >= 1 (1 = the full map)");
   }
+}
+
+void check_optimize_maps(const OptimizeMaps& m, const OptionNaming& naming) {
+  const auto name = [&naming](const std::string& key, const std::string& value) { return named(naming, key, value); };
+  if (m.atlas_path.empty() && !m.synthetic) {
+    throw InputError("no map source: give " + name("atlas", "FILE") +
+                     " (a charge-density atlas of the film, `pvdfkit atlas SCENE -o FILE`) or " + name("synthetic", "") +
+                     " (the analytic stand-in, a preview)");
+  }
+  if (!m.atlas_path.empty() && m.synthetic) {
+    throw InputError(name("atlas", m.atlas_path) + " and " + name("synthetic", "") + ": give one of them");
+  }
+  if (!m.atlas_path.empty() && (m.spacing_m > 0 || m.tolerance > 0)) {
+    const bool spacing = m.spacing_m > 0;
+    throw InputError(name(spacing ? "spacing_m" : "tolerance", num(spacing ? m.spacing_m : m.tolerance)) + " with " +
+                     name("atlas", m.atlas_path) + ": the atlas fixes the grid and the tolerance; drop it or make another atlas");
+  }
+  if (!m.atlas_path.empty() && !std::filesystem::is_regular_file(m.atlas_path)) {
+    throw InputError(name("atlas", m.atlas_path) + ": no such file; make one with `pvdfkit atlas SCENE -o " + m.atlas_path + "`");
+  }
+  if (m.synthetic && (m.spacing_m < 0 || !std::isfinite(m.spacing_m))) {
+    throw InputError(name("spacing_m", num(m.spacing_m)) + " must be > 0 (m), e.g. 0.001");
+  }
+}
+
+MapProvider synthetic_map_provider(double spacing_m, double force_N) {
+  const double spacing = spacing_m > 0 ? spacing_m : 0.001;
+  return [spacing, force_N](const pvdf::Scene& s) { return synthetic_map_for_scene(s, spacing, force_N, 5e-14); };
 }
 
 nlohmann::json scene_with_layout(const nlohmann::json& scene, const std::vector<OrientedRect>& layout) {
@@ -192,7 +232,8 @@ OptimizeSummary optimize_layouts(const nlohmann::json& scene_json, const std::st
   space.square = o.square;
   space.angle_hi = o.rotate ? (o.square ? 0.5 * pi : pi) : 0.0;
   if (!(space.x_hi > space.x_lo && space.y_hi > space.y_lo)) {
-    throw InputError("--clamp-margin-m " + num(o.clamp_margin_m) + " with --size-min-m " + num(o.size_min_m) + ": no room on the film of " +
+    throw InputError(named(o.naming, "clamp_margin_m", num(o.clamp_margin_m)) + " with " +
+                     named(o.naming, "size_min_m", num(o.size_min_m)) + ": no room on the film of " +
                      source + " (bounding box " + num(box[1] - box[0]) + " x " + num(box[3] - box[2]) +
                      " m); give a smaller margin or size");
   }
@@ -286,8 +327,12 @@ OptimizeSummary optimize_layouts(const nlohmann::json& scene_json, const std::st
   return summary;
 }
 
-nlohmann::json optimize_summary_json(const OptimizeSummary& s, const OptimizeOptions& o) {
+nlohmann::json optimize_summary_json(const OptimizeSummary& s, const OptimizeOptions& o, const OptimizeMaps& maps,
+                                     const std::string& scene_source) {
   nlohmann::json j;
+  j["scene"] = scene_source;
+  j["maps"] = maps.kind();
+  if (!maps.atlas_path.empty()) j["atlas"] = maps.atlas_path;
   j["settings"] = {{"electrodes_min", o.electrodes_min}, {"electrodes_max", o.electrodes_max},
                    {"size_min_m", o.size_min_m},         {"size_max_m", o.size_max_m},
                    {"square", o.square},                 {"rotate", o.rotate},

@@ -24,6 +24,12 @@ namespace pvdf::mapping {
 /// The charge map of a candidate layout (a scene whose electrodes are the candidate's).
 using MapProvider = std::function<ChargeMap(const pvdf::Scene&)>;
 
+/// How messages name an option, given its key (snake_case, the OptimizeOptions / OptimizeMaps field:
+/// "size_min_m") and its value as text (empty for a switch named alone). The command passes its
+/// flags' spelling ("--size-min-m 0"), the Python package its keywords' ("optimize_layouts:
+/// size_min_m = 0"); empty = the field's own name ("size_min_m = 0"). The library spells no flag.
+using OptionNaming = std::function<std::string(const std::string& key, const std::string& value)>;
+
 /// Settings of a layout search (public members with defaults).
 struct OptimizeOptions {
   int electrodes_min = 3, electrodes_max = 6;  ///< electrode counts searched (≥ 3: a press has 3 unknowns)
@@ -44,10 +50,32 @@ struct OptimizeOptions {
   bool keep_evaluated = false;
   /// Called after each evaluation: (count index, counts, evaluations done in this count, budget).
   std::function<void(std::size_t, std::size_t, std::size_t, std::size_t)> progress;
+  /// How the messages of check_optimize_options and optimize_layouts name an option (see OptionNaming).
+  OptionNaming naming;
 };
 
-/// Throws InputError naming the option (as the command spells it), its value and the fix.
+/// The one check of a search's settings, for the command and the Python package alike: throws
+/// InputError naming the option (as options.naming spells it), its value, the rule and the fix.
 void check_optimize_options(const OptimizeOptions& options);
+
+/// Where a search's charge maps come from: a charge-density atlas file (docs/atlas.md), or the
+/// synthetic stand-in (a preview).
+struct OptimizeMaps {
+  std::string atlas_path;     ///< the atlas file; empty = none
+  bool synthetic = false;     ///< the analytic stand-in (synthetic_map_for_scene) instead
+  double spacing_m = 0;       ///< synthetic maps' grid spacing (m); 0 = 0.001. The atlas fixes its own.
+  double tolerance = 0;       ///< requested charge error; 0 = none given (the atlas fixes its own)
+  std::string kind() const { return synthetic ? "synthetic" : "atlas"; }
+};
+
+/// Throws InputError (options named by `naming`, see OptionNaming) unless exactly one map source is
+/// given, the atlas file exists, and neither a spacing nor a tolerance is given with an atlas (the
+/// atlas fixes both).
+void check_optimize_maps(const OptimizeMaps& maps, const OptionNaming& naming = {});
+
+/// The synthetic maps of a search: synthetic_map_for_scene at `spacing_m` (0 = 0.001 m), one force
+/// level `force_N`, the command's noise 5e-14 C on every channel.
+MapProvider synthetic_map_provider(double spacing_m, double force_N);
 
 /// The best layout found for one electrode count.
 struct CountResult {
@@ -87,7 +115,10 @@ ChargeMap coarsen_map(const ChargeMap& map, int stride);
 OptimizeSummary optimize_layouts(const nlohmann::json& scene, const std::string& source, const MapProvider& provider,
                                  const OptimizeOptions& options);
 
-/// The summary as JSON (per count: layout, summary figures, evaluations, seconds).
-nlohmann::json optimize_summary_json(const OptimizeSummary& summary, const OptimizeOptions& options);
+/// The summary as JSON, the one form of `pvdfkit design --optimize --json` (which adds its `files` and
+/// `verify`) and of the Python OptimizeSummary.to_dict(): settings, the reference layout, per count
+/// layout, figures, evaluations and seconds; the best count; `scene` (its source), `maps` and `atlas`.
+nlohmann::json optimize_summary_json(const OptimizeSummary& summary, const OptimizeOptions& options,
+                                     const OptimizeMaps& maps, const std::string& scene_source);
 
 }  // namespace pvdf::mapping
