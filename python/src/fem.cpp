@@ -13,6 +13,8 @@
 #include "pvdf/mapping/generate.hpp"
 #include "pvdf/mapping/map_report.hpp"
 
+#include <malloc.h>
+
 #include <cmath>
 #include <algorithm>
 #include <cstdio>
@@ -100,6 +102,9 @@ pvdf::fem::Result solve(py::object scene_arg, py::object loads, py::object sampl
   {
     py::gil_scoped_release release;
     r = pvdf::fem::solve(scene, options);
+    // The solve's meshes, matrices and factors (GBs near the clamp) go back to the system now: glibc
+    // keeps freed memory otherwise, and a Python loop of solves held its largest solve's RSS.
+    malloc_trim(0);
   }
   if (check && !pvdf::fem::usable(r.summary.status)) {
     throw pvdf::NumericalError(scene.source + ": the film solve did not converge (" +
