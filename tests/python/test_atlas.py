@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 import pvdfkit
+from cli_path import pvdfkit_cli
 
 # A 16 mm film with three 2 mm electrodes (their layout plays no part in the atlas); a coarse
 # probe grid (13 positions, 6 solved, the rest mirror images): about 20 s per atlas.
@@ -25,11 +26,7 @@ ATLAS_FLAGS = ["--spacing-m", "0.003", "--tolerance", "0.04", "--threads", "1", 
 
 
 def cli():
-    binary = os.environ.get("PVDF_BINARY_DIR")
-    path = os.path.join(binary, "app", "pvdfkit") if binary else None
-    if not path or not os.path.exists(path):
-        pytest.fail("PVDF_BINARY_DIR/app/pvdfkit not found: run through ctest (tests/python/CMakeLists.txt)")
-    return path
+    return pvdfkit_cli()
 
 
 @pytest.fixture(scope="module")

@@ -71,10 +71,8 @@ def test_summary_is_the_command_line_json(tmp_path):
     import json
     import os
     import subprocess
-    binary = os.environ.get("PVDF_BINARY_DIR")
-    cli = os.path.join(binary, "app", "pvdfkit") if binary else None
-    if not cli or not os.path.exists(cli):
-        pytest.fail("PVDF_BINARY_DIR/app/pvdfkit not found: run through ctest (tests/python/CMakeLists.txt)")
+    from cli_path import pvdfkit_cli
+    cli = pvdfkit_cli()
     amap = analytic_map(spacing=0.002)
     path = tmp_path / "analytic.h5"
     pvdfkit.write_map(str(path), amap)
@@ -100,10 +98,8 @@ def test_optimize_layouts_synthetic_is_design_optimize(tmp_path):
     import json
     import os
     import subprocess
-    binary = os.environ.get("PVDF_BINARY_DIR")
-    cli = os.path.join(binary, "app", "pvdfkit") if binary else None
-    if not cli or not os.path.exists(cli):
-        pytest.fail("PVDF_BINARY_DIR/app/pvdfkit not found: run through ctest (tests/python/CMakeLists.txt)")
+    from cli_path import pvdfkit_cli
+    cli = pvdfkit_cli()
     film = {
         "membrane": {"shape": "circle", "radius_m": 0.012, "thickness_m": 25e-6},
         "material": {"E1_Pa": 2.2e9, "E2_Pa": 1.8e9, "G12_Pa": 0.58e9, "nu12": 0.35, "draw_angle_deg": 0.0,

@@ -14,6 +14,7 @@ import pytest
 import pvdfkit
 from pvdfkit import restore
 from test_maps import analytic_charge_C, analytic_map
+from cli_path import pvdfkit_cli
 
 NAN, INF = float("nan"), float("inf")
 
@@ -389,11 +390,7 @@ def test_locate_refuses_nan_instead_of_flagging(locator):
 
 
 def cli():
-    binary = os.environ.get("PVDF_BINARY_DIR")
-    path = os.path.join(binary, "app", "pvdfkit") if binary else None
-    if not path or not os.path.exists(path):
-        pytest.fail("PVDF_BINARY_DIR/app/pvdfkit not found: run through ctest (tests/python/CMakeLists.txt)")
-    return path
+    return pvdfkit_cli()
 
 
 @pytest.mark.skipif(not pvdfkit.has_fem, reason="built without the FEM modules")
