@@ -88,19 +88,18 @@ void FilmSolver::update_clamp_layer(const Vector<double>& u, Model model) {
   const FEValuesExtractors::Vector inplane(0);
   const FEValuesExtractors::Scalar w(2);
   const unsigned int p = form_degree();
-  // 1. At the rim's support points: N_nn and the normal per w DOF (a vertex's two faces averaged),
-  // the in-plane DOFs at the same points, and the lumped rim mass ∮ φ_i ds of each w DOF.
+  // 1. At the rim's support points: the normal per w DOF (a vertex's two faces averaged) and the
+  // in-plane DOFs at the same points; per w DOF the rim mass ∮ φ_i ds and ∮ N_nn φ_i ds.
   const Quadrature<dim - 1> sq(fe_->get_unit_face_support_points());
-  FEFaceValues<dim> sv(*mapping_, *fe_, sq, update_gradients | update_normal_vectors);
+  FEFaceValues<dim> sv(*mapping_, *fe_, sq, update_normal_vectors);
   const QGauss<dim - 1> fq(p + 1);
   FEFaceValues<dim> fv(*mapping_, *fe_, fq, update_values | update_gradients | update_hessians | update_normal_vectors |
                                                 update_JxW_values);
-  std::vector<Tensor<2, dim>> su(sq.size()), gu(fq.size()), hw(fq.size());
-  std::vector<Tensor<1, dim>> sw(sq.size()), gw(fq.size());
+  std::vector<Tensor<2, dim>> gu(fq.size()), hw(fq.size());
+  std::vector<Tensor<1, dim>> gw(fq.size());
   std::vector<types::global_dof_index> face_dofs(fe_->n_dofs_per_face()), cell_dofs(fe_->n_dofs_per_cell());
   struct Node {
-    double N = 0, n[2] = {0, 0};
-    int count = 0;
+    double n[2] = {0, 0};
   };
   std::map<types::global_dof_index, Node> nodes;                                          // rim w DOFs
   std::map<types::global_dof_index, std::pair<types::global_dof_index, unsigned int>> partner;  // in-plane → (w DOF, component)
@@ -112,18 +111,14 @@ void FilmSolver::update_clamp_layer(const Vector<double>& u, Model model) {
     for (const unsigned int f : cell->face_indices()) {
       if (!cell->face(f)->at_boundary()) continue;
       sv.reinit(cell, f);
-      sv[inplane].get_function_gradients(u, su);
-      sv[w].get_function_gradients(u, sw);
       cell->face(f)->get_dof_indices(face_dofs);
       for (unsigned int i = 0; i < face_dofs.size(); ++i) {
         const unsigned int c = fe_->face_system_to_component_index(i).first;
         if (c == 2) {
           const Tensor<1, dim>& n = sv.normal_vector(i);
           Node& node = nodes[face_dofs[i]];
-          node.N += normal_force(membrane_C_, kinematics_from(su[i], sw[i]), model, pretension_, n);
           node.n[0] += n[0];
           node.n[1] += n[1];
-          ++node.count;
           continue;
         }
         for (unsigned int j = 0; j < face_dofs.size(); ++j)
@@ -200,9 +195,10 @@ void FilmSolver::update_clamp_layer(const Vector<double>& u, Model model) {
   std::map<types::global_dof_index, int> row;  // rim w DOF → row of P
   for (const auto& [d, node] : nodes) {
     if (hanging_constraints_.is_constrained(d) || !constraints_.is_constrained(d) || !(mass(d) > 0)) continue;
+    const auto held_N = clamp_N_.find(d);  // every rim DOF with ∮ φ_i ds > 0 since the first pass
+    if (held_N == clamp_N_.end()) continue;
     Slope s;
-    const auto held_N = clamp_N_.find(d);
-    s.N = held_N != clamp_N_.end() ? held_N->second : std::max(node.N / node.count, n_floor);
+    s.N = held_N->second;
     Tensor<1, dim> n;
     n[0] = node.n[0];
     n[1] = node.n[1];
