@@ -11,6 +11,7 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -94,6 +95,48 @@ static void openmp_serial_on_this_thread() {
   (void)set;
 }
 
+// CHOLMOD's dense kernels run in whichever BLAS the process loaded: OpenBLAS (fem/CMakeLists.txt
+// puts it first). Debian's single-threaded flavour (libopenblas0-serial, "SINGLE_THREADED" in
+// openblas_get_config) is not built for two threads calling at once (its work buffers are handed
+// out without a lock unless built with USE_LOCKING), and map threads do call at once. On it a
+// 2-thread map of the 10 mm CI film differed from the 1-thread one, and from itself run to run,
+// by up to 1e-15 of the largest charge at 5-20 % of its values (5 runs of 5), and the main job's
+// map decided the clamp layer differently at 2 nodes (0.26 %). Newton hid the race by iterating;
+// an estimate solved with a raced factor has no such cover. The reference BLAS (thread-safe) gave
+// the 1-thread map in 3 runs of 3, 1.9x slower; so did the pthread flavour asked for one thread
+// per call (scripts/install-deps), in 4 runs of 4, at the serial flavour's speed
+// (docs/map-generation.md §2). So: one OpenBLAS thread per call (the map's threads are the
+// parallelism), and where the loaded OpenBLAS is the single-threaded one, one BLAS caller at a
+// time (correct, slower). Other BLAS (ATLAS, the reference BLAS) define neither symbol.
+extern "C" {
+void openblas_set_num_threads(int) __attribute__((weak));
+int openblas_get_parallel(void) __attribute__((weak));
+}
+
+static bool blas_needs_one_caller_at_a_time() {
+  static const bool serialize = [] {
+    if (openblas_set_num_threads) openblas_set_num_threads(1);
+    return openblas_get_parallel != nullptr && openblas_get_parallel() == 0;
+  }();
+  return serialize;
+}
+
+// Held while a factorization or solve may call the BLAS, when blas_needs_one_caller_at_a_time().
+static std::unique_lock<std::mutex> blas_turn() {
+  static std::mutex m;
+  return blas_needs_one_caller_at_a_time() ? std::unique_lock<std::mutex>(m) : std::unique_lock<std::mutex>();
+}
+
+// CHOLMOD may order by METIS (it tries METIS when AMD's fill is high), whose random generator's
+// state is a process global: two threads analysing at once would interleave its draws, and the
+// ordering (so the rounding of every factorization) would depend on timing. Not the race measured
+// above (the CI film's orderings are AMD's: AMD alone gave the same map bit for bit), a guard for
+// the larger meshes; one analysis per mesh, so the lock costs nothing measurable.
+static std::mutex& cholmod_analysis_mutex() {
+  static std::mutex m;
+  return m;
+}
+
 // PVDF_FACTORIZATION=simplicial-ldlt in the environment selects the method used before CHOLMOD,
 // so that benchmarks can compare both in one run on one machine (docs/bench-fem.md).
 // Settled once per process (a map builds a factorization for every probe mesh).
@@ -151,6 +194,7 @@ void TangentFactorization::set_pattern(const dealii::SparsityPattern& pattern) {
 
 bool TangentFactorization::factorize(const dealii::SparseMatrix<double>& matrix) {
   openmp_serial_on_this_thread();
+  const auto blas = blas_turn();
   Impl& m = *impl_;
   double* values = m.matrix.valuePtr();
   std::size_t k = 0;
@@ -166,6 +210,7 @@ bool TangentFactorization::factorize(const dealii::SparseMatrix<double>& matrix)
   if (method_ == Method::supernodal_cholesky && m.skip_cholesky > 0) --m.skip_cholesky;
   else if (method_ == Method::supernodal_cholesky) {
     if (!m.cholesky_analyzed) {
+      std::lock_guard<std::mutex> one_at_a_time(cholmod_analysis_mutex());
       m.cholesky.analyzePattern(m.matrix);
       m.cholesky_analyzed = true;
     }
@@ -198,6 +243,7 @@ void TangentFactorization::forget_history() {
 
 void TangentFactorization::solve(const double* b, double* x, std::size_t n) const {
   openmp_serial_on_this_thread();
+  const auto blas = blas_turn();
   const Eigen::Map<const Eigen::VectorXd> bv(b, static_cast<Eigen::Index>(n));
   Eigen::Map<Eigen::VectorXd> xv(x, static_cast<Eigen::Index>(n));
   if (impl_->last_was_cholesky)
