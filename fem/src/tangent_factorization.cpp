@@ -21,7 +21,7 @@ namespace pvdf::fem::detail {
 // its symbolic analysis (ordering, supernodes) is kept, so a factor that is not in use (a Cholesky
 // that met a non-positive pivot, while the LDLᵀ serves) holds no memory but its structure.
 // cholmod_factorize refills a symbolic factor from scratch, so the next factor is the same.
-class SupernodalCholesky : public Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> {
+class SupernodalCholesky : public Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Upper> {
  public:
   void release_numeric() {
     if (m_cholmodFactor && m_cholmodFactor->xtype != CHOLMOD_PATTERN)
@@ -55,12 +55,15 @@ struct PatternAmdOrdering {
 
 struct TangentFactorization::Impl {
   using Matrix = Eigen::SparseMatrix<double>;
-  using Ldlt = Eigen::SimplicialLDLT<Matrix, Eigen::Lower, PatternAmdOrdering>;
-  // The lower triangle of the symmetric pattern (CSC), all that both factorizations read: half the
+  using Ldlt = Eigen::SimplicialLDLT<Matrix, Eigen::Upper, PatternAmdOrdering>;
+  // The upper triangle of the symmetric pattern (CSC), all that both factorizations read: half the
   // copy of the full pattern (measured: the Q3 estimate space of a direct map solve near the clamp
-  // held 0.54 GB in the full copy and its slots).
+  // held 0.54 GB in the full copy and its slots). Upper, not lower: CHOLMOD's supernodal
+  // factorization wants tril(PAPᵀ) and makes it with one permuted transpose from triu(A), two
+  // from tril(A) (cholmod_factorize.c); the second was 4 % of a map node (perf,
+  // cholmod_transpose_sym 8 % of the samples).
   Matrix matrix;
-  std::vector<int> slot;  // deal.II entry k (in its row-major order) → value slot in `matrix`; -1 above the diagonal
+  std::vector<int> slot;  // deal.II entry k (in its row-major order) → value slot in `matrix`; -1 below the diagonal
   SupernodalCholesky cholesky;
   // Built on the first indefinite tangent and dropped when a Cholesky succeeds again: its factor
   // (simplicial, AMD) is as large as the Cholesky's, and a map's engines met an indefinite tangent
@@ -155,7 +158,9 @@ TangentFactorization::~TangentFactorization() = default;
 
 // The Eigen copy of the pattern (CSC) and, for each deal.II entry, its slot there: each
 // factorization copies the values without searching. Built by a counting transpose of deal.II's
-// rows, O(nnz): visiting the rows in increasing order leaves every column's row indices sorted, so
+// rows, O(nnz): row r gives column c >= r its entry (r, c) (deal.II keeps the diagonal first in
+// a row, which is still the column's last); visiting the rows in increasing order leaves every
+// column's row indices sorted, so
 // no sort or search is needed (the triplet sort + lower_bound before took 6.7 % of seed 001's
 // centre solve, perf, for the Q2 and the Q3 pattern). Same CSC as Eigen's setFromTriplets.
 void TangentFactorization::set_pattern(const dealii::SparsityPattern& pattern) {
@@ -167,7 +172,7 @@ void TangentFactorization::set_pattern(const dealii::SparsityPattern& pattern) {
   std::vector<int> count(static_cast<std::size_t>(n) + 1, 0);
   for (int r = 0; r < n; ++r)
     for (auto it = pattern.begin(r); it != pattern.end(r); ++it)
-      if (static_cast<int>(it->column()) <= r) ++count[it->column() + 1];
+      if (static_cast<int>(it->column()) >= r) ++count[it->column() + 1];
   for (int c = 0; c < n; ++c) count[c + 1] += count[c];
   const auto nnz = static_cast<Eigen::Index>(count[n]);
   m.matrix.resizeNonZeros(nnz);
@@ -180,7 +185,7 @@ void TangentFactorization::set_pattern(const dealii::SparsityPattern& pattern) {
   for (int r = 0; r < n; ++r)
     for (auto it = pattern.begin(r); it != pattern.end(r); ++it) {
       const int c = static_cast<int>(it->column());
-      if (c > r) {
+      if (c < r) {
         m.slot[k++] = -1;
         continue;
       }
