@@ -46,10 +46,10 @@ void ItemCostEta::block_done(const std::vector<std::size_t>& items, const std::v
       bin_units_.resize(b + 1, 0.0);
     }
     ++bin_items_[b];
+    bin_units_[b] += units_[id];
     for (std::size_t c = 0; c < n_kinds_ && c < work[n].size(); ++c) {
       const double w = std::isfinite(work[n][c]) ? std::max(0.0, work[n][c]) : 0.0;
       bin_work_[b][c] += w;
-      bin_units_[b] += w;
       sum[c] += w;
     }
   }
@@ -148,8 +148,8 @@ double ItemCostEta::seconds_left(double t_s) const {
       else if (d <= start && bin_items_[start - d] > 0) best = start - d;
     }
     if (best == nb) continue;
-    // Per unit of the bin's items done, times this item's units; a bin whose items did no counted
-    // work (nothing to learn a mix from) gives its per-item mean.
+    // The bin's work per unit of its items done (their units as set when done), times this item's
+    // units.
     const double per = bin_units_[best] > 0 ? units_[id] / bin_units_[best] : 1.0 / double(bin_items_[best]);
     for (std::size_t c = 0; c < n_kinds_; ++c) cpu_left += cost_[c] * bin_work_[best][c] * per;
   }

@@ -195,10 +195,13 @@ class Generator {
   std::size_t fem_points_solved_ = 0;    // FEM-solved points (position × level), committed
   std::size_t n_resumed_points_ = 0;
   std::size_t progress_done_ = 0, progress_total_ = 0;
-  // MapOptions::time_left: kinds of work = fem::SweepModel codes 0..3 per solved level; feature =
-  // the position's distance to the clamp; time_left_id_[p] = its item id (npos: not planned).
+  // MapOptions::time_left: kinds of work = fem::SweepModel codes 0..3: the sweep solves of a
+  // position (one per level solved) and, on top of them, the rim-model, direct and clamp-layer
+  // solves it ran, kept or not; feature = the position's distance to the clamp; time_left_id_[p] =
+  // its item id (npos: not planned); time_left_work_[p] = its work, written by the thread solving it.
   pvdf::ItemCostEta time_left_{4, 1.0, 1};
   std::vector<std::size_t> time_left_id_;
+  std::vector<std::array<double, 4>> time_left_work_;
   std::chrono::steady_clock::time_point clock0_ = std::chrono::steady_clock::now();
   std::chrono::steady_clock::time_point last_checkpoint_;
   std::string first_failure_;

@@ -7,6 +7,7 @@
 #include "pvdf/core/membrane_scaling.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <exception>
 #include <limits>
@@ -63,6 +64,10 @@ void Generator::solve_block(fem::ProbeSweep& sweep, const Block& block, std::vec
       return;
     }
     const double x = map_.x_m[task.i], y = map_.y_m[task.j];
+    // The time left's work of this position: sweep solves, and on top of them the rim-model and
+    // clamp-layer solves the sweep ran (kept or not) and the direct solves tried.
+    std::array<double, 4> work{};
+    const fem::SweepTiming timing0 = sweep.timing();
     std::vector<double> rec(layout_.size(), nan);
     rec[Layout::point_index] = double(task.j * grid_.nx + task.i);
     auto put = [&](std::size_t f, const fem::ProbeSolution* s, std::uint8_t prov) {
@@ -98,7 +103,11 @@ void Generator::solve_block(fem::ProbeSweep& sweep, const Block& block, std::vec
         s.force_N = o_.forces_N[f];
         s.message = e.what();
       }
-      if (s.status == fem::Status::tolerance_not_met && o_.direct_solves == DirectSolves::by_estimate) improve_by_direct_solve(x, y, s);
+      ++work[std::size_t(fem::SweepModel::cheap)];
+      if (s.status == fem::Status::tolerance_not_met && o_.direct_solves == DirectSolves::by_estimate) {
+        improve_by_direct_solve(x, y, s);
+        ++work[std::size_t(direct_model)];  // tried, kept or not
+      }
       const double cpu = thread_cpu_s() - cpu0;
       std::lock_guard<std::mutex> lock(mutex_);
       solve_cpu_s_ += cpu;
@@ -136,6 +145,11 @@ void Generator::solve_block(fem::ProbeSweep& sweep, const Block& block, std::vec
       if (next_have[f]) state[f] = std::move(next[f]);
       have[f] = next_have[f];
     }
+    const fem::SweepTiming timing1 = sweep.timing();
+    work[std::size_t(fem::SweepModel::rim)] += double(timing1.rim_solves - timing0.rim_solves);
+    work[std::size_t(fem::SweepModel::clamp_layer)] += double(timing1.clamp_layer_solves - timing0.clamp_layer_solves);
+    const std::size_t p = task.j * grid_.nx + task.i;
+    if (p < time_left_work_.size()) time_left_work_[p] = work;  // this thread's own position
     records.insert(records.end(), rec.begin(), rec.end());
     const std::size_t solved = positions_solved_.fetch_add(1) + 1;
     if (o_.stop_after_positions > 0 && solved >= o_.stop_after_positions) {
@@ -152,22 +166,14 @@ double Generator::eta_clock_s() const {
 
 void Generator::commit(const std::vector<double>& records, std::size_t n_positions, double cpu_s, double start_s) {
   std::lock_guard<std::mutex> lock(mutex_);
-  // The time left: the kinds of solve each position of the block needed.
+  // The time left: the solves of each kind each position of the block ran (solve_block).
   std::vector<std::size_t> items;
   std::vector<std::vector<double>> work;
   for (std::size_t r = 0; r < records.size(); r += layout_.size()) {
-    const double* rec = records.data() + r;
-    const std::size_t p = std::size_t(rec[Layout::point_index]);
-    if (p >= time_left_id_.size() || time_left_id_[p] == std::size_t(-1)) continue;
-    std::vector<double> w(4, 0.0);
-    for (std::size_t f = 0; f < layout_.nf; ++f) {
-      const double* lv = layout_.level(rec, f);
-      if ((std::uint8_t(lv[Layout::provenance]) & (provenance::scaled | provenance::mirrored)) != 0) continue;
-      const int m = int(lv[Layout::model]);
-      if (m >= 0 && m < 4) w[std::size_t(m)] += 1;
-    }
+    const std::size_t p = std::size_t(records[r + Layout::point_index]);
+    if (p >= time_left_id_.size() || time_left_id_[p] == std::size_t(-1) || p >= time_left_work_.size()) continue;
     items.push_back(time_left_id_[p]);
-    work.push_back(std::move(w));
+    work.emplace_back(time_left_work_[p].begin(), time_left_work_[p].end());
   }
   const double now_s = eta_clock_s();
   time_left_.block_done(items, work, cpu_s, start_s, now_s);

@@ -16,10 +16,12 @@ namespace pvdf {
 ///   are fitted by least squares to the CPU seconds of the blocks done (a small ridge pulls them
 ///   toward the mean cost per unit of work, so that one block already gives an answer);
 /// - work of an item still to do: its expected number of units (set_units; default 1: e.g. the
-///   force levels a map position will solve) × the mix of kinds per unit of the items done whose
-///   feature lies in the same bin (bins of `bin_width` in the feature), else in the nearest bin
-///   that has items done — so items that do three units each (a map's force-scaling checks) do not
-///   make the one-unit items to come look three times as dear;
+///   force levels a map position will solve) × the work of each kind per unit of the items done
+///   whose feature lies in the same bin (bins of `bin_width` in the feature), else in the nearest
+///   bin that has items done — so items that do three units each (a map's force-scaling checks) do
+///   not make the one-unit items to come look three times as dear. A unit may need more than one
+///   piece of work (a map position's sweep solve and a rim-model solve tried on top of it): all of
+///   it is counted, since work left out would be charged to the kinds that are counted;
 /// - wall time: the CPU seconds left over the throughput `threads` × e, with e the CPU seconds
 ///   per wall second of the blocks done (their CPU over their own wall durations), which holds the
 ///   load of the machine as it was.
@@ -54,7 +56,7 @@ class ItemCostEta {
   // per feature bin: items done and their summed work per kind
   std::vector<std::size_t> bin_items_;
   std::vector<std::vector<double>> bin_work_;
-  std::vector<double> bin_units_;  ///< summed units (Σ_c work) of the items done in each bin
+  std::vector<double> bin_units_;  ///< summed units (set_units) of the items done in each bin
   // per block done: work per kind and CPU seconds (the least-squares rows)
   std::vector<std::vector<double>> block_work_;
   std::vector<double> block_cpu_s_;
