@@ -2,6 +2,8 @@
 // check carries a clearance of a fraction of the mesh size.
 #include "pvdf/core/planar.hpp"
 
+#include "pvdf/core/assert.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -139,6 +141,7 @@ bool region_contains(const Region& r, const Point& p) {
 
 Point boundary_point(const Region& r) {
   if (r.is_circle) return {r.center[0] + r.radius, r.center[1]};
+  PVDF_ASSERT(!r.vertices.empty(), "a polygon region must have vertices");
   return r.vertices.front();
 }
 

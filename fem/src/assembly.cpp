@@ -3,6 +3,7 @@
 // tangent of the chosen kinematics (every Newton step), with a per-mesh geometry cache.
 #include "film_solver.hpp"
 
+#include "pvdf/core/assert.hpp"
 #include "pvdf/core/constants.hpp"
 
 #include <deal.II/base/quadrature_lib.h>
@@ -171,6 +172,7 @@ void FilmSolver::assemble_load_vector() {
     }
     double sum = 0;
     for (types::global_dof_index i = 0; i < f.size(); ++i) sum += f(i);
+    PVDF_ASSERT(std::isfinite(sum), "the nodal forces of a load must be finite");
     if (load.probe) {
       if (sum != 0) f *= load.force_N / sum;
     }
@@ -190,6 +192,7 @@ void FilmSolver::build_geometry_cache() {
   FEValues<dim> fe_values(*mapping_, *fe_, quadrature, update_gradients | update_JxW_values);
   const unsigned int n = fe_->n_dofs_per_cell();
   const unsigned int n_base = n / 3;
+  PVDF_ASSERT(n == 3 * n_base, "the element has three components (u_x, u_y, w) of the same base");
   const unsigned int n_q = quadrature.size();
   cache_.n_q = n_q;
   cache_.n_base = n_base;
@@ -217,6 +220,7 @@ void FilmSolver::build_geometry_cache() {
     }
     ++k;
   }
+  PVDF_ASSERT(k == n_cells, "the geometry cache must hold every active cell once");
   cache_.n_cells = n_cells;
   cache_.valid = true;
 }
@@ -342,6 +346,9 @@ void FilmSolver::assemble(const Vector<double>& u, Model model, double artificia
   std::vector<types::global_dof_index> dofs(n);
   std::vector<double> ul(n);  // local values ordered (component, base)
   const double N_tot = pretension_ + artificial_tension;
+  PVDF_ASSERT(u.size() == dof_handler_.n_dofs(), "the displacement must have one value per DOF of this space");
+  PVDF_ASSERT(cache_.dofs.size() == cache_.n_cells * n && cache_.system_index.size() == 3 * std::size_t(nb),
+              "the geometry cache must belong to this element and mesh");
 
   residual.reinit(dof_handler_.n_dofs());
   membrane_raw_ = 0;

@@ -10,6 +10,7 @@
 #include "electrode_cells.hpp"
 #include "film_solver.hpp"
 
+#include "pvdf/core/assert.hpp"
 #include "pvdf/core/material.hpp"
 #include "pvdf/core/piezo.hpp"
 
@@ -32,6 +33,8 @@ using namespace dealii;
 // material axes, Voigt rows) and λ = Cᵀa, dQ/du_i = A/(h·|Ω_k|) ∫_Ω_k λ·δE(φ_i) dA, δE(φ) for
 // component c being (v_c0 φ_x, v_c1 φ_y, v_c0 φ_y + v_c1 φ_x) as in the residual (assembly.cpp).
 Vector<double> FilmSolver::charge_derivative(const Vector<double>& u, Model model, std::size_t k) const {
+  PVDF_ASSERT(k < scene_.electrodes.size() && u.size() == dof_handler_.n_dofs(),
+              "a charge's derivative is asked for an electrode of the scene, at a solution of this space");
   const Eigen::Matrix3d T = pvdf::stress_to_material(draw_angle_);
   const double d31 = scene_.material.d31_C_per_N, d32 = scene_.material.d32_C_per_N;
   double lam[3] = {0, 0, 0};
@@ -117,6 +120,9 @@ namespace {
 // sums add up to r·ψ exactly).
 void add_cell_shares(const DoFHandler<2>& dofh, const Vector<double>& r, const Vector<double>& psi, double factor,
                      const std::vector<unsigned int>& multiplicity, Vector<float>& indicator) {
+  PVDF_ASSERT(r.size() == dofh.n_dofs() && psi.size() == dofh.n_dofs() && multiplicity.size() == dofh.n_dofs(),
+              "the residual, the weights and the DOF multiplicities must have one value per DOF");
+  PVDF_ASSERT(indicator.size() == dofh.get_triangulation().n_active_cells(), "one error indicator per active cell");
   std::vector<types::global_dof_index> dofs(dofh.get_fe().n_dofs_per_cell());
   for (const auto& cell : dofh.active_cell_iterators()) {
     cell->get_dof_indices(dofs);
@@ -152,6 +158,8 @@ FilmSolver::GoalErrors FilmSolver::estimate_goal_errors(const Vector<double>& u,
                                                         bool higher_order_adjoint) {
   GoalErrors ge;
   const std::size_t ne = electrode_polygons_.size(), nl = loads_.size(), n_out = ne + nl;
+  PVDF_ASSERT(ne == scene_.electrodes.size() && u.size() == dof_handler_.n_dofs(),
+              "one electrode outline per electrode of the scene; the solution has one value per DOF");
   std::vector<Vector<double>> dJ;
   double q_scale = 0, w_scale = 0;
   current_model_ = model;
@@ -169,6 +177,7 @@ FilmSolver::GoalErrors FilmSolver::estimate_goal_errors(const Vector<double>& u,
     w_scale = std::max(w_scale, std::abs(value[2]));
     dJ.push_back(deflection_derivative(l.center));
   }
+  PVDF_ASSERT(dJ.size() == n_out, "one output derivative per charge and per load's deflection");
   std::vector<double> scale(n_out);
   for (std::size_t j = 0; j < n_out; ++j) scale[j] = std::max(j < ne ? q_scale : w_scale, 1e-300);
   for (auto& g : dJ) constraints_.condense(g);

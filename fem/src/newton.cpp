@@ -4,6 +4,7 @@
 // continuation from the flat film.
 #include "film_solver.hpp"
 
+#include "pvdf/core/assert.hpp"
 #include "pvdf/core/membrane_scaling.hpp"
 
 #include <deal.II/lac/precondition.h>
@@ -23,6 +24,8 @@ using namespace dealii;
 
 bool FilmSolver::solve_linear(const Vector<double>& rhs, Vector<double>& x, std::string& message, bool factorize) {
   const auto t0 = Clock::now();
+  PVDF_ASSERT(rhs.size() == dof_handler_.n_dofs() && x.size() == rhs.size(),
+              "a linear solve's right-hand side and solution must have one value per DOF");
   bool ok = true;
   try {
     if (options_.iterative_solver && dof_handler_.n_dofs() > 0) {
@@ -78,6 +81,8 @@ bool FilmSolver::solve_linear(const Vector<double>& rhs, Vector<double>& x, std:
 // stir ‖r‖ at one level for hundreds of iterations, minutes each at 127k DOFs (issue 30).
 NewtonOutcome FilmSolver::newton(Model model, double artificial_tension, Vector<double>& u, double stage_rtol) {
   NewtonOutcome out;
+  PVDF_ASSERT(u.size() == dof_handler_.n_dofs() && load_.size() == u.size(),
+              "Newton's iterate and the load vector must have one value per DOF");
   const double f_norm = load_.l2_norm();
   const double r_tol = options_.residual_rtol * f_norm + options_.residual_atol;
   Vector<double> r(u.size()), du(u.size()), trial(u.size()), r_trial(u.size()), rhs(u.size());
@@ -118,6 +123,7 @@ NewtonOutcome FilmSolver::newton(Model model, double artificial_tension, Vector<
       return out;
     }
     best_so_far.push_back(std::min(r_norm, best_so_far.empty() ? r_norm : best_so_far.back()));
+    PVDF_ASSERT(best_so_far.size() == std::size_t(it) + 1, "one smallest residual per Newton iteration");
     if (k_stag > 0 && it >= k_stag && best_so_far[it] > options_.stagnation_factor * best_so_far[it - k_stag]) {
       out.status = Status::no_convergence;
       out.stagnated = true;
@@ -159,6 +165,8 @@ NewtonOutcome FilmSolver::newton(Model model, double artificial_tension, Vector<
       out.message = "every line-search trial gave a non-finite residual";
       return out;
     }
+    PVDF_ASSERT(best_alpha > 0 && best_alpha <= 1 && std::isfinite(best_norm) && last_alpha > 0,
+                "an accepted line-search step has 0 < alpha <= 1 and a finite residual");
     u.add(best_alpha, du);
     last_increment = best_alpha * du.l2_norm();
     if (reuse_factorization_ && !options_.iterative_solver) {
@@ -263,6 +271,8 @@ NewtonOutcome FilmSolver::solve_from_flat(Model model, Vector<double>& u) {
   std::size_t k = 0;
   while (k < targets.size()) {
     const double target = targets[k];
+    PVDF_ASSERT(target >= 0 && (last_converged < 0 || target < last_converged),
+                "each continuation stage must lower the artificial pretension");
     // The stages with artificial pretension only lead to the last one, which alone must meet
     // the Newton tolerance: each stops at ‖r‖ ≤ 1e-3‖f‖ (measured on seed 001's centre solve:
     // 18 instead of 25 Newton iterations, outputs unchanged to 10 digits).

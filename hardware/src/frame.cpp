@@ -1,6 +1,7 @@
 // CRC-32, frame encoding and the resynchronizing frame decoder (docs/hardware.md, "Frames").
 #include "pvdf/hardware/frame.hpp"
 
+#include "pvdf/core/assert.hpp"
 #include "pvdf/core/error.hpp"
 
 #include <algorithm>
@@ -89,6 +90,8 @@ void encode_frame(const Frame& frame, std::vector<std::uint8_t>& out) {
   put_u64(out, frame.timestamp_us);
   for (const std::int16_t c : frame.counts) put_u16(out, static_cast<std::uint16_t>(c));
   put_u32(out, crc32(out.data() + begin, out.size() - begin));
+  PVDF_ASSERT(out.size() - begin == frame_size(frame.n_channels, frame.n_samples),
+              "an encoded frame must have the size the decoder expects from its header");
 }
 
 std::string DecoderCounters::summary() const {

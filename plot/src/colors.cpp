@@ -1,6 +1,7 @@
 // Colours (line cycle, sequential and diverging maps) and contour extraction by marching squares.
 #include "detail.hpp"
 
+#include "pvdf/core/assert.hpp"
 #include "pvdf/core/error.hpp"
 
 #include <algorithm>
@@ -132,6 +133,7 @@ std::vector<std::vector<std::array<double, 2>>> contour_lines(const Grid& g, dou
           (found == 0 ? a : b) = e[k];
           ++found;
         }
+        PVDF_ASSERT(found == 2, "a contour cell that is not a saddle cuts exactly two of its edges");
         if (found == 2) segs.push_back({a, b});
       }
     }

@@ -7,6 +7,7 @@
 // the field's edge smoothly halfway between valid and missing nodes instead of a staircase.
 #include "interpolate.hpp"
 
+#include "pvdf/core/assert.hpp"
 #include "pvdf/core/error.hpp"
 
 #include <algorithm>
@@ -60,6 +61,7 @@ double in_cell(const Grid& g, std::size_t i0, std::size_t j0, double u, double v
 
 /// The cell holding fractional node position `a` along an axis of n nodes, and the local coordinate.
 void locate(double a, std::size_t n, std::size_t& i0, double& u) {
+  PVDF_ASSERT(n >= 2, "an axis with a cell has at least 2 nodes");
   i0 = std::min(static_cast<std::size_t>(std::max(a, 0.0)), n - 2);
   u = std::clamp(a - static_cast<double>(i0), 0.0, 1.0);
 }

@@ -1,6 +1,8 @@
 // FFTW wrapper (see fft.hpp).
 #include "fft.hpp"
 
+#include "pvdf/core/assert.hpp"
+
 #include <fftw3.h>
 
 #include <algorithm>
@@ -37,6 +39,7 @@ RealFft::~RealFft() {
 }
 
 void RealFft::forward(const double* in, std::size_t count, std::complex<double>* out) {
+  PVDF_ASSERT(count <= n_, "a transform must hold all its samples (they would be cut off silently)");
   count = std::min(count, n_);
   std::copy(in, in + count, real_);
   std::fill(real_ + count, real_ + n_, 0.0);
@@ -61,10 +64,12 @@ std::size_t good_fft_size(std::size_t n) {
       best = std::min(best, v);
     }
   }
+  PVDF_ASSERT(best >= n, "the transform size must hold the n samples asked for");
   return best;
 }
 
 std::vector<double> linear_convolution(const std::vector<double>& a, const std::vector<double>& b) {
+  PVDF_ASSERT(!a.empty() && !b.empty(), "a linear convolution needs two non-empty sequences");
   const std::size_t n_out = a.size() + b.size() - 1;
   RealFft fft(good_fft_size(n_out));
   std::vector<std::complex<double>> A(fft.bins()), B(fft.bins());

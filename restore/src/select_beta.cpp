@@ -4,6 +4,7 @@
 #include "select_beta.hpp"
 
 #include "fft.hpp"
+#include "pvdf/core/assert.hpp"
 #include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 
@@ -46,6 +47,7 @@ RecordPower record_power(const TransferMatrix& t, const std::vector<Identificati
   RecordPower r;
   r.grid = design_grid(t, big, o);
   const std::size_t B = big.bins();
+  PVDF_ASSERT(r.grid.s1.size() == B && r.grid.U.size() == B, "the design grid has one entry per bin of the records' transform");
   r.p1.assign(B, 0.0);
   r.p2.assign(B, 0.0);
   std::vector<cd> M1(B), M2(B);
@@ -254,6 +256,8 @@ DesignGrid design_grid(const TransferMatrix& t, RealFft& fft, const DesignOption
     g.s2[k] = svd.singularValues()(1);
     g.U[k] = svd.matrixU();
     g.V[k] = svd.matrixV();
+    // gains() gives the weak direction's gain by s2: the singular values come sorted, s1 >= s2 >= 0.
+    PVDF_ASSERT(!(g.s2[k] > g.s1[k]) && !(g.s2[k] < 0), "the singular values of G must be sorted, s1 >= s2 >= 0");
     g.smax = std::max(g.smax, g.s1[k]);
     g.shape[k] = beta_shape(o, k, g.L, g.dx);
     g.target[k] = target_gain(o, k, g.L, g.dx);

@@ -3,6 +3,7 @@
 // the map, and the resume from the files of an interrupted run.
 #include "generator.hpp"
 
+#include "pvdf/core/assert.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
 #include "pvdf/mesh/film_mesh.hpp"
@@ -56,6 +57,7 @@ std::uint64_t checkpoint_checksum(const std::string& header, const std::vector<d
 
 void write_checkpoint(const std::string& path, const std::string& hash, const Layout& layout,
                       const std::vector<double>& records) {
+  PVDF_ASSERT(layout.size() > 0 && records.size() % layout.size() == 0, "a checkpoint holds whole records");
   const std::string header = checkpoint_header(hash, layout.size(), records.size() / layout.size());
   const std::string checksum = hex(checkpoint_checksum(header, records));
   write_file_atomically(path, [&](std::ostream& out) {
@@ -180,6 +182,8 @@ std::vector<std::string> existing_checkpoints(const std::string& base) {
 void Generator::store_record(const double* rec, bool resumed) {
   const std::size_t p = std::size_t(rec[Layout::point_index]);
   const std::size_t ne = layout_.ne;
+  PVDF_ASSERT(rec[Layout::point_index] >= 0 && p < grid_.nx * grid_.ny,
+              "a record is stored at a point of the grid (resume() checks the files' records)");
   for (std::size_t f = 0; f < layout_.nf; ++f) {
     const double* r = layout_.level(rec, f);
     const std::size_t pt = f * grid_.nx * grid_.ny + p;
@@ -213,6 +217,7 @@ std::vector<double> Generator::known_records(bool only_this_run) const {
       for (std::size_t k = 0; k < ne; ++k) out.push_back(map_.charge_C[pt * ne + k]);
       for (std::size_t k = 0; k < ne; ++k) out.push_back(map_.estimated_charge_error_C[pt * ne + k]);
     }
+    PVDF_ASSERT(out.size() % layout_.size() == 0, "a record must have the layout's size");
   }
   return out;
 }

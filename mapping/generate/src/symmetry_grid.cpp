@@ -2,6 +2,7 @@
 // options' checks, and the split over MPI ranks and threads.
 #include "generator.hpp"
 
+#include "pvdf/core/assert.hpp"
 #include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
 
@@ -78,6 +79,14 @@ Symmetry detect_symmetry(const pvdf::Scene& scene, bool wanted) {
   const std::string why_y = check_mirror(scene, false, s.perm_about_y);
   s.about_x = why_x.empty();
   s.about_y = why_y.empty();
+  // A mirror used maps the electrodes onto themselves in pairs: its permutation is an involution.
+  for (const auto& [used, perm] : {std::pair{s.about_x, &s.perm_about_x}, std::pair{s.about_y, &s.perm_about_y}}) {
+    if (!used) continue;
+    PVDF_ASSERT(perm->size() == scene.electrodes.size(), "a mirror permutation has one entry per electrode");
+    for (std::size_t k = 0; k < perm->size(); ++k) {
+      PVDF_ASSERT((*perm)[k] < perm->size() && (*perm)[(*perm)[k]] == k, "a mirror's electrode permutation must be an involution");
+    }
+  }
   s.reason = std::string("mirror about the x axis (y -> -y): ") + (s.about_x ? "yes" : "no, " + why_x) +
              "; mirror about the y axis (x -> -x): " + (s.about_y ? "yes" : "no, " + why_y);
   return s;
@@ -154,6 +163,11 @@ void Generator::build_grid() {
   map_.y_m.resize(grid_.ny);
   for (std::size_t i = 0; i < grid_.nx; ++i) map_.x_m[i] = double(grid_.i0 + long(i)) * s;
   for (std::size_t j = 0; j < grid_.ny; ++j) map_.y_m[j] = double(grid_.j0 + long(j)) * s;
+  for (const auto* axis : {&map_.x_m, &map_.y_m}) {
+    for (std::size_t i = 1; i < axis->size(); ++i) {
+      PVDF_ASSERT((*axis)[i] > (*axis)[i - 1], "the grid's axes must be strictly ascending");
+    }
+  }
   map_.mask.assign(grid_.nx * grid_.ny, 0);
   std::size_t n_in = 0;
   for (std::size_t j = 0; j < grid_.ny; ++j) {
@@ -185,14 +199,23 @@ bool Generator::in_grid(long I, long J, std::size_t& i, std::size_t& j) const {
 // Prefer the image with I >= 0 (if mirror about y) and J >= 0 (if mirror about x) that lies in
 // the mapped grid; fall back to partial flips and finally to the point itself.
 Generator::Rep Generator::rep(std::size_t i, std::size_t j) const {
-  const long I = grid_.i0 + long(i), J = grid_.j0 + long(j);
-  const bool fi = sym_.about_y && I < 0, fj = sym_.about_x && J < 0;
-  const bool options[4][2] = {{fi, fj}, {fi, false}, {false, fj}, {false, false}};
-  for (const auto& opt : options) {
-    std::size_t ri = 0, rj = 0;
-    if (in_grid(opt[0] ? -I : I, opt[1] ? -J : J, ri, rj)) return {ri, rj, opt[0], opt[1]};
-  }
-  return {i, j, false, false};
+  const auto find = [this](std::size_t i, std::size_t j) -> Rep {
+    const long I = grid_.i0 + long(i), J = grid_.j0 + long(j);
+    const bool fi = sym_.about_y && I < 0, fj = sym_.about_x && J < 0;
+    const bool options[4][2] = {{fi, fj}, {fi, false}, {false, fj}, {false, false}};
+    for (const auto& opt : options) {
+      std::size_t ri = 0, rj = 0;
+      if (in_grid(opt[0] ? -I : I, opt[1] ? -J : J, ri, rj)) return {ri, rj, opt[0], opt[1]};
+    }
+    return {i, j, false, false};
+  };
+  const Rep r = find(i, j);
+  // The representative is its own representative (else a point could be solved twice or never).
+  PVDF_ASSERT([&] {
+    const Rep again = find(r.i, r.j);
+    return again.i == r.i && again.j == r.j;
+  }(), "a grid point's representative must be its own representative");
+  return r;
 }
 
 void Generator::setup_mpi() {

@@ -3,6 +3,7 @@
 // host and the reader never depends on the host's alignment or byte order.
 #include "pvdf/mapping/flat_map.hpp"
 
+#include "pvdf/core/assert.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/mapping/interpolant.hpp"  // max_electrodes
 
@@ -228,6 +229,7 @@ std::vector<unsigned char> encode_flat_map(const ChargeMap& map, const std::stri
   }
   while (w.data().size() % 4 != 0) w.data().push_back(0);
   w.u32(flat_map_crc32(w.data().data(), w.data().size()));
+  PVDF_ASSERT(w.data().size() == l.total(), "the flat map written must have the size its header announces");
   return std::move(w.data());
 }
 
@@ -283,6 +285,8 @@ ChargeMap decode_flat_map(const unsigned char* data, std::size_t size, const std
     m.electrode_names.push_back(name);
     r.skip(flat_map_name_bytes);
   }
+  PVDF_ASSERT(std::uint64_t(r.here() - data) == l.body_without_padding(),
+              "the fields read must end where the header's sizes say the body ends");
   m.deflection_at_load_m.assign(std::size_t(l.points()), 0.0);
   m.model = "flat export";
   m.description = "read from the flat map " + source;

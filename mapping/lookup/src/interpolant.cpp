@@ -1,6 +1,7 @@
 // Bicubic Hermite interpolation of a charge map with 4th-order finite-difference node slopes.
 #include "pvdf/mapping/interpolant.hpp"
 
+#include "pvdf/core/assert.hpp"
 #include "pvdf/core/error.hpp"
 
 #include <algorithm>
@@ -50,13 +51,26 @@ MapInterpolant::MapInterpolant(const ChargeMap& map)
                      std::to_string(max_electrodes));
   }
   if (nx_ < 2 || ny_ < 2 || nf_ < 1 || ne_ < 1) throw InputError("map grid is too small for interpolation (need 2 x 2 nodes)");
+  // Only a validated map (validate(), map.hpp) reaches here: its arrays have the grid's shapes.
+  const std::size_t n_points = nf_ * ny_ * nx_;
+  PVDF_ASSERT(map.mask.size() == nx_ * ny_ && map.status.size() == n_points && map.charge_C.size() == n_points * ne_,
+              "the map's mask, status and charge arrays must have the shapes of its grid (validate the map first)");
+  PVDF_ASSERT(map.dcharge_dx_C_per_m.size() == map.dcharge_dy_C_per_m.size() &&
+                  (map.dcharge_dx_C_per_m.empty() || map.dcharge_dx_C_per_m.size() == n_points * ne_),
+              "the map's charge derivatives must be both absent or both [nf][ny][nx][ne]");
   x0_ = map.x_m.front();
   y0_ = map.y_m.front();
   hx_ = (map.x_m.back() - x0_) / double(nx_ - 1);
   hy_ = (map.y_m.back() - y0_) / double(ny_ - 1);
+  PVDF_ASSERT(hx_ > 0 && hy_ > 0 && std::isfinite(hx_) && std::isfinite(hy_),
+              "the map's axes must be ascending and finite (validate the map first)");
   ihx_ = 1.0 / hx_;
   ihy_ = 1.0 / hy_;
   for (double f : map.forces_N) log_f_.push_back(std::log(f));
+  for (std::size_t f = 0; f < nf_; ++f) {
+    PVDF_ASSERT(std::isfinite(log_f_[f]) && (f == 0 || log_f_[f] > log_f_[f - 1]),
+                "the force levels must be > 0 and strictly ascending (validate the map first)");
+  }
 
   node_ok_.assign(nx_ * ny_, 0);
   for (std::size_t j = 0; j < ny_; ++j) {
@@ -226,6 +240,7 @@ PVDF_CLONES bool MapInterpolant::evaluate(double x_m, double y_m, double log_for
   std::size_t f0 = 0;
   double w = 0, dw = 0;  // G = (1 − w) G_f0 + w G_f0+1, dw = ∂w/∂ln F (0 where w is clamped)
   level_bracket(log_force, f0, w);
+  PVDF_ASSERT(w >= 0 && w <= 1 && (nf_ == 1 ? f0 == 0 : f0 + 1 < nf_), "the force bracket must lie between two levels");
   if (nf_ > 1 && log_force > log_f_.front() && log_force < log_f_.back()) dw = 1.0 / (log_f_[f0 + 1] - log_f_[f0]);
   const double* cell = &coef_[(j * (nx_ - 1) + i) * nf_ * 16 * ne_];
   switch (ne_) {

@@ -3,6 +3,7 @@
 #include "locator_detail.hpp"
 #include "pvdf/mapping/locator.hpp"
 
+#include "pvdf/core/assert.hpp"
 #include "pvdf/core/error.hpp"
 #include "pvdf/mapping/interpolation_error.hpp"
 
@@ -666,6 +667,17 @@ PVDF_CLONES Location Locator::finish(const Query& Q, std::array<Fit, 8>& fits, i
       std::swap(p[std::size_t(c)], p[std::size_t(c - 1)]);
       std::swap(group[std::size_t(c)], group[std::size_t(c - 1)]);
     }
+  }
+  {  // the reported probabilities: finite, most probable first, summing to 1 within rounding
+    PVDF_ASSERT(n_group >= 2 && std::size_t(n_group) <= group.size() && std::size_t(n_group - 1) <= out.alternatives.size(),
+                "an ambiguous answer has 2 .. 8 solutions, one main and the rest as alternatives");
+    double total = 0;
+    for (int g = 0; g < n_group; ++g) {
+      PVDF_ASSERT(std::isfinite(p[std::size_t(g)]) && p[std::size_t(g)] >= 0 && (g == 0 || p[std::size_t(g)] <= p[std::size_t(g - 1)]),
+                  "the solutions' probabilities must be finite, >= 0 and sorted, most probable first");
+      total += p[std::size_t(g)];
+    }
+    PVDF_ASSERT(std::abs(total - 1) <= 1e-12, "the solutions' probabilities must sum to 1");
   }
   const int n_starts_made = out.n_starts;
   Fit& main = fits[std::size_t(group[0])];
