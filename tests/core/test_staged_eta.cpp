@@ -63,6 +63,37 @@ TEST_CASE("staged ETA: a stage that states its own time left is taken at its wor
   CHECK(eta.seconds_left(7.0) == Approx(8.0 + 10.0 - 5.0));
 }
 
+// Rows of a map run on two threads, each row taken by whichever thread is free first, each thread
+// doing `efficiency` CPU-s per wall second: when each row ends, the run's end, and the rows in the
+// order they end (the order a map reports them).
+namespace {
+
+struct TwoThreadSchedule {
+  std::vector<double> start, end;
+  double finish = 0;
+  std::vector<std::size_t> order;
+};
+
+TwoThreadSchedule schedule_on_two_threads(const std::vector<double>& cpu_s, double efficiency) {
+  TwoThreadSchedule s;
+  s.start.resize(cpu_s.size());
+  s.end.resize(cpu_s.size());
+  double free_at[2] = {0, 0};
+  for (std::size_t r = 0; r < cpu_s.size(); ++r) {
+    const int t = free_at[0] <= free_at[1] ? 0 : 1;
+    s.start[r] = free_at[t];
+    s.end[r] = s.start[r] + cpu_s[r] / efficiency;
+    free_at[t] = s.end[r];
+  }
+  s.finish = std::max(free_at[0], free_at[1]);
+  s.order.resize(cpu_s.size());
+  for (std::size_t r = 0; r < cpu_s.size(); ++r) s.order[r] = r;
+  std::sort(s.order.begin(), s.order.end(), [&](std::size_t a, std::size_t b) { return s.end[a] < s.end[b]; });
+  return s;
+}
+
+}  // namespace
+
 // A map-like run: the positions of a unit disc on a 0.1 grid, solved row by row from the bottom on
 // two threads; those within 0.15 of the rim need the dear model (30 CPU-s), the others 1 CPU-s;
 // each thread gets 0.8 CPU-s per wall second. The true time left at each row's end comes from the
@@ -88,20 +119,14 @@ TEST_CASE("item-cost ETA: dear rim positions early in the run do not inflate the
   REQUIRE(eta.plan(features) == 0);
   // The schedule: rows taken in order by whichever thread is free first.
   const double efficiency = 0.8;
-  std::vector<double> start(rows.size()), end(rows.size()), cpu(rows.size());
-  double free_at[2] = {0, 0};
-  for (std::size_t r = 0; r < rows.size(); ++r) {
-    cpu[r] = 0;
+  std::vector<double> cpu(rows.size(), 0.0);
+  for (std::size_t r = 0; r < rows.size(); ++r)
     for (const auto& it : rows[r]) cpu[r] += it.dear ? 30.0 : 1.0;
-    const int t = free_at[0] <= free_at[1] ? 0 : 1;
-    start[r] = free_at[t];
-    end[r] = start[r] + cpu[r] / efficiency;
-    free_at[t] = end[r];
-  }
-  const double finish = std::max(free_at[0], free_at[1]);
-  std::vector<std::size_t> order(rows.size());
-  for (std::size_t r = 0; r < rows.size(); ++r) order[r] = r;
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return end[a] < end[b]; });
+  const TwoThreadSchedule schedule = schedule_on_two_threads(cpu, efficiency);
+  const std::vector<double>& start = schedule.start;
+  const std::vector<double>& end = schedule.end;
+  const double finish = schedule.finish;
+  const std::vector<std::size_t>& order = schedule.order;
   std::vector<std::size_t> first_id(rows.size());
   for (std::size_t r = 0, id = 0; r < rows.size(); id += rows[r].size(), ++r) first_id[r] = id;
   int within = 0, reports = 0, naive_within = 0;
@@ -173,19 +198,13 @@ TEST_CASE("item-cost ETA: items of three units early do not make one-unit items 
     n_items += r.features.size();
   }
   const double efficiency = 0.8;
-  std::vector<double> start(rows.size()), end(rows.size()), cpu(rows.size());
-  double free_at[2] = {0, 0};
-  for (std::size_t r = 0; r < rows.size(); ++r) {
-    cpu[r] = rows[r].units * double(rows[r].features.size());
-    const int t = free_at[0] <= free_at[1] ? 0 : 1;
-    start[r] = free_at[t];
-    end[r] = start[r] + cpu[r] / efficiency;
-    free_at[t] = end[r];
-  }
-  const double finish = std::max(free_at[0], free_at[1]);
-  std::vector<std::size_t> order(rows.size());
-  for (std::size_t r = 0; r < rows.size(); ++r) order[r] = r;
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return end[a] < end[b]; });
+  std::vector<double> cpu(rows.size());
+  for (std::size_t r = 0; r < rows.size(); ++r) cpu[r] = rows[r].units * double(rows[r].features.size());
+  const TwoThreadSchedule schedule = schedule_on_two_threads(cpu, efficiency);
+  const std::vector<double>& start = schedule.start;
+  const std::vector<double>& end = schedule.end;
+  const double finish = schedule.finish;
+  const std::vector<std::size_t>& order = schedule.order;
   int within = 0, reports = 0;
   std::string ratios;
   double worst_mean_rule = 1;
@@ -246,20 +265,14 @@ TEST_CASE("item-cost ETA: work tried on top of a unit counts, in the unit's shar
     if (!row.empty()) rows.push_back(row);
   }
   const double efficiency = 0.8, tried_cpu_s = 20.0;
-  std::vector<double> start(rows.size()), end(rows.size()), cpu(rows.size());
-  double free_at[2] = {0, 0};
-  for (std::size_t r = 0; r < rows.size(); ++r) {
-    cpu[r] = 0;
+  std::vector<double> cpu(rows.size(), 0.0);
+  for (std::size_t r = 0; r < rows.size(); ++r)
     for (const auto& it : rows[r]) cpu[r] += 1.0 + (it.tried ? tried_cpu_s : 0.0);
-    const int t = free_at[0] <= free_at[1] ? 0 : 1;
-    start[r] = free_at[t];
-    end[r] = start[r] + cpu[r] / efficiency;
-    free_at[t] = end[r];
-  }
-  const double finish = std::max(free_at[0], free_at[1]);
-  std::vector<std::size_t> order(rows.size());
-  for (std::size_t r = 0; r < rows.size(); ++r) order[r] = r;
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return end[a] < end[b]; });
+  const TwoThreadSchedule schedule = schedule_on_two_threads(cpu, efficiency);
+  const std::vector<double>& start = schedule.start;
+  const std::vector<double>& end = schedule.end;
+  const double finish = schedule.finish;
+  const std::vector<std::size_t>& order = schedule.order;
   std::vector<std::size_t> first_id(rows.size());
   for (std::size_t r = 0, id = 0; r < rows.size(); id += rows[r].size(), ++r) first_id[r] = id;
 
