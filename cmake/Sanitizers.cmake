@@ -1,8 +1,10 @@
 # PVDF_SANITIZE=ON builds everything with AddressSanitizer and UndefinedBehaviorSanitizer (any
 # error aborts the test that hit it). Meant for the modules without deal.II:
-#   cmake -S . -B build-asan -DPVDF_SANITIZE=ON -DPVDF_WITH_FEM=OFF -DPVDF_BUILD_BENCH=OFF
+#   cmake -S . -B build-asan -DCMAKE_BUILD_TYPE=Debug -DPVDF_SANITIZE=ON -DPVDF_WITH_FEM=OFF \
+#     -DPVDF_BUILD_BENCH=OFF -DPVDF_BUILD_PYTHON=OFF
 #   cmake --build build-asan -j2 && ctest --test-dir build-asan
-# (scripts/run-sanitized-tests does exactly this). deal.II itself is not instrumented, so the
+# (scripts/run-sanitized-tests does this, and excludes the tests that cannot run instrumented;
+# Debug keeps PVDF_ASSERT and _GLIBCXX_ASSERTIONS on). deal.II itself is not instrumented, so the
 # finite-element modules are left out rather than reported with false positives.
 option(PVDF_SANITIZE "Build with AddressSanitizer and UBSan (use with PVDF_WITH_FEM=OFF)" OFF)
 if(PVDF_SANITIZE)

@@ -49,6 +49,7 @@ bool FilmSolver::solve_linear(const Vector<double>& rhs, Vector<double>& x, std:
         if (!good) factorization_.invalidate();
       }
       if (!good) {  // indefinite or ill-conditioned pivots: pivoting LU
+        const auto blas = blas_turn();  // UMFPACK calls the BLAS too
         SparseDirectUMFPACK direct;
         direct.initialize(tangent_);
         direct.vmult(x, rhs);

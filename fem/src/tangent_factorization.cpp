@@ -125,7 +125,7 @@ static bool blas_needs_one_caller_at_a_time() {
 }
 
 // Held while a factorization or solve may call the BLAS, when blas_needs_one_caller_at_a_time().
-static std::unique_lock<std::mutex> blas_turn() {
+std::unique_lock<std::mutex> blas_turn() {
   static std::mutex m;
   return blas_needs_one_caller_at_a_time() ? std::unique_lock<std::mutex>(m) : std::unique_lock<std::mutex>();
 }

@@ -17,8 +17,14 @@
 
 #include <cstddef>
 #include <memory>
+#include <mutex>
 
 namespace pvdf::fem::detail {
+
+/// Hold the returned lock while calling the BLAS from code outside TangentFactorization (the
+/// UMFPACK fallback in newton.cpp): it is a real lock only when the process loaded OpenBLAS's
+/// single-threaded flavour, which does not allow two threads in at once (tangent_factorization.cpp).
+std::unique_lock<std::mutex> blas_turn();
 
 class TangentFactorization {
  public:
