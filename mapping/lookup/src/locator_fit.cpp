@@ -668,7 +668,7 @@ PVDF_CLONES Location Locator::finish(const Query& Q, std::array<Fit, 8>& fits, i
       std::swap(group[std::size_t(c)], group[std::size_t(c - 1)]);
     }
   }
-  {  // the reported probabilities: finite, most probable first, summing to 1 within rounding
+  if (PVDF_ASSERTIONS) {  // the reported probabilities: finite, most probable first, summing to 1 (no work in Release)
     PVDF_ASSERT(n_group >= 2 && std::size_t(n_group) <= group.size() && std::size_t(n_group - 1) <= out.alternatives.size(),
                 "an ambiguous answer has 2 .. 8 solutions, one main and the rest as alternatives");
     double total = 0;
