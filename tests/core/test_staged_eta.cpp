@@ -92,6 +92,30 @@ TwoThreadSchedule schedule_on_two_threads(const std::vector<double>& cpu_s, doub
   return s;
 }
 
+// The positions of a unit disc on a grid of `step` (i, j from -n to n, rows j up to j_last), as a
+// map solves them row by row: each with its distance to the rim (the feature) and whether it lies
+// within `rim_band` of the rim (the dear ones). `features` receives every position's, in order.
+struct DiscItem {
+  double feature;
+  bool near_rim;
+};
+
+std::vector<std::vector<DiscItem>> disc_rows(int n, int j_last, double step, double rim_band,
+                                             std::vector<double>& features) {
+  std::vector<std::vector<DiscItem>> rows;
+  for (int j = -n; j <= j_last; ++j) {
+    std::vector<DiscItem> row;
+    for (int i = -n; i <= n; ++i) {
+      const double d = 1.0 - std::hypot(step * i, step * j);
+      if (d <= 0.02) continue;
+      row.push_back({d, d < rim_band});
+      features.push_back(d);
+    }
+    if (!row.empty()) rows.push_back(row);
+  }
+  return rows;
+}
+
 }  // namespace
 
 // A map-like run: the positions of a unit disc on a 0.1 grid, solved row by row from the bottom on
@@ -99,34 +123,16 @@ TwoThreadSchedule schedule_on_two_threads(const std::vector<double>& cpu_s, doub
 // each thread gets 0.8 CPU-s per wall second. The true time left at each row's end comes from the
 // simulated schedule; ItemCostEta must track it, where items-left over the rate so far does not.
 TEST_CASE("item-cost ETA: dear rim positions early in the run do not inflate the time left", "[core][progress]") {
-  struct Item {
-    double feature;
-    bool dear;
-  };
-  std::vector<std::vector<Item>> rows;
   std::vector<double> features;
-  for (int j = -10; j <= 10; ++j) {
-    std::vector<Item> row;
-    for (int i = -10; i <= 10; ++i) {
-      const double d = 1.0 - std::hypot(0.1 * i, 0.1 * j);
-      if (d <= 0.02) continue;
-      row.push_back({d, d < 0.15});
-      features.push_back(d);
-    }
-    if (!row.empty()) rows.push_back(row);
-  }
+  const auto rows = disc_rows(10, 10, 0.1, 0.15, features);
   pvdf::ItemCostEta eta(2, 0.1, 2);
   REQUIRE(eta.plan(features) == 0);
   // The schedule: rows taken in order by whichever thread is free first.
   const double efficiency = 0.8;
   std::vector<double> cpu(rows.size(), 0.0);
   for (std::size_t r = 0; r < rows.size(); ++r)
-    for (const auto& it : rows[r]) cpu[r] += it.dear ? 30.0 : 1.0;
-  const TwoThreadSchedule schedule = schedule_on_two_threads(cpu, efficiency);
-  const std::vector<double>& start = schedule.start;
-  const std::vector<double>& end = schedule.end;
-  const double finish = schedule.finish;
-  const std::vector<std::size_t>& order = schedule.order;
+    for (const auto& it : rows[r]) cpu[r] += it.near_rim ? 30.0 : 1.0;
+  const auto& [start, end, finish, order] = schedule_on_two_threads(cpu, efficiency);
   std::vector<std::size_t> first_id(rows.size());
   for (std::size_t r = 0, id = 0; r < rows.size(); id += rows[r].size(), ++r) first_id[r] = id;
   int within = 0, reports = 0, naive_within = 0;
@@ -138,7 +144,7 @@ TEST_CASE("item-cost ETA: dear rim positions early in the run do not inflate the
     std::vector<std::vector<double>> work;
     for (std::size_t n = 0; n < rows[r].size(); ++n) {
       ids.push_back(first_id[r] + n);
-      work.push_back(rows[r][n].dear ? std::vector<double>{0, 1} : std::vector<double>{1, 0});
+      work.push_back(rows[r][n].near_rim ? std::vector<double>{0, 1} : std::vector<double>{1, 0});
     }
     eta.block_done(ids, work, cpu[r], start[r], end[r]);
     items_done += rows[r].size();
@@ -200,11 +206,7 @@ TEST_CASE("item-cost ETA: items of three units early do not make one-unit items 
   const double efficiency = 0.8;
   std::vector<double> cpu(rows.size());
   for (std::size_t r = 0; r < rows.size(); ++r) cpu[r] = rows[r].units * double(rows[r].features.size());
-  const TwoThreadSchedule schedule = schedule_on_two_threads(cpu, efficiency);
-  const std::vector<double>& start = schedule.start;
-  const std::vector<double>& end = schedule.end;
-  const double finish = schedule.finish;
-  const std::vector<std::size_t>& order = schedule.order;
+  const auto& [start, end, finish, order] = schedule_on_two_threads(cpu, efficiency);
   int within = 0, reports = 0;
   std::string ratios;
   double worst_mean_rule = 1;
@@ -248,31 +250,13 @@ TEST_CASE("item-cost ETA: items of three units early do not make one-unit items 
 // charged to kind 0 and the rows to come, fewer of whose positions lie near the rim, look more
 // than 30 % too long. (Counting one unit as two, as the ETA did before, halves the tried work.)
 TEST_CASE("item-cost ETA: work tried on top of a unit counts, in the unit's share", "[core][progress]") {
-  struct Item {
-    double feature;
-    bool tried;
-  };
-  std::vector<std::vector<Item>> rows;
   std::vector<double> features;
-  for (int j = -20; j <= 0; ++j) {  // one half, as a mirror-symmetric map solves it
-    std::vector<Item> row;
-    for (int i = -20; i <= 20; ++i) {
-      const double d = 1.0 - std::hypot(0.05 * i, 0.05 * j);
-      if (d <= 0.02) continue;
-      row.push_back({d, d < 0.1});
-      features.push_back(d);
-    }
-    if (!row.empty()) rows.push_back(row);
-  }
+  const auto rows = disc_rows(20, 0, 0.05, 0.1, features);  // one half, as a mirror-symmetric map solves it
   const double efficiency = 0.8, tried_cpu_s = 20.0;
   std::vector<double> cpu(rows.size(), 0.0);
   for (std::size_t r = 0; r < rows.size(); ++r)
-    for (const auto& it : rows[r]) cpu[r] += 1.0 + (it.tried ? tried_cpu_s : 0.0);
-  const TwoThreadSchedule schedule = schedule_on_two_threads(cpu, efficiency);
-  const std::vector<double>& start = schedule.start;
-  const std::vector<double>& end = schedule.end;
-  const double finish = schedule.finish;
-  const std::vector<std::size_t>& order = schedule.order;
+    for (const auto& it : rows[r]) cpu[r] += 1.0 + (it.near_rim ? tried_cpu_s : 0.0);
+  const auto& [start, end, finish, order] = schedule_on_two_threads(cpu, efficiency);
   std::vector<std::size_t> first_id(rows.size());
   for (std::size_t r = 0, id = 0; r < rows.size(); id += rows[r].size(), ++r) first_id[r] = id;
 
@@ -288,7 +272,7 @@ TEST_CASE("item-cost ETA: work tried on top of a unit counts, in the unit's shar
     std::vector<std::vector<double>> work_counted, work_left_out;
     for (std::size_t n = 0; n < rows[r].size(); ++n) {
       ids.push_back(first_id[r] + n);
-      work_counted.push_back({1.0, rows[r][n].tried ? 1.0 : 0.0});
+      work_counted.push_back({1.0, rows[r][n].near_rim ? 1.0 : 0.0});
       work_left_out.push_back({1.0, 0.0});
     }
     counted.block_done(ids, work_counted, cpu[r], start[r], end[r]);
