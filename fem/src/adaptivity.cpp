@@ -16,6 +16,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 
 namespace pvdf::fem::detail {
 
@@ -94,8 +95,21 @@ void FilmSolver::refine_mesh(Vector<double>& u, const Vector<float>* goal_indica
 // Returns whether anything was refined. Shared by the map's rim model (prepare_sweep, one arc) and
 // grade_toward_rim (the whole rim).
 bool FilmSolver::refine_toward_rim(double size_m, double grading, double angle_rad, double half_angle_rad,
-                                   Vector<double>* u) {
+                                   Vector<double>* u, const std::vector<RimLayerPoint>* widths) {
   const auto& outline = scene_.membrane.outline;
+  // The layer's width at the rim point nearest to c (size_m without widths).
+  auto layer_at = [&](const Point<dim>& c) {
+    if (!widths || widths->empty()) return size_m;
+    double best = std::numeric_limits<double>::infinity(), width = size_m;
+    for (const RimLayerPoint& p : *widths) {
+      const double d2 = (p.x_m - c[0]) * (p.x_m - c[0]) + (p.y_m - c[1]) * (p.y_m - c[1]);
+      if (d2 < best) {
+        best = d2;
+        width = p.width_m;
+      }
+    }
+    return std::max(size_m, width);
+  };
   bool refined = false;
   for (int pass = 0; pass < 30; ++pass) {
     bool marked = false;
@@ -104,7 +118,8 @@ bool FilmSolver::refine_toward_rim(double size_m, double grading, double angle_r
       const double off = std::remainder(std::atan2(c[1], c[0]) - angle_rad, 2 * pvdf::pi);
       if (std::abs(off) > half_angle_rad) continue;
       const double d = std::max(0.0, outline.inside_distance_m({c[0], c[1]}) - 0.5 * cell->diameter());
-      if (cell->diameter() / std::sqrt(2.0) > 1.3 * std::max(size_m, grading * d)) {
+      const double h = cell->diameter() / std::sqrt(2.0);
+      if (h > 1.3 * std::max(size_m, grading * d) && h > 1.3 * std::max(layer_at(c), grading * d)) {
         cell->set_refine_flag();
         marked = true;
       }
@@ -132,9 +147,17 @@ bool FilmSolver::refine_toward_rim(double size_m, double grading, double angle_r
 // at 1 N) that a first mesh with cells of a/6 at the rim does not resolve. Primal and adjoint both
 // miss it there, so the goal-oriented loop neither sees nor finds it (docs/fem.md §6), while it
 // moves the charges everywhere by tenths of a percent (0.5 % at r = 24 mm on seed 001). So
-// the cells are refined toward the whole rim until their size is at most max(l_b, distance / 2),
-// l_b at the total load.
-void FilmSolver::grade_toward_rim(Vector<double>* u) {
+// the cells are refined toward the whole rim until their size is at most max(l_b, distance / 2).
+// Before a solve (bending kept from the start) l_b is the centred press's (rim_boundary_layer_m at
+// the total load) all around. From a solved state u it is the layer's own width along the rim,
+// sqrt(D_nn/N_nn) with the rim's normal force: a press near one stretch of the clamp leaves the rest
+// of it barely stretched, where the layer is wider and so may be its cells — never finer than the
+// centred press's l_b (the goal-oriented loop refines further) and never coarser than
+// kWidestRimCell of it (docs/fem.md §6.1 "The rim graded to its own layer": coarser rims lifted the
+// discretization estimate past the tolerance at (−32, 28) mm on seed 001 and the refined re-solve
+// then stagnated).
+void FilmSolver::grade_toward_rim(Vector<double>* u, Model model) {
+  constexpr double kWidestRimCell = 4.0;  // × the centred press's l_b
   if (!options_.grade_rim_for_bending || rim_graded_ || !(total_force_ > 0)) return;
   // The linear plate carries no membrane force: no layer (unless pretensioned).
   if (options_.model == Model::linear && !(pretension_ > 0)) return;
@@ -147,7 +170,15 @@ void FilmSolver::grade_toward_rim(Vector<double>* u) {
   const double layer = std::max(rim_boundary_layer_m(scene_, total_force_), a / 1000);
   if (rim_boundary_layer_m(scene_, total_force_) / a <= 0.1 * options_.tolerance) return;
   summary_.clamp_layer = "rim-graded";
-  const bool refined = refine_toward_rim(layer, 0.5, 0.0, 4.0, u);
+  std::vector<RimLayerPoint> widths;
+  if (u && !rim_grading_uniform()) widths = rim_layer_widths(*u, model, kWidestRimCell * layer);
+  if (!widths.empty()) {
+    double widest = 0;
+    for (const RimLayerPoint& p : widths) widest = std::max(widest, p.width_m);
+    clamp_reason_ += "; rim graded to the layer's own width (" + fmt(layer * 1e3, 3) + " to " + fmt(widest * 1e3, 3) +
+                     " mm along the rim)";
+  }
+  const bool refined = refine_toward_rim(layer, 0.5, 0.0, 4.0, u, widths.empty() ? nullptr : &widths);
   if (refined && u) {
     set_material_ids();
     setup_system();
@@ -195,7 +226,7 @@ NewtonOutcome FilmSolver::refine_until_tolerance(Model model, std::string& where
       }
       if (!leave_out) {  // the richer model, from the membrane solution on this mesh
         enable_bending();
-        if (!clamp_layer_) grade_toward_rim(&solution_);
+        if (!clamp_layer_) grade_toward_rim(&solution_, model);
         NewtonOutcome o = clamp_layer_ ? solve_with_clamp_layer(model, solution_) : newton(model, 0.0, solution_);
         ++s.load_steps;
         s.newton_iterations += o.iterations;
@@ -221,7 +252,7 @@ NewtonOutcome FilmSolver::refine_until_tolerance(Model model, std::string& where
       set_clamp_layer(false, solution_);
       enable_bending();
       s.clamp_layer = "none";
-      grade_toward_rim(&solution_);  // "rim-graded" when it grades
+      grade_toward_rim(&solution_, model);  // "rim-graded" when it grades
       NewtonOutcome o = newton(model, 0.0, solution_);
       ++s.load_steps;
       s.newton_iterations += o.iterations;

@@ -84,6 +84,31 @@ void FilmSolver::set_clamp_layer(bool on, Vector<double>& u) {
   if (on) apply_clamp_shift(u);
 }
 
+std::vector<FilmSolver::RimLayerPoint> FilmSolver::rim_layer_widths(const Vector<double>& u, Model model,
+                                                                   double cap_m) const {
+  const FEValuesExtractors::Vector inplane(0);
+  const FEValuesExtractors::Scalar w(2);
+  const QGauss<dim - 1> fq(form_degree() + 1);
+  FEFaceValues<dim> fv(*mapping_, *fe_, fq, update_gradients | update_normal_vectors | update_quadrature_points);
+  std::vector<Tensor<2, dim>> gu(fq.size());
+  std::vector<Tensor<1, dim>> gw(fq.size());
+  std::vector<RimLayerPoint> points;
+  for (const auto& cell : dof_handler_.active_cell_iterators())
+    for (const unsigned int f : cell->face_indices()) {
+      if (!cell->face(f)->at_boundary()) continue;
+      fv.reinit(cell, f);
+      fv[inplane].get_function_gradients(u, gu);
+      fv[w].get_function_gradients(u, gw);
+      for (unsigned int q = 0; q < fq.size(); ++q) {
+        const Tensor<1, dim>& n = fv.normal_vector(q);
+        const double N = normal_force(membrane_C_, kinematics_from(gu[q], gw[q]), model, pretension_, n);
+        const double l = N > 0 ? std::sqrt(bending_nn(bending_D_, n) / N) : cap_m;
+        points.push_back({fv.quadrature_point(q)[0], fv.quadrature_point(q)[1], std::min(l, cap_m)});
+      }
+    }
+  return points;
+}
+
 void FilmSolver::update_clamp_layer(const Vector<double>& u, Model model) {
   const FEValuesExtractors::Vector inplane(0);
   const FEValuesExtractors::Scalar w(2);
@@ -446,6 +471,13 @@ bool clamp_layer_accepted() {
     return v && std::string(v) == "accept";
   }();
   return accepted;
+}
+
+bool rim_grading_uniform() {
+  const char* v = std::getenv("PVDF_RIM_GRADING");
+  if (!v || std::string(v).empty() || std::string(v) == "local") return false;
+  if (std::string(v) == "uniform") return true;
+  throw InputError("PVDF_RIM_GRADING = '" + std::string(v) + "' is not a mode; use uniform or local, or unset it");
 }
 
 // The bench switch, read like PVDF_FACTORIZATION (bench/fem/bench_clamp_layer.sh,

@@ -22,4 +22,9 @@ Options with_clamp_layer_switch(Options options);
 /// share (instead of the rim-graded path), so its effectivity can be measured there.
 bool clamp_layer_accepted();
 
+/// PVDF_RIM_GRADING=uniform (bench only): the rim-graded path grades the whole rim to the centred
+/// press's layer width, as before r14 (the conservative reference mesh), instead of the layer's own
+/// width along the rim. Unset, empty or "local": the default; another value throws pvdf::InputError.
+bool rim_grading_uniform();
+
 }  // namespace pvdf::fem::detail

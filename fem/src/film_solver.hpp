@@ -268,8 +268,15 @@ class FilmSolver {
   void refine_initial_mesh();
   // adaptivity.cpp: with bending, cells toward the clamped rim down to its boundary layer (once);
   // u, when given, is carried over to the new mesh.
-  void grade_toward_rim(Vector<double>* u);
-  bool refine_toward_rim(double size_m, double grading, double angle_rad, double half_angle_rad, Vector<double>* u);
+  void grade_toward_rim(Vector<double>* u, Model model = Model::von_karman);
+  /// A point of the rim and the width of the clamp's bending layer there (m).
+  struct RimLayerPoint {
+    double x_m = 0, y_m = 0, width_m = 0;
+  };
+  /// `widths`, when given: no cell is made smaller than the layer at the nearest of those points
+  /// (the size is max(size_m, that width, grading x distance)).
+  bool refine_toward_rim(double size_m, double grading, double angle_rad, double half_angle_rad, Vector<double>* u,
+                         const std::vector<RimLayerPoint>* widths = nullptr);
   void set_material_ids();
   void setup_system();
   void mark_rim_w_dofs();
@@ -292,6 +299,9 @@ class FilmSolver {
   NewtonOutcome switch_to_clamp_layer(Model model, Vector<double>& u);
   /// Its estimated remaining error, relative (largest charge change × clamp_ratio_).
   double clamp_layer_estimate() const;
+  /// The layer's width l_b = sqrt(D_nn/N_nn) at the rim's face quadrature points of state u (N_nn
+  /// the membrane's normal force there; at most `cap_m`, and `cap_m` where the rim is not in tension).
+  std::vector<RimLayerPoint> rim_layer_widths(const Vector<double>& u, Model model, double cap_m) const;
   /// Its share of each electrode's error bar (C), for charges charge_C.
   std::vector<double> clamp_layer_charge_error_C(const std::vector<double>& charge_C) const;
 
