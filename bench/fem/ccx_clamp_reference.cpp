@@ -186,7 +186,8 @@ int main(int argc, char** argv) {
       j["ccx_version"] = ccx_version(work + "/" + job + ".log");
       nlohmann::json charges = nlohmann::json::array();
       for (const auto& e : scene.electrodes)
-        charges.push_back(pvdf::bench::electrode_charge_C(mesh, r.displacement_m, scene.material, e.center_m, e.size_m[0]));
+        charges.push_back(pvdf::bench::electrode_charge_C(mesh, r.displacement_m, scene.material, h, e.center_m,
+                                                        e.size_m[0]));
       nlohmann::json level{{"spokes", lv.spokes},
                            {"rim_size_m", mesh.rim_size_m},
                            {"max_rim_aspect", mesh.max_rim_aspect},

@@ -20,13 +20,14 @@
 // l_b = √(D/N) ≈ 0.2–0.4 mm (docs/fem.md §3.4), while along the rim the field varies on the scale
 // of the distance to the probe; the spokes' tangential spacing is (distance to p)·2π/np, i.e. a
 // fixed fraction of that scale everywhere. Far from the probe this gives rim cells of aspect ratio
-// up to ~70 (h_rim = 0.15 mm, np = 64, 85 mm from the probe).
+// up to ~60 (h_rim = 0.15 mm, np = 64, 85 mm from the probe).
 #pragma once
 
 #include "ccx_peer.hpp"
 
 #include "pvdf/core/constants.hpp"
 #include "pvdf/core/material.hpp"
+#include "pvdf/core/piezo.hpp"
 
 #include <Eigen/Dense>
 
@@ -338,12 +339,13 @@ inline void write_s8r_deck(const std::string& path, const ShellMesh& m, const pv
 }
 
 /// Charge on a square electrode (axis-aligned, centre, side) as pvdfkit defines it
-/// (docs/charge-model.md §1): Q = ∫ (d31 N11 + d32 N22) / h dA, N = h Q E the 2nd Piola–Kirchhoff
-/// membrane resultant in material axes, E = ½(FᵀF − I) the mid-surface Green–Lagrange strain of
-/// (u_x, u_y, w) interpolated by the 8-node shape functions. Midpoint rule on samples × samples points.
+/// (docs/charge-model.md §1; the law is core/piezo.hpp's): Q = ∫ (d31 N11 + d32 N22) / h dA, with
+/// N = h Q E the 2nd Piola–Kirchhoff membrane resultant in material axes and E = ½(FᵀF − I) the
+/// mid-surface Green–Lagrange strain of (u_x, u_y, w) interpolated by the 8-node shape functions.
+/// Midpoint rule on samples × samples points (the law is linear: the mean N times the area).
 inline double electrode_charge_C(const ShellMesh& m, const std::vector<std::array<double, 3>>& u,
-                                 const pvdf::Material& mat, std::array<double, 2> centre, double side_m,
-                                 int samples = 40) {
+                                 const pvdf::Material& mat, double thickness_m, std::array<double, 2> centre,
+                                 double side_m, int samples = 40) {
   std::vector<int> cand;
   for (std::size_t e = 0; e < m.elements.size(); ++e) {
     double x0 = 1e9, x1 = -1e9, y0 = 1e9, y1 = -1e9;
@@ -363,7 +365,7 @@ inline double electrode_charge_C(const ShellMesh& m, const std::vector<std::arra
   const double c = std::cos(mat.draw_angle_rad), s = std::sin(mat.draw_angle_rad);
   Eigen::Matrix2d R;
   R << c, s, -s, c;
-  double sum = 0;
+  double sum11 = 0, sum22 = 0;  // Σ N11, Σ N22 over the samples
   int found = 0;
   for (int i = 0; i < samples; ++i)
     for (int j = 0; j < samples; ++j) {
@@ -398,14 +400,16 @@ inline double electrode_charge_C(const ShellMesh& m, const std::vector<std::arra
         }
         const Eigen::Matrix2d E = 0.5 * (F.transpose() * F - Eigen::Matrix2d::Identity());
         const Eigen::Matrix2d Em = R * E * R.transpose();  // material axes
-        const Eigen::Vector3d sigma = Q * Eigen::Vector3d(Em(0, 0), Em(1, 1), 2 * Em(0, 1));
-        sum += mat.d31_C_per_N * sigma[0] + mat.d32_C_per_N * sigma[1];
+        const Eigen::Vector3d Nm = thickness_m * Q * Eigen::Vector3d(Em(0, 0), Em(1, 1), 2 * Em(0, 1));
+        sum11 += Nm[0];
+        sum22 += Nm[1];
         ++found;
         break;
       }
     }
   if (found != samples * samples) throw std::runtime_error("electrode_charge_C: a sample point lies in no element");
-  return sum / found * side_m * side_m;
+  return pvdf::piezo_charge_C(side_m * side_m, sum11 / found, sum22 / found, thickness_m, mat.d31_C_per_N,
+                              mat.d32_C_per_N);
 }
 
 }  // namespace pvdf::bench
