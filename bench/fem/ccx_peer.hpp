@@ -240,18 +240,37 @@ inline std::optional<std::array<double, 3>> read_dat_rim_total(const std::string
   return out;
 }
 
-/// Runs ccx on `<dir>/<job>.inp` with one thread; wall time of the run only.
-inline CcxResult run_ccx(const std::string& dir, const std::string& job, const PolarMesh& m) {
+template <class Mesh>
+CcxResult read_ccx_results(const std::string& dir, const std::string& job, const Mesh& m);
+
+/// Runs ccx on `<dir>/<job>.inp` with one thread; wall time of the run only. Mesh: PolarMesh or
+/// any mesh with `nodes` and `centre_node` (ccx_shell.hpp's ShellMesh).
+template <class Mesh>
+CcxResult run_ccx(const std::string& dir, const std::string& job, const Mesh& m) {
   CcxResult r;
   const std::string cmd = "cd '" + dir + "' && OMP_NUM_THREADS=1 CCX_NPROC_EQUATION_SOLVER=1 CCX_NPROC_RESULTS=1 ccx -i " +
                           job + " > " + job + ".log 2>&1";
   const auto t0 = std::chrono::steady_clock::now();
   const int status = std::system(cmd.c_str());
-  r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const double wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (status != 0) {
+    r.message = "ccx failed (see " + dir + "/" + job + ".log)";
+    r.wall_s = wall_s;
+    return r;
+  }
+  r = read_ccx_results(dir, job, m);
+  r.wall_s = wall_s;
+  return r;
+}
+
+/// The results of a finished ccx run of `<dir>/<job>` (.frd displacements, .dat rim reaction).
+template <class Mesh>
+CcxResult read_ccx_results(const std::string& dir, const std::string& job, const Mesh& m) {
+  CcxResult r;
   r.n_dofs = 3 * m.nodes.size();
   const auto disp = read_frd_displacements(dir + "/" + job + ".frd");
   const auto rim = read_dat_rim_total(dir + "/" + job + ".dat");
-  if (status != 0 || disp.size() != m.nodes.size() || !rim) {
+  if (disp.size() != m.nodes.size() || !rim) {
     r.message = "ccx failed or produced no results (see " + dir + "/" + job + ".log)";
     return r;
   }
