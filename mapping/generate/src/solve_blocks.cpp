@@ -188,6 +188,10 @@ void Generator::commit(const std::vector<double>& records, std::size_t n_positio
   progress_done_ += n_positions;
   // Under MPI the total is global; this rank's count × ranks estimates the global count.
   if (o_.progress) o_.progress(std::min(progress_total_, progress_done_ * std::size_t(size_)), progress_total_);
+  if (o_.common_seconds_per_position) {  // before time_left, whose report refreshes the caller's ETA
+    const double cpu_s = time_left_.cpu_s_per_item({std::size_t(fem::SweepModel::cheap), std::size_t(fem::SweepModel::clamp_layer)});
+    o_.common_seconds_per_position(cpu_s / time_left_.cpu_per_wall_s());
+  }
   if (o_.time_left) o_.time_left(time_left_.seconds_left(now_s));
 }
 
