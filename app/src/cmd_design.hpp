@@ -73,7 +73,9 @@ struct MemorySample {
 /// each map's setup (mesh, setup checks) and its rate per position are measured apart, the map in
 /// progress is finished by its own estimate (MapOptions::time_left: each position's cost predicted
 /// from its distance to the clamp) or else at its own rate, and the maps to come are predicted with
-/// the measured mean setup and the pooled rate (docs/design.md §6).
+/// the measured mean setup and the cost per position of the solves every layout needs, as the maps
+/// seen measured it (MapOptions::common_seconds_per_position: sweep and clamp-layer solves, not
+/// their own rim-model and direct solves), docs/design.md §6.
 class MapsProgress {
  public:
   /// The clock (and a heartbeat line every 10 s off a terminal) starts now, before the first setup.
@@ -120,6 +122,15 @@ class MapsProgress {
       const double t = now_s();
       eta_.stage_seconds_left(index, seconds_left, t);
       bar_->set_eta_s(eta_.seconds_left(t));
+    };
+  }
+  /// The callback of MapOptions::common_seconds_per_position for map number `index`: what a
+  /// position of the maps still to come is expected to take.
+  std::function<void(double)> common_cost_for_map(std::size_t index) {
+    if (quiet_) return {};
+    return [this, index](double seconds_per_position) {
+      if (!bar_) return;
+      eta_.stage_item_seconds(index, seconds_per_position);
     };
   }
   void finish() {

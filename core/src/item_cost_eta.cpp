@@ -153,11 +153,28 @@ double ItemCostEta::seconds_left(double t_s) const {
     const double per = bin_units_[best] > 0 ? units_[id] / bin_units_[best] : 1.0 / double(bin_items_[best]);
     for (std::size_t c = 0; c < n_kinds_; ++c) cpu_left += cost_[c] * bin_work_[best][c] * per;
   }
-  const double per_thread = cpu_done_s_ / wall_done_s_;  // CPU-s per wall-s of one thread
-  if (!(per_thread > 0)) return std::numeric_limits<double>::quiet_NaN();
+  const double rate = cpu_per_wall_s();
+  if (!(rate > 0)) return std::numeric_limits<double>::quiet_NaN();
   // Counted down from the last block's end: the blocks in flight have run since then.
-  const double left = cpu_left / (per_thread * threads_) - std::max(0.0, t_s - last_end_s_);
+  const double left = cpu_left / rate - std::max(0.0, t_s - last_end_s_);
   return std::max(0.0, left);
+}
+
+double ItemCostEta::cpu_s_per_item(const std::vector<std::size_t>& kinds) const {
+  std::size_t items = 0;
+  for (std::size_t n : bin_items_) items += n;
+  if (items == 0 || cost_.size() != n_kinds_) return std::numeric_limits<double>::quiet_NaN();
+  double cpu = 0;
+  for (std::size_t c : kinds) {
+    if (c >= n_kinds_) continue;
+    for (const auto& w : bin_work_) cpu += cost_[c] * w[c];
+  }
+  return cpu / double(items);
+}
+
+double ItemCostEta::cpu_per_wall_s() const {
+  if (!(wall_done_s_ > 0)) return std::numeric_limits<double>::quiet_NaN();
+  return cpu_done_s_ / wall_done_s_ * double(threads_);  // each thread's CPU-s per wall-s × threads
 }
 
 }  // namespace pvdf

@@ -52,6 +52,11 @@ void StagedEta::stage_seconds_left(std::size_t index, double seconds, double t_s
   s.own_at_s = t_s;
 }
 
+void StagedEta::stage_item_seconds(std::size_t index, double seconds_per_item) {
+  if (index >= stages_.size()) return;
+  stages_[index].item_s = std::isfinite(seconds_per_item) && seconds_per_item > 0 ? seconds_per_item : -1;
+}
+
 double StagedEta::seconds_left(double t_s) const {
   // Pooled rate and mean setup of the stages whose rate is measured.
   double items = 0, seconds = 0, setup_sum = 0;
@@ -66,26 +71,37 @@ double StagedEta::seconds_left(double t_s) const {
       ++n_setups;
     }
   }
-  if (items <= 0 || seconds <= 0) return NAN;
-  const double pooled = items / seconds;
+  const double pooled = items > 0 && seconds > 0 ? items / seconds : 0.0;
   const double mean_setup = n_setups > 0 ? setup_sum / n_setups : 0.0;
+  // Seconds per item of a stage not yet measured: the stages' stated ones, weighted by their items
+  // done (at least one each), else the pooled rate's.
+  double stated = 0, weight = 0;
+  for (const Stage& s : stages_) {
+    if (s.item_s < 0) continue;
+    const double w = double(std::max<std::size_t>(1, s.last_done));
+    stated += w * s.item_s;
+    weight += w;
+  }
+  const double item_s = weight > 0 ? stated / weight : pooled > 0 ? 1.0 / pooled : NAN;
 
   double left = 0;
   if (current_ < stages_.size()) {
     const Stage& c = stages_[current_];
-    const double rate = c.rate() > 0 ? c.rate() : pooled;
     if (c.own_left_s >= 0) {
       left += std::max(0.0, c.own_left_s - (t_s - c.own_at_s));
+    } else if (c.rate() > 0) {
+      const double rest = double(c.planned > c.last_done ? c.planned - c.last_done : 0) / c.rate();
+      left += rest - std::min(t_s - c.last_s, rest);
     } else if (!c.reported) {
       const double into = c.started ? t_s - c.start_s : 0.0;
-      left += std::max(0.0, mean_setup - into) + double(c.planned) / rate;
+      left += std::max(0.0, mean_setup - into) + double(c.planned) * item_s;
     } else {
-      left += double(c.planned > c.last_done ? c.planned - c.last_done : 0) / rate;
-      left -= std::min(t_s - c.last_s, double(c.planned > c.last_done ? c.planned - c.last_done : 0) / rate);
+      const double rest = double(c.planned > c.last_done ? c.planned - c.last_done : 0) * item_s;
+      left += rest - std::min(t_s - c.last_s, rest);
     }
   }
-  for (std::size_t k = current_ + 1; k < stages_.size(); ++k) left += mean_setup + double(stages_[k].planned) / pooled;
-  return std::max(0.0, left);
+  for (std::size_t k = current_ + 1; k < stages_.size(); ++k) left += mean_setup + double(stages_[k].planned) * item_s;
+  return std::isfinite(left) ? std::max(0.0, left) : NAN;
 }
 
 }  // namespace pvdf

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -295,4 +296,85 @@ TEST_CASE("item-cost ETA: work tried on top of a unit counts, in the unit's shar
   REQUIRE(k.size() == 2);
   CHECK(k[0] == Approx(1.0).epsilon(0.15));
   CHECK(k[1] == Approx(tried_cpu_s).epsilon(0.15));
+}
+
+// A `design` run of two maps on two threads at 0.8 CPU-s per wall second, each a 10 s setup then
+// its rows. Map A (half a disc, as a mirror-symmetric layout solves it): every position one sweep
+// solve (1 CPU-s), those within 0.1 of the rim a clamp-layer solve (0.5 CPU-s), and those within
+// 0.05 a rim-model solve (20 CPU-s: where A's electrodes meet the clamp). Map B (the whole disc): the sweep and
+// clamp-layer solves alone. Driven as MapsProgress drives it: A's own estimate (ItemCostEta) and,
+// under the new rule, A's cost per position of the solves every layout needs (sweep and clamp
+// layer). B predicted at A's pooled rate (the old rule) is 2× too long or more while A runs; at A's
+// common cost per position every report of A from the fourth row on is within ±30 % of the truth.
+TEST_CASE("staged ETA: maps to come predicted at the cost per position every layout needs", "[core][progress]") {
+  const double efficiency = 0.8, setup_s = 10.0, sweep_cpu_s = 1.0, clamp_cpu_s = 0.5, rim_cpu_s = 20.0;
+  const double rim_band = 0.1, rim_model_band = 0.05;
+  std::vector<double> features_a, features_b;
+  const auto rows_a = disc_rows(20, 0, 0.05, rim_band, features_a);
+  const auto rows_b = disc_rows(20, 20, 0.05, rim_band, features_b);
+  auto row_cpu = [&](const std::vector<std::vector<DiscItem>>& rows, bool rim_solves) {
+    std::vector<double> cpu(rows.size(), 0.0);
+    for (std::size_t r = 0; r < rows.size(); ++r)
+      for (const auto& it : rows[r])
+        cpu[r] += sweep_cpu_s + (it.near_rim ? clamp_cpu_s : 0.0) + (rim_solves && it.feature < rim_model_band ? rim_cpu_s : 0.0);
+    return cpu;
+  };
+  const auto cpu_a = row_cpu(rows_a, true), cpu_b = row_cpu(rows_b, false);
+  const auto sched_a = schedule_on_two_threads(cpu_a, efficiency);
+  const auto sched_b = schedule_on_two_threads(cpu_b, efficiency);
+  const double a_end = setup_s + sched_a.finish, run_end = a_end + setup_s + sched_b.finish;
+
+  pvdf::StagedEta new_rule({features_a.size(), features_b.size()}), old_rule({features_a.size(), features_b.size()});
+  new_rule.start_stage(0, 0.0);
+  old_rule.start_stage(0, 0.0);
+  pvdf::ItemCostEta map_a(3, 0.05, 2);  // kinds: sweep, rim model, clamp layer
+  REQUIRE(map_a.plan(features_a) == 0);
+  std::vector<std::size_t> first_id(rows_a.size());
+  for (std::size_t r = 0, id = 0; r < rows_a.size(); id += rows_a[r].size(), ++r) first_id[r] = id;
+  int reports = 0, new_within = 0;
+  double worst_old = 1, worst_new = 1;
+  std::size_t done = 0;
+  std::string ratios;
+  for (std::size_t k = 0; k < sched_a.order.size(); ++k) {
+    const std::size_t r = sched_a.order[k];
+    std::vector<std::size_t> ids;
+    std::vector<std::vector<double>> work;
+    for (std::size_t n = 0; n < rows_a[r].size(); ++n) {
+      ids.push_back(first_id[r] + n);
+      const DiscItem& it = rows_a[r][n];
+      work.push_back({1.0, it.feature < rim_model_band ? 1.0 : 0.0, it.near_rim ? 1.0 : 0.0});
+    }
+    const double t = setup_s + sched_a.end[r];
+    map_a.block_done(ids, work, cpu_a[r], setup_s + sched_a.start[r], t);
+    done += rows_a[r].size();
+    for (pvdf::StagedEta* eta : {&new_rule, &old_rule}) {
+      eta->items_done(0, done, features_a.size(), t);
+      eta->stage_seconds_left(0, map_a.seconds_left(t), t);
+    }
+    new_rule.stage_item_seconds(0, map_a.cpu_s_per_item({0, 2}) / map_a.cpu_per_wall_s());
+    if (k < 3) continue;  // the first rows teach map A's own estimate
+    const double truth = run_end - t, a = new_rule.seconds_left(t), b = old_rule.seconds_left(t);
+    REQUIRE(std::isfinite(a));
+    REQUIRE(std::isfinite(b));
+    ++reports;
+    if (std::abs(a / truth - 1) <= 0.3) ++new_within;
+    worst_new = pvdf::testing::worst_of(worst_new, std::max(a / truth, truth / a));
+    worst_old = pvdf::testing::worst_of(worst_old, b / truth);
+    ratios += " " + std::to_string(a / truth) + "/" + std::to_string(b / truth);
+  }
+  REQUIRE(reports >= 10);
+  INFO("predicted / true time left, new rule / old rule:" << ratios);
+  CHECK(new_within == reports);
+  CHECK(worst_new < 1.3);
+  CHECK(worst_old > 2.0);  // the case is one the pooled rate gets wrong
+  // The common cost per position is map B's: its rows' CPU over its positions, as wall time.
+  const double b_cpu_per_position = std::accumulate(cpu_b.begin(), cpu_b.end(), 0.0) / double(features_b.size());
+  CHECK(map_a.cpu_s_per_item({0, 2}) == Approx(b_cpu_per_position).epsilon(0.15));
+  CHECK(map_a.cpu_per_wall_s() == Approx(2 * efficiency));
+  // Map B's setup: 10 s measured on A (its first report less its first items at A's rate, which is
+  // not exactly 10 s), then B's planned positions at the stated cost: B alone is left.
+  new_rule.items_done(0, features_a.size(), features_a.size(), a_end);
+  new_rule.start_stage(1, a_end);
+  const double in_setup = new_rule.seconds_left(a_end + 1.0), truth_b = run_end - (a_end + 1.0);
+  CHECK(std::abs(in_setup / truth_b - 1) <= 0.3);
 }

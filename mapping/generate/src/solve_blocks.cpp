@@ -12,6 +12,8 @@
 #include <exception>
 #include <limits>
 #include <thread>
+#include <utility>
+#include <vector>
 
 #include <malloc.h>
 #include <time.h>
@@ -24,6 +26,36 @@ double thread_cpu_s() {
   timespec t{};
   clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
   return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+}
+
+// The order the row blocks are handed to the threads: the first and the last, then the middle of
+// each gap, breadth first (0, n−1, n/2, n/4, 3n/4, …), so that the rows done early sample the whole
+// film, the dear ones near the clamp included, and the time left learns their cost (docs/design.md
+// §6). Each block is solved on its own (warm starts along its row only), so the map does not depend
+// on the order, as it does not on the threads.
+std::vector<std::size_t> spread_order(std::size_t n) {
+  std::vector<std::size_t> order;
+  if (n == 0) return order;
+  std::vector<char> taken(n, 0);
+  auto take = [&](std::size_t k) {
+    if (!taken[k]) order.push_back(k);
+    taken[k] = 1;
+  };
+  take(0);
+  take(n - 1);
+  std::vector<std::pair<std::size_t, std::size_t>> gaps{{0, n - 1}}, next;
+  while (!gaps.empty()) {
+    next.clear();
+    for (const auto& [a, b] : gaps) {
+      if (b - a < 2) continue;
+      const std::size_t m = a + (b - a) / 2;
+      take(m);
+      next.push_back({a, m});
+      next.push_back({m, b});
+    }
+    gaps.swap(next);
+  }
+  return order;
 }
 
 }  // namespace
@@ -188,6 +220,10 @@ void Generator::commit(const std::vector<double>& records, std::size_t n_positio
   progress_done_ += n_positions;
   // Under MPI the total is global; this rank's count × ranks estimates the global count.
   if (o_.progress) o_.progress(std::min(progress_total_, progress_done_ * std::size_t(size_)), progress_total_);
+  if (o_.common_seconds_per_position) {  // before time_left, whose report refreshes the caller's ETA
+    const double cpu_s = time_left_.cpu_s_per_item({std::size_t(fem::SweepModel::cheap), std::size_t(fem::SweepModel::clamp_layer)});
+    o_.common_seconds_per_position(cpu_s / time_left_.cpu_per_wall_s());
+  }
   if (o_.time_left) o_.time_left(time_left_.seconds_left(now_s));
 }
 
@@ -201,6 +237,7 @@ void Generator::run_blocks(const std::vector<Block>& blocks) {
       }
     }
   }
+  const std::vector<std::size_t> order = spread_order(blocks.size());
   std::atomic<std::size_t> next{0};
   std::exception_ptr error;
   std::mutex error_mutex;
@@ -217,8 +254,9 @@ void Generator::run_blocks(const std::vector<Block>& blocks) {
       }
       std::vector<double> records;
       while (!stop_) {
-        const std::size_t b = next.fetch_add(1);
-        if (b >= blocks.size()) break;
+        const std::size_t k = next.fetch_add(1);
+        if (k >= order.size()) break;
+        const std::size_t b = order[k];
         bool abandoned = false;
         const double start_s = eta_clock_s(), cpu0_s = thread_cpu_s();
         solve_block(*sweeps_[std::size_t(t)], blocks[b], records, abandoned);

@@ -44,6 +44,13 @@ class ItemCostEta {
   double seconds_left(double t_s) const;
   /// The fitted CPU seconds per unit of each kind of work (empty until a block is done).
   std::vector<double> cost_per_kind() const { return cost_; }
+  /// The CPU seconds per item done of the work of `kinds` alone: Σ over those kinds of the fitted
+  /// cost × the items' work of that kind, over the items done (NaN until a block is done). E.g. a
+  /// map's sweep and clamp-layer solves per position, which another layout of the film needs too.
+  double cpu_s_per_item(const std::vector<std::size_t>& kinds) const;
+  /// The CPU seconds per wall second of all threads: `threads` × the blocks' CPU over their own
+  /// wall durations (NaN until a block is done).
+  double cpu_per_wall_s() const;
 
  private:
   void fit();

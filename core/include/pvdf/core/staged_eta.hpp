@@ -15,11 +15,14 @@ namespace pvdf {
 /// The time left is
 ///   current stage: its setup still to run (while no item is reported, the mean measured setup
 ///                  minus the time since its start) + items left / rate;
-///   stages to come: mean measured setup + planned items / rate,
-/// with `rate` the current stage's own once measured, else the pooled rate of the stages seen
-/// (their items over the time between their first and last reports); a stage that states its own
-/// time left (stage_seconds_left) is taken at its word while it is current. NaN until one rate is
-/// known.
+///   stages to come: mean measured setup + planned items × seconds per item,
+/// with the seconds per item those the stages seen stated for an item of any stage
+/// (stage_item_seconds: a map's cost per position of the solves every layout needs, leaving out
+/// what made that map's own positions dear), their mean weighted by their items done, else
+/// 1 / the pooled rate of the stages seen (their items over the time between their first and last
+/// reports); the current stage's items at its own rate once measured, else as a stage to come; a
+/// stage that states its own time left (stage_seconds_left) is taken at its word while it is
+/// current. NaN until one rate or seconds per item is known.
 /// Times are seconds on any monotone clock the caller chooses.
 class StagedEta {
  public:
@@ -33,7 +36,11 @@ class StagedEta {
   /// positions are dear): used for the current stage in place of items left / rate, counted down
   /// from `t_s`. NaN clears it.
   void stage_seconds_left(std::size_t index, double seconds, double t_s);
-  /// Seconds left at `t_s`; NaN before any stage has a measured rate.
+  /// The wall seconds an item of any stage is expected to take, as stage `index` measured it so
+  /// far (e.g. a map's cost per position of the solves every layout needs): used for the stages to
+  /// come and for a current stage without a rate or estimate of its own. NaN clears it.
+  void stage_item_seconds(std::size_t index, double seconds_per_item);
+  /// Seconds left at `t_s`; NaN before any stage has a measured rate or seconds per item.
   double seconds_left(double t_s) const;
 
  private:
@@ -45,6 +52,7 @@ class StagedEta {
     std::size_t first_done = 0, last_done = 0;
     double first_s = 0, last_s = 0;
     double own_left_s = -1, own_at_s = 0;  ///< stage_seconds_left's (< 0: none)
+    double item_s = -1;                    ///< stage_item_seconds' (< 0: none)
     double rate() const;   ///< items per second between first and latest report; 0 if not measured
     double setup_s() const;  ///< measured setup, < 0 if not measured
   };

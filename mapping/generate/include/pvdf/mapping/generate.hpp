@@ -137,6 +137,13 @@ struct MapOptions {
   /// to the clamp, by the kinds of solve — cheap model, clamp layer, rim model, direct — that the
   /// positions done at that distance needed, at the CPU rate measured so far). NaN until known.
   std::function<void(double seconds_left)> time_left;
+  /// Called with time_left: the wall seconds per position of the solves any layout of the film
+  /// needs — the sweep solves and the clamp-layer solves, at the CPU seconds per solve of each kind
+  /// fitted so far (pvdf::ItemCostEta::cost_per_kind) times their count per position done — at the
+  /// CPU rate of the rows done × the threads. This scene's rim-model and direct solves are left out:
+  /// they belong to where its electrodes meet the clamp. `pvdfkit design` predicts the maps still to
+  /// come with it (docs/design.md §6). NaN until known.
+  std::function<void(double seconds_per_position)> common_seconds_per_position;
   /// 1-σ charge noise per channel written into the map (C); empty = 0.05 pC each.
   std::vector<double> noise_C;
   /// Free text stored in the map.
