@@ -256,7 +256,7 @@ TEST_CASE("kill and resume gives the uninterrupted map; a foreign checkpoint is 
   o.checkpoint_interval_s = 0;
 
   MapOptions killed = o;
-  killed.stop_after_positions = 3;  // row 0 done, row 1 abandoned mid-way
+  killed.stop_after_positions = 3;  // rows run 0, 2, 1 (spread over the film): row 0 done, row 2 abandoned mid-way
   MapReport r1;
   const ChargeMap partial = generate_map(scene, killed, &r1);
   CHECK(r1.stopped_early);
