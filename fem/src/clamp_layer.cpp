@@ -483,6 +483,7 @@ bool rim_grading_uniform() {
 // The bench switch, read like PVDF_FACTORIZATION (bench/fem/bench_clamp_layer.sh,
 // bench/mapping/bench_clamp_layer_map.sh).
 Options with_clamp_layer_switch(Options options) {
+  (void)rim_grading_uniform();  // its bench switch refused here too, before any solve
   const char* v = std::getenv("PVDF_CLAMP_LAYER");
   if (!v) return options;
   const std::string mode = v;
