@@ -119,6 +119,8 @@ bool FilmSolver::refine_toward_rim(double size_m, double grading, double angle_r
       if (std::abs(off) > half_angle_rad) continue;
       const double d = std::max(0.0, outline.inside_distance_m({c[0], c[1]}) - 0.5 * cell->diameter());
       const double h = cell->diameter() / std::sqrt(2.0);
+      // layer_at(c) >= size_m: the first test only spares the nearest-point search for cells that
+      // are fine enough anyway (most of the film).
       if (h > 1.3 * std::max(size_m, grading * d) && h > 1.3 * std::max(layer_at(c), grading * d)) {
         cell->set_refine_flag();
         marked = true;
