@@ -142,10 +142,10 @@ void print_solve_text(const SolveOptions& o, const pvdf::Scene& scene, const pvd
   std::printf("%s: %s (%s)\n", scene.source.c_str(), pvdf::fem::status_name(s.status).c_str(), s.message.c_str());
   std::printf("model %s: %s\n", pvdf::fem::model_name(s.model).c_str(), s.model_reason.c_str());
   if (!o.mesh_path.empty()) std::printf("mesh %s: %zu cells as read, refined from there\n", o.mesh_path.c_str(), mesh_file_cells);
-  std::printf("%zu DOFs, %zu cells, %d Newton iterations, %d load steps, %d refinements, %.3f s "
+  std::printf("%zu DOFs, %zu cells, %d Newton iterations, %d load steps, %d refinements, %.3f s wall, %.3f CPU-s "
               "(assembly %.3f s, linear solves %.3f s, setup %.3f s)\n",
-              s.n_dofs, s.n_cells, s.newton_iterations, s.load_steps, s.refinement_cycles, s.wall_s, s.assembly_s,
-              s.linear_solve_s, s.setup_s);
+              s.n_dofs, s.n_cells, s.newton_iterations, s.load_steps, s.refinement_cycles, s.wall_s, s.cpu_s,
+              s.assembly_s, s.linear_solve_s, s.setup_s);
   std::printf("estimated relative error %.3g = discretization %.3g + model %.3g (%s)\n", s.estimated_relative_error,
               s.estimated_discretization_error, s.estimated_model_error, s.error_estimator.c_str());
   if (!ok) return;

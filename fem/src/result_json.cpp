@@ -50,6 +50,7 @@ nlohmann::json result_json(const Result& r) {
   j["load_steps"] = s.load_steps;
   j["refinement_cycles"] = s.refinement_cycles;
   j["wall_s"] = s.wall_s;
+  j["cpu_s"] = s.cpu_s;
   j["time_breakdown_s"] = {{"setup", s.setup_s}, {"assembly", s.assembly_s}, {"linear_solve", s.linear_solve_s}};
   j["estimated_relative_error"] = s.estimated_relative_error;
   j["estimated_discretization_error"] = s.estimated_discretization_error;

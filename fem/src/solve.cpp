@@ -6,6 +6,7 @@
 #include "pvdf/fem/plausibility.hpp"
 
 #include "pvdf/core/error.hpp"
+#include "pvdf/core/resources.hpp"
 
 #include <cmath>
 #include <cstdlib>
@@ -203,6 +204,7 @@ namespace {
 // sparsity); the kinematics, if still open, are chosen by run() on the first mesh.
 Result run_with_model_choice(const pvdf::Scene& scene, const Options& options,
                              const std::function<void(FilmSolver&)>& make_grid) {
+  const double cpu0_s = pvdf::process_cpu_s();
   const ModelChoice choice = choose_model(scene, options);
   Options used = with_clamp_layer_switch(options);  // the PVDF_CLAMP_LAYER bench switch (clamp_layer.cpp)
   used.model = choice.model;
@@ -218,6 +220,7 @@ Result run_with_model_choice(const pvdf::Scene& scene, const Options& options,
   const bool decided_a_priori = options.model == Model::automatic && choice.model != Model::automatic;
   std::string& reason = r.summary.model_reason;
   if (decided_a_priori) reason = reason.rfind("requested", 0) == 0 ? choice.reason + reason.substr(9) : choice.reason;
+  r.summary.cpu_s = pvdf::process_cpu_s() - cpu0_s;
   return r;
 }
 

@@ -174,6 +174,7 @@ order; sample arrays the ``samples`` passed to solve.)doc")
         d["estimated_model_error"] = s.estimated_model_error;
         d["error_estimator"] = s.error_estimator;
         d["wall_s"] = s.wall_s;
+        d["cpu_s"] = s.cpu_s;
         // The keys of `pvdfkit solve --json` (pvdf::fem::result_json): time_breakdown_s.assembly, not assembly_s.
         py::dict times;
         times["setup"] = s.setup_s;
@@ -181,7 +182,7 @@ order; sample arrays the ``samples`` passed to solve.)doc")
         times["linear_solve"] = s.linear_solve_s;
         d["time_breakdown_s"] = times;
         return d;
-      }, "status, message, model, n_dofs, n_cells, iterations, estimates, wall_s and time_breakdown_s {setup, assembly, "
+      }, "status, message, model, n_dofs, n_cells, iterations, estimates, wall_s, cpu_s and time_breakdown_s {setup, assembly, "
          "linear_solve} (s): the solver summary with the keys of `pvdfkit solve --json`")
       .def("to_dict", [](const Result& r) {
         return py::module_::import("json").attr("loads")(pvdf::fem::result_json(r).dump());

@@ -9,6 +9,10 @@ namespace pvdf {
 /// the system does not say). Children are not counted.
 std::uint64_t peak_resident_bytes();
 
+/// The CPU seconds (user + system, all threads) this process has used so far (getrusage; 0 when
+/// the system does not say).
+double process_cpu_s();
+
 /// The resident set size of this process now, in bytes (/proc/self/statm; 0 where it is absent).
 std::uint64_t current_resident_bytes();
 

@@ -61,7 +61,7 @@ struct Options {
   double coarse_size_m = 0.0;
   /// Target cell size under a probe footprint (m); 0 = probe radius / 2.
   double probe_size_m = 0.0;
-  /// Target cell size on electrodes (m); 0 = smallest electrode side / 4.
+  /// Target cell size on electrodes (m); 0 = smallest electrode side / 2.
   double electrode_size_m = 0.0;
   /// With bending: refine toward the clamped rim until the cells there are no larger than its
   /// bending boundary layer sqrt(D/N) (growing by half the distance from the rim), on the first
@@ -161,6 +161,10 @@ struct Summary {
   int clamp_layer_passes = 0;
   std::string error_estimator;          ///< how the estimates were obtained
   double wall_s = 0;                    ///< total
+  /// CPU seconds (user + system, all threads) of the whole solve: model choice, mesh, Newton,
+  /// estimates and outputs (process CPU time, so other work of the process in the same interval
+  /// counts too; 0 when the system does not say).
+  double cpu_s = 0;
   double assembly_s = 0;                ///< residual + tangent assembly
   double linear_solve_s = 0;            ///< factorization + back substitution
   double setup_s = 0;                   ///< mesh, DOFs, sparsity, bending matrix
