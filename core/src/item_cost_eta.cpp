@@ -23,6 +23,15 @@ void ItemCostEta::set_prior(std::size_t kind, double cpu_s_per_unit, double weig
   if (std::isfinite(cpu_per_wall_s_per_thread) && cpu_per_wall_s_per_thread > 0) prior_rate_ = cpu_per_wall_s_per_thread;
 }
 
+void ItemCostEta::queue_blocks(const std::vector<std::vector<std::size_t>>& blocks) {
+  for (const auto& b : blocks) {
+    std::vector<std::size_t> ids;
+    for (std::size_t id : b)
+      if (id < feature_.size()) ids.push_back(id);
+    if (!ids.empty()) queued_.push_back(std::move(ids));
+  }
+}
+
 void ItemCostEta::block_started(const std::vector<std::size_t>& items, double start_s) {
   tracking_ = true;
   InFlight b;
@@ -213,17 +222,38 @@ double ItemCostEta::seconds_left(double t_s) const {
   }
   // Each block in flight holds its thread for its predicted time less its run so far, and at least
   // overrun_share × its run so far.
-  double held_s = 0, longest_s = 0;
+  std::vector<double> free_s;  // when each thread is free, from now
   for (const auto& b : in_flight_) {
     double cpu = 0;
     for (std::size_t id : b.items)
       if (!done_[id]) cpu += predicted_cpu_s(id);
     const double run_s = std::max(0.0, t_s - b.start_s);
-    const double rest_s = std::max(cpu / per_thread - run_s, overrun_share * run_s);
-    held_s += rest_s;
-    longest_s = std::max(longest_s, rest_s);
+    free_s.push_back(std::max(cpu / per_thread - run_s, overrun_share * run_s));
   }
-  return std::max(longest_s, (held_s + cpu_left / per_thread) / double(threads_));
+  free_s.resize(std::max<std::size_t>(free_s.size(), std::size_t(threads_)), 0.0);
+  // The blocks queued, in order, each to the thread free first (not yet started: no item done or
+  // in flight); their items are taken off the loose ones.
+  std::vector<char> queued(feature_.size(), 0);
+  for (const auto& b : queued_) {
+    bool waiting = true;
+    for (std::size_t id : b) waiting = waiting && !done_[id] && !flying[id];
+    if (!waiting) continue;
+    double cpu = 0;
+    for (std::size_t id : b) {
+      cpu += predicted_cpu_s(id);
+      queued[id] = 1;
+    }
+    *std::min_element(free_s.begin(), free_s.end()) += cpu / per_thread;
+  }
+  double loose_cpu = 0;
+  for (std::size_t id = 0; id < feature_.size(); ++id)
+    if (!done_[id] && !flying[id] && !queued[id]) loose_cpu += predicted_cpu_s(id);
+  double sum_s = loose_cpu / per_thread, last_s = 0;
+  for (double f : free_s) {
+    sum_s += f;
+    last_s = std::max(last_s, f);
+  }
+  return std::max(last_s, sum_s / double(free_s.size()));
 }
 
 double ItemCostEta::cpu_s_per_item(const std::vector<std::size_t>& kinds) const {

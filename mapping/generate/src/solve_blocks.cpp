@@ -249,16 +249,29 @@ void Generator::commit(const std::vector<double>& records, std::size_t n_positio
 }
 
 void Generator::run_blocks(const std::vector<Block>& blocks) {
-  // The time left learns which positions solve every force level and which the largest only.
-  for (const auto& block : blocks) {
-    for (const auto& t : block) {
-      const std::size_t p = t.j * grid_.nx + t.i;
-      if (p < time_left_id_.size() && time_left_id_[p] != std::size_t(-1)) {
-        time_left_.set_units(time_left_id_[p], t.all_levels ? double(layout_.nf) : 1.0);
+  const std::vector<std::size_t> order = spread_order(blocks.size());
+  {
+    // The time left learns which positions solve every force level and which the largest only, and
+    // the rows in the order the threads take them.
+    std::lock_guard<std::mutex> lock(mutex_);  // the heartbeat may ask for the time left meanwhile
+    for (const auto& block : blocks) {
+      for (const auto& t : block) {
+        const std::size_t p = t.j * grid_.nx + t.i;
+        if (p < time_left_id_.size() && time_left_id_[p] != std::size_t(-1)) {
+          time_left_.set_units(time_left_id_[p], t.all_levels ? double(layout_.nf) : 1.0);
+        }
       }
     }
+    std::vector<std::vector<std::size_t>> queued;
+    for (std::size_t b : order) {
+      queued.emplace_back();
+      for (const auto& t : blocks[b]) {
+        const std::size_t p = t.j * grid_.nx + t.i;
+        if (p < time_left_id_.size() && time_left_id_[p] != std::size_t(-1)) queued.back().push_back(time_left_id_[p]);
+      }
+    }
+    time_left_.queue_blocks(queued);
   }
-  const std::vector<std::size_t> order = spread_order(blocks.size());
   if (eta_trace()) {
     const fem::SweepTiming t0 = sweeps_[0]->timing();
     std::string line = "eta-trace blocks t=" + std::to_string(eta_clock_s()) + " n=" + std::to_string(blocks.size()) +

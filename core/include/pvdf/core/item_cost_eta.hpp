@@ -33,8 +33,10 @@ namespace pvdf {
 ///   holds its thread for its predicted wall time less the time it has run, and at least
 ///   `overrun_share` × the time it has run (a block that outruns its prediction is likely to be
 ///   dearer still: it is not counted as done); the time left is the larger of the longest of
-///   them and (their remainders + the items to do) spread over the threads. Without
-///   block_started, the time left is counted down from the last block's end.
+///   them and (their remainders + the items to do) spread over the threads; with the blocks queued
+///   (queue_blocks), each thread takes the next block queued when it is free, at its predicted
+///   time, and the time left is when the last thread ends. Without block_started, the time left is
+///   counted down from the last block's end.
 /// NaN until a block is done or a prior is set. Not thread-safe (the caller serializes).
 class ItemCostEta {
  public:
@@ -50,6 +52,10 @@ class ItemCostEta {
   /// work each needed ([item][kind], counts), and the CPU seconds it took.
   void block_done(const std::vector<std::size_t>& items, const std::vector<std::vector<double>>& work,
                   double cpu_s, double start_s, double end_s);
+  /// The blocks the items will be solved in, in the order the threads take them (each thread the
+  /// next when it is free): the time left then follows that schedule (a dear block taken last runs
+  /// alone). Items in no block queued are spread over the threads.
+  void queue_blocks(const std::vector<std::vector<std::size_t>>& blocks);
   /// A block of planned items (ids from plan) starts at wall time `start_s` on one thread.
   void block_started(const std::vector<std::size_t>& items, double start_s);
   /// A prior for kind `kind`: `cpu_s_per_unit` as if `weight_units` units of it had been done at
@@ -104,6 +110,7 @@ class ItemCostEta {
     double start_s = 0;
   };
   std::vector<InFlight> in_flight_;
+  std::vector<std::vector<std::size_t>> queued_;  ///< queue_blocks', in order
   bool tracking_ = false;  ///< block_started was called: the blocks in flight are known
   std::vector<double> prior_cost_, prior_weight_;
   double prior_rate_ = 0;  ///< CPU-s per wall-s of one thread before any block (0: none)
