@@ -75,7 +75,9 @@ struct MemorySample {
 /// from its distance to the clamp) or else at its own rate, and the maps to come are predicted with
 /// the measured mean setup and the cost per position of the solves every layout needs, as the maps
 /// seen measured it (MapOptions::common_seconds_per_position: sweep and clamp-layer solves, not
-/// their own rim-model and direct solves), docs/design.md §6.
+/// their own rim-model and direct solves), docs/design.md §6. Before each heartbeat line the map in
+/// progress is asked for its time left as of now (MapOptions::time_left_now: its rows in flight at
+/// their time so far), so that a dear row is seen while it runs, not only once it ends.
 class MapsProgress {
  public:
   /// The clock (and a heartbeat line every 10 s off a terminal) starts now, before the first setup.
