@@ -109,6 +109,7 @@ ChargeMap make_map(const Candidate& c, const DesignCommandOptions& o, double spa
   mo.progress = progress.for_map(map_index);
   mo.time_left = progress.time_left_for_map(map_index);
   mo.common_seconds_per_position = progress.common_cost_for_map(map_index);
+  mo.time_left_now = progress.time_left_now_for_map(map_index);
   progress.start_map(map_index);
   MapReport report;
   ChargeMap map = generate_map(scene, mo, &report);

@@ -75,7 +75,9 @@ struct MemorySample {
 /// from its distance to the clamp) or else at its own rate, and the maps to come are predicted with
 /// the measured mean setup and the cost per position of the solves every layout needs, as the maps
 /// seen measured it (MapOptions::common_seconds_per_position: sweep and clamp-layer solves, not
-/// their own rim-model and direct solves), docs/design.md §6.
+/// their own rim-model and direct solves), docs/design.md §6. Before each heartbeat line the map in
+/// progress is asked for its time left as of now (MapOptions::time_left_now: its rows in flight at
+/// their time so far), so that a dear row is seen while it runs, not only once it ends.
 class MapsProgress {
  public:
   /// The clock (and a heartbeat line every 10 s off a terminal) starts now, before the first setup.
@@ -85,11 +87,22 @@ class MapsProgress {
                std::vector<MemorySample>* memory = nullptr)
       : label_(std::move(label)), planned_(std::move(planned)), n_maps_(planned_.size()), quiet_(quiet),
         phase_(std::move(phase)), memory_(memory), eta_(planned_), t0_(std::chrono::steady_clock::now()) {
-    if (!quiet_ && n_maps_ > 0) bar_ = std::make_unique<pvdf::Progress>(label_, 0);
+    // The total is known before the first setup: a line with the positions to do (and, once the
+    // first map's setup states a prior, its ETA) instead of "starting".
+    std::size_t total = 0;
+    for (std::size_t n : planned_) total += n;
+    if (!quiet_ && n_maps_ > 0) {
+      bar_ = std::make_unique<pvdf::Progress>(label_, total);
+      bar_->set_refresh([this] { refresh(); });
+    }
+  }
+  ~MapsProgress() {
+    if (bar_) bar_->set_refresh({});
   }
   /// Map number `index` (0-based) starts its setup now.
   void start_map(std::size_t index) {
     if (quiet_) return;
+    std::lock_guard<std::mutex> lock(eta_mutex_);
     eta_.start_stage(index, now_s());
     if (bar_) bar_->set_eta_s(eta_.seconds_left(now_s()));
   }
@@ -106,6 +119,7 @@ class MapsProgress {
       for (std::size_t k = index + 1; k < n_maps_; ++k) all += planned_[k];
       if (memory_ != nullptr) memory_->push_back({phase_, done_before_ + done, pvdf::current_resident_bytes()});
       if (!bar_) return;
+      std::lock_guard<std::mutex> lock(eta_mutex_);
       const double t = now_s();
       eta_.items_done(index, done, total, t);
       bar_->set_total(all);
@@ -119,6 +133,7 @@ class MapsProgress {
     if (quiet_) return {};
     return [this, index](double seconds_left) {
       if (!bar_) return;
+      std::lock_guard<std::mutex> lock(eta_mutex_);
       const double t = now_s();
       eta_.stage_seconds_left(index, seconds_left, t);
       bar_->set_eta_s(eta_.seconds_left(t));
@@ -130,7 +145,19 @@ class MapsProgress {
     if (quiet_) return {};
     return [this, index](double seconds_per_position) {
       if (!bar_) return;
+      std::lock_guard<std::mutex> lock(eta_mutex_);
       eta_.stage_item_seconds(index, seconds_per_position);
+    };
+  }
+  /// The callback of MapOptions::time_left_now for map number `index`: the map's time left as of
+  /// any moment, which the heartbeat asks for before each line (refresh), so that a row in flight
+  /// longer than predicted counts between rows too.
+  std::function<void(std::function<double()>)> time_left_now_for_map(std::size_t index) {
+    if (quiet_) return {};
+    return [this, index](std::function<double()> seconds_left_now) {
+      std::lock_guard<std::mutex> lock(live_mutex_);
+      live_ = std::move(seconds_left_now);
+      live_index_ = index;
     };
   }
   void finish() {
@@ -146,6 +173,17 @@ class MapsProgress {
 
  private:
   double now_s() const { return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0_).count(); }
+  // The heartbeat's: the map's time left as of now. Lock order: live_mutex_, then the map's own
+  // (inside live_), released before eta_mutex_ — the map's callbacks hold its lock, then eta_mutex_.
+  void refresh() {
+    std::lock_guard<std::mutex> live_lock(live_mutex_);
+    if (!live_ || !bar_) return;
+    const double seconds = live_();
+    std::lock_guard<std::mutex> lock(eta_mutex_);
+    const double t = now_s();
+    eta_.stage_seconds_left(live_index_, seconds, t);
+    bar_->set_eta_s(eta_.seconds_left(t));
+  }
   std::string label_;
   std::vector<std::size_t> planned_;
   std::size_t n_maps_;
@@ -153,6 +191,10 @@ class MapsProgress {
   std::string phase_;
   std::vector<MemorySample>* memory_;
   pvdf::StagedEta eta_;
+  std::mutex eta_mutex_;   ///< guards eta_ (the map's callbacks and the heartbeat's refresh)
+  std::mutex live_mutex_;  ///< guards live_ and is held while it is called
+  std::function<double()> live_;  ///< MapOptions::time_left_now's of the map in progress
+  std::size_t live_index_ = 0;
   std::chrono::steady_clock::time_point t0_;
   std::size_t current_ = 0, current_total_ = 0, done_before_ = 0;
   std::unique_ptr<pvdf::Progress> bar_;

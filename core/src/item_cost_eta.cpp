@@ -11,7 +11,35 @@ namespace pvdf {
 ItemCostEta::ItemCostEta(std::size_t n_kinds, double bin_width, int threads)
     : n_kinds_(std::max<std::size_t>(1, n_kinds)),
       bin_width_(bin_width > 0 ? bin_width : 1.0),
-      threads_(std::max(1, threads)) {}
+      threads_(std::max(1, threads)),
+      prior_cost_(n_kinds_, 0.0),
+      prior_weight_(n_kinds_, 0.0) {}
+
+void ItemCostEta::set_prior(std::size_t kind, double cpu_s_per_unit, double weight_units, double cpu_per_wall_s_per_thread) {
+  if (kind < n_kinds_ && std::isfinite(cpu_s_per_unit) && cpu_s_per_unit > 0 && std::isfinite(weight_units) && weight_units > 0) {
+    prior_cost_[kind] = cpu_s_per_unit;
+    prior_weight_[kind] = weight_units;
+  }
+  if (std::isfinite(cpu_per_wall_s_per_thread) && cpu_per_wall_s_per_thread > 0) prior_rate_ = cpu_per_wall_s_per_thread;
+}
+
+void ItemCostEta::queue_blocks(const std::vector<std::vector<std::size_t>>& blocks) {
+  for (const auto& b : blocks) {
+    std::vector<std::size_t> ids;
+    for (std::size_t id : b)
+      if (id < feature_.size()) ids.push_back(id);
+    if (!ids.empty()) queued_.push_back(std::move(ids));
+  }
+}
+
+void ItemCostEta::block_started(const std::vector<std::size_t>& items, double start_s) {
+  tracking_ = true;
+  InFlight b;
+  for (std::size_t id : items)
+    if (id < feature_.size() && !done_[id]) b.items.push_back(id);
+  b.start_s = start_s;
+  if (!b.items.empty()) in_flight_.push_back(std::move(b));
+}
 
 std::size_t ItemCostEta::plan(const std::vector<double>& features) {
   const std::size_t first = feature_.size();
@@ -34,6 +62,13 @@ std::size_t ItemCostEta::bin_of(double feature) const {
 
 void ItemCostEta::block_done(const std::vector<std::size_t>& items, const std::vector<std::vector<double>>& work,
                              double cpu_s, double start_s, double end_s) {
+  // The block is no longer in flight (matched by any of its items).
+  for (std::size_t f = 0; f < in_flight_.size();) {
+    const auto& fi = in_flight_[f].items;
+    const bool mine = std::any_of(items.begin(), items.end(), [&](std::size_t id) { return std::find(fi.begin(), fi.end(), id) != fi.end(); });
+    if (mine) in_flight_.erase(in_flight_.begin() + std::ptrdiff_t(f));
+    else ++f;
+  }
   std::vector<double> sum(n_kinds_, 0.0);
   for (std::size_t n = 0; n < items.size() && n < work.size(); ++n) {
     const std::size_t id = items[n];
@@ -81,6 +116,11 @@ void ItemCostEta::fit() {
         r[i] += a[i] * block_cpu_s_[b];
         for (std::size_t j = 0; j < n; ++j) M[i * n + j] += a[i] * a[j];
       }
+    }
+    for (std::size_t i = 0; i < n; ++i) {  // the priors: that many units done at their cost
+      const double w2 = prior_weight_[i] * prior_weight_[i];
+      M[i * n + i] += w2;
+      r[i] += w2 * prior_cost_[i];
     }
     for (std::size_t i = 0; i < n; ++i) {
       const double lambda = 1e-3 * M[i * n + i] + 1e-12;
@@ -135,45 +175,106 @@ void ItemCostEta::fit() {
   cost_ = k;
 }
 
-double ItemCostEta::seconds_left(double t_s) const {
-  if (block_cpu_s_.empty() || cost_.empty() || bin_items_.empty() || !(wall_done_s_ > 0)) return std::numeric_limits<double>::quiet_NaN();
-  double cpu_left = 0;
-  for (std::size_t id = 0; id < feature_.size(); ++id) {
-    if (done_[id]) continue;
-    // The nearest bin with items done (ties: the larger feature, i.e. farther from the clamp).
-    const std::size_t nb = bin_items_.size(), start = std::min(bin_of(feature_[id]), nb - 1);
-    std::size_t best = nb;
-    for (std::size_t d = 0; d < nb && best == nb; ++d) {
-      if (start + d < nb && bin_items_[start + d] > 0) best = start + d;
-      else if (d <= start && bin_items_[start - d] > 0) best = start - d;
-    }
-    if (best == nb) continue;
-    // The bin's work per unit of its items done (their units as set when done), times this item's
-    // units.
-    const double per = bin_units_[best] > 0 ? units_[id] / bin_units_[best] : 1.0 / double(bin_items_[best]);
-    for (std::size_t c = 0; c < n_kinds_; ++c) cpu_left += cost_[c] * bin_work_[best][c] * per;
+void ItemCostEta::add_predicted_work(std::size_t id, double scale, std::vector<double>& out) const {
+  const double units = units_[id];
+  // No item done, or the item farther from the clamp than every bin done: the work every unit needs.
+  const std::size_t nb = bin_items_.size(), b = bin_of(feature_[id]);
+  if (nb == 0 || b >= nb) {
+    out[0] += units * scale;
+    return;
   }
-  const double rate = cpu_per_wall_s();
-  if (!(rate > 0)) return std::numeric_limits<double>::quiet_NaN();
-  // Counted down from the last block's end: the blocks in flight have run since then.
-  const double left = cpu_left / rate - std::max(0.0, t_s - last_end_s_);
-  return std::max(0.0, left);
+  // The nearest bin with items done (ties: the larger feature, i.e. farther from the clamp).
+  std::size_t best = nb;
+  for (std::size_t d = 0; d < nb && best == nb; ++d) {
+    if (b + d < nb && bin_items_[b + d] > 0) best = b + d;
+    else if (d <= b && bin_items_[b - d] > 0) best = b - d;
+  }
+  if (best == nb) return;
+  // The bin's work per unit of its items done (their units as set when done), times this item's units.
+  const double per = bin_units_[best] > 0 ? units / bin_units_[best] : 1.0 / double(bin_items_[best]);
+  for (std::size_t c = 0; c < n_kinds_; ++c) out[c] += bin_work_[best][c] * per * scale;
+}
+
+double ItemCostEta::predicted_cpu_s(std::size_t id) const {
+  const std::vector<double>& k = cost_.empty() ? prior_cost_ : cost_;
+  std::vector<double> w(n_kinds_, 0.0);
+  add_predicted_work(id, 1.0, w);
+  double cpu = 0;
+  for (std::size_t c = 0; c < n_kinds_; ++c) cpu += k[c] * w[c];
+  return cpu;
+}
+
+double ItemCostEta::seconds_left(double t_s) const {
+  const bool fitted = !block_cpu_s_.empty() && !cost_.empty() && wall_done_s_ > 0;
+  if (!fitted && !(prior_rate_ > 0 && prior_weight_[0] > 0)) return std::numeric_limits<double>::quiet_NaN();
+  const double per_thread = fitted ? cpu_done_s_ / wall_done_s_ : prior_rate_;  // CPU-s per wall-s of one thread
+  if (!(per_thread > 0)) return std::numeric_limits<double>::quiet_NaN();
+  std::vector<char> flying(feature_.size(), 0);
+  for (const auto& b : in_flight_)
+    for (std::size_t id : b.items) flying[id] = 1;
+  double cpu_left = 0;
+  for (std::size_t id = 0; id < feature_.size(); ++id)
+    if (!done_[id] && !flying[id]) cpu_left += predicted_cpu_s(id);
+  if (!tracking_) {
+    // Counted down from the last block's end: the blocks in flight have run since then.
+    const double left = cpu_left / (per_thread * double(threads_)) - (fitted ? std::max(0.0, t_s - last_end_s_) : 0.0);
+    return std::max(0.0, left);
+  }
+  // Each block in flight holds its thread for its predicted time less its run so far, and at least
+  // overrun_share × its run so far.
+  std::vector<double> free_s;  // when each thread is free, from now
+  for (const auto& b : in_flight_) {
+    double cpu = 0;
+    for (std::size_t id : b.items)
+      if (!done_[id]) cpu += predicted_cpu_s(id);
+    const double run_s = std::max(0.0, t_s - b.start_s);
+    free_s.push_back(std::max(cpu / per_thread - run_s, overrun_share * run_s));
+  }
+  free_s.resize(std::max<std::size_t>(free_s.size(), std::size_t(threads_)), 0.0);
+  // The blocks queued, in order, each to the thread free first (not yet started: no item done or
+  // in flight); their items are taken off the loose ones.
+  std::vector<char> queued(feature_.size(), 0);
+  for (const auto& b : queued_) {
+    bool waiting = true;
+    for (std::size_t id : b) waiting = waiting && !done_[id] && !flying[id];
+    if (!waiting) continue;
+    double cpu = 0;
+    for (std::size_t id : b) {
+      cpu += predicted_cpu_s(id);
+      queued[id] = 1;
+    }
+    *std::min_element(free_s.begin(), free_s.end()) += cpu / per_thread;
+  }
+  double loose_cpu = 0;
+  for (std::size_t id = 0; id < feature_.size(); ++id)
+    if (!done_[id] && !flying[id] && !queued[id]) loose_cpu += predicted_cpu_s(id);
+  double sum_s = loose_cpu / per_thread, last_s = 0;
+  for (double f : free_s) {
+    sum_s += f;
+    last_s = std::max(last_s, f);
+  }
+  return std::max(last_s, sum_s / double(free_s.size()));
 }
 
 double ItemCostEta::cpu_s_per_item(const std::vector<std::size_t>& kinds) const {
-  std::size_t items = 0;
-  for (std::size_t n : bin_items_) items += n;
-  if (items == 0 || cost_.size() != n_kinds_) return std::numeric_limits<double>::quiet_NaN();
+  if (feature_.empty()) return std::numeric_limits<double>::quiet_NaN();
+  const bool fitted = !block_cpu_s_.empty() && cost_.size() == n_kinds_;
+  if (!fitted && !(prior_weight_[0] > 0)) return std::numeric_limits<double>::quiet_NaN();
+  const std::vector<double>& k = fitted ? cost_ : prior_cost_;
+  // The work of the items done (the bins' sums) and the predicted work of the others.
+  std::vector<double> work(n_kinds_, 0.0);
+  for (const auto& w : bin_work_)
+    for (std::size_t c = 0; c < n_kinds_; ++c) work[c] += w[c];
+  for (std::size_t id = 0; id < feature_.size(); ++id)
+    if (!done_[id]) add_predicted_work(id, 1.0, work);
   double cpu = 0;
-  for (std::size_t c : kinds) {
-    if (c >= n_kinds_) continue;
-    for (const auto& w : bin_work_) cpu += cost_[c] * w[c];
-  }
-  return cpu / double(items);
+  for (std::size_t c : kinds)
+    if (c < n_kinds_) cpu += k[c] * work[c];
+  return cpu / double(feature_.size());
 }
 
 double ItemCostEta::cpu_per_wall_s() const {
-  if (!(wall_done_s_ > 0)) return std::numeric_limits<double>::quiet_NaN();
+  if (!(wall_done_s_ > 0)) return prior_rate_ > 0 ? prior_rate_ * double(threads_) : std::numeric_limits<double>::quiet_NaN();
   return cpu_done_s_ / wall_done_s_ * double(threads_);  // each thread's CPU-s per wall-s × threads
 }
 

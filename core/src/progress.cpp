@@ -60,6 +60,14 @@ void Progress::heartbeat() {
                                       std::chrono::duration<double>(interval_s_));
     if (stop_.wait_until(lock, due, [this] { return finished_; })) break;
     if (std::chrono::steady_clock::now() < due) continue;  // a line was printed meanwhile
+    if (refresh_) {  // the caller's ETA as of now, computed without our lock (it takes its own)
+      const std::function<void()> refresh = refresh_;
+      lock.unlock();
+      refresh();
+      lock.lock();
+      if (finished_) break;
+      if (std::chrono::steady_clock::now() < due) continue;
+    }
     last_draw_ = std::chrono::steady_clock::now();
     print_line(false);
   }
@@ -105,6 +113,11 @@ void Progress::set_eta_s(double seconds_left) {
   std::lock_guard<std::mutex> lock(mutex_);
   eta_hint_s_ = std::isfinite(seconds_left) && seconds_left >= 0 ? seconds_left : -1;
   eta_hint_at_ = std::chrono::steady_clock::now();
+}
+
+void Progress::set_refresh(std::function<void()> refresh) {
+  std::lock_guard<std::mutex> lock(mutex_);
+  refresh_ = std::move(refresh);
 }
 
 void Progress::finish() {

@@ -87,7 +87,11 @@ double StagedEta::seconds_left(double t_s) const {
   double left = 0;
   if (current_ < stages_.size()) {
     const Stage& c = stages_[current_];
-    if (c.own_left_s >= 0) {
+    // A stage's own estimate before its first items (a prior from its setup) yields to the seconds
+    // per item the stages before it measured (at the machine's load as it was, not the setup's).
+    bool measured_before = false;
+    for (std::size_t k = 0; k < current_; ++k) measured_before = measured_before || stages_[k].item_s >= 0;
+    if (c.own_left_s >= 0 && (c.reported || !measured_before)) {
       left += std::max(0.0, c.own_left_s - (t_s - c.own_at_s));
     } else if (c.rate() > 0) {
       const double rest = double(c.planned > c.last_done ? c.planned - c.last_done : 0) / c.rate();

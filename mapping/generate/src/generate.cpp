@@ -19,8 +19,18 @@
 #include <cmath>
 #include <cstdlib>
 
+#include <time.h>
+
 namespace pvdf::mapping {
 namespace detail {
+namespace {
+// CPU time of the calling thread (s).
+double thread_cpu_now_s() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+}
+}  // namespace
 
 ChargeMap Generator::run(MapReport& report) {
   const auto t_start = std::chrono::steady_clock::now();
@@ -30,12 +40,39 @@ ChargeMap Generator::run(MapReport& report) {
   build_grid();
   layout_ = Layout{o_.forces_N.size(), scene_.electrodes.size()};
   init_map();
+  const double setup_wall0_s = eta_clock_s(), setup_cpu0_s = thread_cpu_now_s();
   setup_sweeps();
+  const double setup_wall_s = eta_clock_s() - setup_wall0_s, setup_cpu_s = thread_cpu_now_s() - setup_cpu0_s;
   hash_ = run_hash();
   resume();
   last_checkpoint_ = std::chrono::steady_clock::now();
   scaling_ = o_.use_force_scaling && layout_.nf > 1;
   count_progress_total();
+  // The time left before any row is done: each position's solves at the setup checks' CPU seconds
+  // each (mesh included), at the setup's CPU per wall second on every thread (docs/design.md §6).
+  if (o_.n_setup_checks > 0 && setup_cpu_s > 0 && setup_wall_s > 0) {
+    time_left_.set_prior(std::size_t(fem::SweepModel::cheap), setup_cpu_s / o_.n_setup_checks, double(o_.n_setup_checks),
+                         setup_cpu_s / setup_wall_s);
+    const double now_s = eta_clock_s();
+    if (o_.common_seconds_per_position) {
+      o_.common_seconds_per_position(time_left_.cpu_s_per_item({std::size_t(fem::SweepModel::cheap), std::size_t(fem::SweepModel::clamp_layer)}) /
+                                     time_left_.cpu_per_wall_s());
+    }
+    if (o_.time_left) o_.time_left(time_left_.seconds_left(now_s));
+  }
+  // The time left as of any moment, for the caller's heartbeat; withdrawn however run() ends.
+  struct Withdraw {
+    const std::function<void(std::function<double()>)>& f;
+    ~Withdraw() {
+      if (f) f({});
+    }
+  } withdraw{o_.time_left_now};
+  if (o_.time_left_now) {
+    o_.time_left_now([this] {
+      std::lock_guard<std::mutex> lock(mutex_);
+      return time_left_.seconds_left(eta_clock_s());
+    });
+  }
 
   bool stopped_anywhere = run_scaling_checks(report);      // phase A
   if (!stopped_anywhere) {

@@ -9,6 +9,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <limits>
 #include <thread>
@@ -56,6 +58,13 @@ std::vector<std::size_t> spread_order(std::size_t n) {
     gaps.swap(next);
   }
   return order;
+}
+
+// PVDF_ETA_TRACE set: one stderr line per row committed and per run_blocks call, with what the
+// time left was computed from, so that a run's ETA can be replayed offline (docs/design.md §6).
+bool eta_trace() {
+  static const bool on = std::getenv("PVDF_ETA_TRACE") != nullptr;
+  return on;
 }
 
 }  // namespace
@@ -224,20 +233,55 @@ void Generator::commit(const std::vector<double>& records, std::size_t n_positio
     const double cpu_s = time_left_.cpu_s_per_item({std::size_t(fem::SweepModel::cheap), std::size_t(fem::SweepModel::clamp_layer)});
     o_.common_seconds_per_position(cpu_s / time_left_.cpu_per_wall_s());
   }
-  if (o_.time_left) o_.time_left(time_left_.seconds_left(now_s));
+  const double left_s = time_left_.seconds_left(now_s);
+  if (o_.time_left) o_.time_left(left_s);
+  if (eta_trace()) {
+    std::string line = "eta-trace row t=" + std::to_string(now_s) + " start=" + std::to_string(start_s) +
+                       " cpu=" + std::to_string(cpu_s) + " left=" + std::to_string(left_s) + " items=";
+    for (std::size_t n = 0; n < items.size(); ++n) {
+      line += std::to_string(items[n]) + ":" + std::to_string(time_left_.feature(items[n])) + ":" +
+              std::to_string(time_left_.units(items[n]));
+      for (double w : work[n]) line += ":" + std::to_string(int(w));
+      line += ";";
+    }
+    std::fprintf(stderr, "%s\n", line.c_str());
+  }
 }
 
 void Generator::run_blocks(const std::vector<Block>& blocks) {
-  // The time left learns which positions solve every force level and which the largest only.
-  for (const auto& block : blocks) {
-    for (const auto& t : block) {
-      const std::size_t p = t.j * grid_.nx + t.i;
-      if (p < time_left_id_.size() && time_left_id_[p] != std::size_t(-1)) {
-        time_left_.set_units(time_left_id_[p], t.all_levels ? double(layout_.nf) : 1.0);
+  const std::vector<std::size_t> order = spread_order(blocks.size());
+  {
+    // The time left learns which positions solve every force level and which the largest only, and
+    // the rows in the order the threads take them.
+    std::lock_guard<std::mutex> lock(mutex_);  // the heartbeat may ask for the time left meanwhile
+    for (const auto& block : blocks) {
+      for (const auto& t : block) {
+        const std::size_t p = t.j * grid_.nx + t.i;
+        if (p < time_left_id_.size() && time_left_id_[p] != std::size_t(-1)) {
+          time_left_.set_units(time_left_id_[p], t.all_levels ? double(layout_.nf) : 1.0);
+        }
       }
     }
+    std::vector<std::vector<std::size_t>> queued;
+    for (std::size_t b : order) {
+      queued.emplace_back();
+      for (const auto& t : blocks[b]) {
+        const std::size_t p = t.j * grid_.nx + t.i;
+        if (p < time_left_id_.size() && time_left_id_[p] != std::size_t(-1)) queued.back().push_back(time_left_id_[p]);
+      }
+    }
+    time_left_.queue_blocks(queued);
   }
-  const std::vector<std::size_t> order = spread_order(blocks.size());
+  if (eta_trace()) {
+    const fem::SweepTiming t0 = sweeps_[0]->timing();
+    std::string line = "eta-trace blocks t=" + std::to_string(eta_clock_s()) + " n=" + std::to_string(blocks.size()) +
+                       " threads=" + std::to_string(threads_) + " setup_s=" + std::to_string(sweeps_[0]->setup().setup_s) +
+                       " solve_cpu_s=" + std::to_string(solve_cpu_s_) + " newton=" + std::to_string(t0.newton_iterations) +
+                       " plan=";
+    for (std::size_t id = 0; id < time_left_.size(); ++id)
+      line += std::to_string(time_left_.feature(id)) + ":" + std::to_string(time_left_.units(id)) + ";";
+    std::fprintf(stderr, "%s\n", line.c_str());
+  }
   std::atomic<std::size_t> next{0};
   std::exception_ptr error;
   std::mutex error_mutex;
@@ -259,6 +303,15 @@ void Generator::run_blocks(const std::vector<Block>& blocks) {
         const std::size_t b = order[k];
         bool abandoned = false;
         const double start_s = eta_clock_s(), cpu0_s = thread_cpu_s();
+        {
+          std::vector<std::size_t> ids;
+          for (const auto& task : blocks[b]) {
+            const std::size_t p = task.j * grid_.nx + task.i;
+            if (p < time_left_id_.size() && time_left_id_[p] != std::size_t(-1)) ids.push_back(time_left_id_[p]);
+          }
+          std::lock_guard<std::mutex> lock(mutex_);
+          time_left_.block_started(ids, start_s);
+        }
         solve_block(*sweeps_[std::size_t(t)], blocks[b], records, abandoned);
         if (abandoned) break;
         commit(records, blocks[b].size(), thread_cpu_s() - cpu0_s, start_s);

@@ -14,18 +14,30 @@ namespace pvdf {
 /// The model (docs/design.md §6):
 /// - cost: an item that needed n_c units of work kind c costs Σ_c n_c k_c CPU-seconds; the k_c ≥ 0
 ///   are fitted by least squares to the CPU seconds of the blocks done (a small ridge pulls them
-///   toward the mean cost per unit of work, so that one block already gives an answer);
+///   toward the mean cost per unit of work, so that one block already gives an answer; a prior,
+///   set_prior, enters as that many units of its kind done at its cost);
 /// - work of an item still to do: its expected number of units (set_units; default 1: e.g. the
 ///   force levels a map position will solve) × the work of each kind per unit of the items done
 ///   whose feature lies in the same bin (bins of `bin_width` in the feature), else in the nearest
 ///   bin that has items done — so items that do three units each (a map's force-scaling checks) do
 ///   not make the one-unit items to come look three times as dear. A unit may need more than one
 ///   piece of work (a map position's sweep solve and a rim-model solve tried on top of it): all of
-///   it is counted, since work left out would be charged to the kinds that are counted;
+///   it is counted, since work left out would be charged to the kinds that are counted. Kind 0 is
+///   the work every unit needs (one each: a map's sweep solve); the other kinds grow toward a small
+///   feature (the clamp), so an item whose bin lies beyond every bin done (farther from the clamp
+///   than any item done) is given kind 0 alone, not the extra work of the nearest bin done;
 /// - wall time: the CPU seconds left over the throughput `threads` × e, with e the CPU seconds
 ///   per wall second of the blocks done (their CPU over their own wall durations), which holds the
-///   load of the machine as it was.
-/// NaN until a block is done. Not thread-safe (the caller serializes).
+///   load of the machine as it was (before any block: the prior's, set_prior);
+/// - blocks in flight (block_started): their items are not counted with the items to do; each
+///   holds its thread for its predicted wall time less the time it has run, and at least
+///   `overrun_share` × the time it has run (a block that outruns its prediction is likely to be
+///   dearer still: it is not counted as done); the time left is the larger of the longest of
+///   them and (their remainders + the items to do) spread over the threads; with the blocks queued
+///   (queue_blocks), each thread takes the next block queued when it is free, at its predicted
+///   time, and the time left is when the last thread ends. Without block_started, the time left is
+///   counted down from the last block's end.
+/// NaN until a block is done or a prior is set. Not thread-safe (the caller serializes).
 class ItemCostEta {
  public:
   /// `n_kinds`: kinds of work an item may need; `bin_width`: of the feature (> 0); `threads`:
@@ -40,21 +52,43 @@ class ItemCostEta {
   /// work each needed ([item][kind], counts), and the CPU seconds it took.
   void block_done(const std::vector<std::size_t>& items, const std::vector<std::vector<double>>& work,
                   double cpu_s, double start_s, double end_s);
-  /// Seconds left at wall time `t_s` (NaN until a block is done).
+  /// The blocks the items will be solved in, in the order the threads take them (each thread the
+  /// next when it is free): the time left then follows that schedule (a dear block taken last runs
+  /// alone). Items in no block queued are spread over the threads.
+  void queue_blocks(const std::vector<std::vector<std::size_t>>& blocks);
+  /// A block of planned items (ids from plan) starts at wall time `start_s` on one thread.
+  void block_started(const std::vector<std::size_t>& items, double start_s);
+  /// A prior for kind `kind`: `cpu_s_per_unit` as if `weight_units` units of it had been done at
+  /// that cost (e.g. the setup checks' CPU seconds per solve, the number of checks), and the CPU
+  /// seconds per wall second of one thread until a block is done (`cpu_per_wall_s_per_thread`).
+  void set_prior(std::size_t kind, double cpu_s_per_unit, double weight_units, double cpu_per_wall_s_per_thread);
+  /// Seconds left at wall time `t_s` (NaN until a block is done or a prior is set).
   double seconds_left(double t_s) const;
+  /// The share of its elapsed time a block in flight that has outrun its prediction is still
+  /// expected to take.
+  static constexpr double overrun_share = 0.5;
   /// The fitted CPU seconds per unit of each kind of work (empty until a block is done).
   std::vector<double> cost_per_kind() const { return cost_; }
-  /// The CPU seconds per item done of the work of `kinds` alone: Σ over those kinds of the fitted
-  /// cost × the items' work of that kind, over the items done (NaN until a block is done). E.g. a
-  /// map's sweep and clamp-layer solves per position, which another layout of the film needs too.
+  /// The CPU seconds per planned item of the work of `kinds` alone: Σ over those kinds of the
+  /// fitted cost × the items' work of that kind (as done, or as predicted for the items to do),
+  /// over all planned items (NaN until a block is done or a prior is set). E.g. a map's sweep and
+  /// clamp-layer solves per position, which another layout of the same film needs too: over the
+  /// planned positions, not over those done, which (rows near the clamp first) are not a sample.
   double cpu_s_per_item(const std::vector<std::size_t>& kinds) const;
   /// The CPU seconds per wall second of all threads: `threads` × the blocks' CPU over their own
-  /// wall durations (NaN until a block is done).
+  /// wall durations (before any block: the prior's; NaN without either).
   double cpu_per_wall_s() const;
+  /// Planned items, and an item's feature and expected units (diagnostics, e.g. a trace to replay).
+  std::size_t size() const { return feature_.size(); }
+  double feature(std::size_t id) const { return id < feature_.size() ? feature_[id] : 0.0; }
+  double units(std::size_t id) const { return id < units_.size() ? units_[id] : 0.0; }
 
  private:
   void fit();
   std::size_t bin_of(double feature) const;
+  /// Predicted work per kind of item `id` (as if not done), added × `scale` to `out`.
+  void add_predicted_work(std::size_t id, double scale, std::vector<double>& out) const;
+  double predicted_cpu_s(std::size_t id) const;  ///< Σ_c cost × add_predicted_work
   std::size_t n_kinds_;
   double bin_width_;
   std::vector<double> feature_;
@@ -71,6 +105,15 @@ class ItemCostEta {
   double cpu_done_s_ = 0, wall_done_s_ = 0;
   int threads_ = 1;
   double last_end_s_ = 0;
+  struct InFlight {
+    std::vector<std::size_t> items;
+    double start_s = 0;
+  };
+  std::vector<InFlight> in_flight_;
+  std::vector<std::vector<std::size_t>> queued_;  ///< queue_blocks', in order
+  bool tracking_ = false;  ///< block_started was called: the blocks in flight are known
+  std::vector<double> prior_cost_, prior_weight_;
+  double prior_rate_ = 0;  ///< CPU-s per wall-s of one thread before any block (0: none)
 };
 
 }  // namespace pvdf

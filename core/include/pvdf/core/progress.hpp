@@ -5,6 +5,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <cstddef>
+#include <functional>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -35,6 +36,10 @@ class Progress {
   /// setup and its own rate), in place of the items-left-over-rate one: the seconds left as of now,
   /// counted down until the next call. NaN or negative returns to the rate-based ETA.
   void set_eta_s(double seconds_left);
+  /// Called by the heartbeat (plain lines) before each of its lines, without the progress's lock
+  /// held, so that it may call set_eta_s with an ETA computed as of now (e.g. rows in flight that
+  /// outrun their prediction). Empty: none.
+  void set_refresh(std::function<void()> refresh);
   /// Final line (see the class comment); idempotent. Stops the heartbeat.
   void finish();
   /// True when stderr is a terminal (or forced): the bar; false: plain lines.
@@ -64,6 +69,7 @@ class Progress {
   double eta_hint_s_ = -1;  ///< set_eta_s's value (< 0: none)
   std::chrono::steady_clock::time_point eta_hint_at_;
   std::mutex mutex_;  ///< guards the counts, the clocks and stderr writes
+  std::function<void()> refresh_;  ///< set_refresh's (guarded by mutex_; called without it)
   std::condition_variable stop_;
   std::thread heartbeat_;  ///< non-terminal only
 };

@@ -22,7 +22,9 @@ namespace pvdf {
 /// 1 / the pooled rate of the stages seen (their items over the time between their first and last
 /// reports); the current stage's items at its own rate once measured, else as a stage to come; a
 /// stage that states its own time left (stage_seconds_left) is taken at its word while it is
-/// current. NaN until one rate or seconds per item is known.
+/// current, except before its first items when a stage before it stated seconds per item (its own
+/// estimate then is a prior from its setup, the earlier stages' a measurement under the load as it
+/// is). NaN until one rate or seconds per item is known.
 /// Times are seconds on any monotone clock the caller chooses.
 class StagedEta {
  public:

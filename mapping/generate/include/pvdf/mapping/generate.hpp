@@ -144,6 +144,12 @@ struct MapOptions {
   /// they belong to where its electrodes meet the clamp. `pvdfkit design` predicts the maps still to
   /// come with it (docs/design.md §6). NaN until known.
   std::function<void(double seconds_per_position)> common_seconds_per_position;
+  /// Called from the thread that called generate_map: when the rows start, with a function (safe
+  /// to call from any thread while the map runs) that returns time_left's estimate as of the call,
+  /// the rows in flight counted at their time so far (pvdf::ItemCostEta::block_started); and with
+  /// an empty function before generate_map returns or throws. A caller's heartbeat refreshes its
+  /// ETA with it between rows. Do not call it while holding a lock the other callbacks take.
+  std::function<void(std::function<double()> seconds_left_now)> time_left_now;
   /// 1-σ charge noise per channel written into the map (C); empty = 0.05 pC each.
   std::vector<double> noise_C;
   /// Free text stored in the map.
