@@ -109,6 +109,7 @@ ChargeAtlas generate_atlas(const pvdf::Scene& scene, const AtlasOptions& o, Atla
   so.n_setup_checks = o.n_setup_checks;
   so.cell_m = o.cell_m;
   so.fe_size_m = o.fe_size_m;
+  so.keep_out_m = o.keep_out_m;
   int threads = o.threads > 0 ? o.threads : int(std::max(1u, std::thread::hardware_concurrency()));
   threads = std::max(1, std::min<int>(threads, int(ny)));
   std::vector<std::unique_ptr<pvdf::fem::AtlasSweep>> sweeps;
@@ -118,12 +119,14 @@ ChargeAtlas generate_atlas(const pvdf::Scene& scene, const AtlasOptions& o, Atla
   atlas.grid = first.grid();
   atlas.geometry = first.cell_geometry();
   atlas.fe_size_m = first.fe_size_m();
+  atlas.keep_out_m = first.keep_out_m();
   atlas.n_dofs = setup.n_dofs;
   atlas.model = pvdf::fem::model_name(setup.model);
   atlas.model_reason = first.model_reason();
   atlas.error_estimator =
       "per press: the sweep's adjoint-weighted residual estimates (discretization + bending left out, by magnitude) of the "
-      "charges of the reference electrodes Q1..Q4 (the film's quadrants); estimated_relative_error = max_k err_k / max_k |Q_k|";
+      "charges of the reference electrodes Q1..Q4 (the quadrants of the film less its keep-out band along the clamp); "
+      "estimated_relative_error = max_k err_k / max_k |Q_k|";
   atlas.integration_error_rule =
       "per electrode and press: sum over the atlas cells the electrode covers partly of |linear - constant reconstruction| "
       "of its share (fully covered cells are exact)";
@@ -250,6 +253,7 @@ ChargeAtlas generate_atlas(const pvdf::Scene& scene, const AtlasOptions& o, Atla
     }
     r.first_failure = first_failure;
     r.n_solved_positions = n_canonical;
+    for (const auto& s : sweeps) r.n_rim_solves += std::size_t(s->timing().rim_solves);
     r.mirror_x = mirror_x;
     r.mirror_y = mirror_y;
     r.setup_s = setup_s;
