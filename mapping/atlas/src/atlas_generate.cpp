@@ -158,41 +158,81 @@ ChargeAtlas generate_atlas(const pvdf::Scene& scene, const AtlasOptions& o, Atla
   std::mutex report_mutex;
   std::string first_failure;
   std::exception_ptr error;
+  // One press, all levels, at (i, j), warm from along[f] (or the level below); stores the result
+  // and leaves the converged states in along. `fresh`: the warm start first makes the sweep forget
+  // its earlier solves (SweepState::fresh_history), so the press depends on nothing else.
+  auto press_at = [&](pvdf::fem::AtlasSweep& sweep, std::size_t i, std::size_t j, std::vector<pvdf::fem::SweepState>& along,
+                      bool fresh) {
+    for (std::size_t f = 0; f < nf; ++f) {
+      pvdf::fem::SweepState* warm = !along[f].dofs.empty() ? &along[f] : (f > 0 && !along[f - 1].dofs.empty() ? &along[f - 1] : nullptr);
+      if (warm && fresh) warm->fresh_history = true;
+      pvdf::fem::SweepState next;
+      const pvdf::fem::AtlasPress press = sweep.solve(atlas.x_m[i], atlas.y_m[j], forces[f], warm, &next);
+      if (warm) warm->fresh_history = false;
+      const std::size_t p = atlas.point(f, j, i);
+      const auto& sol = press.solution;
+      if (!pvdf::fem::usable(sol.status)) {
+        atlas.status[p] = std::uint8_t(PointStatus::not_converged);
+        std::lock_guard<std::mutex> lock(report_mutex);
+        if (first_failure.empty())
+          first_failure = "(" + num(atlas.x_m[i]) + ", " + num(atlas.y_m[j]) + ") m, " + num(forces[f]) + " N: " + sol.message;
+        along[f] = {};
+        continue;
+      }
+      atlas.status[p] = std::uint8_t(PointStatus::ok);
+      std::copy(press.moments.begin(), press.moments.end(), atlas.moments.begin() + long(p * nc * 3));
+      atlas.deflection_at_load_m[p] = sol.deflection_at_load_m;
+      atlas.estimated_relative_error[p] = sol.estimated_relative_error;
+      for (std::size_t k = 0; k < nr && k < sol.charge_C.size(); ++k) {
+        atlas.reference_charge_C[p * nr + k] = sol.charge_C[k];
+        atlas.reference_charge_error_C[p * nr + k] = k < sol.charge_error_C.size() ? sol.charge_error_C[k] : nan;
+      }
+      along[f] = std::move(next);
+    }
+    const std::size_t d = ++done;
+    if (o.progress) {
+      std::lock_guard<std::mutex> lock(report_mutex);
+      o.progress(d, n_canonical);
+    }
+  };
+  // 3a. The rows' first positions as one chain on the first sweep, before the threads: from the row
+  // nearest y = 0 (solved from the flat film) outward both ways, each warm from its neighbour row's
+  // (a cold solve on the atlas's fine mesh is a long continuation: on seed 001 a row start cost as
+  // much as a whole row of warm presses). Each chain press and each row's next press forget the
+  // sweep's history, so the atlas does not depend on the number of threads.
+  std::vector<std::size_t> row_first(ny, nx);
+  for (std::size_t j = 0; j < ny; ++j)
+    for (std::size_t i = 0; i < nx && row_first[j] == nx; ++i)
+      if (atlas.mask[j * nx + i] && canonical(i, j)) row_first[j] = i;
+  std::vector<std::vector<pvdf::fem::SweepState>> row_start(ny, std::vector<pvdf::fem::SweepState>(nf));
+  {
+    std::size_t centre = ny;
+    for (std::size_t j = 0; j < ny; ++j)
+      if (row_first[j] < nx && (centre == ny || std::abs(atlas.y_m[j]) < std::abs(atlas.y_m[centre]))) centre = j;
+    if (centre < ny) {
+      std::vector<pvdf::fem::SweepState> along(nf);
+      press_at(*sweeps.front(), row_first[centre], centre, along, true);
+      row_start[centre] = along;
+      for (int dir : {+1, -1}) {
+        along = row_start[centre];
+        for (long j = long(centre) + dir; j >= 0 && j < long(ny); j += dir) {
+          if (row_first[std::size_t(j)] >= nx) continue;
+          press_at(*sweeps.front(), row_first[std::size_t(j)], std::size_t(j), along, true);
+          row_start[std::size_t(j)] = along;
+        }
+      }
+    }
+  }
   auto work = [&](pvdf::fem::AtlasSweep& sweep) {
     try {
       for (std::size_t j = next_row++; j < ny; j = next_row++) {
-        std::vector<pvdf::fem::SweepState> along(nf);  // last state of the row at each level
-        for (std::size_t i = 0; i < nx; ++i) {
+        if (row_first[j] >= nx) continue;
+        std::vector<pvdf::fem::SweepState> along = std::move(row_start[j]);  // last state of the row at each level
+        bool fresh = true;
+        for (std::size_t i = row_first[j] + 1; i < nx; ++i) {
           if (!atlas.mask[j * nx + i] || !canonical(i, j)) continue;
-          for (std::size_t f = 0; f < nf; ++f) {
-            const pvdf::fem::SweepState* warm = !along[f].dofs.empty() ? &along[f] : (f > 0 && !along[f - 1].dofs.empty() ? &along[f - 1] : nullptr);
-            pvdf::fem::SweepState next;
-            const pvdf::fem::AtlasPress press = sweep.solve(atlas.x_m[i], atlas.y_m[j], forces[f], warm, &next);
-            const std::size_t p = atlas.point(f, j, i);
-            const auto& sol = press.solution;
-            if (!pvdf::fem::usable(sol.status)) {
-              atlas.status[p] = std::uint8_t(PointStatus::not_converged);
-              std::lock_guard<std::mutex> lock(report_mutex);
-              if (first_failure.empty())
-                first_failure = "(" + num(atlas.x_m[i]) + ", " + num(atlas.y_m[j]) + ") m, " + num(forces[f]) + " N: " + sol.message;
-              along[f] = {};
-              continue;
-            }
-            atlas.status[p] = std::uint8_t(PointStatus::ok);
-            std::copy(press.moments.begin(), press.moments.end(), atlas.moments.begin() + long(p * nc * 3));
-            atlas.deflection_at_load_m[p] = sol.deflection_at_load_m;
-            atlas.estimated_relative_error[p] = sol.estimated_relative_error;
-            for (std::size_t k = 0; k < nr && k < sol.charge_C.size(); ++k) {
-              atlas.reference_charge_C[p * nr + k] = sol.charge_C[k];
-              atlas.reference_charge_error_C[p * nr + k] = k < sol.charge_error_C.size() ? sol.charge_error_C[k] : nan;
-            }
-            along[f] = std::move(next);
-          }
-          const std::size_t d = ++done;
-          if (o.progress) {
-            std::lock_guard<std::mutex> lock(report_mutex);
-            o.progress(d, n_canonical);
-          }
+          press_at(sweep, i, j, along, fresh);
+          fresh = false;
         }
       }
     } catch (...) {
