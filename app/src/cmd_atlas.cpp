@@ -26,6 +26,7 @@ struct AtlasCommandOptions {
   double cell_m = 0.001;
   double fe_size_m = 0;
   double rim_margin_m = 0;
+  double keep_out_m = 0.001;
   int threads = 0;
   int setup_checks = 3;
   bool json = false;
@@ -46,6 +47,7 @@ int run_atlas(const AtlasCommandOptions& o) {
                            pvdf::format_g(2 * scene.probe.radius_m) + " m, two probe radii");
   }
   options.rim_margin_m = o.rim_margin_m;
+  options.keep_out_m = o.keep_out_m;
   options.threads = o.threads;
   options.n_setup_checks = o.setup_checks;
   options.description = "pvdfkit atlas " + o.scene_path;
@@ -73,6 +75,8 @@ int run_atlas(const AtlasCommandOptions& o) {
                 "(%zu presses above the tolerance %g)\n",
                 atlas.n_dofs, 1e3 * atlas.fe_size_m, 100 * report.estimated_relative_error, report.n_tolerance_not_met,
                 atlas.tolerance);
+    std::printf("served: electrodes at least %g mm inside the clamp; %zu presses solved again by the rim model\n",
+                1e3 * atlas.keep_out_m, report.n_rim_solves);
     std::printf("%d thread(s), setup %.1f s, %.1f s in all\n", report.threads, report.setup_s, report.wall_s);
   }
   if (report.n_failed > 0) {
@@ -105,6 +109,10 @@ PVDF_COMMAND(36, [](CLI::App& root) {
       ->check(pvdf::app::number_in(0, 0.05, "m"));
   sub->add_option("--rim-margin-m", o->rim_margin_m, "No probe centres closer than this to the rim (m) (default 0: 2 x probe radius)")
       ->check(pvdf::app::number_in(0, 1, "m"));
+  sub->add_option("--keep-out-m", o->keep_out_m,
+                  "Electrodes are served at least this far inside the clamp (m); `map --atlas` refuses layouts reaching "
+                  "closer (default 0.001, the design's --clamp-margin-m default; 0 = anywhere)")
+      ->check(pvdf::app::number_in(0, 0.1, "m (1 mm is 0.001)"));
   sub->add_option("--threads", o->threads, "Worker threads (default 0: the cores)")->check(pvdf::app::integer_in(0, 1024));
   sub->add_option("--setup-checks", o->setup_checks,
                   "Probe positions at which the setup evaluates its error estimate to size the mesh, 0-3 (default 3)")

@@ -54,12 +54,13 @@ AtlasGrid atlas_grid_for(const pvdf::FilmOutline& outline, double cell_m) {
 
 namespace {
 
-// The film cut into its four quadrants (polygons: centre, then the rim from one axis to the next,
-// vertices on the outline so that the chords stay inside); a non-circular film is cut by its
-// bounding box's quadrants clipped nowhere (the FE integrals see only the film).
-std::vector<pvdf::Electrode> quadrants(const pvdf::FilmOutline& outline) {
+// The served region cut into its four quadrants (polygons: centre, then the outline shrunk by the
+// keep-out band from one axis to the next, vertices on that shrunk outline so that the chords stay
+// inside it); a non-circular film is cut by its bounding box's quadrants clipped nowhere (the FE
+// integrals see only the film).
+std::vector<pvdf::Electrode> quadrants(const pvdf::FilmOutline& outline, double keep_out_m) {
   std::vector<pvdf::Electrode> out;
-  const int n_arc = 16;
+  const int n_arc = 32;
   for (int k = 0; k < 4; ++k) {
     pvdf::Electrode e;
     e.name = "Q" + std::to_string(k + 1);
@@ -68,11 +69,11 @@ std::vector<pvdf::Electrode> quadrants(const pvdf::FilmOutline& outline) {
     for (int s = 0; s <= n_arc; ++s) {
       const double t = 0.5 * pvdf::pi * (k + double(s) / n_arc);
       const pvdf::Point2 dir{std::cos(t), std::sin(t)};
-      // Walk out to the outline along dir (bisection on contains): the vertex on the rim.
+      // Walk out to the shrunk outline along dir (bisection on contains): the vertex there.
       double lo = 0, hi = 2 * outline.characteristic_radius_m() + 1e-9;
       for (int it = 0; it < 60; ++it) {
         const double mid = 0.5 * (lo + hi);
-        (outline.contains({mid * dir[0], mid * dir[1]}) ? lo : hi) = mid;
+        (outline.contains({mid * dir[0], mid * dir[1]}, keep_out_m) ? lo : hi) = mid;
       }
       e.vertices_m.push_back({lo * dir[0], lo * dir[1]});
     }
@@ -81,36 +82,103 @@ std::vector<pvdf::Electrode> quadrants(const pvdf::FilmOutline& outline) {
   return out;
 }
 
+// A FilmSolver on the mesh SweepEngine builds for (sizes, bending): the construction of
+// sweep_engine.cpp's constructor, so that the DOF numbering is the engine's (checked by the caller).
+std::unique_ptr<detail::FilmSolver> engine_mesh_copy(const pvdf::Scene& scene, const Options& solver, Model model,
+                                                     bool include_bending, const detail::SweepMeshSizes& sizes) {
+  Options o = solver;
+  o.model = model;
+  o.include_bending = include_bending;
+  o.adaptive = false;
+  o.grade_rim_for_bending = false;
+  o.coarse_size_m = sizes.region_size_m;
+  o.probe_size_m = sizes.region_size_m;
+  o.electrode_size_m = sizes.electrode_size_m;
+  o.grading = sizes.grading;
+  o.initial_global_refinements = sizes.global_refinements;
+  o.sample_points_m.clear();
+  o.vtu_directory.clear();
+  auto copy = std::make_unique<detail::FilmSolver>(scene, o);
+  if (!include_bending) copy->keep_bending_pattern(false);  // an estimating engine without bending does so
+  copy->prepare_sweep(sizes, nullptr);
+  return copy;
+}
+
 }  // namespace
 
 struct AtlasSweep::Impl {
-  pvdf::Scene scene;  // the film with the reference electrodes (outlives `copy`, which keeps a reference)
+  pvdf::Scene scene;  // the film with the reference electrodes (outlives the copies, which keep a reference)
   AtlasSweepOptions options;
   AtlasGrid grid;
   std::vector<double> geometry;
   double fe_size_m = 0;
   std::unique_ptr<ProbeSweep> sweep;
+  Options solver;  // the options the sweep's engines were built with
   std::unique_ptr<detail::FilmSolver> copy;  // the sweep mesh again (see the file comment)
+  // The rim model's meshes again, one per rim sector, built when a press first needs it; at most
+  // two alive (as the sweep's own rim engines), the least recently used dropped.
+  detail::SweepMeshSizes rim_sizes;
+  int rim_sectors = 16;
+  std::vector<std::unique_ptr<detail::FilmSolver>> rim_copies;
+  std::vector<bool> rim_checked;  // the sector's copy has passed its first identity check
+  std::vector<int> rim_recent;
+  detail::FilmSolver& rim_copy(int sector, std::size_t expected_dofs);
   Model model = Model::large_rotation;
   std::size_t presses = 0;
   std::string model_reason;
 };
 
+detail::FilmSolver& AtlasSweep::Impl::rim_copy(int sector, std::size_t expected_dofs) {
+  if (sector < 0 || sector >= rim_sectors) throw std::runtime_error("atlas: rim sector " + std::to_string(sector) + " out of range (internal error)");
+  auto& c = rim_copies[std::size_t(sector)];
+  rim_recent.erase(std::remove(rim_recent.begin(), rim_recent.end(), sector), rim_recent.end());
+  rim_recent.push_back(sector);
+  while (rim_recent.size() > 2) {
+    rim_copies[std::size_t(rim_recent.front())].reset();
+    rim_recent.erase(rim_recent.begin());
+  }
+  if (!c) {
+    detail::SweepMeshSizes sizes = rim_sizes;  // ProbeSweep::Impl::rim_engine's sector arc
+    sizes.rim_angle_rad = 2 * pvdf::pi * sector / std::max(1, rim_sectors);
+    sizes.rim_half_angle_rad = rim_sectors <= 1 ? 4.0 : 1.5 * 2 * pvdf::pi / rim_sectors;
+    c = engine_mesh_copy(scene, solver, model, true, sizes);
+    std::vector<double> geometry;
+    c->prepare_atlas(grid, geometry);
+  }
+  if (c->n_dofs() != expected_dofs) {
+    throw std::runtime_error("atlas: the copy of the rim mesh of sector " + std::to_string(sector) + " has " +
+                             std::to_string(c->n_dofs()) + " DOFs, the rim model's state " +
+                             std::to_string(expected_dofs) + " (internal error)");
+  }
+  return *c;
+}
+
 AtlasSweep::AtlasSweep(const pvdf::Scene& scene, const AtlasSweepOptions& options) : impl_(std::make_unique<Impl>()) {
   Impl& im = *impl_;
   im.options = options;
   im.grid = atlas_grid_for(scene.membrane.outline, options.cell_m);
+  if (!(options.keep_out_m >= 0) || !std::isfinite(options.keep_out_m) ||
+      !scene.membrane.outline.contains({0.0, 0.0}, options.keep_out_m + 2 * scene.probe.radius_m)) {
+    std::ostringstream m;
+    m << "atlas: keep-out band " << options.keep_out_m << " m must be >= 0 and leave the film centre served";
+    throw pvdf::InputError(m.str());
+  }
   im.scene = scene;
   im.scene.loads.clear();
-  im.scene.electrodes = quadrants(scene.membrane.outline);
+  im.scene.electrodes = quadrants(scene.membrane.outline, options.keep_out_m);
   const double tolerance = options.solver.tolerance;
   const double shrink = std::clamp(std::sqrt(tolerance / 0.01), 0.25, 1.0);
   im.fe_size_m = options.fe_size_m > 0 ? options.fe_size_m
                                        : std::min(options.cell_m, 2 * scene.probe.radius_m) * shrink;
-  // 1. The sweep: the whole film at the FE size (every cell lies in a quadrant), no per-probe
-  // refinement (the footprint is resolved by that size already), the sweep's model only.
+  // 1. The sweep: the whole film at the FE size (every cell of the served region lies in a
+  // quadrant), no per-probe refinement (the footprint is resolved by that size already), the
+  // `auto` rule's model, and the map path's rim model (bending kept, mesh graded toward the clamp
+  // along the probe's sector) where the cheap model's estimate says bending matters for the
+  // quadrants. No clamp-layer condition: its state is not returned, so its density could not be
+  // integrated.
   SweepOptions so;
   so.solver = options.solver;
+  so.solver.clamp_layer_condition = false;
   so.forces_N = options.forces_N;
   so.rim_margin_m = options.rim_margin_m;
   so.n_setup_checks = options.n_setup_checks;
@@ -118,62 +186,53 @@ AtlasSweep::AtlasSweep(const pvdf::Scene& scene, const AtlasSweepOptions& option
   so.electrode_size_m = im.fe_size_m;
   so.grading = 1.0;
   so.probe_size_m = -1;
-  so.rim_model = SweepOptions::RimModel::never;
-  so.estimate_errors = true;
-  // The kinematics of the `auto` rule over the force range, with bending kept at every press and the
-  // mesh graded toward the whole clamp to its bending layer: the direct map's rim model, everywhere.
-  const double f_min = options.forces_N.empty() ? 1.0 : *std::min_element(options.forces_N.begin(), options.forces_N.end());
-  const double f_max = options.forces_N.empty() ? 1.0 : *std::max_element(options.forces_N.begin(), options.forces_N.end());
-  const detail::ForceRange range{f_min, f_max};
-  const detail::ModelChoice choice = detail::choose_model(im.scene, detail::with_clamp_layer_switch(options.solver), &range);
-  so.solver.model = choice.model;
-  so.solver.include_bending = true;
-  so.sweep_rim_size_m = detail::rim_boundary_layer_m(im.scene, f_min);
+  so.rim_model = SweepOptions::RimModel::by_estimate;
   so.rim_grading = 0.5;
-  im.model_reason = choice.reason + "; bending kept at every press, mesh graded toward the clamp to " +
-                    std::to_string(so.sweep_rim_size_m * 1e3) + " mm";
+  so.rim_sectors = im.rim_sectors;
+  so.estimate_errors = true;
   im.sweep = std::make_unique<ProbeSweep>(im.scene, so);
   const SweepSetup& setup = im.sweep->setup();
   im.fe_size_m = setup.electrode_size_m;  // the setup may have halved it
   im.model = setup.model;
+  im.solver = detail::with_clamp_layer_switch(so.solver);
+  std::ostringstream reason;
+  reason << setup.model_reason;
+  if (setup.rim_model_available)
+    reason << "; the rim model (bending kept, mesh graded to " << setup.rim_size_m * 1e3
+           << " mm along the probe's sector of the clamp) where the estimate says bending matters";
+  if (options.keep_out_m > 0) reason << "; served region: " << options.keep_out_m * 1e3 << " mm inside the clamp";
+  im.model_reason = reason.str();
   // 2. The copy of its mesh: SweepEngine's construction with the sizes the setup settled on.
   detail::SweepMeshSizes sizes;
   sizes.region_size_m = setup.region_size_m;
   sizes.electrode_size_m = setup.electrode_size_m;
   sizes.probe_size_m = 0;
   sizes.grading = 1.0;
-  sizes.rim_size_m = so.sweep_rim_size_m;
-  sizes.rim_grading = so.rim_grading;
-  Options o = detail::with_clamp_layer_switch(so.solver);
-  o.model = setup.model;
-  o.include_bending = setup.include_bending;
-  o.adaptive = false;
-  o.grade_rim_for_bending = false;
-  o.coarse_size_m = sizes.region_size_m;
-  o.probe_size_m = sizes.region_size_m;
-  o.electrode_size_m = sizes.electrode_size_m;
-  o.grading = sizes.grading;
-  o.initial_global_refinements = 0;
-  o.sample_points_m.clear();
-  o.vtu_directory.clear();
-  im.copy = std::make_unique<detail::FilmSolver>(im.scene, o);
-  if (!setup.include_bending) im.copy->keep_bending_pattern(false);
-  im.copy->prepare_sweep(sizes, nullptr);
+  im.copy = engine_mesh_copy(im.scene, im.solver, setup.model, setup.include_bending, sizes);
   if (im.copy->n_dofs() != setup.n_dofs) {
     throw std::runtime_error("atlas: the copy of the sweep mesh has " + std::to_string(im.copy->n_dofs()) +
                              " DOFs, the sweep " + std::to_string(setup.n_dofs) + " (internal error)");
   }
   im.copy->prepare_atlas(im.grid, im.geometry);
+  if (setup.rim_model_available) {
+    im.rim_sizes = sizes;
+    im.rim_sizes.rim_size_m = setup.rim_size_m;
+    im.rim_sizes.rim_grading = so.rim_grading;
+    im.rim_copies.resize(std::size_t(im.rim_sectors));
+    im.rim_checked.assign(std::size_t(im.rim_sectors), false);
+  }
 }
 
 AtlasSweep::~AtlasSweep() = default;
 
 const SweepSetup& AtlasSweep::setup() const { return impl_->sweep->setup(); }
+SweepTiming AtlasSweep::timing() const { return impl_->sweep->timing(); }
 const std::string& AtlasSweep::model_reason() const { return impl_->model_reason; }
 const AtlasGrid& AtlasSweep::grid() const { return impl_->grid; }
 const std::vector<pvdf::Electrode>& AtlasSweep::reference_electrodes() const { return impl_->scene.electrodes; }
 const std::vector<double>& AtlasSweep::cell_geometry() const { return impl_->geometry; }
 double AtlasSweep::fe_size_m() const { return impl_->fe_size_m; }
+double AtlasSweep::keep_out_m() const { return impl_->options.keep_out_m; }
 
 AtlasPress AtlasSweep::solve(double x_m, double y_m, double force_N, const SweepState* warm_start, SweepState* state_out) {
   Impl& im = *impl_;
@@ -181,26 +240,39 @@ AtlasPress AtlasSweep::solve(double x_m, double y_m, double force_N, const Sweep
   SweepState state;
   press.solution = im.sweep->solve(x_m, y_m, force_N, warm_start, &state);
   if (!usable(press.solution.status)) return press;
-  dealii::Vector<double> u(state.dofs.size());
-  std::copy(state.dofs.begin(), state.dofs.end(), u.begin());
-  im.copy->atlas_moments(u, im.model, press.moments);
-  // The copy must be the sweep's mesh: its reference charges from the same state agree (checked at
-  // the first press and every 64th after it: the check costs a residual assembly).
-  if (im.presses++ % 64 != 0) {
-    if (state_out) *state_out = std::move(state);
-    return press;
+  // The moments of the solution kept: the cheap model's on the sweep mesh, or the rim model's on
+  // its sector's mesh (the state's rim part, which the sweep sets when the rim model solved it).
+  detail::FilmSolver* on = im.copy.get();
+  const std::vector<double>* dofs = &state.dofs;
+  Model model = im.model;
+  bool check = im.presses++ % 64 == 0;
+  if (press.solution.model_used == SweepModel::rim) {
+    dofs = &state.rim_dofs;
+    on = &im.rim_copy(state.rim_sector, state.rim_dofs.size());
+    if (!im.rim_checked[std::size_t(state.rim_sector)]) check = true;
+    im.rim_checked[std::size_t(state.rim_sector)] = true;
+  } else if (press.solution.model_used != SweepModel::cheap) {
+    throw std::runtime_error("atlas: a press solved by a model the atlas cannot integrate (internal error)");
   }
-  detail::EngineSolution check;
-  im.copy->set_probe(x_m, y_m, force_N);
-  im.copy->probe_outputs(u, im.model, check);
-  double scale = 0, diff = 0;
-  for (std::size_t k = 0; k < check.charge_C.size() && k < press.solution.charge_C.size(); ++k) {
-    scale = std::max(scale, std::abs(press.solution.charge_C[k]));
-    diff = std::max(diff, std::abs(press.solution.charge_C[k] - check.charge_C[k]));
-  }
-  if (!(diff <= 1e-9 * scale)) {
-    throw std::runtime_error("atlas: the copy of the sweep mesh gives reference charges " + std::to_string(diff / scale) +
-                             " (relative) off the sweep's (internal error)");
+  dealii::Vector<double> u(dofs->size());
+  std::copy(dofs->begin(), dofs->end(), u.begin());
+  on->atlas_moments(u, model, press.moments);
+  // The copy must be the solver's mesh: its reference charges from the same state agree (checked at
+  // the first press, every 64th after it and the first press on each rim sector's copy: the check
+  // costs a residual assembly).
+  if (check) {
+    detail::EngineSolution again;
+    on->set_probe(x_m, y_m, force_N);
+    on->probe_outputs(u, model, again);
+    double scale = 0, diff = 0;
+    for (std::size_t k = 0; k < again.charge_C.size() && k < press.solution.charge_C.size(); ++k) {
+      scale = std::max(scale, std::abs(press.solution.charge_C[k]));
+      diff = std::max(diff, std::abs(press.solution.charge_C[k] - again.charge_C[k]));
+    }
+    if (!(diff <= 1e-9 * scale)) {
+      throw std::runtime_error("atlas: the copy of the solver's mesh gives reference charges " + std::to_string(diff / scale) +
+                               " (relative) off the sweep's (internal error)");
+    }
   }
   if (state_out) *state_out = std::move(state);
   return press;

@@ -420,7 +420,13 @@ ProbeSolution ProbeSweep::solve(double x_m, double y_m, double force_N, const Sw
   if (warm) {
     state = warm_start->dofs;
     state_force = warm_start->force_N;
-  } else {
+  }
+  if (warm && warm_start->fresh_history) {  // the atlas's row starts (never set by maps)
+    im.engine->forget_history();
+    for (auto& e : im.rim_engines)
+      if (e) e->forget_history();
+  }
+  if (!warm) {
     // A cold solve (a map row's first) depends on nothing solved before it: no chord tangent or
     // LDLᵀ countdown from another row, so the map is bitwise the same for any thread count.
     im.engine->forget_history();

@@ -90,8 +90,8 @@ TEST_CASE("maps read from the atlas agree with direct FEM maps within their stat
   REQUIRE(atlas.moments.size() == generated.moments.size());
   for (std::size_t k = 0; k < atlas.moments.size(); ++k)
     if (!std::isnan(generated.moments[k])) REQUIRE(atlas.moments[k] == generated.moments[k]);
-  std::printf("atlas: %zu positions (%zu solved, the rest mirror images), %zu DOFs, FE size %g mm, largest press estimate %.3g, %.1f CPU s, %.1f s wall (setup %.1f s)\n", ar.n_positions,
-              ar.n_solved_positions, atlas.n_dofs, 1e3 * atlas.fe_size_m, ar.estimated_relative_error, atlas_cpu, atlas_wall, ar.setup_s);
+  std::printf("atlas: %zu positions (%zu solved, the rest mirror images, %zu by the rim model), %zu DOFs, FE size %g mm, largest press estimate %.3g, %.1f CPU s, %.1f s wall (setup %.1f s)\n", ar.n_positions,
+              ar.n_solved_positions, ar.n_rim_solves, atlas.n_dofs, 1e3 * atlas.fe_size_m, ar.estimated_relative_error, atlas_cpu, atlas_wall, ar.setup_s);
 
   for (const std::string which : {"four squares", "pentagon", "strips"}) {
     const pvdf::Scene scene = layout(which);
@@ -153,5 +153,19 @@ TEST_CASE("maps read from the atlas agree with direct FEM maps within their stat
   other = film_json();
   other["probe"]["radius_m"] = 0.001;
   CHECK_THROWS_AS(map_from_atlas(atlas, pvdf::parse_scene(other, "probe.json"), path), pvdf::InputError);
+
+  // The keep-out band along the clamp (default 1 mm) is written and read back, and a layout reaching
+  // into it is refused; one just inside it is served.
+  CHECK(atlas.keep_out_m == 0.001);
+  other = film_json();
+  other["electrodes"] = nlohmann::json::array({square("E", 0.0105, 0.0, 0.002, 0.002, 0)});  // reaches r = 11.5 mm
+  try {
+    (void)map_from_atlas(atlas, pvdf::parse_scene(other, "near-clamp.json"), path);
+    FAIL("an electrode 0.5 mm from the clamp was read from an atlas that serves 1 mm inside it");
+  } catch (const pvdf::InputError& e) {
+    CHECK(std::string(e.what()).find("keep-out") != std::string::npos);
+  }
+  other["electrodes"] = nlohmann::json::array({square("E", 0.0095, 0.0, 0.001, 0.001, 0)});  // corners at r < 10.02 mm
+  CHECK_NOTHROW(map_from_atlas(atlas, pvdf::parse_scene(other, "inside.json"), path));
   std::filesystem::remove(path);
 }

@@ -16,7 +16,7 @@ namespace pvdf::mapping {
 namespace {
 
 constexpr const char* format_name = "pvdfkit-charge-density-atlas";
-constexpr int format_version = 1;
+constexpr int format_version = 2;  // 2 (r15): keep_out_m; version 1 files are read as keep_out_m = 0
 
 class Handle {
  public:
@@ -144,6 +144,7 @@ void write_atlas(const std::string& path, const ChargeAtlas& a) {
     w.number_attribute(root, "rim_margin_m", a.rim_margin_m);
     w.number_attribute(root, "spacing_m", a.spacing_m);
     w.number_attribute(root, "fe_size_m", a.fe_size_m);
+    w.number_attribute(root, "keep_out_m", a.keep_out_m);
     w.number_attribute(root, "n_dofs", double(a.n_dofs));
     {
       Handle g(H5Gcreate2(root, "provenance", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose);
@@ -199,7 +200,8 @@ ChargeAtlas read_atlas(const std::string& path) {
   const hid_t root = file.get();
   ChargeAtlas a;
   if (r.string_attribute(root, "format") != format_name) r.fail("attribute format is not " + std::string(format_name) + " (a map, not an atlas?)");
-  if (r.number_attribute(root, "format_version") != format_version) r.fail("format_version is not " + std::to_string(format_version));
+  const double version = r.number_attribute(root, "format_version");
+  if (version != format_version && version != 1) r.fail("format_version is not 1 or " + std::to_string(format_version));
   a.pvdfkit_version = r.string_attribute(root, "pvdfkit_version");
   a.scene_json = r.string_attribute(root, "scene_json");
   a.model = r.string_attribute(root, "model");
@@ -211,6 +213,8 @@ ChargeAtlas read_atlas(const std::string& path) {
   a.rim_margin_m = r.number_attribute(root, "rim_margin_m");
   a.spacing_m = r.number_attribute(root, "spacing_m");
   a.fe_size_m = r.number_attribute(root, "fe_size_m");
+  a.keep_out_m = version == 1 ? 0.0 : r.number_attribute(root, "keep_out_m");  // version 1: the whole film served
+  if (!(a.keep_out_m >= 0)) r.fail("keep_out_m is not >= 0");
   a.n_dofs = std::size_t(r.number_attribute(root, "n_dofs"));
   {
     if (H5Lexists(root, "provenance", H5P_DEFAULT) <= 0) r.fail("group /provenance is missing");

@@ -109,6 +109,7 @@ ChargeAtlas generate_atlas(const pvdf::Scene& scene, const AtlasOptions& o, Atla
   so.n_setup_checks = o.n_setup_checks;
   so.cell_m = o.cell_m;
   so.fe_size_m = o.fe_size_m;
+  so.keep_out_m = o.keep_out_m;
   int threads = o.threads > 0 ? o.threads : int(std::max(1u, std::thread::hardware_concurrency()));
   threads = std::max(1, std::min<int>(threads, int(ny)));
   std::vector<std::unique_ptr<pvdf::fem::AtlasSweep>> sweeps;
@@ -118,12 +119,14 @@ ChargeAtlas generate_atlas(const pvdf::Scene& scene, const AtlasOptions& o, Atla
   atlas.grid = first.grid();
   atlas.geometry = first.cell_geometry();
   atlas.fe_size_m = first.fe_size_m();
+  atlas.keep_out_m = first.keep_out_m();
   atlas.n_dofs = setup.n_dofs;
   atlas.model = pvdf::fem::model_name(setup.model);
   atlas.model_reason = first.model_reason();
   atlas.error_estimator =
       "per press: the sweep's adjoint-weighted residual estimates (discretization + bending left out, by magnitude) of the "
-      "charges of the reference electrodes Q1..Q4 (the film's quadrants); estimated_relative_error = max_k err_k / max_k |Q_k|";
+      "charges of the reference electrodes Q1..Q4 (the quadrants of the film less its keep-out band along the clamp); "
+      "estimated_relative_error = max_k err_k / max_k |Q_k|";
   atlas.integration_error_rule =
       "per electrode and press: sum over the atlas cells the electrode covers partly of |linear - constant reconstruction| "
       "of its share (fully covered cells are exact)";
@@ -155,41 +158,81 @@ ChargeAtlas generate_atlas(const pvdf::Scene& scene, const AtlasOptions& o, Atla
   std::mutex report_mutex;
   std::string first_failure;
   std::exception_ptr error;
+  // One press, all levels, at (i, j), warm from along[f] (or the level below); stores the result
+  // and leaves the converged states in along. `fresh`: the warm start first makes the sweep forget
+  // its earlier solves (SweepState::fresh_history), so the press depends on nothing else.
+  auto press_at = [&](pvdf::fem::AtlasSweep& sweep, std::size_t i, std::size_t j, std::vector<pvdf::fem::SweepState>& along,
+                      bool fresh) {
+    for (std::size_t f = 0; f < nf; ++f) {
+      pvdf::fem::SweepState* warm = !along[f].dofs.empty() ? &along[f] : (f > 0 && !along[f - 1].dofs.empty() ? &along[f - 1] : nullptr);
+      if (warm && fresh) warm->fresh_history = true;
+      pvdf::fem::SweepState next;
+      const pvdf::fem::AtlasPress press = sweep.solve(atlas.x_m[i], atlas.y_m[j], forces[f], warm, &next);
+      if (warm) warm->fresh_history = false;
+      const std::size_t p = atlas.point(f, j, i);
+      const auto& sol = press.solution;
+      if (!pvdf::fem::usable(sol.status)) {
+        atlas.status[p] = std::uint8_t(PointStatus::not_converged);
+        std::lock_guard<std::mutex> lock(report_mutex);
+        if (first_failure.empty())
+          first_failure = "(" + num(atlas.x_m[i]) + ", " + num(atlas.y_m[j]) + ") m, " + num(forces[f]) + " N: " + sol.message;
+        along[f] = {};
+        continue;
+      }
+      atlas.status[p] = std::uint8_t(PointStatus::ok);
+      std::copy(press.moments.begin(), press.moments.end(), atlas.moments.begin() + long(p * nc * 3));
+      atlas.deflection_at_load_m[p] = sol.deflection_at_load_m;
+      atlas.estimated_relative_error[p] = sol.estimated_relative_error;
+      for (std::size_t k = 0; k < nr && k < sol.charge_C.size(); ++k) {
+        atlas.reference_charge_C[p * nr + k] = sol.charge_C[k];
+        atlas.reference_charge_error_C[p * nr + k] = k < sol.charge_error_C.size() ? sol.charge_error_C[k] : nan;
+      }
+      along[f] = std::move(next);
+    }
+    const std::size_t d = ++done;
+    if (o.progress) {
+      std::lock_guard<std::mutex> lock(report_mutex);
+      o.progress(d, n_canonical);
+    }
+  };
+  // 3a. The rows' first positions as one chain on the first sweep, before the threads: from the row
+  // nearest y = 0 (solved from the flat film) outward both ways, each warm from its neighbour row's
+  // (a cold solve on the atlas's fine mesh is a long continuation: on seed 001 a row start cost as
+  // much as a whole row of warm presses). Each chain press and each row's next press forget the
+  // sweep's history, so the atlas does not depend on the number of threads.
+  std::vector<std::size_t> row_first(ny, nx);
+  for (std::size_t j = 0; j < ny; ++j)
+    for (std::size_t i = 0; i < nx && row_first[j] == nx; ++i)
+      if (atlas.mask[j * nx + i] && canonical(i, j)) row_first[j] = i;
+  std::vector<std::vector<pvdf::fem::SweepState>> row_start(ny, std::vector<pvdf::fem::SweepState>(nf));
+  {
+    std::size_t centre = ny;
+    for (std::size_t j = 0; j < ny; ++j)
+      if (row_first[j] < nx && (centre == ny || std::abs(atlas.y_m[j]) < std::abs(atlas.y_m[centre]))) centre = j;
+    if (centre < ny) {
+      std::vector<pvdf::fem::SweepState> along(nf);
+      press_at(*sweeps.front(), row_first[centre], centre, along, true);
+      row_start[centre] = along;
+      for (int dir : {+1, -1}) {
+        along = row_start[centre];
+        for (long j = long(centre) + dir; j >= 0 && j < long(ny); j += dir) {
+          if (row_first[std::size_t(j)] >= nx) continue;
+          press_at(*sweeps.front(), row_first[std::size_t(j)], std::size_t(j), along, true);
+          row_start[std::size_t(j)] = along;
+        }
+      }
+    }
+  }
   auto work = [&](pvdf::fem::AtlasSweep& sweep) {
     try {
       for (std::size_t j = next_row++; j < ny; j = next_row++) {
-        std::vector<pvdf::fem::SweepState> along(nf);  // last state of the row at each level
-        for (std::size_t i = 0; i < nx; ++i) {
+        if (row_first[j] >= nx) continue;
+        std::vector<pvdf::fem::SweepState> along = std::move(row_start[j]);  // last state of the row at each level
+        bool fresh = true;
+        for (std::size_t i = row_first[j] + 1; i < nx; ++i) {
           if (!atlas.mask[j * nx + i] || !canonical(i, j)) continue;
-          for (std::size_t f = 0; f < nf; ++f) {
-            const pvdf::fem::SweepState* warm = !along[f].dofs.empty() ? &along[f] : (f > 0 && !along[f - 1].dofs.empty() ? &along[f - 1] : nullptr);
-            pvdf::fem::SweepState next;
-            const pvdf::fem::AtlasPress press = sweep.solve(atlas.x_m[i], atlas.y_m[j], forces[f], warm, &next);
-            const std::size_t p = atlas.point(f, j, i);
-            const auto& sol = press.solution;
-            if (!pvdf::fem::usable(sol.status)) {
-              atlas.status[p] = std::uint8_t(PointStatus::not_converged);
-              std::lock_guard<std::mutex> lock(report_mutex);
-              if (first_failure.empty())
-                first_failure = "(" + num(atlas.x_m[i]) + ", " + num(atlas.y_m[j]) + ") m, " + num(forces[f]) + " N: " + sol.message;
-              along[f] = {};
-              continue;
-            }
-            atlas.status[p] = std::uint8_t(PointStatus::ok);
-            std::copy(press.moments.begin(), press.moments.end(), atlas.moments.begin() + long(p * nc * 3));
-            atlas.deflection_at_load_m[p] = sol.deflection_at_load_m;
-            atlas.estimated_relative_error[p] = sol.estimated_relative_error;
-            for (std::size_t k = 0; k < nr && k < sol.charge_C.size(); ++k) {
-              atlas.reference_charge_C[p * nr + k] = sol.charge_C[k];
-              atlas.reference_charge_error_C[p * nr + k] = k < sol.charge_error_C.size() ? sol.charge_error_C[k] : nan;
-            }
-            along[f] = std::move(next);
-          }
-          const std::size_t d = ++done;
-          if (o.progress) {
-            std::lock_guard<std::mutex> lock(report_mutex);
-            o.progress(d, n_canonical);
-          }
+          press_at(sweep, i, j, along, fresh);
+          fresh = false;
         }
       }
     } catch (...) {
@@ -250,6 +293,7 @@ ChargeAtlas generate_atlas(const pvdf::Scene& scene, const AtlasOptions& o, Atla
     }
     r.first_failure = first_failure;
     r.n_solved_positions = n_canonical;
+    for (const auto& s : sweeps) r.n_rim_solves += std::size_t(s->timing().rim_solves);
     r.mirror_x = mirror_x;
     r.mirror_y = mirror_y;
     r.setup_s = setup_s;

@@ -20,6 +20,8 @@ nlohmann::json atlas_report_json(const AtlasReport& report, const ChargeAtlas& a
   j["tolerance"] = atlas.tolerance;
   j["n_dofs"] = atlas.n_dofs;
   j["fe_size_m"] = atlas.fe_size_m;
+  j["keep_out_m"] = atlas.keep_out_m;
+  j["n_rim_solves"] = report.n_rim_solves;
   j["cell_m"] = atlas.grid.cell_m;
   j["n_cells"] = atlas.n_cells();
   j["spacing_m"] = atlas.spacing_m;

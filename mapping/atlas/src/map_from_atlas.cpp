@@ -55,6 +55,26 @@ ChargeMap map_from_atlas(const ChargeAtlas& atlas, const pvdf::Scene& scene, con
     map.electrode_names.push_back(e.name);
     map.electrode_centers_m.push_back(e.centroid_m());
     const std::vector<pvdf::Point2> outline = e.outline(64);
+    // The atlas serves electrodes at least keep_out_m inside the clamp (its estimates speak for that
+    // region only): every vertex, and points along every edge, must lie there.
+    if (atlas.keep_out_m > 0) {
+      const auto& film = scene.membrane.outline;
+      for (std::size_t v = 0; v < outline.size(); ++v) {
+        const auto& a = outline[v];
+        const auto& b = outline[(v + 1) % outline.size()];
+        for (int s = 0; s < 16; ++s) {
+          const double t = s / 16.0;
+          const pvdf::Point2 p{a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])};
+          if (!film.contains(p, atlas.keep_out_m * (1 - 1e-9))) {
+            std::ostringstream msg;
+            msg << scene.source << ": electrode " << e.name << " reaches within " << atlas.keep_out_m * 1e3
+                << " mm of the clamp (at (" << p[0] << ", " << p[1] << ") m), the atlas's keep-out band (" << atlas_path
+                << ", keep_out_m); move it inward or make an atlas with a smaller --keep-out-m";
+            throw pvdf::InputError(msg.str());
+          }
+        }
+      }
+    }
     readings.push_back(pvdf::fem::atlas_electrode(atlas.grid, atlas.geometry, outline));
     double twice_area = 0;  // of the outline integrated (a circle's 64-gon, not pi r^2)
     for (std::size_t v = 0; v < outline.size(); ++v) {

@@ -48,6 +48,11 @@ struct AtlasSweepOptions {
   /// FE cell size over the whole film (m); 0 = min(cell_m, probe diameter) scaled with the
   /// tolerance like the sweep's own sizes (sqrt(tolerance/0.01), within [0.25, 1]).
   double fe_size_m = 0;
+  /// Keep-out band along the clamp (m): the atlas serves electrodes at least this far inside the
+  /// outline. The reference quadrants end there, so the per-press estimates (and the choice of the
+  /// rim model) speak for the served region only; the clamp's bending layer inside the band is
+  /// resolved only where a press needs the rim model. 0 = the whole film is served.
+  double keep_out_m = 0.001;
 };
 
 /// One press of the atlas sweep.
@@ -61,9 +66,9 @@ struct AtlasPress {
 /// The scene's electrodes are replaced by `reference_electrodes` (the film cut into four quadrants,
 /// which sets the FE mesh to fe_size_m over the whole film and carries the press's error estimate);
 /// every probe is solved on that one mesh (no per-probe refinement: the footprint is already at
-/// fe_size_m), with the `auto` rule's kinematics and bending kept, the mesh graded toward the whole
-/// clamp to its bending layer (no rim model: every press is solved on the one mesh, so the density
-/// the moments integrate is the one the estimate is for).
+/// fe_size_m) with the `auto` rule's model, and again with the map path's rim model (bending kept,
+/// mesh graded toward the clamp along the probe's sector) where the cheap model's estimate says
+/// bending matters; the moments are taken on the mesh of the solution kept (docs/atlas.md §3).
 /// Not thread-safe: one instance per thread.
 class AtlasSweep {
  public:
@@ -76,13 +81,17 @@ class AtlasSweep {
   /// Why this model (the `auto` rule's reason, and bending kept with the rim grading).
   const std::string& model_reason() const;
   const AtlasGrid& grid() const;
-  /// The reference electrodes (the film's quadrants) whose charges and estimates every press carries.
+  /// The reference electrodes (the served region's quadrants) whose charges and estimates every press carries.
   const std::vector<pvdf::Electrode>& reference_electrodes() const;
   /// [ny][nx][6] geometry of each cell ∩ FE film: ∫dA, ∫(x−xc), ∫(y−yc), ∫(x−xc)², ∫(x−xc)(y−yc), ∫(y−yc)²
   /// (m², m³, m³, m⁴, m⁴, m⁴), by the same quadrature as the moments.
   const std::vector<double>& cell_geometry() const;
   /// FE mesh size used over the film (m).
   double fe_size_m() const;
+  /// The keep-out band along the clamp (m): electrodes are served at least this far inside.
+  double keep_out_m() const;
+  /// Cost breakdown of the sweep's solves (rim-model solves counted in it).
+  SweepTiming timing() const;
 
   /// One press (see ProbeSweep::solve); `moments` is filled when the solution is usable.
   AtlasPress solve(double x_m, double y_m, double force_N, const SweepState* warm_start = nullptr,

@@ -100,6 +100,11 @@ struct SweepState {
   std::vector<double> dofs;
   double force_N = 0;                   ///< force it was converged under (warm starts across forces scale it)
   double x_m = 0, y_m = 0;              ///< probe centre it was converged for (m)
+  /// Used as a warm start: the sweep first forgets what its earlier solves left in the solvers
+  /// (chord tangents, factorization countdowns), as it does before a cold solve, so that the result
+  /// depends only on this state and the press (the atlas's rows warm-started from a column chain,
+  /// docs/atlas.md §3). Maps never set it.
+  bool fresh_history = false;
   /// The rim model's last converged state in the same chain (empty = none) and where/under what force.
   std::vector<double> rim_dofs;
   double rim_force_N = 0, rim_x_m = 0, rim_y_m = 0;

@@ -32,6 +32,9 @@ struct ChargeAtlas {
   std::string integration_error_rule;  ///< how a layout's integration error is estimated (map_from_atlas)
   double tolerance = 0;         ///< requested relative charge error of the sweep
   double rim_margin_m = 0;
+  /// Electrodes are served at least this far inside the clamp outline (m); 0 = anywhere on the film
+  /// (format_version 1 files). map_from_atlas refuses a layout that reaches into the band.
+  double keep_out_m = 0;
   double fe_size_m = 0;         ///< FE cell size over the whole film (m)
   std::size_t n_dofs = 0;
   std::string description;
@@ -68,6 +71,7 @@ struct AtlasOptions {
   double tolerance = 0.01;           ///< requested relative charge error (0 = the scene's)
   double cell_m = 0.001;             ///< atlas cell side (m)
   double fe_size_m = 0;              ///< FE size over the film (0 = AtlasSweepOptions' default)
+  double keep_out_m = 0.001;         ///< electrodes served at least this far inside the clamp (m)
   int n_setup_checks = 3;
   int threads = 1;                   ///< worker threads (one AtlasSweep each); 0 = hardware concurrency
   std::function<void(std::size_t done, std::size_t total)> progress;
@@ -80,6 +84,7 @@ struct AtlasReport {
   std::size_t n_solved_positions = 0;   ///< positions solved (the others are mirror images)
   bool mirror_x = false, mirror_y = false;  ///< mirror images used under x → −x, y → −y
   double estimated_relative_error = 0;  ///< largest per-press estimate
+  std::size_t n_rim_solves = 0;         ///< presses solved again by the rim model (bending, rim-graded mesh)
   double setup_s = 0, wall_s = 0;
   int threads = 1;
   std::string first_failure;
