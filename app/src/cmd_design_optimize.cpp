@@ -257,7 +257,7 @@ int run_optimize(const DesignCommandOptions& o) {
   MapProvider provider;
 #ifdef PVDF_HAVE_MAP_GENERATION
   std::shared_ptr<const ChargeAtlas> atlas;
-  if (!o.atlas_path.empty()) provider = atlas_map_provider(o.atlas_path, scene, &atlas);
+  if (!o.atlas_path.empty()) provider = atlas_map_provider(o.atlas_path, scene, oo_checked, &atlas);
 #else
   if (!o.atlas_path.empty()) {
     throw pvdf::InputError("--atlas: this pvdfkit was built without the FEM (PVDF_WITH_FEM=OFF) and cannot read atlases; "

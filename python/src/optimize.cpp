@@ -113,7 +113,7 @@ OptimizeResult run(py::object scene_arg, py::object atlas, py::object synthetic,
     provider = pvdf::mapping::synthetic_map_provider(r.maps.spacing_m, o.design.force_N);
   } else {
 #ifdef PVDF_PYTHON_WITH_FEM
-    provider = prefixed(f, [&] { return pvdf::mapping::atlas_map_provider(r.maps.atlas_path, scene); });
+    provider = prefixed(f, [&] { return pvdf::mapping::atlas_map_provider(r.maps.atlas_path, scene, o); });
 #else
     throw pvdf::InputError(f + "atlas: this pvdfkit was built without the FEM (PVDF_WITH_FEM=OFF) and cannot read "
                            "atlases; give synthetic=True for a preview");

@@ -131,6 +131,9 @@ def test_optimize_layouts_refuses_as_the_command(film, tmp_path):
         ({}, [], "atlas = FILE", "(a charge-density atlas of the film"),
         ({"atlas": str(film["atlas"]), "synthetic": True}, ["--atlas", str(film["atlas"]), "--synthetic"],
          "synthetic = True", "give one of them"),
+        # A clamp margin inside the atlas's keep-out band (1 mm by default): refused before the search.
+        ({"atlas": str(film["atlas"]), "clamp_margin_m": 0.0005}, ["--atlas", str(film["atlas"]), "--clamp-margin-m", "0.0005"],
+         "clamp_margin_m = 0.0005", "inside the keep-out band"),
     ]
     for kwargs, flags, named, rule in cases:
         with pytest.raises(pvdfkit.InputError) as e:
