@@ -86,19 +86,7 @@ std::vector<pvdf::Electrode> quadrants(const pvdf::FilmOutline& outline, double 
 // sweep_engine.cpp's constructor, so that the DOF numbering is the engine's (checked by the caller).
 std::unique_ptr<detail::FilmSolver> engine_mesh_copy(const pvdf::Scene& scene, const Options& solver, Model model,
                                                      bool include_bending, const detail::SweepMeshSizes& sizes) {
-  Options o = solver;
-  o.model = model;
-  o.include_bending = include_bending;
-  o.adaptive = false;
-  o.grade_rim_for_bending = false;
-  o.coarse_size_m = sizes.region_size_m;
-  o.probe_size_m = sizes.region_size_m;
-  o.electrode_size_m = sizes.electrode_size_m;
-  o.grading = sizes.grading;
-  o.initial_global_refinements = sizes.global_refinements;
-  o.sample_points_m.clear();
-  o.vtu_directory.clear();
-  auto copy = std::make_unique<detail::FilmSolver>(scene, o);
+  auto copy = std::make_unique<detail::FilmSolver>(scene, detail::engine_solver_options(solver, model, include_bending, sizes));
   if (!include_bending) copy->keep_bending_pattern(false);  // an estimating engine without bending does so
   copy->prepare_sweep(sizes, nullptr);
   return copy;

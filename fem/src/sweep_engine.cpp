@@ -178,16 +178,7 @@ FilmSolver& SweepEngine::Impl::probe_solver_at(double x_m, double y_m, double fo
   return *probe_solver;
 }
 
-SweepEngine::SweepEngine(const pvdf::Scene& scene, const Options& options, Model model, bool include_bending,
-                         const SweepMeshSizes& sizes, bool estimate_errors, const pvdf::mesh::FilmMesh* mesh)
-    : impl_(std::make_unique<Impl>()) {
-  impl_->estimate_errors = estimate_errors;
-  impl_->include_bending = include_bending;
-  impl_->sizes = sizes;
-  impl_->mesh = mesh;
-  impl_->scene = scene;
-  impl_->scene.loads.clear();
-  impl_->model = model;
+Options engine_solver_options(const Options& options, Model model, bool include_bending, const SweepMeshSizes& sizes) {
   Options o = options;
   o.model = model;
   o.include_bending = include_bending;
@@ -200,6 +191,20 @@ SweepEngine::SweepEngine(const pvdf::Scene& scene, const Options& options, Model
   o.initial_global_refinements = sizes.global_refinements;
   o.sample_points_m.clear();
   o.vtu_directory.clear();
+  return o;
+}
+
+SweepEngine::SweepEngine(const pvdf::Scene& scene, const Options& options, Model model, bool include_bending,
+                         const SweepMeshSizes& sizes, bool estimate_errors, const pvdf::mesh::FilmMesh* mesh)
+    : impl_(std::make_unique<Impl>()) {
+  impl_->estimate_errors = estimate_errors;
+  impl_->include_bending = include_bending;
+  impl_->sizes = sizes;
+  impl_->mesh = mesh;
+  impl_->scene = scene;
+  impl_->scene.loads.clear();
+  impl_->model = model;
+  const Options o = engine_solver_options(options, model, include_bending, sizes);
   impl_->options = o;
   impl_->solver = std::make_unique<FilmSolver>(impl_->scene, o);
   if (estimate_errors && !include_bending) impl_->solver->keep_bending_pattern(false);

@@ -36,6 +36,12 @@ struct SweepMeshSizes {
   double rim_half_angle_rad = 4.0;
 };
 
+/// The solver options of a sweep engine's mesh: `options` with the engine's model and bending, no
+/// adaptivity and no rim grading of its own, and the mesh sizes of `sizes`. Every FilmSolver that must
+/// number its DOFs as an engine does (the engine itself, the atlas's copies of its mesh) is built
+/// from these.
+Options engine_solver_options(const Options& options, Model model, bool include_bending, const SweepMeshSizes& sizes);
+
 /// Outcome of one probe solve on the sweep mesh.
 struct EngineSolution {
   Status status = Status::no_convergence;
