@@ -111,7 +111,7 @@ PVDF_COMMAND(36, [](CLI::App& root) {
       ->check(pvdf::app::number_in(0, 1, "m"));
   sub->add_option("--keep-out-m", o->keep_out_m,
                   "Electrodes are served at least this far inside the clamp (m); `map --atlas` refuses layouts reaching "
-                  "closer (default 0.001, the design's --clamp-margin-m default; 0 = anywhere)")
+                  "closer (default 0.001, as the design's --clamp-margin-m; 0 = anywhere)")
       ->check(pvdf::app::number_in(0, 0.1, "m (1 mm is 0.001)"));
   sub->add_option("--threads", o->threads, "Worker threads (default 0: the cores)")->check(pvdf::app::integer_in(0, 1024));
   sub->add_option("--setup-checks", o->setup_checks,
