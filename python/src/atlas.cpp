@@ -12,7 +12,8 @@ namespace pvdf::python {
 
 void bind_atlas(py::module_& m) {
   m.def("make_atlas", [](py::object scene_arg, py::object path_arg, py::object spacing_m, py::object forces_N,
-                         py::object tolerance, py::object cell_m, py::object threads, py::object n_setup_checks) {
+                         py::object tolerance, py::object cell_m, py::object threads, py::object n_setup_checks,
+                         py::object keep_out_m) {
           // Each argument by the rule of `pvdfkit atlas`'s flag (app/src/cmd_atlas.cpp).
           const std::string f = "make_atlas: ";
           const pvdf::Scene scene = arg::scene(scene_arg, f + "scene");
@@ -25,6 +26,7 @@ void bind_atlas(py::module_& m) {
           o.cell_m = arg::number_in(cell_m, f + "cell_m", 1e-5, 0.05, "m (1 mm is 0.001)");
           o.threads = int(arg::integer_in(threads, f + "threads", 0, 1024, "(0 = all cores)"));
           o.n_setup_checks = int(arg::integer_in(n_setup_checks, f + "n_setup_checks", 0, 3, "(as pvdfkit atlas --setup-checks)"));
+          o.keep_out_m = arg::number_in(keep_out_m, f + "keep_out_m", 0, 0.1, "m (1 mm is 0.001)");
           o.description = "pvdfkit.make_atlas " + path;
           pvdf::mapping::AtlasReport r;
           nlohmann::json report;
@@ -39,12 +41,13 @@ void bind_atlas(py::module_& m) {
         },
         py::arg("scene"), py::arg("path"), py::arg("spacing_m") = 0.002, py::arg("forces_N") = std::vector<double>{1.0},
         py::arg("tolerance") = py::none(), py::arg("cell_m") = 0.001, py::arg("threads") = 0,
-        py::arg("n_setup_checks") = 3,
+        py::arg("n_setup_checks") = 3, py::arg("keep_out_m") = 0.001,
         "Charge-density atlas of the scene's film written to `path` (HDF5, docs/atlas.md), with the defaults and "
         "checks of ``pvdfkit atlas``; returns the report dict of ``pvdfkit atlas --json`` (same keys: counts, model, "
         "tolerance, mesh, cells, timings in s, output). spacing_m (m, in [1e-5, 0.1]); forces_N (N, each in (0, 1e4], "
         "distinct); tolerance None = the scene's, else in [1e-8, 0.5]; cell_m (m, in [1e-5, 0.05]); threads 0 = all "
-        "cores; n_setup_checks 0-3 as --setup-checks.");
+        "cores; n_setup_checks 0-3 as --setup-checks; keep_out_m (m, in [0, 0.1]) as --keep-out-m: electrodes are "
+        "served at least this far inside the clamp.");
   m.def("map_from_atlas", [](py::object scene_arg, const std::string& atlas_path) {
           const pvdf::Scene scene = arg::scene(scene_arg, "map_from_atlas: scene");
           const pvdf::mapping::ChargeAtlas atlas = pvdf::mapping::read_atlas(atlas_path);

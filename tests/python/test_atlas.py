@@ -158,6 +158,7 @@ def test_make_atlas_refuses_as_the_command(tmp_path):
         ({"forces_N": [1.0, 1.0]}, "make_atlas: forces_N", "--forces-N", "1,1"),
         ({"threads": -1}, "make_atlas: threads = -1", "--threads", "-1"),
         ({"n_setup_checks": 4}, "make_atlas: n_setup_checks = 4", "--setup-checks", "4"),
+        ({"keep_out_m": 0.5}, "make_atlas: keep_out_m = 0.5", "--keep-out-m", "0.5"),
     ]
     scene_path = tmp_path / "film.json"
     scene_path.write_text(json.dumps(FILM))
