@@ -5,6 +5,7 @@
 #include <cstdio>
 
 #include <sys/resource.h>
+#include <time.h>
 #include <unistd.h>
 
 namespace pvdf {
@@ -20,6 +21,12 @@ double process_cpu_s() {
   if (getrusage(RUSAGE_SELF, &usage) != 0) return 0;
   auto seconds = [](const timeval& t) { return double(t.tv_sec) + 1e-6 * double(t.tv_usec); };
   return seconds(usage.ru_utime) + seconds(usage.ru_stime);
+}
+
+double thread_cpu_s() {
+  timespec t{};
+  if (clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t) != 0) return 0;
+  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
 }
 
 std::uint64_t current_resident_bytes() {

@@ -10,6 +10,7 @@
 #include "generator.hpp"
 
 #include "pvdf/core/error.hpp"
+#include "pvdf/core/resources.hpp"
 #include "pvdf/version.hpp"
 
 #include <mpi.h>
@@ -19,18 +20,8 @@
 #include <cmath>
 #include <cstdlib>
 
-#include <time.h>
-
 namespace pvdf::mapping {
 namespace detail {
-namespace {
-// CPU time of the calling thread (s).
-double thread_cpu_now_s() {
-  timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
-}
-}  // namespace
 
 ChargeMap Generator::run(MapReport& report) {
   const auto t_start = std::chrono::steady_clock::now();
@@ -40,9 +31,9 @@ ChargeMap Generator::run(MapReport& report) {
   build_grid();
   layout_ = Layout{o_.forces_N.size(), scene_.electrodes.size()};
   init_map();
-  const double setup_wall0_s = eta_clock_s(), setup_cpu0_s = thread_cpu_now_s();
+  const double setup_wall0_s = eta_clock_s(), setup_cpu0_s = pvdf::thread_cpu_s();
   setup_sweeps();
-  const double setup_wall_s = eta_clock_s() - setup_wall0_s, setup_cpu_s = thread_cpu_now_s() - setup_cpu0_s;
+  const double setup_wall_s = eta_clock_s() - setup_wall0_s, setup_cpu_s = pvdf::thread_cpu_s() - setup_cpu0_s;
   hash_ = run_hash();
   resume();
   last_checkpoint_ = std::chrono::steady_clock::now();

@@ -5,6 +5,7 @@
 
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/membrane_scaling.hpp"
+#include "pvdf/core/resources.hpp"
 
 #include <algorithm>
 #include <array>
@@ -18,17 +19,9 @@
 #include <vector>
 
 #include <malloc.h>
-#include <time.h>
 
 namespace pvdf::mapping::detail {
 namespace {
-
-// CPU time of the calling thread (s): what a solve costs, whatever else shares the cores.
-double thread_cpu_s() {
-  timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
-}
 
 // The order the row blocks are handed to the threads: the first and the last, then the middle of
 // each gap, breadth first (0, n−1, n/2, n/4, 3n/4, …), so that the rows done early sample the whole

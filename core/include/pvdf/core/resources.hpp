@@ -13,6 +13,10 @@ std::uint64_t peak_resident_bytes();
 /// the system does not say).
 double process_cpu_s();
 
+/// The CPU seconds the calling thread has used so far (CLOCK_THREAD_CPUTIME_ID): what a piece of
+/// work costs, whatever else shares the cores.
+double thread_cpu_s();
+
 /// The resident set size of this process now, in bytes (/proc/self/statm; 0 where it is absent).
 std::uint64_t current_resident_bytes();
 
