@@ -10,12 +10,19 @@
 #include "pvdf/mapping/atlas.hpp"
 #include "pvdf/mapping/atlas_report.hpp"
 
+#include <atomic>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <iostream>
 #include <memory>
+#include <optional>
 
 namespace {
+
+// Set by SIGINT/SIGTERM: the sweep stops after the presses in flight and keeps its checkpoint.
+std::atomic<bool> interrupted{false};
+extern "C" void on_atlas_interrupt(int) { interrupted.store(true); }
 
 struct AtlasCommandOptions {
   std::string scene_path;
@@ -29,6 +36,10 @@ struct AtlasCommandOptions {
   double keep_out_m = 0.001;
   int threads = 0;
   int setup_checks = 3;
+  std::string checkpoint;
+  bool no_checkpoint = false;
+  bool no_resume = false;
+  std::size_t stop_after = 0;
   bool json = false;
   bool quiet = false;
 };
@@ -51,6 +62,16 @@ int run_atlas(const AtlasCommandOptions& o) {
   options.threads = o.threads;
   options.n_setup_checks = o.setup_checks;
   options.description = "pvdfkit atlas " + o.scene_path;
+  if (!o.no_checkpoint) {
+    options.checkpoint_path = o.checkpoint.empty() ? o.output + ".checkpoint" : o.checkpoint;
+    // The default OUTPUT.checkpoint is derived: checked as an output here (main checked the flags).
+    if (o.checkpoint.empty()) pvdf::app::check_output_file(options.checkpoint_path, "--checkpoint");
+  }
+  options.resume = !o.no_resume;
+  options.stop_after_positions = o.stop_after;
+  options.cancel = &interrupted;
+  std::signal(SIGINT, on_atlas_interrupt);
+  std::signal(SIGTERM, on_atlas_interrupt);
   std::unique_ptr<pvdf::Progress> bar;
   if (!o.quiet) {
     options.progress = [&bar](std::size_t done, std::size_t total) {
@@ -59,10 +80,24 @@ int run_atlas(const AtlasCommandOptions& o) {
     };
   }
   pvdf::app::OutputLock lock(o.output, "-o/--output");
+  std::optional<pvdf::app::OutputLock> checkpoint_lock;
+  if (!o.no_checkpoint && !o.checkpoint.empty()) checkpoint_lock.emplace(o.checkpoint, "--checkpoint");
   pvdf::mapping::AtlasReport report;
   const pvdf::mapping::ChargeAtlas atlas = pvdf::mapping::generate_atlas(scene, options, &report);
   if (bar) bar->finish();
+  if (report.stopped_early) {
+    const std::string why = interrupted ? std::string("interrupted") :
+                                          "stopped after " + std::to_string(o.stop_after) + " positions (--stop-after-positions)";
+    if (options.checkpoint_path.empty()) {
+      std::cerr << "error: " << why << "; no checkpoint (--no-checkpoint), no atlas written\n";
+    } else {
+      std::cerr << "error: " << why << "; the checkpoint " << options.checkpoint_path
+                << " holds the completed rows: rerun the same command to resume\n";
+    }
+    return interrupted ? 130 : pvdf::exit_code::numerical;
+  }
   pvdf::mapping::write_atlas(o.output, atlas);
+  if (!options.checkpoint_path.empty()) std::remove(options.checkpoint_path.c_str());
   if (o.json) {
     std::cout << pvdf::mapping::atlas_report_json(report, atlas, o.output).dump(2) << '\n';
   } else {
@@ -77,6 +112,9 @@ int run_atlas(const AtlasCommandOptions& o) {
                 atlas.tolerance);
     std::printf("served: electrodes at least %g mm inside the clamp; %zu presses solved again by the rim model\n",
                 1e3 * atlas.keep_out_m, report.n_rim_solves);
+    if (report.n_resumed_positions > 0)
+      std::printf("%zu positions taken from the checkpoint, %zu solved now\n", report.n_resumed_positions,
+                  report.n_solved_positions - report.n_resumed_positions);
     std::printf("%d thread(s), setup %.1f s, %.1f s in all\n", report.threads, report.setup_s, report.wall_s);
   }
   if (report.n_failed > 0) {
@@ -117,6 +155,14 @@ PVDF_COMMAND(36, [](CLI::App& root) {
   sub->add_option("--setup-checks", o->setup_checks,
                   "Probe positions at which the setup evaluates its error estimate to size the mesh, 0-3 (default 3)")
       ->check(pvdf::app::integer_in(0, 3));
+  sub->add_option("--checkpoint", o->checkpoint,
+                  "Checkpoint file: the completed rows, every 30 s and when stopped (default OUTPUT.checkpoint; resumed when it exists)")
+      ->check(pvdf::app::output_file());
+  sub->add_flag("--no-checkpoint", o->no_checkpoint, "Write no checkpoint");
+  sub->add_flag("--no-resume", o->no_resume, "Ignore an existing checkpoint (start afresh)");
+  sub->add_option("--stop-after-positions", o->stop_after,
+                  "Testing: stop as if killed after N solved positions (checkpoint kept, no atlas written)")
+      ->check(pvdf::app::integer_in(1, 1000000000));
   sub->add_flag("--json", o->json, "Print a JSON summary (counts, model, estimate, timings)");
   sub->add_flag("--quiet", o->quiet, "No progress bar");
   return pvdf::app::Subcommand{sub, [o] { return run_atlas(*o); }};

@@ -313,6 +313,7 @@ int run_map(const MapCommandOptions& o) {
   if (rank == 0 && !o.quiet) {
     options.progress = [&bar](std::size_t done, std::size_t total) {
       if (!bar) bar = std::make_unique<pvdf::Progress>("map", total);
+      bar->set_total(total);  // adaptive placement learns each level's solves when it gets there
       bar->update(done);
     };
     // The generator's own estimate of its time left (each position's cost predicted from its

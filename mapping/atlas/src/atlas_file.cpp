@@ -146,6 +146,7 @@ void write_atlas(const std::string& path, const ChargeAtlas& a) {
     w.number_attribute(root, "fe_size_m", a.fe_size_m);
     w.number_attribute(root, "keep_out_m", a.keep_out_m);
     w.number_attribute(root, "n_dofs", double(a.n_dofs));
+    if (!a.checkpoint_key.empty()) w.string_attribute(root, "checkpoint_key", a.checkpoint_key);
     {
       Handle g(H5Gcreate2(root, "provenance", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose);
       if (!g.valid()) w.fail("group /provenance");
@@ -216,6 +217,7 @@ ChargeAtlas read_atlas(const std::string& path) {
   a.keep_out_m = version == 1 ? 0.0 : r.number_attribute(root, "keep_out_m");  // version 1: the whole film served
   if (!(a.keep_out_m >= 0)) r.fail("keep_out_m is not >= 0");
   a.n_dofs = std::size_t(r.number_attribute(root, "n_dofs"));
+  if (H5Aexists(root, "checkpoint_key") > 0) a.checkpoint_key = r.string_attribute(root, "checkpoint_key");
   {
     if (H5Lexists(root, "provenance", H5P_DEFAULT) <= 0) r.fail("group /provenance is missing");
     Handle g(H5Gopen2(root, "provenance", H5P_DEFAULT), H5Gclose);

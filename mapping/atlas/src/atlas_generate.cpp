@@ -9,12 +9,15 @@
 #include "pvdf/fem/solver.hpp"
 #include "pvdf/version.hpp"
 
+#include <nlohmann/json.hpp>
+
 #include <algorithm>
 #include <array>
 #include <atomic>
 #include <chrono>
 #include <cmath>
 #include <exception>
+#include <filesystem>
 #include <limits>
 #include <mutex>
 #include <sstream>
@@ -39,6 +42,81 @@ bool film_mirror_symmetric(const pvdf::Scene& scene) {
   if (scene.membrane.outline.shape == pvdf::FilmOutline::Shape::polygon) return false;
   const double quarter = std::remainder(scene.material.draw_angle_rad, 0.5 * pvdf::pi);
   return std::abs(quarter) <= 1e-12;
+}
+
+// Everything a resumed run must share with the run that wrote the checkpoint: every setting that
+// changes a value (not the thread count: each row depends only on its warm start, §3).
+std::string checkpoint_key(const std::string& scene_json, const AtlasOptions& o, const std::vector<double>& forces,
+                           double tolerance, double margin) {
+  nlohmann::json k;
+  k["checkpoint"] = "pvdfkit-atlas-checkpoint 1";
+  k["pvdfkit_version"] = pvdf::version_string;
+  k["scene"] = scene_json;
+  k["spacing_m"] = o.spacing_m;
+  k["forces_N"] = forces;
+  k["tolerance"] = tolerance;
+  k["rim_margin_m"] = margin;
+  k["cell_m"] = o.cell_m;
+  k["fe_size_m"] = o.fe_size_m;
+  k["keep_out_m"] = o.keep_out_m;
+  k["n_setup_checks"] = o.n_setup_checks;
+  return k.dump();
+}
+
+// The per-press data of the rows marked in `rows` (each completed: no thread writes them any more),
+// every other served press not_computed: what a checkpoint holds.
+ChargeAtlas completed_rows(const ChargeAtlas& a, const std::vector<std::uint8_t>& rows) {
+  ChargeAtlas c;
+  c.scene_json = a.scene_json;
+  c.pvdfkit_version = a.pvdfkit_version;
+  c.film_json = a.film_json;
+  c.material_json = a.material_json;
+  c.probe_json = a.probe_json;
+  c.thickness_m = a.thickness_m;
+  c.model = a.model;
+  c.model_reason = a.model_reason;
+  c.error_estimator = a.error_estimator;
+  c.integration_error_rule = a.integration_error_rule;
+  c.tolerance = a.tolerance;
+  c.rim_margin_m = a.rim_margin_m;
+  c.keep_out_m = a.keep_out_m;
+  c.fe_size_m = a.fe_size_m;
+  c.n_dofs = a.n_dofs;
+  c.description = a.description + " (checkpoint: completed rows only)";
+  c.checkpoint_key = a.checkpoint_key;
+  c.spacing_m = a.spacing_m;
+  c.x_m = a.x_m;
+  c.y_m = a.y_m;
+  c.mask = a.mask;
+  c.forces_N = a.forces_N;
+  c.grid = a.grid;
+  c.geometry = a.geometry;
+  c.reference_names = a.reference_names;
+  const std::size_t nx = a.nx(), ny = a.ny(), nf = a.nf(), nr = a.nr(), nc = a.n_cells(), np = nf * ny * nx;
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  c.status.assign(np, std::uint8_t(PointStatus::outside));
+  c.moments.assign(np * nc * 3, nan);
+  c.deflection_at_load_m.assign(np, nan);
+  c.estimated_relative_error.assign(np, nan);
+  c.reference_charge_C.assign(np * nr, nan);
+  c.reference_charge_error_C.assign(np * nr, nan);
+  for (std::size_t f = 0; f < nf; ++f)
+    for (std::size_t j = 0; j < ny; ++j)
+      for (std::size_t i = 0; i < nx; ++i) {
+        const std::size_t p = a.point(f, j, i);
+        if (!a.mask[j * nx + i]) continue;
+        if (!rows[j]) {
+          c.status[p] = std::uint8_t(PointStatus::not_computed);
+          continue;
+        }
+        c.status[p] = a.status[p];
+        c.deflection_at_load_m[p] = a.deflection_at_load_m[p];
+        c.estimated_relative_error[p] = a.estimated_relative_error[p];
+        std::copy_n(a.moments.begin() + long(p * nc * 3), nc * 3, c.moments.begin() + long(p * nc * 3));
+        std::copy_n(a.reference_charge_C.begin() + long(p * nr), nr, c.reference_charge_C.begin() + long(p * nr));
+        std::copy_n(a.reference_charge_error_C.begin() + long(p * nr), nr, c.reference_charge_error_C.begin() + long(p * nr));
+      }
+  return c;
 }
 
 }  // namespace
@@ -154,15 +232,104 @@ ChargeAtlas generate_atlas(const pvdf::Scene& scene, const AtlasOptions& o, Atla
   std::size_t n_canonical = 0;
   for (std::size_t j = 0; j < ny; ++j)
     for (std::size_t i = 0; i < nx; ++i) n_canonical += atlas.mask[j * nx + i] && canonical(i, j);
-  std::atomic<std::size_t> next_row{0}, done{0};
-  std::mutex report_mutex;
+  std::vector<std::size_t> row_first(ny, nx);
+  for (std::size_t j = 0; j < ny; ++j)
+    for (std::size_t i = 0; i < nx && row_first[j] == nx; ++i)
+      if (atlas.mask[j * nx + i] && canonical(i, j)) row_first[j] = i;
+  // row_complete[j]: every canonical position of row j solved at every level (a row without one
+  // counts as complete). Set under report_mutex once the row's last press is stored; a checkpoint
+  // holds exactly these rows.
+  std::vector<std::uint8_t> row_complete(ny, 0);
+  for (std::size_t j = 0; j < ny; ++j) row_complete[j] = row_first[j] >= nx;
+  atlas.checkpoint_key = checkpoint_key(atlas.scene_json, o, forces, tolerance, margin);
+  std::size_t n_resumed = 0;
   std::string first_failure;
+  if (!o.checkpoint_path.empty() && o.resume && std::filesystem::exists(o.checkpoint_path)) {
+    ChargeAtlas saved;
+    const std::string fix = "; delete it, pass --no-resume, or give another --checkpoint";
+    try {
+      saved = read_atlas(o.checkpoint_path);
+    } catch (const pvdf::InputError& e) {
+      throw pvdf::InputError("atlas checkpoint " + o.checkpoint_path + " cannot be read (" + e.what() + ")" + fix);
+    }
+    if (saved.checkpoint_key != atlas.checkpoint_key) {
+      throw pvdf::InputError("atlas checkpoint " + o.checkpoint_path +
+                             " was written for another scene, grid, force levels, tolerance or version" + fix);
+    }
+    if (saved.nx() != nx || saved.ny() != ny || saved.nf() != nf || saved.nr() != nr || saved.n_cells() != nc ||
+        saved.n_dofs != atlas.n_dofs || saved.mask != atlas.mask) {
+      throw pvdf::InputError("atlas checkpoint " + o.checkpoint_path + " has another probe grid, cell grid or mesh" + fix);
+    }
+    for (std::size_t j = 0; j < ny; ++j) {
+      if (row_complete[j]) continue;
+      bool complete = true;
+      for (std::size_t f = 0; f < nf && complete; ++f)
+        for (std::size_t i = 0; i < nx && complete; ++i) {
+          if (!atlas.mask[j * nx + i] || !canonical(i, j)) continue;
+          const std::size_t p = atlas.point(f, j, i);
+          const auto st = saved.status[p];
+          if (st == std::uint8_t(PointStatus::ok)) {
+            for (std::size_t v = 0; v < nc * 3 && complete; ++v) complete = std::isfinite(saved.moments[p * nc * 3 + v]);
+            if (!complete) {
+              throw pvdf::InputError("atlas checkpoint " + o.checkpoint_path + ": a press marked ok holds a non-finite moment" + fix);
+            }
+          } else if (st != std::uint8_t(PointStatus::not_converged)) {
+            complete = false;
+          }
+        }
+      if (!complete) continue;
+      row_complete[j] = 1;
+      for (std::size_t f = 0; f < nf; ++f)
+        for (std::size_t i = 0; i < nx; ++i) {
+          if (!atlas.mask[j * nx + i] || !canonical(i, j)) continue;
+          const std::size_t p = atlas.point(f, j, i);
+          if (f == 0) ++n_resumed;
+          atlas.status[p] = saved.status[p];
+          atlas.deflection_at_load_m[p] = saved.deflection_at_load_m[p];
+          atlas.estimated_relative_error[p] = saved.estimated_relative_error[p];
+          std::copy_n(saved.moments.begin() + long(p * nc * 3), nc * 3, atlas.moments.begin() + long(p * nc * 3));
+          std::copy_n(saved.reference_charge_C.begin() + long(p * nr), nr, atlas.reference_charge_C.begin() + long(p * nr));
+          std::copy_n(saved.reference_charge_error_C.begin() + long(p * nr), nr,
+                      atlas.reference_charge_error_C.begin() + long(p * nr));
+          if (saved.status[p] == std::uint8_t(PointStatus::not_converged) && first_failure.empty())
+            first_failure = "(" + num(atlas.x_m[i]) + ", " + num(atlas.y_m[j]) + ") m, " + num(forces[f]) +
+                            " N: did not converge (in the resumed checkpoint)";
+        }
+    }
+  }
+  std::atomic<std::size_t> next_row{0}, done{n_resumed};
+  std::atomic<bool> stopped{false};
+  std::mutex report_mutex, checkpoint_mutex;
   std::exception_ptr error;
+  auto last_checkpoint = std::chrono::steady_clock::now();
+  auto stop_now = [&] {
+    if (stopped) return true;
+    if ((o.cancel && o.cancel->load()) || (o.stop_after_positions > 0 && done - n_resumed >= o.stop_after_positions)) stopped = true;
+    return stopped.load();
+  };
+  // Writes the completed rows (atomically: write_atlas renames a finished temporary file).
+  auto write_checkpoint = [&](bool force) {
+    if (o.checkpoint_path.empty()) return;
+    std::unique_lock<std::mutex> writing(checkpoint_mutex, std::try_to_lock);
+    if (!writing.owns_lock() && !force) return;
+    if (!writing.owns_lock()) writing.lock();
+    std::vector<std::uint8_t> rows;
+    {
+      std::lock_guard<std::mutex> lock(report_mutex);
+      const double since = std::chrono::duration<double>(std::chrono::steady_clock::now() - last_checkpoint).count();
+      if (!force && since < o.checkpoint_interval_s) return;
+      rows = row_complete;
+    }
+    write_atlas(o.checkpoint_path, completed_rows(atlas, rows));
+    std::lock_guard<std::mutex> lock(report_mutex);
+    last_checkpoint = std::chrono::steady_clock::now();
+  };
   // One press, all levels, at (i, j), warm from along[f] (or the level below); stores the result
   // and leaves the converged states in along. `fresh`: the warm start first makes the sweep forget
-  // its earlier solves (SweepState::fresh_history), so the press depends on nothing else.
+  // its earlier solves (SweepState::fresh_history), so the press depends on nothing else. `count`:
+  // a press of a row not taken from the checkpoint (progress and --stop-after-positions count it).
   auto press_at = [&](pvdf::fem::AtlasSweep& sweep, std::size_t i, std::size_t j, std::vector<pvdf::fem::SweepState>& along,
-                      bool fresh) {
+                      bool fresh, bool count) {
     for (std::size_t f = 0; f < nf; ++f) {
       pvdf::fem::SweepState* warm = !along[f].dofs.empty() ? &along[f] : (f > 0 && !along[f - 1].dofs.empty() ? &along[f - 1] : nullptr);
       if (warm && fresh) warm->fresh_history = true;
@@ -189,35 +356,40 @@ ChargeAtlas generate_atlas(const pvdf::Scene& scene, const AtlasOptions& o, Atla
       }
       along[f] = std::move(next);
     }
+    if (!count) return;
     const std::size_t d = ++done;
     if (o.progress) {
       std::lock_guard<std::mutex> lock(report_mutex);
       o.progress(d, n_canonical);
     }
   };
+  if (o.progress && n_resumed > 0) o.progress(n_resumed, n_canonical);
   // 3a. The rows' first positions as one chain on the first sweep, before the threads: from the row
   // nearest y = 0 (solved from the flat film) outward both ways, each warm from its neighbour row's
   // (a cold solve on the atlas's fine mesh is a long continuation: on seed 001 a row start cost as
   // much as a whole row of warm presses). Each chain press and each row's next press forget the
-  // sweep's history, so the atlas does not depend on the number of threads.
-  std::vector<std::size_t> row_first(ny, nx);
-  for (std::size_t j = 0; j < ny; ++j)
-    for (std::size_t i = 0; i < nx && row_first[j] == nx; ++i)
-      if (atlas.mask[j * nx + i] && canonical(i, j)) row_first[j] = i;
+  // sweep's history, so the atlas does not depend on the number of threads, nor on a resume: a
+  // resumed run walks the chain as far as the farthest row still to do each way (the chain's
+  // presses in completed rows give the values the checkpoint holds; they are not counted again).
   std::vector<std::vector<pvdf::fem::SweepState>> row_start(ny, std::vector<pvdf::fem::SweepState>(nf));
   {
     std::size_t centre = ny;
     for (std::size_t j = 0; j < ny; ++j)
       if (row_first[j] < nx && (centre == ny || std::abs(atlas.y_m[j]) < std::abs(atlas.y_m[centre]))) centre = j;
-    if (centre < ny) {
+    if (centre < ny && std::find(row_complete.begin(), row_complete.end(), 0) != row_complete.end()) {
       std::vector<pvdf::fem::SweepState> along(nf);
-      press_at(*sweeps.front(), row_first[centre], centre, along, true);
-      row_start[centre] = along;
+      if (!stop_now()) {
+        press_at(*sweeps.front(), row_first[centre], centre, along, true, !row_complete[centre]);
+        row_start[centre] = along;
+      }
       for (int dir : {+1, -1}) {
+        long last = -1;  // the farthest row still to do this way
+        for (long j = long(centre) + dir; j >= 0 && j < long(ny); j += dir)
+          if (!row_complete[std::size_t(j)]) last = j;
         along = row_start[centre];
-        for (long j = long(centre) + dir; j >= 0 && j < long(ny); j += dir) {
+        for (long j = long(centre) + dir; last >= 0 && j >= 0 && j < long(ny) && j != last + dir && !stop_now(); j += dir) {
           if (row_first[std::size_t(j)] >= nx) continue;
-          press_at(*sweeps.front(), row_first[std::size_t(j)], std::size_t(j), along, true);
+          press_at(*sweeps.front(), row_first[std::size_t(j)], std::size_t(j), along, true, !row_complete[std::size_t(j)]);
           row_start[std::size_t(j)] = along;
         }
       }
@@ -226,14 +398,25 @@ ChargeAtlas generate_atlas(const pvdf::Scene& scene, const AtlasOptions& o, Atla
   auto work = [&](pvdf::fem::AtlasSweep& sweep) {
     try {
       for (std::size_t j = next_row++; j < ny; j = next_row++) {
-        if (row_first[j] >= nx) continue;
+        if (row_complete[j]) continue;  // taken from the checkpoint (or no position): not written by anyone now
+        if (stop_now()) break;
         std::vector<pvdf::fem::SweepState> along = std::move(row_start[j]);  // last state of the row at each level
-        bool fresh = true;
+        bool fresh = true, abandoned = false;
         for (std::size_t i = row_first[j] + 1; i < nx; ++i) {
           if (!atlas.mask[j * nx + i] || !canonical(i, j)) continue;
-          press_at(sweep, i, j, along, fresh);
+          if (stop_now()) {
+            abandoned = true;  // a partial row is not checkpointed: a resume solves it again from its start
+            break;
+          }
+          press_at(sweep, i, j, along, fresh, true);
           fresh = false;
         }
+        if (abandoned) break;
+        {
+          std::lock_guard<std::mutex> lock(report_mutex);
+          row_complete[j] = 1;
+        }
+        write_checkpoint(false);
       }
     } catch (...) {
       std::lock_guard<std::mutex> lock(report_mutex);
@@ -246,6 +429,22 @@ ChargeAtlas generate_atlas(const pvdf::Scene& scene, const AtlasOptions& o, Atla
   work(*sweeps.front());
   for (auto& th : pool) th.join();
   if (error) std::rethrow_exception(error);
+  if (stopped) {
+    write_checkpoint(true);
+    if (report) {
+      AtlasReport r;
+      r.n_positions = n_positions;
+      r.n_resumed_positions = n_resumed;
+      r.n_solved_positions = done;
+      r.stopped_early = true;
+      r.threads = threads;
+      r.setup_s = setup_s;
+      r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+      *report = r;
+    }
+    return atlas;
+  }
+  atlas.checkpoint_key.clear();
 
   // 4. Mirror images: cell (ci, cj) of the image is cell (ncx−1−ci, cj) of the source under x → −x
   // (m1 changes sign), likewise in y; the reference quadrants are permuted (Q1 ↔ Q2, Q3 ↔ Q4 under
@@ -293,6 +492,7 @@ ChargeAtlas generate_atlas(const pvdf::Scene& scene, const AtlasOptions& o, Atla
     }
     r.first_failure = first_failure;
     r.n_solved_positions = n_canonical;
+    r.n_resumed_positions = n_resumed;
     for (const auto& s : sweeps) r.n_rim_solves += std::size_t(s->timing().rim_solves);
     r.mirror_x = mirror_x;
     r.mirror_y = mirror_y;

@@ -10,6 +10,7 @@ nlohmann::json atlas_report_json(const AtlasReport& report, const ChargeAtlas& a
   j["n_positions"] = report.n_positions;
   j["n_points"] = report.n_points;
   j["n_solved_positions"] = report.n_solved_positions;
+  j["n_resumed_positions"] = report.n_resumed_positions;
   j["mirror_x"] = report.mirror_x;
   j["mirror_y"] = report.mirror_y;
   j["n_failed"] = report.n_failed;

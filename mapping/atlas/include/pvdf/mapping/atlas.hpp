@@ -8,6 +8,7 @@
 #include "pvdf/fem/atlas.hpp"
 #include "pvdf/mapping/map.hpp"
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -38,6 +39,9 @@ struct ChargeAtlas {
   double fe_size_m = 0;         ///< FE cell size over the whole film (m)
   std::size_t n_dofs = 0;
   std::string description;
+  /// Checkpoints only (docs/atlas.md §7): the settings a resumed run must share, one string; empty
+  /// in a finished atlas.
+  std::string checkpoint_key;
   // --- probe grid (the map generator's: nodes at integer multiples of spacing_m)
   double spacing_m = 0;
   std::vector<double> x_m, y_m;      ///< [nx], [ny]
@@ -76,6 +80,13 @@ struct AtlasOptions {
   int threads = 1;                   ///< worker threads (one AtlasSweep each); 0 = hardware concurrency
   std::function<void(std::size_t done, std::size_t total)> progress;
   std::string description;
+  /// Checkpoint file (docs/atlas.md §7): the completed rows, written at most every
+  /// checkpoint_interval_s and when the run stops early; "" = none.
+  std::string checkpoint_path;
+  bool resume = true;                   ///< start from checkpoint_path's completed rows when it exists
+  double checkpoint_interval_s = 30;
+  const std::atomic<bool>* cancel = nullptr;  ///< set (SIGINT): stop after the presses in flight
+  std::size_t stop_after_positions = 0; ///< testing: stop as if killed after this many solved positions; 0 = never
 };
 
 /// What a generation did.
@@ -88,6 +99,8 @@ struct AtlasReport {
   double setup_s = 0, wall_s = 0;
   int threads = 1;
   std::string first_failure;
+  std::size_t n_resumed_positions = 0;  ///< positions taken from the checkpoint
+  bool stopped_early = false;           ///< cancelled or stop_after_positions: the atlas is partial (checkpoint written)
 };
 
 /// One FEM sweep over the probe grid of `scene` (its electrodes and loads ignored).
