@@ -181,21 +181,6 @@ void print_details(const Candidate& c) {
   }
 }
 
-nlohmann::json candidate_json(const Candidate& c, int rank) {
-  nlohmann::json j = design_summary_json(c.summary);
-  j["rank"] = rank;
-  j["label"] = c.label;
-  j["source"] = c.source;
-  j["map_source"] = c.map_source;
-  if (!c.map_file.empty()) j["map_file"] = c.map_file;
-  if (!c.sweep_key.empty()) {
-    j["vary_key"] = c.sweep_key;
-    j["vary_value"] = c.sweep_value;
-  }
-  j["refined"] = c.refined;
-  return j;
-}
-
 // ---------------------------------------------------------------------------------------------
 // Figures
 
@@ -446,40 +431,17 @@ std::vector<Candidate> collect_candidates(const DesignCommandOptions& o, const s
     for (const auto& w : scene.warnings) pvdf::app::warn(w);
     const int series = int(series_names.size());
     series_names.push_back(stem(path));
-    if (!sweep) {
-      Candidate c;
-      c.label = stem(path);
-      c.source = path;
-      c.scene = scene.original;
-      c.series = series;
-      all.push_back(std::move(c));
-      continue;
-    }
-    for (double v : sweep->values) {
-      Candidate c;
-      c.label = stem(path) + " " + sweep->key + "=" + fmt("%.4g", v);
-      c.source = path;
-      try {
-        c.scene = set_scene_key(scene.original, sweep->key, v, path);
-      } catch (const pvdf::InputError& e) {
-        throw pvdf::InputError(std::string("--vary: ") + e.what());
-      }
-      c.sweep_key = sweep->key;
-      c.sweep_value = v;
-      c.series = series;
-      all.push_back(std::move(c));
+    try {
+      for (auto& c : scene_candidates(scene.original, path, stem(path), series, sweep)) all.push_back(std::move(c));
+    } catch (const pvdf::InputError& e) {
+      throw pvdf::InputError(std::string("--vary: ") + e.what());
     }
   }
-  if (sweep && o.synthetic && all.size() >= 2) {
+  if (sweep && o.synthetic && all.size() >= 2 && same_synthetic_stand_in(all[0], all[1])) {
     // The stand-in sees only geometry, draw angle, d32/d31 and electrode area: say so when the
     // swept key changes none of them.
-    const auto m0 = synthetic_model_for_scene(pvdf::parse_scene(*all[0].scene, all[0].source));
-    const auto m1 = synthetic_model_for_scene(pvdf::parse_scene(*all[1].scene, all[1].source));
-    if (m0.centers_m == m1.centers_m && m0.draw_angle_rad == m1.draw_angle_rad && m0.scale_C == m1.scale_C &&
-        m0.d32_over_d31 == m1.d32_over_d31 && m0.film_radius_m == m1.film_radius_m) {
-      pvdf::app::warn("--vary " + sweep->key + " does not change the synthetic stand-in (it models only geometry, draw "
-                      "angle, d32/d31 and electrode area): every value will score the same; drop --synthetic for FEM maps");
-    }
+    pvdf::app::warn("--vary " + sweep->key + " does not change the synthetic stand-in (it models only geometry, draw "
+                    "angle, d32/d31 and electrode area): every value will score the same; drop --synthetic for FEM maps");
   }
   for (const auto& path : o.maps) {
     Candidate c;
@@ -494,30 +456,16 @@ std::vector<Candidate> collect_candidates(const DesignCommandOptions& o, const s
   return all;
 }
 
-/// The candidates best first by the library's rule (mapping::rank_designs).
-std::vector<const Candidate*> rank(const std::vector<Candidate>& candidates) {
-  std::vector<DesignSummary> summaries;
-  for (const auto& c : candidates) summaries.push_back(c.summary);
-  std::vector<const Candidate*> ranked;
-  for (std::size_t i : rank_designs(summaries)) ranked.push_back(&candidates[i]);
-  return ranked;
-}
-
 /// The best `--refine-best` scene candidates recomputed at the finer spacing and evaluated again.
 std::vector<Candidate> refine_winners(const std::vector<const Candidate*>& ranked, const DesignCommandOptions& o,
                                       const DesignOptions& d, double spacing, std::vector<MemorySample>* memory) {
   std::vector<Candidate> refined;
   if (o.refine_best > 0) {
     const double fine = o.refine_spacing_m > 0 ? o.refine_spacing_m : spacing / 2;
-    std::vector<const Candidate*> to_refine;
-    for (const Candidate* c : ranked) {
-      if (c->scene && int(to_refine.size()) < o.refine_best) to_refine.push_back(c);
-    }
+    const std::vector<const Candidate*> to_refine = winners_to_refine(ranked, o.refine_best);
     MapsProgress progress("design: refined maps, positions", planned_positions(to_refine, o, fine), o.quiet, "refined",
                           memory);
-    for (const Candidate* c : ranked) {
-      if (int(refined.size()) >= o.refine_best) break;
-      if (!c->scene) continue;  // a ready map cannot be refined here
+    for (const Candidate* c : to_refine) {
       Candidate r = *c;
       r.refined = true;
       r.map = make_map(r, o, fine, r.map_file, r.map_source, progress, refined.size());
@@ -527,34 +475,6 @@ std::vector<Candidate> refine_winners(const std::vector<const Candidate*>& ranke
     progress.finish();
   }
   return refined;
-}
-
-/// The ranking as JSON (what `--json` prints and design.json holds).
-nlohmann::json design_json(const DesignOptions& d, bool any_synthetic, double spacing,
-                           const std::vector<const Candidate*>& ranked, const std::vector<Candidate>& refined,
-                           const std::vector<const Candidate*>& ranked_refined, const Candidate* best,
-                           const std::optional<SceneSweep>& sweep, const std::vector<std::string>& written) {
-  nlohmann::json j;
-  j["synthetic"] = any_synthetic;
-  j["noise_C"] = d.noise_C;
-  j["target_m"] = d.target_m;
-  j["force_N"] = d.force_N;
-  j["force_range_N"] = {d.min_force_N, d.max_force_N};
-  j["force_known"] = d.force_known;
-  j["adc_bits"] = d.adc_bits;
-  j["preview_spacing_m"] = spacing;
-  j["layouts"] = nlohmann::json::array();
-  for (std::size_t i = 0; i < ranked.size(); ++i) j["layouts"].push_back(candidate_json(*ranked[i], int(i) + 1));
-  if (!refined.empty()) {
-    j["refined"] = nlohmann::json::array();
-    for (std::size_t i = 0; i < ranked_refined.size(); ++i) j["refined"].push_back(candidate_json(*ranked_refined[i], int(i) + 1));
-  }
-  j["best"] = best->label;
-  if (sweep) {
-    j["vary"] = {{"key", sweep->key}, {"values", sweep->values}};
-  }
-  j["figures"] = written;
-  return j;
 }
 
 /// The ranking as text: settings, tables, details, the best layout and the files written.
@@ -617,9 +537,9 @@ int run_design(const DesignCommandOptions& o) {
   progress.finish();
 
   // Step 3: rank; refine the winners at a finer spacing and rank again.
-  const std::vector<const Candidate*> ranked = rank(all);
+  const std::vector<const Candidate*> ranked = rank_candidates(all);
   const std::vector<Candidate> refined = refine_winners(ranked, o, d, spacing, &memory);
-  const std::vector<const Candidate*> ranked_refined = rank(refined);
+  const std::vector<const Candidate*> ranked_refined = rank_candidates(refined);
 
   // Step 4: report.
   bool any_synthetic = false;
@@ -631,8 +551,15 @@ int run_design(const DesignCommandOptions& o) {
     write_map_figures(ranked_refined.empty() ? ranked : ranked_refined, o, noise_text, written);
     if (sweep) write_sweep_figure(all, series_names, o, sweep->key, written);
   }
-  const Candidate* best = ranked_refined.empty() ? ranked.front() : ranked_refined.front();
-  nlohmann::json j = design_json(d, any_synthetic, spacing, ranked, refined, ranked_refined, best, sweep, written);
+  DesignStudyReport report;
+  report.synthetic = any_synthetic;
+  report.preview_spacing_m = spacing;
+  report.ranked = ranked;
+  report.ranked_refined = ranked_refined;
+  report.sweep = sweep;
+  report.figures = written;
+  const Candidate* best = &report.best();
+  nlohmann::json j = design_study_json(d, report);  // what --json prints and design.json holds
   j["peak_resident_bytes"] = pvdf::peak_resident_bytes();
   j["memory"] = nlohmann::json::array();
   for (const auto& m : memory) {

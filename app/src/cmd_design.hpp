@@ -8,6 +8,7 @@
 #include "pvdf/core/resources.hpp"
 #include "pvdf/core/staged_eta.hpp"
 #include "pvdf/mapping/design.hpp"
+#include "pvdf/mapping/design_study.hpp"
 #include "pvdf/mapping/map.hpp"
 
 #include <nlohmann/json.hpp>
@@ -200,20 +201,8 @@ class MapsProgress {
   std::unique_ptr<pvdf::Progress> bar_;
 };
 
-/// One candidate layout and what the analysis found.
-struct Candidate {
-  std::string label;            ///< shown in tables and plots
-  std::string source;           ///< scene or map file
-  std::optional<nlohmann::json> scene;  ///< null for a ready map
-  std::string sweep_key;
-  double sweep_value = 0;
-  int series = 0;               ///< which SCENE of the command line (sweep curves)
-  std::string map_source;       ///< "fem" | "synthetic" | "file"
-  std::string map_file;         ///< written or read map (empty for synthetic)
-  pvdf::mapping::ChargeMap map;
-  pvdf::mapping::DesignSummary summary;
-  bool refined = false;
-};
+/// One candidate layout and what the analysis found (the library's: mapping/studies/design_study.hpp).
+using Candidate = pvdf::mapping::DesignCandidate;
 
 /// printf-formatted number ("%.3g").
 std::string fmt(const char* f, double v);

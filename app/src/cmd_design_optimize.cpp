@@ -171,11 +171,8 @@ void write_optimize_files(const std::vector<Candidate>& winners, const OptimizeS
     written.push_back(w.source);
   }
   if (winners.empty()) return;
-  std::vector<const Candidate*> shown;
-  for (const auto& w : winners) shown.push_back(&w);
-  // Panels best first, so that each panel's "#k" is the winner's rank (mapping::ranks_before).
-  std::stable_sort(shown.begin(), shown.end(),
-                   [](const Candidate* a, const Candidate* b) { return ranks_before(a->summary, b->summary); });
+  // Panels best first, so that each panel's "#k" is the winner's rank (mapping::rank_candidates).
+  const std::vector<const Candidate*> shown = rank_candidates(winners);
   write_map_figures(shown, o, noise_label(d, o), written);
   write_pareto_figure(s, o, o.synthetic, written);
 }

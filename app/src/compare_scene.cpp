@@ -1,6 +1,7 @@
 // `pvdfkit compare SCENE measured.csv`: measured charges (and deflections) against FEM solves at
 // the measured presses themselves, warm-started on one prepared mesh — no map, no interpolation
-// error. Also the rule that flags presses a map's spacing cannot resolve.
+// error. The comparison is the library's (pvdf::mapping::compare_with_fem); here its progress,
+// text, JSON and CSV.
 #include "compare_scene.hpp"
 
 #include "command.hpp"
@@ -9,9 +10,8 @@
 #include "pvdf/core/io.hpp"
 #include "pvdf/core/progress.hpp"
 #include "pvdf/core/scene.hpp"
-#include "pvdf/fit/measured.hpp"
-#include "pvdf/fit/predictor.hpp"
 #include "pvdf/mapping/analysis.hpp"
+#include "pvdf/mapping/compare_fem.hpp"
 #include "pvdf/mapping/map.hpp"
 #include "pvdf/mapping/pictures.hpp"
 
@@ -20,15 +20,13 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <functional>
 #include <iostream>
-#include <limits>
 #include <memory>
 
 namespace pvdf::app {
 
 namespace {
-
-constexpr double nan_value = std::numeric_limits<double>::quiet_NaN();
 
 nlohmann::json number_or_null(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
@@ -36,8 +34,7 @@ nlohmann::json number_or_null(double v) { return std::isfinite(v) ? nlohmann::js
 
 namespace {
 
-/// The measured table against the FEM solves at its presses, in the record of `compare MAP`, with
-/// the measured and computed deflections beside it (NaN where the table has no deflection).
+/// The library's comparison (mapping::compare_with_fem) under the names the printers below use.
 struct SceneComparison {
   std::vector<std::string> names;
   pvdf::mapping::Comparison c;
@@ -47,69 +44,20 @@ struct SceneComparison {
 
 SceneComparison compare_with_fem(const pvdf::Scene& scene, const std::string& measured_path, double min_charge_C,
                                  bool quiet) {
-  SceneComparison out;
-  std::vector<std::string>& names = out.names;
-  for (const auto& e : scene.electrodes) names.push_back(e.name);
-  const fit::MeasuredTable m = fit::read_measured(measured_path, names);
-  const std::size_t ne = names.size(), n = m.n_rows();
-  std::vector<fit::Press> presses;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (!scene.membrane.outline.contains({m.x_m[i], m.y_m[i]}, scene.probe.radius_m)) {
-      throw pvdf::InputError(measured_path + ":" + std::to_string(m.line[i]) +
-                             ": press is not inside the film at least a probe radius from the rim; fix or remove the row");
-    }
-    presses.push_back({m.x_m[i], m.y_m[i], m.force_N[i]});
-  }
   // Progress on stderr (none with --quiet): the sweep setup ("starting"), then the solves.
   std::unique_ptr<pvdf::Progress> bar;
-  fit::PredictorOptions options;
+  std::function<void(std::size_t, std::size_t)> progress;
   if (!quiet) {
     bar = std::make_unique<pvdf::Progress>("compare: FEM solves", 0);
-    options.progress = [&bar](std::size_t done, std::size_t total) {
+    progress = [&bar](std::size_t done, std::size_t total) {
       bar->set_total(total);
       bar->update(done);
     };
   }
-  fit::Predictor predictor(scene, presses, options);
-  const auto responses = predictor.predict({scene.membrane.pretension_N_per_m, 1.0});
+  pvdf::mapping::FemComparison r = pvdf::mapping::compare_with_fem(scene, measured_path, min_charge_C, progress);
   if (bar) bar->finish();
-  const std::vector<double> gains(ne, 1.0);
-
-  // The same record as `compare MAP`, so the same summary, plot and report follow.
-  pvdf::mapping::Comparison& c = out.c;
-  out.w_meas.assign(n, nan_value);
-  out.w_fem.assign(n, nan_value);
-  std::vector<std::vector<double>> measured_q(n, std::vector<double>(ne, nan_value));
-  for (const auto& col : m.observed) {
-    for (std::size_t i = 0; i < n; ++i) {
-      if (col.electrode < 0) out.w_meas[i] = col.value[i];
-      else measured_q[i][col.electrode] = col.value[i];
-    }
-  }
-  pvdf::mapping::CompareOptions co;
-  co.min_map_charge_C = min_charge_C;
-  const std::vector<double> floor_C =
-      pvdf::mapping::comparison_floor_C(co, std::vector<double>(ne, pvdf::mapping::default_noise_C));
-  for (std::size_t i = 0; i < n; ++i) {
-    pvdf::mapping::ComparedPress p;
-    p.measured.x_m = m.x_m[i];
-    p.measured.y_m = m.y_m[i];
-    p.measured.force_N = m.force_N[i];
-    p.measured.line = m.line[i];
-    p.measured.charge_C = measured_q[i];
-    p.in_map = true;
-    p.map_charge_C = fit::charges_C(responses[i], predictor.electrode_areas_m2(), scene.membrane.thickness_m,
-                                    scene.material.d31_C_per_N, scene.material.d32_C_per_N, gains);
-    p.difference_pct.assign(ne, nan_value);
-    for (std::size_t k = 0; k < ne; ++k)
-      p.difference_pct[k] = pvdf::mapping::charge_difference_pct(measured_q[i][k], p.map_charge_C[k], floor_C[k]);
-    out.w_fem[i] = responses[i].deflection_m;
-    c.presses.push_back(p);
-  }
-  pvdf::mapping::summarize_comparison(c, names);
-  c.n_presses = c.n_in_map = static_cast<int>(n);
-  out.setup = predictor.stats().reference_setup;
-  return out;
+  return {std::move(r.electrode_names), std::move(r.comparison), std::move(r.deflection_measured_m),
+          std::move(r.deflection_fem_m), r.setup};
 }
 
 /// `--report`: one CSV row per press, measured and FEM values side by side.

@@ -10,8 +10,8 @@ namespace pvdf::app {
 
 /// Compares measured presses with direct FEM solves of the scene at the same positions and
 /// forces (warm-started probe sweep, no interpolation). Same outputs as `compare MAP`, plus the
-/// deflection when the CSV has `deflection_m`; the same charge floor and statistics
-/// (mapping::comparison_floor_C with the default channel noise, mapping::summarize_comparison).
+/// deflection when the CSV has `deflection_m`; the comparison is mapping::compare_with_fem (the
+/// charge floor and statistics of compare_with_map: comparison_floor_C, summarize_comparison).
 /// Progress on stderr unless `quiet`. Returns the exit code.
 int run_compare_scene(const std::string& scene_path, const std::string& measured_path, bool json,
                       const std::string& plot_path, const std::string& report_path, double min_charge_C = 0,

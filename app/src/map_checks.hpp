@@ -12,9 +12,8 @@ namespace pvdf::app {
 /// True when `path` holds a JSON scene (first non-blank byte '{') rather than an HDF5 map.
 bool is_scene_file(const std::string& path);
 
-/// Warns (stderr) about every compared press closer to an electrode centre than twice the map's
-/// spacing, where the map's interpolation error alone reaches tens of % (docs/fem-vs-experiment.md §4).
-/// Returns the number of such presses.
+/// Warns (stderr) about every compared press of mapping::presses_map_cannot_resolve (closer to an
+/// electrode centre than twice the map's spacing). Returns the number of such presses.
 int warn_if_map_too_coarse(const pvdf::mapping::ChargeMap& map, const std::vector<pvdf::mapping::MeasuredPress>& presses);
 
 /// Refuses (InputError naming the CSV and its line) a measured press no bench produces: a force

@@ -157,31 +157,17 @@ order; sample arrays the ``samples`` passed to solve.)doc")
       .def_property_readonly("message", [](const Result& r) { return r.summary.message; })
       .def_property_readonly("estimated_relative_error", [](const Result& r) { return r.summary.estimated_relative_error; })
       .def_property_readonly("summary", [](const Result& r) {
-        const auto& s = r.summary;
-        py::dict d;
-        d["status"] = pvdf::fem::status_name(s.status);
-        d["message"] = s.message;
-        d["model"] = pvdf::fem::model_name(s.model);
-        d["model_reason"] = s.model_reason;
-        d["n_dofs"] = s.n_dofs;
-        d["n_cells"] = s.n_cells;
-        d["newton_iterations"] = s.newton_iterations;
-        d["load_steps"] = s.load_steps;
-        d["refinement_cycles"] = s.refinement_cycles;
-        d["final_residual_norm"] = s.final_residual_norm;
-        d["estimated_relative_error"] = s.estimated_relative_error;
-        d["estimated_discretization_error"] = s.estimated_discretization_error;
-        d["estimated_model_error"] = s.estimated_model_error;
-        d["error_estimator"] = s.error_estimator;
-        d["wall_s"] = s.wall_s;
-        d["cpu_s"] = s.cpu_s;
-        // The keys of `pvdfkit solve --json` (pvdf::fem::result_json): time_breakdown_s.assembly, not assembly_s.
-        py::dict times;
-        times["setup"] = s.setup_s;
-        times["assembly"] = s.assembly_s;
-        times["linear_solve"] = s.linear_solve_s;
-        d["time_breakdown_s"] = times;
-        return d;
+        // The solver summary's keys of `pvdfkit solve --json`, taken from its one serializer
+        // (pvdf::fem::result_json), plus final_residual_norm, which that JSON does not print.
+        const nlohmann::json all = pvdf::fem::result_json(r);
+        nlohmann::json d;
+        for (const char* key : {"status", "message", "model", "model_reason", "n_dofs", "n_cells", "newton_iterations",
+                                "load_steps", "refinement_cycles", "estimated_relative_error",
+                                "estimated_discretization_error", "estimated_model_error", "error_estimator", "wall_s",
+                                "cpu_s", "time_breakdown_s"})
+          d[key] = all.at(key);
+        d["final_residual_norm"] = r.summary.final_residual_norm;
+        return py::module_::import("json").attr("loads")(d.dump());
       }, "status, message, model, n_dofs, n_cells, iterations, estimates, wall_s, cpu_s and time_breakdown_s {setup, assembly, "
          "linear_solve} (s): the solver summary with the keys of `pvdfkit solve --json`")
       .def("to_dict", [](const Result& r) {

@@ -91,6 +91,42 @@ def test_summary_is_the_command_line_json(tmp_path):
     assert py["status"] == "ok" and 0 < py["usable_fraction"] <= 1 and len(py["electrodes"]) == 3
 
 
+def test_design_result_is_the_command_line_json_key_for_key(tmp_path):
+    """The whole object `pvdfkit design --map A --map B --json` prints, rebuilt from the Python package:
+    its settings, every layout (pvdfkit.design's summary plus rank, label, source and map keys) in the
+    order of pvdfkit.rank_designs, best and figures; key for key at every depth (the command's
+    memory keys aside). Both go through the library's design_study_json and design_summary_json."""
+    import json
+    import subprocess
+    from cli_path import pvdfkit_cli
+    from same_json import assert_same_json
+    cli = pvdfkit_cli()
+    small, large = tmp_path / "small.h5", tmp_path / "large.h5"
+    pvdfkit.write_map(str(small), analytic_map(spacing=0.002, half=0.010))  # its usable share is larger: ranks first
+    pvdfkit.write_map(str(large), analytic_map(spacing=0.002))
+    out = subprocess.run([cli, "design", "--map", str(large), "--map", str(small), "--force-N", "1.5", "--force-range-N",
+                          "0.5,3", "--noise-C", repr(NOISE_C), "--target-mm", "0.4", "--adc-bits", "10", "--json",
+                          "--no-plots", "--quiet"], capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    cl = json.loads(out.stdout)
+    paths = [str(large), str(small)]
+    designs = [pvdfkit.design(pvdfkit.read_map(p), force_N=1.5, min_force_N=0.5, max_force_N=3.0, noise_C=NOISE_C,
+                              target_m=0.4e-3, adc_bits=10) for p in paths]
+    order = pvdfkit.rank_designs(designs)
+    assert order == [1, 0]  # the ranking reorders the command line's layouts
+    layouts = []
+    for rank, i in enumerate(order, start=1):
+        layout = dict(designs[i].summary)
+        label = paths[i].rsplit("/", 1)[1][:-3]
+        layout.update(rank=rank, label=label, source=paths[i], map_source="file", map_file=paths[i], refined=False)
+        layouts.append(layout)
+    expected = {"synthetic": False, "noise_C": [NOISE_C], "target_m": 0.4e-3, "force_N": 1.5, "force_range_N": [0.5, 3.0],
+                "force_known": False, "adc_bits": 10, "preview_spacing_m": 0.003, "layouts": layouts,
+                "best": layouts[0]["label"], "figures": []}
+    assert set(cl) - {"peak_resident_bytes", "memory"} == set(expected)
+    assert_same_json(expected, {k: v for k, v in cl.items() if k in expected}, rel=0)
+
+
 def test_optimize_layouts_synthetic_is_design_optimize(tmp_path):
     """pvdfkit.optimize_layouts(synthetic=True) and `pvdfkit design --optimize --synthetic` with the same
     settings and seed: the same JSON key for key (the command adds its files), the same best layout

@@ -170,8 +170,11 @@ def test_generate_map_agrees_with_direct_solves(tmp_path):
     cl = json.loads(out.stdout)
     # peak_resident_bytes is the command process's memory, not a property of the map: not in Python's report
     assert set(report) - {"setup_s"} == set(cl) - {"output", "mesh", "peak_resident_bytes"}
-    for key in ("n_positions", "n_points", "n_solved", "n_mirrored", "n_failed", "model", "nx", "ny", "forces_N"):
-        assert report[key] == cl[key], key
+    # Every key of both (times, the rates derived from them and the checkpoint's file hash aside) has the same value.
+    from same_json import assert_same_json
+    timing = {k for k in report if k.endswith("_s")} | {"estimate_share", "cpu_s_per_solve", "checkpoint_hash"}
+    assert_same_json({k: v for k, v in report.items() if k not in timing | {"setup_s"}},
+                     {k: cl[k] for k in report if k not in timing | {"setup_s"}}, rel=1e-9)
     cli_map = pvdfkit.read_map(str(tmp_path / "cli.h5"))
     assert np.allclose(cli_map.charge_C, cmap.charge_C, rtol=1e-9, atol=0)
 
@@ -199,22 +202,21 @@ def test_to_dict_is_the_command_line_json(tmp_path):
     assert set(py) == set(cl) - {"mesh", "mesh_file_cells", "peak_resident_bytes"}  # the command process's memory
     assert py["status"] == cl["status"] == "converged"
     assert py["estimated_model_error"] >= 0 and "estimated_discretization_error" in py
-    assert py["model"] == cl["model"] and py["n_dofs"] == cl["n_dofs"]
-    for key in ("max_deflection_m", "rim_reaction_N", "estimated_relative_error"):
-        assert py[key] == pytest.approx(cl[key], rel=1e-9), key
-    for a, b in zip(py["electrodes"], cl["electrodes"]):
-        assert a["name"] == b["name"]
-        assert a["charge_C"] == pytest.approx(b["charge_C"], rel=1e-9) and abs(a["charge_C"]) > 0
-        assert a["charge_error_C"] == pytest.approx(b["charge_error_C"], rel=1e-9, abs=1e-30)
-    assert py["samples"][0]["w_m"] == pytest.approx(cl["samples"][0]["w_m"], rel=1e-9)
-    # result.summary names its keys as the command's JSON does (time_breakdown_s.assembly, not
-    # assembly_s); final_residual_norm is the one key the command does not print.
+    for a in py["electrodes"]:
+        assert abs(a["charge_C"]) > 0
+    # Every key at every depth, every value (the timings aside): one serializer, pvdf::fem::result_json.
+    from same_json import assert_same_json
+    assert_same_json(py, {k: v for k, v in cl.items() if k in py})
+    # result.summary is result_json's solver keys plus final_residual_norm, the one key the command
+    # does not print (time_breakdown_s.assembly, not assembly_s).
     summary = result.summary
     assert set(summary) - {"final_residual_norm"} <= set(cl), set(summary) - set(cl)
     assert set(summary["time_breakdown_s"]) == set(cl["time_breakdown_s"]) == {"setup", "assembly", "linear_solve"}
     assert not {"assembly_s", "linear_solve_s", "setup_s"} & set(summary)
-    for key in ("status", "model", "n_dofs", "n_cells", "newton_iterations", "refinement_cycles", "error_estimator"):
-        assert summary[key] == cl[key], key
+    assert_same_json({k: v for k, v in summary.items() if k != "final_residual_norm"}, {k: cl[k] for k in summary if k in cl})
+    assert_same_json({k: v for k, v in summary.items() if k != "final_residual_norm"}, {k: py[k] for k in summary if k in py},
+                     skip=set(), rel=0)  # the same object as to_dict's, timings included
+    assert summary["final_residual_norm"] >= 0
 
 
 def test_atlas_functions_refuse_bad_input_before_any_work(tmp_path):

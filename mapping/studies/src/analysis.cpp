@@ -240,4 +240,20 @@ Comparison compare_with_map(const ChargeMap& map, const MapInterpolant& interpol
   return c;
 }
 
+std::vector<UnresolvedPress> presses_map_cannot_resolve(const ChargeMap& map, const std::vector<MeasuredPress>& presses) {
+  std::vector<UnresolvedPress> out;
+  if (map.nx() < 2 || map.ny() < 2) return out;
+  const double h = std::max(map.x_m[1] - map.x_m[0], map.y_m[1] - map.y_m[0]);
+  for (const auto& p : presses) {
+    for (std::size_t k = 0; k < map.ne(); ++k) {
+      const double d = std::hypot(p.x_m - map.electrode_centers_m[k][0], p.y_m - map.electrode_centers_m[k][1]);
+      if (d < 2 * h) {
+        out.push_back({p.line, k, d, h});
+        break;
+      }
+    }
+  }
+  return out;
+}
+
 }  // namespace pvdf::mapping

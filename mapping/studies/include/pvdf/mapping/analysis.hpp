@@ -146,4 +146,17 @@ Comparison compare_with_map(const ChargeMap& map, const MapInterpolant& interpol
 /// Seed 001's mean FEM-vs-experiment difference (§3), %.
 inline constexpr double paper_mean_difference_pct = 18.0;
 
+/// A compared press that a map's spacing h cannot resolve: closer than 2h to an electrode centre,
+/// where the map's interpolation error alone reaches tens of % (docs/fem-vs-experiment.md §4).
+struct UnresolvedPress {
+  std::size_t line = 0;       ///< the press's CSV line
+  std::size_t electrode = 0;  ///< the first electrode (map order) it is that close to
+  double distance_m = 0;      ///< from that electrode's centre
+  double spacing_m = 0;       ///< h = the larger of the map's x and y steps
+};
+
+/// The presses of `presses` the map cannot resolve, in their order (none for a map under 2 × 2).
+/// The one home of this rule (`compare MAP`, `rays --measured`).
+std::vector<UnresolvedPress> presses_map_cannot_resolve(const ChargeMap& map, const std::vector<MeasuredPress>& presses);
+
 }  // namespace pvdf::mapping

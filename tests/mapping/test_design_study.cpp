@@ -1,0 +1,106 @@
+// The study steps that moved out of the command (docs/structure.md "app/ parses, prints and writes
+// files"): the design study's ranking, winners to refine and JSON, a sweep's candidates, and the
+// rule for presses a map's spacing cannot resolve. Oracles: summaries and maps built by hand.
+#include "pvdf/core/error.hpp"
+#include "pvdf/mapping/analysis.hpp"
+#include "pvdf/mapping/design_study.hpp"
+
+#include <catch2/catch.hpp>
+
+#include <set>
+
+using namespace pvdf::mapping;
+
+namespace {
+
+DesignCandidate candidate(const std::string& label, double usable, bool with_scene) {
+  DesignCandidate c;
+  c.label = label;
+  c.source = label + (with_scene ? ".json" : ".h5");
+  if (with_scene) c.scene = nlohmann::json::object();
+  c.map_source = with_scene ? "synthetic" : "file";
+  if (!with_scene) c.map_file = c.source;
+  c.summary.usable_fraction = usable;
+  return c;
+}
+
+}  // namespace
+
+TEST_CASE("rank_candidates is rank_designs over candidates; winners_to_refine skips ready maps", "[design_study]") {
+  const std::vector<DesignCandidate> all = {candidate("a", 0.2, true), candidate("b", 0.5, false),
+                                            candidate("c", 0.4, true), candidate("d", 0.4, true)};
+  const auto ranked = rank_candidates(all);
+  REQUIRE(ranked.size() == 4);
+  CHECK(ranked[0]->label == "b");
+  CHECK(ranked[1]->label == "c");  // equal to d: the order given
+  CHECK(ranked[2]->label == "d");
+  CHECK(ranked[3]->label == "a");
+  const auto subset = rank_candidates(std::vector<const DesignCandidate*>{&all[3], &all[2]});
+  CHECK(subset[0]->label == "d");  // stable: equal layouts keep the order given
+  const auto winners = winners_to_refine(ranked, 2);
+  REQUIRE(winners.size() == 2);
+  CHECK(winners[0]->label == "c");  // b is a ready map: not refined
+  CHECK(winners[1]->label == "d");
+  CHECK(winners_to_refine(ranked, 0).empty());
+  CHECK(winners_to_refine(ranked, 10).size() == 3);
+}
+
+TEST_CASE("design_study_json holds the settings, every layout with its rank and the best", "[design_study]") {
+  std::vector<DesignCandidate> all = {candidate("a", 0.2, true), candidate("b", 0.5, false)};
+  DesignOptions d;
+  d.noise_C = {5e-14};
+  DesignStudyReport r;
+  r.preview_spacing_m = 0.003;
+  r.ranked = rank_candidates(all);
+  nlohmann::json j = design_study_json(d, r);
+  const std::set<std::string> keys = {"synthetic", "noise_C", "target_m", "force_N", "force_range_N", "force_known",
+                                      "adc_bits", "preview_spacing_m", "layouts", "best", "figures"};
+  std::set<std::string> got;
+  for (const auto& item : j.items()) got.insert(item.key());
+  CHECK(got == keys);
+  CHECK(j["best"] == "b");
+  REQUIRE(j["layouts"].size() == 2);
+  CHECK(j["layouts"][0]["rank"] == 1);
+  CHECK(j["layouts"][0]["map_file"] == "b.h5");
+  CHECK(j["layouts"][1]["label"] == "a");
+  CHECK_FALSE(j["layouts"][1].contains("map_file"));  // no file for a synthetic map
+  CHECK(j["layouts"][1]["refined"] == false);
+
+  // With refined winners: `refined` appears and the best is the first of them.
+  DesignCandidate fine = all[0];
+  fine.refined = true;
+  fine.summary.usable_fraction = 0.9;
+  std::vector<DesignCandidate> refined = {fine};
+  r.ranked_refined = rank_candidates(refined);
+  r.sweep = SceneSweep{"membrane.pretension_N_per_m", {0, 5}};
+  j = design_study_json(d, r);
+  CHECK(j["best"] == "a");
+  REQUIRE(j["refined"].size() == 1);
+  CHECK(j["refined"][0]["refined"] == true);
+  CHECK(j["vary"]["key"] == "membrane.pretension_N_per_m");
+}
+
+TEST_CASE("presses_map_cannot_resolve: closer than twice the spacing to an electrode centre", "[design_study]") {
+  ChargeMap map;
+  map.x_m = {-0.002, -0.001, 0.0, 0.001, 0.002};
+  map.y_m = {-0.004, -0.002, 0.0, 0.002, 0.004};  // h = 2 mm, the larger step
+  map.electrode_names = {"A", "B"};
+  map.electrode_centers_m = {{0.0, 0.0}, {0.010, 0.0}};
+  std::vector<MeasuredPress> presses(3);
+  presses[0].x_m = 0.0039;  // 3.9 mm from A: within 2h = 4 mm
+  presses[0].line = 7;
+  presses[1].x_m = 0.005;  // 5 mm from both: resolved
+  presses[1].line = 8;
+  presses[2].x_m = 0.0085;  // 1.5 mm from B
+  presses[2].line = 9;
+  const auto u = presses_map_cannot_resolve(map, presses);
+  REQUIRE(u.size() == 2);
+  CHECK(u[0].line == 7);
+  CHECK(u[0].electrode == 0);
+  CHECK(u[0].distance_m == Approx(0.0039));
+  CHECK(u[0].spacing_m == Approx(0.002));
+  CHECK(u[1].line == 9);
+  CHECK(u[1].electrode == 1);
+  map.x_m = {0.0};  // under 2 x 2 nodes: no spacing, no warning
+  CHECK(presses_map_cannot_resolve(map, presses).empty());
+}
