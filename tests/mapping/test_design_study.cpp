@@ -1,9 +1,10 @@
 // The study steps that moved out of the command (docs/structure.md "app/ parses, prints and writes
-// files"): the design study's ranking, winners to refine and JSON, a sweep's candidates, and the
-// rule for presses a map's spacing cannot resolve. Oracles: summaries and maps built by hand.
+// files"): the design study's ranking, winners to refine and JSON, the rule for presses a map's
+// spacing cannot resolve, and the force level a picture shows. Oracles: summaries and maps built by hand.
 #include "pvdf/core/error.hpp"
 #include "pvdf/mapping/analysis.hpp"
 #include "pvdf/mapping/design_study.hpp"
+#include "pvdf/mapping/pictures.hpp"
 
 #include <catch2/catch.hpp>
 
@@ -103,4 +104,15 @@ TEST_CASE("presses_map_cannot_resolve: closer than twice the spacing to an elect
   CHECK(u[1].electrode == 1);
   map.x_m = {0.0};  // under 2 x 2 nodes: no spacing, no warning
   CHECK(presses_map_cannot_resolve(map, presses).empty());
+}
+
+TEST_CASE("picture_force_N: the level asked for, else the one nearest 1 N in ratio", "[design_study]") {
+  ChargeMap map;
+  map.forces_N = {0.25, 0.5, 2.0, 4.0};
+  CHECK(picture_force_N(map, 3.0) == 3.0);
+  CHECK(picture_force_N(map, 0) == 0.5);  // 0.5 and 2 tie in ratio: the first
+  map.forces_N = {0.25, 1.5, 4.0};
+  CHECK(picture_force_N(map, 0) == 1.5);
+  map.forces_N = {8.0};
+  CHECK(picture_force_N(map, -1) == 8.0);
 }
