@@ -8,6 +8,7 @@
 
 #include <catch2/catch.hpp>
 
+#include <limits>
 #include <set>
 
 using namespace pvdf::mapping;
@@ -115,4 +116,25 @@ TEST_CASE("picture_force_N: the level asked for, else the one nearest 1 N in rat
   CHECK(picture_force_N(map, 0) == 1.5);
   map.forces_N = {8.0};
   CHECK(picture_force_N(map, -1) == 8.0);
+}
+
+TEST_CASE("comparison_summary_json: the keys compare MAP and compare SCENE share", "[design_study]") {
+  Comparison c;
+  ComparedPress p;
+  p.measured.charge_C = {1.1e-12, 2.0e-12};
+  p.map_charge_C = {1.0e-12, 2.0e-12};
+  p.difference_pct = {10.0, std::numeric_limits<double>::quiet_NaN()};  // the second below the floor
+  c.presses = {p};
+  summarize_comparison(c, {"A", "B"});
+  c.n_presses = 1;
+  const nlohmann::json j = comparison_summary_json(c);
+  CHECK(j["n_presses"] == 1);
+  CHECK(j["n_compared_values"] == 1);
+  CHECK(j["mean_abs_difference_pct"].get<double>() == Approx(10.0));
+  CHECK(j["paper_mean_difference_pct"].get<double>() == paper_mean_difference_pct);
+  REQUIRE(j["electrodes"].size() == 2);
+  CHECK(j["electrodes"][0]["name"] == "A");
+  CHECK(j["electrodes"][0]["n_compared"] == 1);
+  CHECK(j["electrodes"][1]["n_compared"] == 0);
+  CHECK(j.size() == 6);
 }
