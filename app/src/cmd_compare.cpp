@@ -76,28 +76,14 @@ int run_compare(const CompareCliOptions& o) {
     });
   }
   if (o.json) {
-    nlohmann::json j;
+    nlohmann::json j = comparison_summary_json(c);
     j["map"] = o.map_path;
     j["measured"] = o.measured_path;
     j["model"] = map.model;
     j["difference_definition"] = "100 * (Q_measured - Q_map) / Q_map, per press and electrode";
-    j["n_presses"] = c.n_presses;
     j["n_in_map"] = c.n_in_map;
     j["n_outside_map"] = c.n_outside;
     j["n_force_extrapolated"] = c.n_force_extrapolated;
-    j["n_compared_values"] = c.n_compared_values;
-    j["mean_abs_difference_pct"] = c.mean_abs_difference_pct;
-    j["mean_difference_pct"] = c.mean_difference_pct;
-    j["paper_mean_difference_pct"] = paper_mean_difference_pct;
-    j["electrodes"] = nlohmann::json::array();
-    for (const auto& s : c.electrodes) {
-      j["electrodes"].push_back({{"name", s.name},
-                                 {"n_compared", s.n_compared},
-                                 {"mean_abs_difference_pct", s.mean_abs_difference_pct},
-                                 {"mean_difference_pct", s.mean_difference_pct},
-                                 {"rms_difference_pct", s.rms_difference_pct},
-                                 {"max_abs_difference_pct", s.max_abs_difference_pct}});
-    }
     j["presses"] = nlohmann::json::array();
     for (const auto& p : c.presses) {
       nlohmann::json e = {{"line", p.measured.line}, {"x_m", p.measured.x_m}, {"y_m", p.measured.y_m},

@@ -61,13 +61,7 @@ int run_isocharge(const IsochargeOptions& o) {
     if (std::filesystem::is_directory(o.out_dir)) pvdf::app::check_output_file(o.out_dir + name, "--out-dir");
   }
   pvdf::make_directories(o.out_dir);
-  double force = o.force_N;
-  if (!(force > 0)) {  // the level nearest 1 N (seed 001 pressed with 1 N)
-    force = map.forces_N.front();
-    for (double f : map.forces_N) {
-      if (std::abs(std::log(f)) < std::abs(std::log(force))) force = f;
-    }
-  }
+  const double force = picture_force_N(map, o.force_N);  // given, else the level nearest 1 N
   for (std::size_t k = 0; k < map.ne(); ++k) {
     const std::string path = o.out_dir + "/isocharge_" + map.electrode_names[k] + ".png";
     write_isocharge_png(locator, map, k, force, path, o.zoom_m);

@@ -106,13 +106,7 @@ LocatorOptions locator_options(const LocateOptions& o, const ChargeMap& map) {
 /// `--pictures DIR`: the isocharge picture of each electrode and the map as VTK.
 void write_pictures(const LocateOptions& o, const ChargeMap& map, const Locator& locator) {
   pvdf::make_directories(o.pictures_dir);
-  double force = o.force_N;
-  if (!(force > 0)) {  // the level nearest 1 N
-    force = map.forces_N.front();
-    for (double f : map.forces_N) {
-      if (std::abs(std::log(f)) < std::abs(std::log(force))) force = f;
-    }
-  }
+  const double force = picture_force_N(map, o.force_N);  // given, else the level nearest 1 N
   for (std::size_t k = 0; k < map.ne(); ++k) {
     const std::string path = o.pictures_dir + "/isocharge_" + map.electrode_names[k] + ".png";
     write_isocharge_png(locator, map, k, force, path);

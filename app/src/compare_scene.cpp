@@ -85,26 +85,13 @@ void print_comparison_json(const SceneComparison& r, const std::string& scene_pa
   const auto& c = r.c;
   const auto& setup = r.setup;
   const std::size_t ne = names.size(), n = c.presses.size();
-  nlohmann::json j;
+  nlohmann::json j = pvdf::mapping::comparison_summary_json(c);
   j["scene"] = scene_path;
   j["measured"] = measured_path;
   j["model"] = pvdf::fem::model_name(setup.model);
   j["estimated_charge_relative_error"] = setup.estimated_relative_error;
   j["estimated_deflection_relative_error"] = setup.estimated_deflection_relative_error;
   j["difference_definition"] = "100 * (Q_measured - Q_fem) / Q_fem, per press and electrode";
-  j["n_presses"] = c.n_presses;
-  j["n_compared_values"] = c.n_compared_values;
-  j["mean_abs_difference_pct"] = c.mean_abs_difference_pct;
-  j["mean_difference_pct"] = c.mean_difference_pct;
-  j["paper_mean_difference_pct"] = pvdf::mapping::paper_mean_difference_pct;
-  j["electrodes"] = nlohmann::json::array();
-  for (const auto& s : c.electrodes) {
-    j["electrodes"].push_back({{"name", s.name}, {"n_compared", s.n_compared},
-                               {"mean_abs_difference_pct", s.mean_abs_difference_pct},
-                               {"mean_difference_pct", s.mean_difference_pct},
-                               {"rms_difference_pct", s.rms_difference_pct},
-                               {"max_abs_difference_pct", s.max_abs_difference_pct}});
-  }
   j["presses"] = nlohmann::json::array();
   for (std::size_t i = 0; i < n; ++i) {
     const auto& p = c.presses[i];

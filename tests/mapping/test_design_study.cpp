@@ -1,12 +1,14 @@
 // The study steps that moved out of the command (docs/structure.md "app/ parses, prints and writes
-// files"): the design study's ranking, winners to refine and JSON, a sweep's candidates, and the
-// rule for presses a map's spacing cannot resolve. Oracles: summaries and maps built by hand.
+// files"): the design study's ranking, winners to refine and JSON, the rule for presses a map's
+// spacing cannot resolve, and the force level a picture shows. Oracles: summaries and maps built by hand.
 #include "pvdf/core/error.hpp"
 #include "pvdf/mapping/analysis.hpp"
 #include "pvdf/mapping/design_study.hpp"
+#include "pvdf/mapping/pictures.hpp"
 
 #include <catch2/catch.hpp>
 
+#include <limits>
 #include <set>
 
 using namespace pvdf::mapping;
@@ -103,4 +105,36 @@ TEST_CASE("presses_map_cannot_resolve: closer than twice the spacing to an elect
   CHECK(u[1].electrode == 1);
   map.x_m = {0.0};  // under 2 x 2 nodes: no spacing, no warning
   CHECK(presses_map_cannot_resolve(map, presses).empty());
+}
+
+TEST_CASE("picture_force_N: the level asked for, else the one nearest 1 N in ratio", "[design_study]") {
+  ChargeMap map;
+  map.forces_N = {0.25, 0.5, 2.0, 4.0};
+  CHECK(picture_force_N(map, 3.0) == 3.0);
+  CHECK(picture_force_N(map, 0) == 0.5);  // 0.5 and 2 tie in ratio: the first
+  map.forces_N = {0.25, 1.5, 4.0};
+  CHECK(picture_force_N(map, 0) == 1.5);
+  map.forces_N = {8.0};
+  CHECK(picture_force_N(map, -1) == 8.0);
+}
+
+TEST_CASE("comparison_summary_json: the keys compare MAP and compare SCENE share", "[design_study]") {
+  Comparison c;
+  ComparedPress p;
+  p.measured.charge_C = {1.1e-12, 2.0e-12};
+  p.map_charge_C = {1.0e-12, 2.0e-12};
+  p.difference_pct = {10.0, std::numeric_limits<double>::quiet_NaN()};  // the second below the floor
+  c.presses = {p};
+  summarize_comparison(c, {"A", "B"});
+  c.n_presses = 1;
+  const nlohmann::json j = comparison_summary_json(c);
+  CHECK(j["n_presses"] == 1);
+  CHECK(j["n_compared_values"] == 1);
+  CHECK(j["mean_abs_difference_pct"].get<double>() == Approx(10.0));
+  CHECK(j["paper_mean_difference_pct"].get<double>() == paper_mean_difference_pct);
+  REQUIRE(j["electrodes"].size() == 2);
+  CHECK(j["electrodes"][0]["name"] == "A");
+  CHECK(j["electrodes"][0]["n_compared"] == 1);
+  CHECK(j["electrodes"][1]["n_compared"] == 0);
+  CHECK(j.size() == 6);
 }

@@ -256,4 +256,23 @@ std::vector<UnresolvedPress> presses_map_cannot_resolve(const ChargeMap& map, co
   return out;
 }
 
+nlohmann::json comparison_summary_json(const Comparison& c) {
+  nlohmann::json j;
+  j["n_presses"] = c.n_presses;
+  j["n_compared_values"] = c.n_compared_values;
+  j["mean_abs_difference_pct"] = c.mean_abs_difference_pct;
+  j["mean_difference_pct"] = c.mean_difference_pct;
+  j["paper_mean_difference_pct"] = paper_mean_difference_pct;
+  j["electrodes"] = nlohmann::json::array();
+  for (const auto& s : c.electrodes) {
+    j["electrodes"].push_back({{"name", s.name},
+                               {"n_compared", s.n_compared},
+                               {"mean_abs_difference_pct", s.mean_abs_difference_pct},
+                               {"mean_difference_pct", s.mean_difference_pct},
+                               {"rms_difference_pct", s.rms_difference_pct},
+                               {"max_abs_difference_pct", s.max_abs_difference_pct}});
+  }
+  return j;
+}
+
 }  // namespace pvdf::mapping

@@ -19,6 +19,15 @@
 
 namespace pvdf::mapping {
 
+double picture_force_N(const ChargeMap& map, double requested_N) {
+  if (requested_N > 0) return requested_N;
+  double force = map.forces_N.front();
+  for (double f : map.forces_N) {
+    if (std::abs(std::log(f)) < std::abs(std::log(force))) force = f;
+  }
+  return force;
+}
+
 namespace {
 
 constexpr double nan_value = std::numeric_limits<double>::quiet_NaN();

@@ -6,6 +6,8 @@
 #include "pvdf/mapping/interpolant.hpp"
 #include "pvdf/mapping/map.hpp"
 
+#include <nlohmann/json.hpp>
+
 #include <cstddef>
 #include <string>
 #include <vector>
@@ -138,6 +140,12 @@ std::vector<double> comparison_floor_C(const CompareOptions& options, const std:
 /// Fills c.electrodes (named `electrode_names`) and c's means from the presses' difference_pct
 /// (NaN = not compared): the one home of the comparison's statistics (`compare MAP` and `compare SCENE`).
 void summarize_comparison(Comparison& c, const std::vector<std::string>& electrode_names);
+
+/// The summary of a comparison as JSON, the keys `compare MAP` and `compare SCENE` share: n_presses,
+/// n_compared_values, the mean |difference| and mean difference (%), seed 001's mean, and per
+/// electrode its name, n_compared, mean |d|, mean d, rms and max |d| (%). The commands add their
+/// source, model and per-press keys.
+nlohmann::json comparison_summary_json(const Comparison& c);
 
 /// Compares measured presses with the map's (uncalibrated) charges at the same position and force.
 Comparison compare_with_map(const ChargeMap& map, const MapInterpolant& interpolant,

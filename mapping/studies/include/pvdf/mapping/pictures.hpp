@@ -12,6 +12,10 @@
 
 namespace pvdf::mapping {
 
+/// The force level a picture of the map shows: `requested_N` when > 0, else the map's level
+/// nearest 1 N in ratio (|ln F| smallest; seed 001 pressed with 1 N; the first of a tie).
+double picture_force_N(const ChargeMap& map, double requested_N);
+
 /// Isocharge contours of electrode `electrode` for presses of `force_N` over the map: filled
 /// field and labelled contour lines in pC, axes in mm, electrodes marked. PNG, written atomically.
 /// `half_width_m` > 0 zooms on the square [−w, w]² around the film centre (seed 001 Fig. 6
