@@ -24,21 +24,14 @@ import argparse
 import json
 import math
 import os
-import re
 import subprocess
 import sys
 from concurrent.futures import ThreadPoolExecutor
 
+import h5text  # beside this script
 
-def h5dump(path, dataset, attribute=False):
-    cmd = ["h5dump", "-a" if attribute else "-d", dataset, path]
-    out = subprocess.run(cmd, capture_output=True, text=True, check=True).stdout
-    values = []
-    for line in out.splitlines():
-        m = re.match(r"\s*\(([\d,]+)\):\s*(.*)", line)
-        if m and '"' not in m.group(2):
-            values += [float(v) for v in m.group(2).rstrip(",").split(",") if v.strip()]
-    return values
+
+h5dump = h5text.h5dump
 
 
 def read_map(path):

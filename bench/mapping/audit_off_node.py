@@ -26,21 +26,15 @@ Reads the stored errors with h5dump (hdf5-tools).
 """
 import argparse
 import json
-import re
-import subprocess
 
 import numpy as np
+
+import h5text  # beside this script
 import pvdfkit
 
 
-def h5dump(path, dataset):
-    out = subprocess.run(["h5dump", "-d", dataset, path], capture_output=True, text=True, check=True).stdout
-    values = []
-    for line in out.splitlines():
-        m = re.match(r"\s*\(([\d,]+)\):\s*(.*)", line)
-        if m and '"' not in m.group(2):
-            values += [float(v) for v in m.group(2).rstrip(",").split(",") if v.strip()]
-    return np.array(values)
+def h5dump(path, dataset, attribute=False):
+    return np.array(h5text.h5dump(path, dataset, attribute))
 
 
 def numbers(text, n):

@@ -33,24 +33,18 @@ import argparse
 import json
 import math
 import os
-import re
 import subprocess
 import sys
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
+
+import h5text  # beside this script
 import pvdfkit
 
 
 def h5dump(path, dataset, attribute=False):
-    out = subprocess.run(["h5dump", "-a" if attribute else "-d", dataset, path], capture_output=True, text=True,
-                         check=True).stdout
-    values = []
-    for line in out.splitlines():
-        m = re.match(r"\s*\(([\d,]+)\):\s*(.*)", line)
-        if m and '"' not in m.group(2):
-            values += [float(v) for v in m.group(2).rstrip(",").split(",") if v.strip()]
-    return np.array(values)
+    return np.array(h5text.h5dump(path, dataset, attribute))
 
 
 def electrode_distance(e, x, y):

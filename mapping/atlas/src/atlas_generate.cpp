@@ -429,28 +429,16 @@ ChargeAtlas generate_atlas(const pvdf::Scene& scene, const AtlasOptions& o, Atla
   work(*sweeps.front());
   for (auto& th : pool) th.join();
   if (error) std::rethrow_exception(error);
-  if (stopped) {
-    write_checkpoint(true);
-    if (report) {
-      AtlasReport r;
-      r.n_positions = n_positions;
-      r.n_resumed_positions = n_resumed;
-      r.n_solved_positions = done;
-      r.stopped_early = true;
-      r.threads = threads;
-      r.setup_s = setup_s;
-      r.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
-      *report = r;
-    }
-    return atlas;
-  }
-  atlas.checkpoint_key.clear();
+  if (stopped)
+    write_checkpoint(true);  // the partial atlas is returned as it is (report.stopped_early)
+  else
+    atlas.checkpoint_key.clear();
 
-  // 4. Mirror images: cell (ci, cj) of the image is cell (ncx−1−ci, cj) of the source under x → −x
+  // 4. Mirror images (a completed run only): cell (ci, cj) of the image is cell (ncx−1−ci, cj) of the source under x → −x
   // (m1 changes sign), likewise in y; the reference quadrants are permuted (Q1 ↔ Q2, Q3 ↔ Q4 under
   // x → −x; Q1 ↔ Q4, Q2 ↔ Q3 under y → −y). The atlas grid is centred on the origin (atlas_grid_for).
   const std::size_t cx = atlas.grid.nx, cy = atlas.grid.ny;
-  for (std::size_t f = 0; f < nf; ++f)
+  for (std::size_t f = 0; f < nf && !stopped; ++f)
     for (std::size_t j = 0; j < ny; ++j)
       for (std::size_t i = 0; i < nx; ++i) {
         if (!atlas.mask[j * nx + i] || canonical(i, j)) continue;
@@ -491,8 +479,9 @@ ChargeAtlas generate_atlas(const pvdf::Scene& scene, const AtlasOptions& o, Atla
       }
     }
     r.first_failure = first_failure;
-    r.n_solved_positions = n_canonical;
+    r.n_solved_positions = stopped ? done.load() : n_canonical;
     r.n_resumed_positions = n_resumed;
+    r.stopped_early = stopped;
     for (const auto& s : sweeps) r.n_rim_solves += std::size_t(s->timing().rim_solves);
     r.mirror_x = mirror_x;
     r.mirror_y = mirror_y;
