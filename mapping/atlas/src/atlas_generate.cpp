@@ -63,6 +63,19 @@ std::string checkpoint_key(const std::string& scene_json, const AtlasOptions& o,
   return k.dump();
 }
 
+// Sizes the per-press arrays for the atlas's grid, forces, cells and reference electrodes: every
+// press `outside`, every value NaN.
+void allocate_presses(ChargeAtlas& a) {
+  const std::size_t np = a.nf() * a.ny() * a.nx(), nc = a.n_cells(), nr = a.nr();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  a.status.assign(np, std::uint8_t(PointStatus::outside));
+  a.moments.assign(np * nc * 3, nan);
+  a.deflection_at_load_m.assign(np, nan);
+  a.estimated_relative_error.assign(np, nan);
+  a.reference_charge_C.assign(np * nr, nan);
+  a.reference_charge_error_C.assign(np * nr, nan);
+}
+
 // The per-press data of the rows marked in `rows` (each completed: no thread writes them any more),
 // every other served press not_computed: what a checkpoint holds.
 ChargeAtlas completed_rows(const ChargeAtlas& a, const std::vector<std::uint8_t>& rows) {
@@ -92,14 +105,8 @@ ChargeAtlas completed_rows(const ChargeAtlas& a, const std::vector<std::uint8_t>
   c.grid = a.grid;
   c.geometry = a.geometry;
   c.reference_names = a.reference_names;
-  const std::size_t nx = a.nx(), ny = a.ny(), nf = a.nf(), nr = a.nr(), nc = a.n_cells(), np = nf * ny * nx;
-  const double nan = std::numeric_limits<double>::quiet_NaN();
-  c.status.assign(np, std::uint8_t(PointStatus::outside));
-  c.moments.assign(np * nc * 3, nan);
-  c.deflection_at_load_m.assign(np, nan);
-  c.estimated_relative_error.assign(np, nan);
-  c.reference_charge_C.assign(np * nr, nan);
-  c.reference_charge_error_C.assign(np * nr, nan);
+  const std::size_t nx = a.nx(), ny = a.ny(), nf = a.nf(), nr = a.nr(), nc = a.n_cells();
+  allocate_presses(c);
   for (std::size_t f = 0; f < nf; ++f)
     for (std::size_t j = 0; j < ny; ++j)
       for (std::size_t i = 0; i < nx; ++i) {
@@ -216,12 +223,7 @@ ChargeAtlas generate_atlas(const pvdf::Scene& scene, const AtlasOptions& o, Atla
   fill_film_provenance(atlas, scene);
   const double nan = std::numeric_limits<double>::quiet_NaN();
   const std::size_t n_points = nf * ny * nx;
-  atlas.status.assign(n_points, std::uint8_t(PointStatus::outside));
-  atlas.moments.assign(n_points * nc * 3, nan);
-  atlas.deflection_at_load_m.assign(n_points, nan);
-  atlas.estimated_relative_error.assign(n_points, nan);
-  atlas.reference_charge_C.assign(n_points * nr, nan);
-  atlas.reference_charge_error_C.assign(n_points * nr, nan);
+  allocate_presses(atlas);
   for (std::size_t f = 0; f < nf; ++f)
     for (std::size_t p = 0; p < nx * ny; ++p)
       if (atlas.mask[p]) atlas.status[f * nx * ny + p] = std::uint8_t(PointStatus::not_computed);
