@@ -303,6 +303,23 @@ void FilmSolver::apply_clamp_shift(Vector<double>& u) const {
   hanging_constraints_.distribute(u);
 }
 
+bool FilmSolver::clamp_layer_first_pass(const Vector<double>& u, Model model, Vector<double>& shifted) {
+  const auto held_shift = clamp_shift_;
+  const auto held_N = clamp_N_;
+  const double held_ratio = clamp_ratio_, held_l_over_h = clamp_l_over_h_, held_width = summary_.clamp_layer_width_m;
+  clamp_N_.clear();  // N_nn of this state (a first pass)
+  update_clamp_layer(u, model);
+  const bool tension = !clamp_shift_.empty() && std::isfinite(clamp_ratio_);
+  shifted = u;
+  if (tension) apply_clamp_shift(shifted);
+  clamp_shift_ = held_shift;
+  clamp_N_ = held_N;
+  clamp_ratio_ = held_ratio;
+  clamp_l_over_h_ = held_l_over_h;
+  summary_.clamp_layer_width_m = held_width;
+  return tension;
+}
+
 std::vector<double> FilmSolver::electrode_charges(const Vector<double>& u, Model model) const {
   std::vector<double> q;
   for (std::size_t k = 0; k < electrode_polygons_.size(); ++k) {
