@@ -293,9 +293,10 @@ class FilmSolver {
   /// The rim's Dirichlet values of the condition, hanging nodes after them.
   void apply_clamp_shift(Vector<double>& u) const;
   /// From a converged plain-clamp state u: u with the condition's first-pass rim values (the layer's
-  /// first-order effect, for the bending-left-out estimate, goal_error.cpp); the condition's own
-  /// state (held values, N_nn, ratio) is left as it was. False where the rim carries no tension.
-  bool clamp_layer_first_pass(const Vector<double>& u, Model model, Vector<double>& shifted);
+  /// first-order effect, for the bending-left-out estimate, goal_error.cpp) and the factor of its
+  /// own estimate (what first order leaves out / the change); the condition's own state (held
+  /// values, N_nn, ratio) is left as it was. False where the rim carries no tension.
+  bool clamp_layer_first_pass(const Vector<double>& u, Model model, Vector<double>& shifted, double& remainder_factor);
   /// Lagged: solve, update the rim values, until the outputs stop changing.
   NewtonOutcome solve_with_clamp_layer(Model model, Vector<double>& u);
   /// From a converged plain-clamp state u: the condition switched on and solved (bending-free
