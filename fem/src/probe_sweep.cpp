@@ -348,6 +348,7 @@ ProbeSweep::ProbeSweep(const pvdf::Scene& scene, const SweepOptions& options) : 
     im.setup.n_dofs = im.engine->n_dofs();
     im.setup.n_cells = im.engine->n_cells();
     im.setup.estimated_relative_error = checks.empty() ? 0.0 : (failed ? 1.0 : total);
+    im.setup.estimated_discretization_error = checks.empty() ? 0.0 : (failed ? 1.0 : disc);
     im.setup.estimated_deflection_relative_error = checks.empty() ? 0.0 : (failed ? 1.0 : deflection);
     im.setup.error_estimator =
         "per probe: adjoint-weighted residual estimates of every electrode charge on the sweep mesh "

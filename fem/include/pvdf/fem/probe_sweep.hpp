@@ -79,6 +79,11 @@ struct SweepSetup {
   /// Largest per-probe estimate (ProbeSolution::estimated_relative_error) at the setup's check
   /// positions; every probe solve carries its own.
   double estimated_relative_error = 1;
+  /// Its discretization part, largest at the check positions: what sizes the sweep mesh (≤ half
+  /// the tolerance unless the halvings ran out). The model part is not reduced by the mesh: a probe
+  /// whose model part exceeds half the tolerance goes on to the clamp-layer condition or the rim
+  /// model, so estimated_relative_error (the cheap model's) may exceed the tolerance.
+  double estimated_discretization_error = 1;
   std::string error_estimator;          ///< how the per-probe estimates are obtained
   double estimated_deflection_relative_error = 1;  ///< the same for deflection_at_load_m
   /// The rim model (bending kept, rim-graded mesh), built when the cheap model drops bending.
