@@ -76,8 +76,9 @@ bool FilmSolver::solve_linear(const Vector<double>& rhs, Vector<double>& x, std:
 // ‖r‖ ≤ rtol·‖f‖ + atol AND ‖Δu‖ ≤ increment_tol·‖u‖ (both), or after max_newton_iterations
 // (no_convergence), or earlier when Newton has stagnated (no_convergence, `stagnated`): over the
 // last k = stagnation_iterations iterations neither the smallest ‖r‖ fell below stagnation_factor
-// × the smallest before them, nor the smallest Newton decrement −r·du (descent steps only) below
-// stagnation_factor² × the smallest before them (the decrement r·K⁻¹·r scales as ‖r‖²). A
+// × the smallest before them, nor the smallest Newton decrement −r·du of descent steps below
+// stagnation_factor² (final stage) or stagnation_factor⁴ (full steps of stepping-stone stages and
+// slack films) × the smallest before them (the decrement r·K⁻¹·r scales as ‖r‖²). A
 // converging Newton (quadratic, or chord steps contracting 10x) halves ‖r‖ in one or two steps.
 // Films near the physical limits (nu12 -> -1, E2 -> 0, |N0| huge in compression) instead stir
 // ‖r‖ at one level for hundreds of iterations, minutes each at 127k DOFs (issue 30).
@@ -167,10 +168,10 @@ NewtonOutcome FilmSolver::newton(Model model, double artificial_tension, Vector<
       if (!residual_fell && !decrement_fell) {
         out.status = Status::no_convergence;
         out.stagnated = true;
+        const std::string decrement = stepping_stone ? "the Newton decrement of full steps" : "the Newton decrement";
         out.message = "Newton stagnated: over " + std::to_string(k_stag) + " iterations neither the residual fell by " +
-                      fmt(1 / f) + "x nor the Newton decrement of full steps by " + fmt(1 / f_decrement) +
-                      "x (|r| = " + fmt(r_norm) + " N after " + std::to_string(it) + " iterations, tolerance " +
-                      fmt(r_tol) + " N)";
+                      fmt(1 / f) + "x nor " + decrement + " by " + fmt(1 / f_decrement) + "x (|r| = " + fmt(r_norm) +
+                      " N after " + std::to_string(it) + " iterations, tolerance " + fmt(r_tol) + " N)";
         return out;
       }
     }
