@@ -82,9 +82,10 @@ TEST_CASE("clamp-layer condition against the axisymmetric oracle with bending", 
                 layer.summary.clamp_layer.c_str(), layer.summary.clamp_layer_passes,
                 layer.summary.clamp_layer_correction, layer.summary.estimated_discretization_error, estimate,
                 estimate / e_layer);
-    // What the plain clamp states bending would change (the layer's first-order effect as one
-    // Newton step from the condition's rim values, plus bending inside the film: goal_error.cpp)
-    // against its true error. No constant in it was tuned: every film is a check.
+    // What the plain clamp states bending would change (the layer's first-order effect, the linear
+    // response to the condition's first-pass rim values, with the condition's own remainder factor,
+    // plus bending inside the film: goal_error.cpp) against its true error from the oracle. No
+    // constant was tuned on these films for it: every film is a check.
     const double stated_plain = plain.summary.estimated_relative_error;
     std::printf("BENDING-LEFT-OUT h %.0f um, F %.1f N: stated %.3e (model part %.3e), true %.3e, stated/true %.2f\n",
                 c.h_m * 1e6, c.force_N, stated_plain, plain.summary.estimated_model_error, e_plain, stated_plain / e_plain);
