@@ -22,19 +22,13 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
-#include <cctype>
-#include <cstdint>
 #include <cmath>
-#include <filesystem>
-#include <functional>
-#include <mutex>
-#include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <limits>
 #include <memory>
 #include <optional>
-#include <sstream>
 
 namespace pvdf::app::design {
 
@@ -57,7 +51,7 @@ std::string mm(double m) { return std::isfinite(m) ? fmt(m < 1e-4 ? "%.4f mm" : 
 std::string pct(double f) { return std::isfinite(f) ? fmt("%.1f %%", 100 * f) : "unbounded"; }
 
 // ---------------------------------------------------------------------------------------------
-// Maps
+// Maps: the source the flags choose (the study itself is mapping::run_design_study)
 
 DesignMapSource design_maps(const DesignCommandOptions& o, std::vector<MemorySample>* memory,
                             const std::string& progress_label) {
