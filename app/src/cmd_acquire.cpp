@@ -163,21 +163,14 @@ class LocateStage final : public Stage {
   }
   void header(std::FILE* out) override { std::fprintf(out, "%s\n", pvdf::mapping::stream_output_header().c_str()); }
   void process(const SampleBlock& b, std::FILE* out) override {
-    const int nc = b.frame.n_channels;
-    std::vector<double> q(static_cast<std::size_t>(nc), 0.0);
-    bool saturated = b.frame.overflow;
-    for (int i = 0; i < b.frame.n_samples; ++i) {
-      saturated = saturated || pvdf::hardware::sample_clipped(b.frame, i, info_.adc_bits);
-      for (int c = 0; c < nc; ++c) q[static_cast<std::size_t>(c)] += b.frame.counts[static_cast<std::size_t>(i * nc + c)];
-    }
-    for (auto& v : q) v = v * info_.volts_per_count() / b.frame.n_samples / gain_V_per_C_;
+    const pvdf::hardware::BlockCharges q = pvdf::hardware::block_mean_charges(b, info_, gain_V_per_C_);
     pvdf::mapping::Location r;
-    if (saturated) {
+    if (q.saturated) {
       r.flags = pvdf::mapping::flag::saturated;
       ++n_saturated_;
       tracker_.reset();  // the press is lost while clipped: search afresh after it
     } else {
-      r = tracker_.next(q.data());
+      r = tracker_.next(q.charge_C.data());
     }
     const double t = b.time_s(0, info_.sample_rate_Hz) + 0.5 * (b.frame.n_samples - 1) / info_.sample_rate_Hz;
     std::fprintf(out, "%.7f,%s\n", t, pvdf::mapping::stream_row_fields(r).c_str());
@@ -326,7 +319,7 @@ std::unique_ptr<pvdf::hardware::Source> open_any_source(const std::string& devic
     for (const auto& p : scene.presses)
       for (const double q : p.charges_C) peak_C = std::max(peak_C, std::abs(q));
     if (peak_C > 0) {
-      scene.gain_V_per_C = 0.8 * scene.full_scale_V / peak_C;
+      scene.gain_V_per_C = pvdf::hardware::gain_for_peak_charge_V_per_C(scene.full_scale_V, peak_C);
       if (!quiet)
         std::fprintf(stderr, "acquire: simulated amplifier gain %.4g mV/pC (the map's largest charge, %.4g pC, at 80 %% of "
                              "the %g V full scale; set gain_V_per_C in the scene or --gain-mV-per-pC to choose)\n",

@@ -11,32 +11,24 @@
 #include "pvdf/core/io.hpp"
 #include "pvdf/mapping/map_io.hpp"
 #include "pvdf/plot/plot.hpp"
-#include "pvdf/core/progress.hpp"
 #include "pvdf/core/resources.hpp"
-#include "pvdf/core/staged_eta.hpp"
 #include "pvdf/core/scene.hpp"
 #include "pvdf/mapping/design.hpp"
 #include "pvdf/mapping/map.hpp"
 #ifdef PVDF_HAVE_MAP_GENERATION
-#include "pvdf/mapping/generate.hpp"
+#include "pvdf/mapping/design_fem_maps.hpp"
 #endif
 
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
-#include <cctype>
-#include <cstdint>
 #include <cmath>
-#include <filesystem>
-#include <functional>
-#include <mutex>
-#include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <limits>
 #include <memory>
 #include <optional>
-#include <sstream>
 
 namespace pvdf::app::design {
 
@@ -46,12 +38,6 @@ std::string stem(const std::string& path) {
   std::string s = path.substr(path.find_last_of('/') + 1);
   const std::size_t dot = s.rfind('.');
   return dot == std::string::npos || dot == 0 ? s : s.substr(0, dot);
-}
-
-[[maybe_unused]] std::string slug(const std::string& text) {  // used with map generation
-  std::string s;
-  for (char c : text) s += (std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '-' || c == '=') ? c : '_';
-  return s;
 }
 
 std::string fmt(const char* f, double v) {
@@ -65,81 +51,33 @@ std::string mm(double m) { return std::isfinite(m) ? fmt(m < 1e-4 ? "%.4f mm" : 
 std::string pct(double f) { return std::isfinite(f) ? fmt("%.1f %%", 100 * f) : "unbounded"; }
 
 // ---------------------------------------------------------------------------------------------
-// Maps
+// Maps: the source the flags choose (the study itself is mapping::run_design_study)
 
+DesignMapSource design_maps(const DesignCommandOptions& o, std::vector<MemorySample>* memory,
+                            const std::string& progress_label) {
+  if (o.synthetic) return synthetic_design_maps(o.force_N);
 #ifdef PVDF_HAVE_MAP_GENERATION
-MapOptions map_options(const Candidate& c, const DesignCommandOptions& o, double spacing) {
-  MapOptions mo;
-  mo.spacing_m = spacing;
-  mo.forces_N = {o.force_N};  // one level: other forces by the F^(2/3) law (docs/design.md §1)
-  mo.tolerance = o.tolerance;
-  mo.threads = o.threads;
-  mo.description = "pvdfkit design preview of " + c.label;
-  return mo;
-}
-#endif
-
-/// The positions each FEM map of `maps` will solve at `spacing` (progress totals; none synthetic).
-std::vector<std::size_t> planned_positions(const std::vector<const Candidate*>& maps, const DesignCommandOptions& o,
-                                           double spacing) {
-  std::vector<std::size_t> planned;
-#ifdef PVDF_HAVE_MAP_GENERATION
-  if (!o.synthetic) {
-    for (const Candidate* c : maps) {
-      if (c->scene) planned.push_back(pvdf::mapping::planned_positions(pvdf::parse_scene(*c->scene, c->source), map_options(*c, o, spacing)));
-    }
-  }
+  DesignFemMaps fem;
+  fem.force_N = o.force_N;
+  fem.tolerance = o.tolerance;
+  fem.threads = o.threads;
+  fem.maps_dir = o.out_dir + "/maps";
+  fem.quiet = o.quiet;
+  fem.progress_label = progress_label;
+  fem.memory = memory;
+  fem.warn = [](const std::string& message) { pvdf::app::warn(message); };
+  return fem_design_maps(fem);
 #else
-  (void)maps;
-  (void)o;
-  (void)spacing;
-#endif
-  return planned;
-}
-
-ChargeMap make_map(const Candidate& c, const DesignCommandOptions& o, double spacing, std::string& map_file,
-                   std::string& map_source, MapsProgress& progress, std::size_t map_index) {
-  const pvdf::Scene scene = pvdf::parse_scene(*c.scene, c.source);
-  if (o.synthetic) {
-    map_source = "synthetic";
-    return synthetic_map_for_scene(scene, spacing, o.force_N, 5e-14);
-  }
-#ifdef PVDF_HAVE_MAP_GENERATION
-  MapOptions mo = map_options(c, o, spacing);
-  mo.progress = progress.for_map(map_index);
-  mo.time_left = progress.time_left_for_map(map_index);
-  mo.common_seconds_per_position = progress.common_cost_for_map(map_index);
-  mo.time_left_now = progress.time_left_now_for_map(map_index);
-  progress.start_map(map_index);
-  MapReport report;
-  ChargeMap map = generate_map(scene, mo, &report);
-  pvdf::make_directories(o.out_dir + "/maps");
-  map_file = o.out_dir + "/maps/" + slug(c.label) + "_" + fmt("%.2gmm", spacing * 1e3) + ".h5";
-  write_generated_map(map_file, map, report.provenance);
-  progress.note("map " + c.label + ": " + std::to_string(report.n_solved) + " FEM solves in " +
-                pvdf::format_duration(report.wall_s) + " (model " + report.model + ", estimated charge error " +
-                fmt("%.2g", report.estimated_relative_error) + "), written to " + map_file);
-  if (report.n_failed > 0) {
-    pvdf::app::warn(c.label + ": " + std::to_string(report.n_failed) + " map points did not converge (left out)");
-  }
-  map_source = "fem";
-  return map;
-#else
-  (void)spacing;
-  (void)progress;
-  (void)map_index;
-  (void)map_file;
-  (void)map_source;
-  throw pvdf::InputError("this pvdfkit was built without FEM map generation (PVDF_WITH_FEM=OFF): use --synthetic for "
-                         "a preview, or --map MAP.h5 with a map from another build");
+  (void)memory;
+  (void)progress_label;
+  DesignMapSource maps;
+  maps.make_map = [](DesignCandidate&, double, std::size_t) {
+    throw pvdf::InputError("this pvdfkit was built without FEM map generation (PVDF_WITH_FEM=OFF): use --synthetic for "
+                           "a preview, or --map MAP.h5 with a map from another build");
+  };
+  return maps;
 #endif
 }
-
-void evaluate(Candidate& c, const DesignOptions& d) {
-  c.summary = evaluate_design(c.map, d);
-  if (c.map_source == "synthetic") c.summary.synthetic = true;
-}
-
 
 // ---------------------------------------------------------------------------------------------
 // Text and JSON
@@ -347,7 +285,6 @@ void write_sweep_figure(const std::vector<Candidate>& all, const std::vector<std
   bool synthetic = false;
   for (std::size_t s = 0; s < series_names.size(); ++s) {
     std::vector<double> x, usable, coverage, median;
-    const Candidate* best = nullptr;
     for (const auto& c : all) {
       if (c.series != int(s) || c.refined) continue;
       synthetic |= c.summary.synthetic;
@@ -355,8 +292,8 @@ void write_sweep_figure(const std::vector<Candidate>& all, const std::vector<std
       usable.push_back(100 * c.summary.usable_fraction);
       coverage.push_back(100 * c.summary.coverage);
       median.push_back(std::isfinite(c.summary.median_sigma_pos_m) ? c.summary.median_sigma_pos_m * 1e3 : std::nan(""));
-      if (!best || ranks_before(c.summary, best->summary)) best = &c;
     }
+    const Candidate* best = best_in_series(all, int(s));
     const auto color = pvdf::plot::cycle_color(s);
     a.line(x, usable, series_names[s] + ": usable", color, pvdf::plot::LineStyle::solid, pvdf::plot::Marker::circle);
     a.line(x, coverage, series_names[s] + ": coverage", color, pvdf::plot::LineStyle::dashed, pvdf::plot::Marker::none);
@@ -443,38 +380,8 @@ std::vector<Candidate> collect_candidates(const DesignCommandOptions& o, const s
     pvdf::app::warn("--vary " + sweep->key + " does not change the synthetic stand-in (it models only geometry, draw "
                     "angle, d32/d31 and electrode area): every value will score the same; drop --synthetic for FEM maps");
   }
-  for (const auto& path : o.maps) {
-    Candidate c;
-    c.label = stem(path);
-    c.source = path;
-    c.map_source = "file";
-    c.map_file = path;
-    c.map = read_map(path);
-    c.series = -1;
-    all.push_back(std::move(c));
-  }
+  for (const auto& path : o.maps) all.push_back(ready_map_candidate(path, stem(path), read_map(path)));
   return all;
-}
-
-/// The best `--refine-best` scene candidates recomputed at the finer spacing and evaluated again.
-std::vector<Candidate> refine_winners(const std::vector<const Candidate*>& ranked, const DesignCommandOptions& o,
-                                      const DesignOptions& d, double spacing, std::vector<MemorySample>* memory) {
-  std::vector<Candidate> refined;
-  if (o.refine_best > 0) {
-    const double fine = o.refine_spacing_m > 0 ? o.refine_spacing_m : spacing / 2;
-    const std::vector<const Candidate*> to_refine = winners_to_refine(ranked, o.refine_best);
-    MapsProgress progress("design: refined maps, positions", planned_positions(to_refine, o, fine), o.quiet, "refined",
-                          memory);
-    for (const Candidate* c : to_refine) {
-      Candidate r = *c;
-      r.refined = true;
-      r.map = make_map(r, o, fine, r.map_file, r.map_source, progress, refined.size());
-      evaluate(r, d);
-      refined.push_back(std::move(r));
-    }
-    progress.finish();
-  }
-  return refined;
 }
 
 /// The ranking as text: settings, tables, details, the best layout and the files written.
@@ -523,39 +430,26 @@ int run_design(const DesignCommandOptions& o) {
     }
   }
 
-  // Step 2: maps (coarse previews) and their evaluation.
-  std::vector<const Candidate*> with_scene;
-  for (const auto& c : all) with_scene.push_back(&c);
+  // Step 2: the study (mapping::run_design_study): preview maps, their evaluation and ranking, the
+  // winners refined at a finer spacing and ranked again.
+  DesignStudyOptions so;
+  so.analysis = d;
+  so.spacing_m = spacing;
+  so.refine_best = o.refine_best;
+  so.refine_spacing_m = o.refine_spacing_m;
   std::vector<MemorySample> memory;
-  MapsProgress progress("design: preview maps, positions", planned_positions(with_scene, o, spacing), o.quiet, "preview",
-                        &memory);
-  std::size_t map_index = 0;
-  for (auto& c : all) {
-    if (c.scene) c.map = make_map(c, o, spacing, c.map_file, c.map_source, progress, map_index++);
-    evaluate(c, d);
-  }
-  progress.finish();
+  DesignStudy study = run_design_study(std::move(all), so, design_maps(o, &memory));
+  const std::vector<Candidate>& candidates = study.candidates;
+  DesignStudyReport& report = study.report;
 
-  // Step 3: rank; refine the winners at a finer spacing and rank again.
-  const std::vector<const Candidate*> ranked = rank_candidates(all);
-  const std::vector<Candidate> refined = refine_winners(ranked, o, d, spacing, &memory);
-  const std::vector<const Candidate*> ranked_refined = rank_candidates(refined);
-
-  // Step 4: report.
-  bool any_synthetic = false;
-  for (const auto& c : all) any_synthetic |= c.summary.synthetic;
+  // Step 3: report.
   const std::string noise_text = noise_label(d, o);
   std::vector<std::string> written;
   if (!o.no_plots) {
     pvdf::make_directories(o.out_dir);
-    write_map_figures(ranked_refined.empty() ? ranked : ranked_refined, o, noise_text, written);
-    if (sweep) write_sweep_figure(all, series_names, o, sweep->key, written);
+    write_map_figures(report.ranked_refined.empty() ? report.ranked : report.ranked_refined, o, noise_text, written);
+    if (sweep) write_sweep_figure(candidates, series_names, o, sweep->key, written);
   }
-  DesignStudyReport report;
-  report.synthetic = any_synthetic;
-  report.preview_spacing_m = spacing;
-  report.ranked = ranked;
-  report.ranked_refined = ranked_refined;
   report.sweep = sweep;
   report.figures = written;
   const Candidate* best = &report.best();
@@ -572,12 +466,11 @@ int run_design(const DesignCommandOptions& o) {
   if (o.json) {
     std::cout << j.dump(2) << '\n';
   } else {
-    print_design_text(o, d, all.size(), any_synthetic, noise_text, ranked, ranked_refined, best, written);
+    print_design_text(o, d, candidates.size(), report.synthetic, noise_text, report.ranked, report.ranked_refined, best,
+                      written);
   }
   // Every layout unable to locate is a numerical outcome, not a ranking.
-  for (const auto& c : all) {
-    if (c.summary.status == DesignStatus::ok) return pvdf::exit_code::success;
-  }
+  if (study.any_can_locate()) return pvdf::exit_code::success;
   std::cerr << "error: no layout can locate a press (singular Fisher matrix everywhere)\n";
   return pvdf::exit_code::numerical;
 }

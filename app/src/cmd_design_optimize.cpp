@@ -6,6 +6,7 @@
 
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/io.hpp"
+#include "pvdf/core/progress.hpp"
 #include "pvdf/core/scene.hpp"
 #include "pvdf/mapping/optimize.hpp"
 #include "pvdf/plot/plot.hpp"
@@ -21,6 +22,7 @@
 #include <filesystem>
 #include <iostream>
 #include <limits>
+#include <memory>
 
 namespace pvdf::app::design {
 
@@ -181,18 +183,16 @@ void write_optimize_files(const std::vector<Candidate>& winners, const OptimizeS
 /// --verify: each winner's FEM map at the atlas's grid and tolerance, evaluated again (optimize.json's `verify`).
 nlohmann::json verify_winners(const std::vector<Candidate>& winners, const DesignCommandOptions& o, const DesignOptions& d,
                               const ChargeAtlas& atlas) {
-  std::vector<const Candidate*> to_verify;
-  for (const auto& w : winners) to_verify.push_back(&w);
   DesignCommandOptions vo = o;
-  vo.spacing_m = atlas.spacing_m;
   vo.tolerance = atlas.tolerance;
-  MapsProgress progress("design --optimize --verify: FEM maps, positions", planned_positions(to_verify, vo, atlas.spacing_m),
-                        o.quiet);
+  std::vector<Candidate> verified = winners;
+  std::vector<Candidate*> to_verify;
+  for (auto& v : verified) to_verify.push_back(&v);
+  map_and_evaluate("verify", to_verify, atlas.spacing_m,
+                   design_maps(vo, nullptr, "design --optimize --verify: FEM maps, positions"), d);
   nlohmann::json verify = nlohmann::json::array();
   for (std::size_t i = 0; i < winners.size(); ++i) {
-    Candidate v = winners[i];
-    v.map = make_map(v, vo, atlas.spacing_m, v.map_file, v.map_source, progress, i);
-    evaluate(v, d);
+    const Candidate& v = verified[i];
     verify.push_back({{"n_electrodes", v.summary.electrodes.size()},
                       {"map_file", v.map_file},
                       {"usable_fraction_fem", v.summary.usable_fraction},
@@ -200,7 +200,6 @@ nlohmann::json verify_winners(const std::vector<Candidate>& winners, const Desig
                       {"coverage_fem", v.summary.coverage},
                       {"coverage_atlas", winners[i].summary.coverage}});
   }
-  progress.finish();
   return verify;
 }
 #endif

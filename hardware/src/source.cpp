@@ -13,6 +13,24 @@ namespace pvdf::hardware {
 
 double StreamInfo::volts_per_count() const { return full_scale_V / std::ldexp(1.0, adc_bits - 1); }
 
+BlockCharges block_mean_charges(const SampleBlock& block, const StreamInfo& info, double gain_V_per_C) {
+  const Frame& f = block.frame;
+  const int nc = f.n_channels;
+  BlockCharges out;
+  out.charge_C.assign(static_cast<std::size_t>(nc), 0.0);
+  out.saturated = f.overflow;
+  for (int i = 0; i < f.n_samples; ++i) {
+    out.saturated = out.saturated || sample_clipped(f, i, info.adc_bits);
+    for (int c = 0; c < nc; ++c) out.charge_C[static_cast<std::size_t>(c)] += f.counts[static_cast<std::size_t>(i * nc + c)];
+  }
+  for (auto& q : out.charge_C) q = q * info.volts_per_count() / f.n_samples / gain_V_per_C;
+  return out;
+}
+
+double gain_for_peak_charge_V_per_C(double full_scale_V, double peak_charge_C, double fraction) {
+  return fraction * full_scale_V / peak_charge_C;
+}
+
 std::vector<int> StreamInfo::channels() const {
   std::vector<int> list;
   for (int c = 0; c < protocol::max_channels; ++c)

@@ -2,6 +2,7 @@
 // half an ADC step, noise RMS, first-order decay with the amplifier time constant — and exact
 // counts of the transport faults it injects, as seen through the real decoder.
 #include "pvdf/hardware/sim_source.hpp"
+#include "pvdf/hardware/source.hpp"
 
 #include "pvdf/core/error.hpp"
 
@@ -142,4 +143,31 @@ TEST_CASE("sim: scenes are read strictly", "[hardware][sim]") {
   CHECK_THROWS_WITH(parse(R"({"channels": 2, "presses": [{"weights": [1]}]})"), Catch::Contains("weights"));
   CHECK_THROWS_AS(open_source("sim:/nonexistent/scene.json"), pvdf::InputError);
   CHECK_THROWS_WITH(open_source("bogus"), Catch::Contains("expected usb"));
+}
+
+TEST_CASE("block_mean_charges: the mean count in volts over the gain; clipped or overflowed blocks are saturated",
+          "[hardware][charges]") {
+  StreamInfo info;  // 12 bits over 2.5 V: 2.5 / 2048 V per count
+  info.channel_mask = 0x3;
+  SampleBlock b;
+  b.frame.channel_mask = 0x3;
+  b.frame.n_channels = 2;
+  b.frame.n_samples = 4;
+  b.frame.counts = {100, -40, 102, -42, 98, -38, 100, -40};  // channel means 100 and -40 counts
+  const double gain_V_per_C = 2e9;                           // 2 mV/pC
+  const BlockCharges q = block_mean_charges(b, info, gain_V_per_C);
+  REQUIRE(q.charge_C.size() == 2);
+  CHECK(q.charge_C[0] == Approx(100 * 2.5 / 2048 / gain_V_per_C).epsilon(1e-14));
+  CHECK(q.charge_C[1] == Approx(-40 * 2.5 / 2048 / gain_V_per_C).epsilon(1e-14));
+  CHECK_FALSE(q.saturated);
+  // Twice the gain, half the charge (q = V / gain).
+  CHECK(block_mean_charges(b, info, 2 * gain_V_per_C).charge_C[0] == Approx(q.charge_C[0] / 2).epsilon(1e-14));
+  b.frame.counts[5] = 2047;  // one sample at the top code: clipped
+  CHECK(block_mean_charges(b, info, gain_V_per_C).saturated);
+  b.frame.counts[5] = -38;
+  b.frame.overflow = true;
+  CHECK(block_mean_charges(b, info, gain_V_per_C).saturated);
+  // The default gain puts the peak charge at 80 % of full scale.
+  const double g = gain_for_peak_charge_V_per_C(2.5, 1e-9);
+  CHECK(1e-9 * g == Approx(0.8 * 2.5));
 }

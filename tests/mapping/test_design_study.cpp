@@ -1,13 +1,17 @@
 // The study steps that moved out of the command (docs/structure.md "app/ parses, prints and writes
-// files"): the design study's ranking, winners to refine and JSON, the rule for presses a map's
-// spacing cannot resolve, and the force level a picture shows. Oracles: summaries and maps built by hand.
+// files"): the design study's run (which maps, at which spacing, refined in rank order), its
+// ranking, winners to refine and JSON, the rule for presses a map's spacing cannot resolve, and the
+// force level a picture shows. Oracles: summaries and maps built by hand, a recording map source.
 #include "pvdf/core/error.hpp"
+#include "pvdf/core/scene.hpp"
+#include "pvdf/mapping/map_io.hpp"
 #include "pvdf/mapping/analysis.hpp"
 #include "pvdf/mapping/design_study.hpp"
 #include "pvdf/mapping/pictures.hpp"
 
 #include <catch2/catch.hpp>
 
+#include <cmath>
 #include <limits>
 #include <set>
 
@@ -137,4 +141,62 @@ TEST_CASE("comparison_summary_json: the keys compare MAP and compare SCENE share
   CHECK(j["electrodes"][0]["n_compared"] == 1);
   CHECK(j["electrodes"][1]["n_compared"] == 0);
   CHECK(j.size() == 6);
+}
+
+TEST_CASE("run_design_study: previews from the map source, ready maps as given, the winners refined", "[design_study]") {
+  const std::string scenes = std::string(PVDF_SOURCE_DIR) + "/examples/scenes/";
+  std::vector<DesignCandidate> all;
+  for (const char* name : {"seed001", "four-electrodes-45deg"}) {
+    const std::string path = scenes + name + ".json";
+    for (auto& c : scene_candidates(pvdf::load_scene(path).original, path, name, int(all.size()), std::nullopt)) {
+      all.push_back(std::move(c));
+    }
+  }
+  const std::string map_path = std::string(PVDF_SOURCE_DIR) + "/tests/mapping/data/seed001_4mm.h5";
+  all.push_back(ready_map_candidate(map_path, "ready", read_map(map_path)));
+
+  // The synthetic source, with each call recorded: the study decides which maps, at which spacing.
+  const DesignMapSource synthetic = synthetic_design_maps(1.0);
+  std::vector<std::string> calls;
+  DesignMapSource maps;
+  maps.begin_phase = [&calls](const std::string& phase, const std::vector<const DesignCandidate*>& c, double) {
+    calls.push_back("begin " + phase + " " + std::to_string(c.size()));
+  };
+  maps.make_map = [&](DesignCandidate& c, double spacing_m, std::size_t index) {
+    calls.push_back(c.label + " " + std::to_string(index) + " " + std::to_string(int(std::lround(spacing_m * 1e4))));
+    synthetic.make_map(c, spacing_m, index);
+  };
+  DesignStudyOptions options;
+  options.spacing_m = 0.002;
+  options.refine_best = 2;
+  const DesignStudy study = run_design_study(std::move(all), options, maps);
+
+  REQUIRE(study.candidates.size() == 3);
+  CHECK(study.candidates[2].map_source == "file");  // a ready map is evaluated as read, never remade
+  REQUIRE(study.report.ranked.size() == 3);
+  const auto ranked = rank_candidates(study.candidates);
+  for (std::size_t i = 0; i < ranked.size(); ++i) CHECK(study.report.ranked[i] == ranked[i]);
+  // The two best layouts with a scene, refined at half the spacing, in rank order.
+  const auto winners = winners_to_refine(study.report.ranked, 2);
+  REQUIRE(study.refined.size() == 2);
+  const std::vector<std::string> expected = {"begin preview 2",
+                                             "seed001 0 20",
+                                             "four-electrodes-45deg 1 20",
+                                             "begin refined 2",
+                                             winners[0]->label + " 0 10",
+                                             winners[1]->label + " 1 10"};
+  CHECK(calls == expected);
+  for (const auto& r : study.refined) {
+    CHECK(r.refined);
+    CHECK(r.summary.spacing_m == Approx(0.001));
+    CHECK(r.summary.synthetic);
+  }
+  CHECK(study.report.ranked_refined.size() == 2);
+  CHECK(&study.report.best() == study.report.ranked_refined.front());
+  CHECK(study.report.synthetic);
+  CHECK(study.report.preview_spacing_m == 0.002);
+  CHECK(study.any_can_locate());
+  // best_in_series: the series' best unrefined candidate by ranks_before.
+  CHECK(best_in_series(study.candidates, 0) == &study.candidates[0]);
+  CHECK(best_in_series(study.candidates, 5) == nullptr);
 }

@@ -1,5 +1,6 @@
-// The design study's candidates, ranking, winners and JSON (pvdf/mapping/design_study.hpp); moved
-// from app/src/cmd_design.cpp so that the command only reads, draws and prints.
+// The design study's candidates, maps and evaluation, ranking, winners and JSON
+// (pvdf/mapping/design_study.hpp); moved from app/src/cmd_design.cpp so that the command only
+// parses, reads, draws and prints.
 #include "pvdf/mapping/design_study.hpp"
 
 #include "pvdf/core/scene.hpp"
@@ -64,6 +65,91 @@ std::vector<const DesignCandidate*> winners_to_refine(const std::vector<const De
     if (c->scene) out.push_back(c);
   }
   return out;
+}
+
+DesignCandidate ready_map_candidate(const std::string& path, const std::string& label, ChargeMap map) {
+  DesignCandidate c;
+  c.label = label;
+  c.source = path;
+  c.map_source = "file";
+  c.map_file = path;
+  c.map = std::move(map);
+  c.series = -1;
+  return c;
+}
+
+void evaluate_candidate(DesignCandidate& c, const DesignOptions& options) {
+  c.summary = evaluate_design(c.map, options);
+  if (c.map_source == "synthetic") c.summary.synthetic = true;
+}
+
+const DesignCandidate* best_in_series(const std::vector<DesignCandidate>& candidates, int series) {
+  const DesignCandidate* best = nullptr;
+  for (const auto& c : candidates) {
+    if (c.series != series || c.refined) continue;
+    if (!best || ranks_before(c.summary, best->summary)) best = &c;
+  }
+  return best;
+}
+
+DesignMapSource synthetic_design_maps(double force_N) {
+  DesignMapSource maps;
+  maps.make_map = [force_N](DesignCandidate& c, double spacing_m, std::size_t) {
+    c.map = synthetic_map_for_scene(pvdf::parse_scene(*c.scene, c.source), spacing_m, force_N, 5e-14);
+    c.map_source = "synthetic";
+  };
+  return maps;
+}
+
+void map_and_evaluate(const std::string& phase, const std::vector<DesignCandidate*>& candidates, double spacing_m,
+                      const DesignMapSource& maps, const DesignOptions& options) {
+  std::vector<const DesignCandidate*> with_scene;
+  for (const DesignCandidate* c : candidates) {
+    if (c->scene) with_scene.push_back(c);
+  }
+  if (maps.begin_phase) maps.begin_phase(phase, with_scene, spacing_m);
+  std::size_t index = 0;
+  for (DesignCandidate* c : candidates) {
+    if (c->scene) maps.make_map(*c, spacing_m, index++);
+    evaluate_candidate(*c, options);
+  }
+  if (maps.end_phase) maps.end_phase();
+}
+
+bool DesignStudy::any_can_locate() const {
+  for (const auto& c : candidates) {
+    if (c.summary.status == DesignStatus::ok) return true;
+  }
+  return false;
+}
+
+DesignStudy run_design_study(std::vector<DesignCandidate> candidates, const DesignStudyOptions& options,
+                             const DesignMapSource& maps) {
+  DesignStudy study;
+  study.candidates = std::move(candidates);
+  // Step 1: the previews, evaluated and ranked.
+  std::vector<DesignCandidate*> previews;
+  for (auto& c : study.candidates) previews.push_back(&c);
+  map_and_evaluate("preview", previews, options.spacing_m, maps, options.analysis);
+  study.report.ranked = rank_candidates(study.candidates);
+
+  // Step 2: the winners at a finer spacing, ranked again. `refined` is sized first: the report
+  // points into it.
+  if (options.refine_best > 0) {
+    const double fine = options.refine_spacing_m > 0 ? options.refine_spacing_m : options.spacing_m / 2;
+    for (const DesignCandidate* c : winners_to_refine(study.report.ranked, options.refine_best)) {
+      study.refined.push_back(*c);
+      study.refined.back().refined = true;
+    }
+    std::vector<DesignCandidate*> to_refine;
+    for (auto& r : study.refined) to_refine.push_back(&r);
+    map_and_evaluate("refined", to_refine, fine, maps, options.analysis);
+  }
+  study.report.ranked_refined = rank_candidates(study.refined);
+
+  for (const auto& c : study.candidates) study.report.synthetic |= c.summary.synthetic;
+  study.report.preview_spacing_m = options.spacing_m;
+  return study;
 }
 
 nlohmann::json design_candidate_json(const DesignCandidate& c, int rank) {

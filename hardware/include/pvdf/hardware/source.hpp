@@ -35,6 +35,21 @@ struct SampleBlock {
   }
 };
 
+/// A block's charges: each streamed channel's mean ADC count over the block's samples, in volts
+/// (StreamInfo::volts_per_count) and in charge q = V / gain_V_per_C (C), in channel order.
+/// `saturated` when a sample sits at the ADC's limits (sample_clipped) or the device flagged an
+/// overflow: the charges are then not known.
+struct BlockCharges {
+  std::vector<double> charge_C;
+  bool saturated = false;
+};
+/// The charges of `block` at amplifier gain `gain_V_per_C` (V/C, > 0); see BlockCharges.
+BlockCharges block_mean_charges(const SampleBlock& block, const StreamInfo& info, double gain_V_per_C);
+
+/// The charge-amplifier gain (V/C) that puts the charge `peak_charge_C` (> 0) at `fraction` of the
+/// ADC's full scale `full_scale_V`: the simulated amplifier's default.
+double gain_for_peak_charge_V_per_C(double full_scale_V, double peak_charge_C, double fraction = 0.8);
+
 /// Why a stream ended (or that it has not).
 enum class EndReason {
   running,          ///< still streaming

@@ -1,6 +1,7 @@
 // The design study of `pvdfkit design` (docs/design.md) as library steps: its candidate layouts,
-// their ranking, the winners to refine, and its JSON. The command reads the files, makes the maps
-// (FEM, synthetic or read), draws the figures and prints; everything it decides is here.
+// their maps and evaluation, their ranking, the winners to refine, and its JSON (run_design_study
+// does them in order). The command reads the files, chooses the map source (FEM maps:
+// design_fem_maps.hpp), draws the figures and prints; everything it decides is here.
 #pragma once
 
 #include "pvdf/mapping/design.hpp"
@@ -9,6 +10,8 @@
 #include <nlohmann/json.hpp>
 
 #include <cstddef>
+#include <cstdint>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -50,6 +53,45 @@ std::vector<const DesignCandidate*> rank_candidates(const std::vector<const Desi
 /// cannot be refined).
 std::vector<const DesignCandidate*> winners_to_refine(const std::vector<const DesignCandidate*>& ranked, int n);
 
+/// A ready map (read from `path`) as a candidate labelled `label`: map source "file", series -1.
+DesignCandidate ready_map_candidate(const std::string& path, const std::string& label, ChargeMap map);
+
+/// The candidate's DesignSummary from its map (evaluate_design), marked synthetic when its map is
+/// the synthetic stand-in.
+void evaluate_candidate(DesignCandidate& candidate, const DesignOptions& options);
+
+/// The best of the unrefined candidates of sweep series `series` by ranks_before (the first of
+/// equals), or null when the series has none.
+const DesignCandidate* best_in_series(const std::vector<DesignCandidate>& candidates, int series);
+
+/// Where a study's maps come from. A phase ("preview", "refined", "verify") makes the maps of its
+/// candidates in order: begin_phase (optional) sees them all first (e.g. for a progress total),
+/// make_map sets one candidate's `map`, `map_source` and (for a written map) `map_file`, and
+/// end_phase (optional) closes the phase. synthetic_design_maps here; FEM maps in design_fem_maps.hpp.
+struct DesignMapSource {
+  std::function<void(const std::string& phase, const std::vector<const DesignCandidate*>& candidates, double spacing_m)>
+      begin_phase;
+  /// Map number `index` (0-based) of the phase, at grid spacing `spacing_m` (m).
+  std::function<void(DesignCandidate& candidate, double spacing_m, std::size_t index)> make_map;
+  std::function<void()> end_phase;
+};
+
+/// The synthetic stand-in (synthetic_map_for_scene at one force level `force_N`, noise 0.05 pC) as
+/// a study's map source: instant, labelled "synthetic".
+DesignMapSource synthetic_design_maps(double force_N);
+
+/// One phase of maps: each candidate with a scene gets its map from `maps` at `spacing_m`, and
+/// every candidate (a ready map too) is evaluated, in order.
+void map_and_evaluate(const std::string& phase, const std::vector<DesignCandidate*>& candidates, double spacing_m,
+                      const DesignMapSource& maps, const DesignOptions& options);
+
+/// The process's resident memory after each block of map positions (design.json's `memory`).
+struct MemorySample {
+  std::string phase;
+  std::size_t positions = 0;  ///< positions solved in the phase so far
+  std::uint64_t resident_bytes = 0;
+};
+
 /// A candidate as one entry of the study's `layouts` (or `refined`): design_summary_json plus its
 /// rank (1 = best), label, source, map source and file, the swept key and value, and `refined`.
 nlohmann::json design_candidate_json(const DesignCandidate& candidate, int rank);
@@ -65,6 +107,37 @@ struct DesignStudyReport {
   /// The best layout: the first refined winner, else the first preview.
   const DesignCandidate& best() const { return ranked_refined.empty() ? *ranked.front() : *ranked_refined.front(); }
 };
+
+/// The settings of a design study (run_design_study).
+struct DesignStudyOptions {
+  DesignOptions analysis;        ///< how each layout is evaluated
+  double spacing_m = 0.001;      ///< grid spacing of the preview maps (m), > 0
+  int refine_best = 0;           ///< the best this many layouts with a scene get a finer map and are ranked again
+  double refine_spacing_m = 0;   ///< grid spacing of the refined maps (m); 0: half spacing_m
+};
+
+/// A design study's candidates and what it found. `report` points into `candidates` and `refined`,
+/// so the study moves but is not copied.
+struct DesignStudy {
+  std::vector<DesignCandidate> candidates;  ///< the previews, in the order given
+  std::vector<DesignCandidate> refined;     ///< the refined winners, in the order refined
+  DesignStudyReport report;                 ///< rankings, `synthetic`, `preview_spacing_m` (the caller adds sweep, figures)
+  /// True when some preview can locate a press (DesignStatus::ok); false means every layout is singular.
+  bool any_can_locate() const;
+
+  DesignStudy() = default;
+  DesignStudy(DesignStudy&&) = default;
+  DesignStudy& operator=(DesignStudy&&) = default;
+  DesignStudy(const DesignStudy&) = delete;
+  DesignStudy& operator=(const DesignStudy&) = delete;
+};
+
+/// The design study (docs/design.md): each candidate's preview map (map_and_evaluate, phase
+/// "preview"), its evaluation and the ranking; then the first `refine_best` ranked layouts with a
+/// scene recomputed at `refine_spacing_m` (phase "refined") and ranked again. Ready maps are
+/// evaluated as given. Throws what `maps` throws (InputError for a map it cannot make).
+DesignStudy run_design_study(std::vector<DesignCandidate> candidates, const DesignStudyOptions& options,
+                             const DesignMapSource& maps);
 
 /// The study as JSON: the analysis settings, `layouts` (and `refined`), `best`, `vary`, `figures`.
 nlohmann::json design_study_json(const DesignOptions& options, const DesignStudyReport& report);
