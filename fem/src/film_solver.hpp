@@ -304,6 +304,10 @@ class FilmSolver {
   NewtonOutcome switch_to_clamp_layer(Model model, Vector<double>& u);
   /// Its estimated remaining error, relative (largest charge change × clamp_ratio_).
   double clamp_layer_estimate() const;
+  /// solve_from_flat on solution_, then (condition on) its lagged passes again (adaptivity.cpp).
+  NewtonOutcome solve_from_flat_keeping_clamp_layer(Model model);
+  /// The reference path instead of the condition: plain clamp, bending kept, rim graded (adaptivity.cpp).
+  NewtonOutcome leave_clamp_layer_for_graded_rim(Model model);
   /// The layer's width l_b = sqrt(D_nn/N_nn) at the rim's face quadrature points of state u (N_nn
   /// the membrane's normal force there; at most `cap_m`, and `cap_m` where the rim is not in tension).
   std::vector<RimLayerPoint> rim_layer_widths(const Vector<double>& u, Model model, double cap_m) const;
