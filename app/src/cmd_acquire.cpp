@@ -130,13 +130,6 @@ double charge_gain_V_per_C(const StreamInfo& info, const char* flag) {
   return info.gain_V_per_C;
 }
 
-/// Largest |charge| of a map over its nodes and levels (C).
-double map_peak_charge_C(const pvdf::mapping::ChargeMap& map) {
-  double peak = 0;
-  for (const double q : map.charge_C) peak = std::max(peak, std::abs(q));
-  return peak;
-}
-
 /// Press locations: one per block, from the block-mean charges (q = V / gain), channel k
 /// taken as the map's electrode k. A block with a clipped sample (an ADC code at its limits)
 /// or the device's overflow flag is `saturated` and not located: its charges are unknown.
@@ -150,13 +143,13 @@ class LocateStage final : public Stage {
                              " electrodes but the stream has " + std::to_string(info.channels().size()) +
                              " channels; stream one channel per electrode, in the map's order");
     // Front-end sanity: the map's charges (at its highest level) must fit the ADC's range.
-    const double peak_V = map_peak_charge_C(map_) * gain_V_per_C_;
+    const double peak_V = map_.largest_charge_C() * gain_V_per_C_;
     if (peak_V > info.full_scale_V) {
       char text[320];
       std::snprintf(text, sizeof text,
                     "the map %s reaches %g pC, %g V at the gain of %g mV/pC: beyond the front end's %g V full scale, "
                     "so presses there clip (rows flagged saturated); lower --gain-mV-per-pC to at most %g",
-                    map_path.c_str(), map_peak_charge_C(map_) * 1e12, peak_V, gain_V_per_C_ * 1e-9, info.full_scale_V,
+                    map_path.c_str(), map_.largest_charge_C() * 1e12, peak_V, gain_V_per_C_ * 1e-9, info.full_scale_V,
                     gain_V_per_C_ * 1e-9 * info.full_scale_V / peak_V);
       pvdf::app::warn(text);
     }
@@ -315,9 +308,7 @@ std::unique_ptr<pvdf::hardware::Source> open_any_source(const std::string& devic
   // The simulated amplifier's default gain suits the map: its largest charge (or a press's)
   // at 80 % of the ADC's full scale, unless the scene or --gain-mV-per-pC sets the gain.
   if (!scene.gain_given && !(open.gain_mV_per_pC > 0)) {
-    double peak_C = map_peak_charge_C(map);
-    for (const auto& p : scene.presses)
-      for (const double q : p.charges_C) peak_C = std::max(peak_C, std::abs(q));
+    const double peak_C = std::max(map.largest_charge_C(), pvdf::hardware::largest_press_charge_C(scene));
     if (peak_C > 0) {
       scene.gain_V_per_C = pvdf::hardware::gain_for_peak_charge_V_per_C(scene.full_scale_V, peak_C);
       if (!quiet)

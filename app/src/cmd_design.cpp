@@ -40,15 +40,9 @@ std::string stem(const std::string& path) {
   return dot == std::string::npos || dot == 0 ? s : s.substr(0, dot);
 }
 
-std::string fmt(const char* f, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, f, v);
-  return buf;
-}
-
 /// mm with "unbounded" for +∞ (never "inf" or "nan" as a result).
-std::string mm(double m) { return std::isfinite(m) ? fmt(m < 1e-4 ? "%.4f mm" : "%.3g mm", m * 1e3) : "unbounded"; }
-std::string pct(double f) { return std::isfinite(f) ? fmt("%.1f %%", 100 * f) : "unbounded"; }
+std::string mm(double m) { return std::isfinite(m) ? pvdf::format_printf(m < 1e-4 ? "%.4f mm" : "%.3g mm", m * 1e3) : "unbounded"; }
+std::string pct(double f) { return std::isfinite(f) ? pvdf::format_printf("%.1f %%", 100 * f) : "unbounded"; }
 
 // ---------------------------------------------------------------------------------------------
 // Maps: the source the flags choose (the study itself is mapping::run_design_study)
@@ -112,7 +106,7 @@ void print_details(const Candidate& c) {
     std::printf("    %-6s sensitivity %s pC/N on its centre, median %.3g pC/N over the film; max %.4g pC at %.3g N; "
                 "noise %.3g pC (with quantization %.3g pC)\n",
                 e.name.c_str(),
-                std::isfinite(e.sensitivity_at_center_C_per_N) ? fmt("%.3g", e.sensitivity_at_center_C_per_N * 1e12).c_str()
+                std::isfinite(e.sensitivity_at_center_C_per_N) ? pvdf::format_printf("%.3g", e.sensitivity_at_center_C_per_N * 1e12).c_str()
                                                                  : "n/a",
                 e.median_sensitivity_C_per_N * 1e12, e.max_charge_C * 1e12, s.max_force_N, e.noise_C * 1e12,
                 e.effective_noise_C * 1e12);
@@ -236,7 +230,7 @@ void write_map_figures(const std::vector<const Candidate*>& ranked, const Design
     }
     const std::string what = which == 0 ? "Position bound" : "Force bound";
     fig.suptitle(what + std::string(o.force_known ? " (force known), " : " (force unknown), ") + noise_text + ", " +
-                 fmt("%.3g N", o.force_N) + (which == 0 ? ", white line " + fmt("%.3g mm", target) : ", white line 1 %") + kind);
+                 pvdf::format_printf("%.3g N", o.force_N) + (which == 0 ? ", white line " + pvdf::format_printf("%.3g mm", target) : ", white line 1 %") + kind);
     const std::string path = o.out_dir + (which == 0 ? "/design_position.png" : "/design_force.png");
     fig.save(path);
     written.push_back(path);
@@ -300,12 +294,12 @@ void write_sweep_figure(const std::vector<Candidate>& all, const std::vector<std
     b.line(x, median, series_names[s], color, pvdf::plot::LineStyle::solid, pvdf::plot::Marker::circle);
     if (best) {
       a.scatter({best->sweep_value * axis.scale}, {100 * best->summary.usable_fraction},
-                "best: " + fmt("%.4g", best->sweep_value * axis.scale) + (axis.unit.empty() ? "" : " " + axis.unit), pvdf::plot::Color{220, 30, 30},
+                "best: " + pvdf::format_printf("%.4g", best->sweep_value * axis.scale) + (axis.unit.empty() ? "" : " " + axis.unit), pvdf::plot::Color{220, 30, 30},
                 pvdf::plot::Marker::square, 12);
       a.vline(best->sweep_value * axis.scale, pvdf::plot::Color{220, 30, 30});
     }
   }
-  a.xlabel(axis.label()).ylabel("area fraction (%)").title(fmt("usable and covered area (σ$_{pos}$ ≤ %.3g mm)", o.target_mm)).grid_lines().legend("best");
+  a.xlabel(axis.label()).ylabel("area fraction (%)").title(pvdf::format_printf("usable and covered area (σ$_{pos}$ ≤ %.3g mm)", o.target_mm)).grid_lines().legend("best");
   b.xlabel(axis.label()).ylabel("median σ$_{pos}$ (mm)").log_y().title("median position bound").grid_lines().legend("best");
   fig.suptitle("Design sweep of the " + axis.name + " (--vary " + key + ")" +
                (synthetic ? " — SYNTHETIC stand-in maps, not FEM" : ""));
@@ -322,7 +316,7 @@ DesignOptions design_options(const DesignCommandOptions& o) {
     throw pvdf::InputError("nothing to compare: give one or more SCENE files (or --map MAP.h5)");
   }
   if (!o.vary.empty() && o.scenes.empty()) throw pvdf::InputError("--vary needs a SCENE to vary");
-  if (!(o.target_mm > 0)) throw pvdf::InputError("--target-mm " + fmt("%g", o.target_mm) + " must be > 0 (mm)");
+  if (!(o.target_mm > 0)) throw pvdf::InputError("--target-mm " + pvdf::format_printf("%g", o.target_mm) + " must be > 0 (mm)");
   if (o.spacing_m < 0 || o.refine_spacing_m < 0) throw pvdf::InputError("--spacing-m and --refine-spacing-m must be > 0 (m)");
   if (o.refine_best < 0) throw pvdf::InputError("--refine-best must be >= 0");
 
@@ -330,7 +324,7 @@ DesignOptions design_options(const DesignCommandOptions& o) {
   d.noise_C = pvdf::parse_number_list(o.noise, "--noise-C");
   for (const double n : d.noise_C) {
     if (!(n > 0 && n < 1e-6)) {
-      throw pvdf::InputError("--noise-C " + pvdf::escape_control_bytes(o.noise) + ": " + fmt("%g", n) +
+      throw pvdf::InputError("--noise-C " + pvdf::escape_control_bytes(o.noise) + ": " + pvdf::format_printf("%g", n) +
                              " must lie in (0, 1e-6) C (a 1-sigma charge noise)");
     }
   }
@@ -354,7 +348,7 @@ DesignOptions design_options(const DesignCommandOptions& o) {
 /// The figures' noise label: "σ = 0.05 pC, 12-bit ADC" (per electrode "0.05/0.1" when they differ).
 std::string noise_label(const DesignOptions& d, const DesignCommandOptions& o) {
   std::string text;
-  for (std::size_t k = 0; k < d.noise_C.size(); ++k) text += (k ? "/" : "") + fmt("%.3g", d.noise_C[k] * 1e12);
+  for (std::size_t k = 0; k < d.noise_C.size(); ++k) text += (k ? "/" : "") + pvdf::format_printf("%.3g", d.noise_C[k] * 1e12);
   return "σ = " + text + " pC" + (o.adc_bits > 0 ? ", " + std::to_string(o.adc_bits) + "-bit ADC" : "");
 }
 

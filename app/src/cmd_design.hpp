@@ -55,8 +55,6 @@ struct DesignCommandOptions {
 /// One candidate layout and what the analysis found (the library's: mapping/studies/design_study.hpp).
 using Candidate = pvdf::mapping::DesignCandidate;
 
-/// printf-formatted number ("%.3g").
-std::string fmt(const char* f, double v);
 /// m as mm ("0.0850 mm"), "unbounded" for +inf (never "inf" or "nan" as a result).
 std::string mm(double m);
 /// A fraction as a percentage ("38.6 %"), "unbounded" for +inf.

@@ -135,7 +135,7 @@ void write_pareto_figure(const OptimizeSummary& s, const DesignCommandOptions& o
   a.integer_x().xlim(n_lo - 0.5, n_hi + 0.5);
   b.integer_x().xlim(n_lo - 0.5, n_hi + 0.5);
   if (m_hi > 0 && std::isfinite(m_lo)) b.ylim(m_lo / 1.25, m_hi * 1.25);
-  a.xlabel("electrodes").ylabel("area fraction (%)").title(fmt("usable area (σ$_{pos}$ ≤ %.3g mm)", o.target_mm)).grid_lines().legend("best");
+  a.xlabel("electrodes").ylabel("area fraction (%)").title(pvdf::format_printf("usable area (σ$_{pos}$ ≤ %.3g mm)", o.target_mm)).grid_lines().legend("best");
   b.xlabel("electrodes").ylabel("median σ$_{pos}$ (mm)").log_y().title("median position bound").grid_lines().legend("best");
   fig.suptitle("design --optimize: best layout per electrode count (seed " + std::to_string(o.seed) + ", budget " +
                std::to_string(o.budget) + ")" + (synthetic ? " — SYNTHETIC stand-in maps, not FEM" : ", maps from the atlas"));

@@ -40,12 +40,6 @@ struct LocateOptions {
   std::string pictures_dir;
 };
 
-std::string g_text(double v) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%g", v);
-  return buffer;
-}
-
 nlohmann::json flags_json(std::uint32_t flags) {
   nlohmann::json a = nlohmann::json::array();
   const std::string text = pvdf::mapping::flags_text(flags);
@@ -86,13 +80,13 @@ LocatorOptions locator_options(const LocateOptions& o, const ChargeMap& map) {
     if (!(r[0] > 0) || !(r[1] > r[0])) throw pvdf::InputError("--force-range-N " + o.force_range + ": need 0 < MIN < MAX (N)");
   }
   if (o.force_N_given && !(o.force_N > 0 && std::isfinite(o.force_N))) {
-    throw pvdf::InputError("--force-N " + g_text(o.force_N) + ": must be finite and > 0 (N); omit it when the force is unknown");
+    throw pvdf::InputError("--force-N " + pvdf::format_g(o.force_N) + ": must be finite and > 0 (N); omit it when the force is unknown");
   }
   if (!options.noise_C.empty()) {
     for (double s : options.noise_C) {
-      if (!(s > 0 && std::isfinite(s))) throw pvdf::InputError("--noise-C " + o.noise + ": " + g_text(s) + " must be finite and > 0 (C)");
+      if (!(s > 0 && std::isfinite(s))) throw pvdf::InputError("--noise-C " + o.noise + ": " + pvdf::format_g(s) + " must be finite and > 0 (C)");
       if (s > 1e-6) {
-        throw pvdf::InputError("--noise-C " + pvdf::quote_cell(o.noise) + ": " + g_text(s) +
+        throw pvdf::InputError("--noise-C " + pvdf::quote_cell(o.noise) + ": " + pvdf::format_g(s) +
                                " C of noise exceeds 1e-6 C, beyond any film's charge; is the unit pC? (5e-14 C = 0.05 pC)");
       }
     }
@@ -175,7 +169,7 @@ void print_location_text(const LocateOptions& o, const Location& r, const Charge
 /// "0.2-5 N" (or "1 N" for a one-level map): the forces the map was computed at.
 std::string force_coverage(const ChargeMap& map) {
   const double lo = map.forces_N.front(), hi = map.forces_N.back();
-  return lo == hi ? g_text(lo) + " N" : g_text(lo) + "-" + g_text(hi) + " N";
+  return lo == hi ? pvdf::format_g(lo) + " N" : pvdf::format_g(lo) + "-" + pvdf::format_g(hi) + " N";
 }
 
 /// `--charges-C`: one press.
@@ -191,11 +185,11 @@ int locate_one(const LocateOptions& o, const ChargeMap& map, const Locator& loca
     print_location_text(o, r, map);
   }
   if (force_outside_levels) {
-    const std::string where = "--force-N " + g_text(o.force_N) + " N lies beyond the map's force levels: the map covers " +
+    const std::string where = "--force-N " + pvdf::format_g(o.force_N) + " N lies beyond the map's force levels: the map covers " +
                               force_coverage(map);
     if (!r.has_position()) {
       std::cerr << "error: " << where << ", and no press fits there; give a force within it, or build the map with "
-                << "--forces-N reaching " << g_text(o.force_N) << " N\n";
+                << "--forces-N reaching " << pvdf::format_g(o.force_N) << " N\n";
     } else {
       pvdf::app::warn(where + "; the charges were extrapolated in force");
     }

@@ -95,11 +95,7 @@ int run_simulate(const SimulateOptions& o) {
   std::snprintf(comment, sizeof comment, "pvdfkit restore simulate %s: speed %.6g m/s, %.6g Hz, dx %.6g m", o.scene.c_str(),
                 scene.speed_m_per_s, scene.sample_rate_Hz, scene.sample_spacing_m());
   r::write_scan_csv(o.output, scan, comment);
-  double p1 = 0, p2 = 0;
-  for (std::size_t i = 0; i < scan.size(); ++i) {
-    p1 = std::max(p1, std::abs(scan.m1_V[i]));
-    p2 = std::max(p2, std::abs(scan.m2_V[i]));
-  }
+  const double p1 = scan.peak_m1_V(), p2 = scan.peak_m2_V();
   std::printf("simulated %zu samples, dx = %.4g m (%.4g mm/s at %.4g Hz), peak |m1| = %.4g V, |m2| = %.4g V -> %s\n",
               scan.size(), scene.sample_spacing_m(), scene.speed_m_per_s * 1e3, scene.sample_rate_Hz, p1, p2,
               o.output.c_str());
@@ -258,15 +254,10 @@ int run_apply(const ApplyOptions& o) {
   }
   r::write_forces_csv(o.output, forces, "pvdfkit restore apply " + o.filter + " " + o.scan +
                                             ": line forces in N/m (fx_N_per_m, fz_N_per_m) and per sample in N (fx_N, fz_N)");
-  double fz_max = 0, int_x = 0, int_z = 0;
-  for (std::size_t i = 0; i < forces.fz_N.size(); ++i) {
-    fz_max = std::max(fz_max, forces.fz_N_per_m[i]);
-    int_x += forces.fx_N[i];
-    int_z += forces.fz_N[i];
-  }
   std::printf("restored %zu samples: peak f_z = %.4g N/m; integral f_x = %.4g N, f_z = %.4g N; mu threshold %.3g N per "
               "sample -> %s\n",
-              forces.x_m.size(), fz_max, int_x, int_z, forces.mu_threshold_N, o.output.c_str());
+              forces.x_m.size(), forces.peak_fz_N_per_m(), forces.total_fx_N(), forces.total_fz_N(), forces.mu_threshold_N,
+              o.output.c_str());
   if (ro.flat_baseline) {
     std::printf("forces are in excess of the flat-surface level (zero where %.0f %% of the scan is flat): a stress-rate "
                 "sensor cannot see a steady load, so the scan's contact load is not included\n",

@@ -60,11 +60,6 @@ void check_measured_plausible(const std::vector<pvdf::mapping::MeasuredPress>& p
 }
 
 std::vector<double> parse_charges(const std::string& text, const pvdf::mapping::ChargeMap& map) {
-  const auto g_text = [](double v) {
-    char buffer[32];
-    std::snprintf(buffer, sizeof buffer, "%g", v);
-    return std::string(buffer);
-  };
   const auto q = pvdf::parse_number_list(text, "--charges-C");
   if (q.size() != map.ne()) {
     std::string order;
@@ -81,10 +76,10 @@ std::vector<double> parse_charges(const std::string& text, const pvdf::mapping::
   for (const double c : q) given_max_C = std::max(given_max_C, std::abs(c));
   if (map_max_C > 0 && given_max_C > 1e3 * map_max_C) {
     const bool pico = given_max_C * 1e-12 <= 10 * map_max_C;
-    throw pvdf::InputError("--charges-C " + pvdf::quote_cell(text) + ": " + g_text(given_max_C) +
-                           " C is more than 1000 times the map's largest charge (" + g_text(map_max_C) + " C)" +
+    throw pvdf::InputError("--charges-C " + pvdf::quote_cell(text) + ": " + pvdf::format_g(given_max_C) +
+                           " C is more than 1000 times the map's largest charge (" + pvdf::format_g(map_max_C) + " C)" +
                            (pico ? "; these look like pC: the unit is coulombs (1 pC = 1e-12 C), e.g. " +
-                                       g_text(q[0] * 1e-12) + " for " + g_text(q[0])
+                                       pvdf::format_g(q[0] * 1e-12) + " for " + pvdf::format_g(q[0])
                                  : "; the unit is coulombs: check the charge amplifier's gain"));
   }
   return q;

@@ -234,12 +234,8 @@ double time_at_error(const std::vector<const Row*>& rows, double e, bool& extrap
   return NAN;
 }
 
-std::string fmt(const char* f, double v) {
-  if (!std::isfinite(v)) return "—";
-  char buf[64];
-  std::snprintf(buf, sizeof buf, f, v);
-  return buf;
-}
+/// One number for the table; a dash where there is none.
+std::string fmt(const char* f, double v) { return std::isfinite(v) ? pvdf::format_printf(f, v) : "—"; }
 
 struct BenchArgs {
   bool quick = false, use_ccx = true, use_pvdf = true, bending = false, use_sweep = true;

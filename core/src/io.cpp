@@ -163,9 +163,11 @@ void write_file_atomically(const std::string& path, const std::function<void(std
   });
 }
 
-std::string format_g(double x) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%g", x);
+std::string format_g(double x) { return format_printf("%g", x); }
+
+std::string format_printf(const char* format, double x) {
+  char buf[128];
+  std::snprintf(buf, sizeof buf, format, x);
   return buf;
 }
 

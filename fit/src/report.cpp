@@ -1,6 +1,7 @@
 // JSON and PNG reports of a fit.
 #include "pvdf/fit/report.hpp"
 
+#include "pvdf/core/io.hpp"
 #include "pvdf/plot/plot.hpp"
 
 #include <algorithm>
@@ -13,12 +14,6 @@ namespace pvdf::fit {
 namespace {
 
 nlohmann::json number_or_null(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
-
-std::string format(const char* f, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, f, v);
-  return buf;
-}
 
 }  // namespace
 
@@ -144,7 +139,7 @@ void write_fit_png(const FitResult& r, const MeasuredTable& m, const pvdf::Scene
   }
   a.title("Charges: measured against FEM").xlabel("FEM charge (pC)").ylabel("measured charge (pC), ±1σ").grid_lines().legend("upper left");
   b.hline(0.0, Color{0, 0, 0}, LineStyle::solid)
-      .title(format("Difference per value (reduced χ² %.3g after the fit)", r.reduced_chi2))
+      .title(pvdf::format_printf("Difference per value (reduced χ² %.3g after the fit)", r.reduced_chi2))
       .xlabel("observation number (row × column order)")
       .integer_x()
       .ylabel("100·(measured − FEM)/FEM (%)")

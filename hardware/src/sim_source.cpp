@@ -42,6 +42,14 @@ double SimScene::charge_C(int channel, double t_s) const {
 
 double SimScene::ideal_output_V(int channel, double t_s) const { return gain_V_per_C * charge_C(channel, t_s); }
 
+double largest_press_charge_C(const SimScene& scene) {
+  double largest = 0;
+  for (const auto& p : scene.presses)
+    for (const double q : p.charges_C)
+      if (std::abs(q) > largest) largest = std::abs(q);
+  return largest;
+}
+
 SimScene default_sim_scene() {
   SimScene s;
   SimPress p;

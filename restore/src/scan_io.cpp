@@ -76,6 +76,24 @@ void write_scan_csv(const std::string& path, const Scan& scan, const std::string
   });
 }
 
+double RestoredForces::peak_fz_N_per_m() const {
+  double peak = 0;
+  for (const double f : fz_N_per_m) peak = std::max(peak, f);
+  return peak;
+}
+
+double RestoredForces::total_fx_N() const {
+  double total = 0;
+  for (const double f : fx_N) total += f;
+  return total;
+}
+
+double RestoredForces::total_fz_N() const {
+  double total = 0;
+  for (const double f : fz_N) total += f;
+  return total;
+}
+
 void write_forces_csv(const std::string& path, const RestoredForces& f, const std::string& comment) {
   write_file_atomically(path, [&](std::ostream& out) {
     if (!comment.empty()) out << "# " << comment << '\n';

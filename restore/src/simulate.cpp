@@ -26,6 +26,18 @@ double Scan::sample_spacing_m() const {
   return (x_m.back() - x_m.front()) / static_cast<double>(x_m.size() - 1);
 }
 
+namespace {
+double largest_abs(const std::vector<double>& v) {
+  double largest = 0;
+  for (const double x : v)
+    if (std::abs(x) > largest) largest = std::abs(x);
+  return largest;
+}
+}  // namespace
+
+double Scan::peak_m1_V() const { return largest_abs(m1_V); }
+double Scan::peak_m2_V() const { return largest_abs(m2_V); }
+
 void surface_forces(const ScannerScene& scene, const std::vector<double>& x_m, std::vector<double>& fx_N,
                     std::vector<double>& fz_N) {
   const std::size_t n = x_m.size();

@@ -118,13 +118,6 @@ inline bool test_candidate(const float* sc, std::size_t ne_runtime, const double
   return true;
 }
 
-/// A number for a message, printed like %g (never "-0.000000").
-inline std::string text_g(double v) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%g", v);
-  return buffer;
-}
-
 inline double normalize(double* v, std::size_t n) {
   double s = 0;
   for (std::size_t k = 0; k < n; ++k) s += v[k] * v[k];

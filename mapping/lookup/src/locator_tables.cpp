@@ -6,12 +6,12 @@
 #include "pvdf/mapping/locator.hpp"
 
 #include "pvdf/core/error.hpp"
+#include "pvdf/core/io.hpp"
 
 namespace pvdf::mapping {
 
 using detail::direction_key;
 using detail::normalize;
-using detail::text_g;
 using detail::Vec;
 
 /// The local model of one usable cell at one force level, at the cell centre (cell units t, s).
@@ -81,7 +81,7 @@ void Locator::configure(const ChargeMap& map, const LocatorOptions& options) {
                      std::to_string(ne_) + " (one per electrode)");
   }
   for (double s : noise_) {
-    if (!std::isfinite(s) || !(s > 0)) throw InputError("locator noise_C = " + text_g(s) + " must be finite and > 0 (C)");
+    if (!std::isfinite(s) || !(s > 0)) throw InputError("locator noise_C = " + pvdf::format_g(s) + " must be finite and > 0 (C)");
   }
   gain_.assign(ne_, 1.0);
   offset_.assign(ne_, 0.0);
@@ -106,13 +106,13 @@ void Locator::configure(const ChargeMap& map, const LocatorOptions& options) {
   if (!(lo > 0)) lo = 0.5 * map.forces_N.front();
   if (!(hi > 0)) hi = 2.0 * map.forces_N.back();
   if (!(hi > lo) || !std::isfinite(lo) || !std::isfinite(hi)) {
-    throw InputError("locator force range " + text_g(lo) + ".." + text_g(hi) + " N must satisfy 0 < min < max");
+    throw InputError("locator force range " + pvdf::format_g(lo) + ".." + pvdf::format_g(hi) + " N must satisfy 0 < min < max");
   }
   log_force_lo_ = std::log(lo);
   log_force_hi_ = std::log(hi);
   if (options.known_force_N != 0.0) {
     if (!(options.known_force_N > 0) || !std::isfinite(options.known_force_N)) {
-      throw InputError("locator known_force_N = " + text_g(options.known_force_N) + " must be finite and > 0 (N)");
+      throw InputError("locator known_force_N = " + pvdf::format_g(options.known_force_N) + " must be finite and > 0 (N)");
     }
     fixed_force_ = true;
     log_force_lo_ = log_force_hi_ = std::log(options.known_force_N);

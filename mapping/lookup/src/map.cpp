@@ -64,6 +64,13 @@ void check_axis(const std::vector<double>& axis, const std::string& name, const 
 
 }  // namespace
 
+double ChargeMap::largest_charge_C() const {
+  double largest = 0;
+  for (const double q : charge_C)
+    if (std::abs(q) > largest) largest = std::abs(q);
+  return largest;
+}
+
 void validate(const ChargeMap& m, const std::string& source) {
   check_axis(m.x_m, "/grid/x_m", source);
   check_axis(m.y_m, "/grid/y_m", source);

@@ -17,12 +17,6 @@ namespace pvdf::mapping {
 
 namespace {
 
-std::string format(const char* f, double v) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, f, v);
-  return buf;
-}
-
 /// The label as a file name: letters, digits and ".-=" kept, anything else "_".
 std::string slug(const std::string& text) {
   std::string s;
@@ -54,11 +48,11 @@ void make_fem_map(DesignCandidate& c, const DesignFemMaps& settings, double spac
   MapReport report;
   c.map = generate_map(scene, mo, &report);
   pvdf::make_directories(settings.maps_dir);
-  c.map_file = settings.maps_dir + "/" + slug(c.label) + "_" + format("%.2gmm", spacing_m * 1e3) + ".h5";
+  c.map_file = settings.maps_dir + "/" + slug(c.label) + "_" + pvdf::format_printf("%.2gmm", spacing_m * 1e3) + ".h5";
   write_generated_map(c.map_file, c.map, report.provenance);
   progress.note("map " + c.label + ": " + std::to_string(report.n_solved) + " FEM solves in " +
                 pvdf::format_duration(report.wall_s) + " (model " + report.model + ", estimated charge error " +
-                format("%.2g", report.estimated_relative_error) + "), written to " + c.map_file);
+                pvdf::format_printf("%.2g", report.estimated_relative_error) + "), written to " + c.map_file);
   if (report.n_failed > 0 && settings.warn) {
     settings.warn(c.label + ": " + std::to_string(report.n_failed) + " map points did not converge (left out)");
   }

@@ -3,6 +3,7 @@
 
 #include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
+#include "pvdf/core/io.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -15,12 +16,6 @@
 namespace pvdf::mapping {
 
 namespace {
-
-std::string num(double v) {
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%g", v);
-  return buf;
-}
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -112,16 +107,16 @@ void check_optimize_options(const OptimizeOptions& o) {
                      "5 variables per electrode); give 16 or fewer");
   }
   if (!(o.size_min_m > 0) || !std::isfinite(o.size_min_m)) {
-    throw InputError(name("size_min_m", num(o.size_min_m)) + " must be > 0 (m), e.g. 0.001");
+    throw InputError(name("size_min_m", pvdf::format_g(o.size_min_m)) + " must be > 0 (m), e.g. 0.001");
   }
   if (!(o.size_max_m >= o.size_min_m) || !std::isfinite(o.size_max_m)) {
-    throw InputError(name("size_max_m", num(o.size_max_m)) + " must be >= " + name("size_min_m", num(o.size_min_m)) + " (m)");
+    throw InputError(name("size_max_m", pvdf::format_g(o.size_max_m)) + " must be >= " + name("size_min_m", pvdf::format_g(o.size_min_m)) + " (m)");
   }
   if (!(o.min_gap_m >= 0) || !std::isfinite(o.min_gap_m)) {
-    throw InputError(name("min_gap_m", num(o.min_gap_m)) + " must be >= 0 (m), e.g. 0.0005");
+    throw InputError(name("min_gap_m", pvdf::format_g(o.min_gap_m)) + " must be >= 0 (m), e.g. 0.0005");
   }
   if (!(o.clamp_margin_m >= 0) || !std::isfinite(o.clamp_margin_m)) {
-    throw InputError(name("clamp_margin_m", num(o.clamp_margin_m)) + " must be >= 0 (m), e.g. 0.001");
+    throw InputError(name("clamp_margin_m", pvdf::format_g(o.clamp_margin_m)) + " must be >= 0 (m), e.g. 0.001");
   }
   if (o.budget < 1 || o.budget > 1000000) {
     throw InputError(name("budget", std::to_string(o.budget)) +
@@ -144,14 +139,14 @@ void check_optimize_maps(const OptimizeMaps& m, const OptionNaming& naming) {
   }
   if (!m.atlas_path.empty() && (m.spacing_m > 0 || m.tolerance > 0)) {
     const bool spacing = m.spacing_m > 0;
-    throw InputError(name(spacing ? "spacing_m" : "tolerance", num(spacing ? m.spacing_m : m.tolerance)) + " with " +
+    throw InputError(name(spacing ? "spacing_m" : "tolerance", pvdf::format_g(spacing ? m.spacing_m : m.tolerance)) + " with " +
                      name("atlas", m.atlas_path) + ": the atlas fixes the grid and the tolerance; drop it or make another atlas");
   }
   if (!m.atlas_path.empty() && !std::filesystem::is_regular_file(m.atlas_path)) {
     throw InputError(name("atlas", m.atlas_path) + ": no such file; make one with `pvdfkit atlas SCENE -o " + m.atlas_path + "`");
   }
   if (m.synthetic && (m.spacing_m < 0 || !std::isfinite(m.spacing_m))) {
-    throw InputError(name("spacing_m", num(m.spacing_m)) + " must be > 0 (m), e.g. 0.001");
+    throw InputError(name("spacing_m", pvdf::format_g(m.spacing_m)) + " must be > 0 (m), e.g. 0.001");
   }
 }
 
@@ -232,9 +227,9 @@ OptimizeSummary optimize_layouts(const nlohmann::json& scene_json, const std::st
   space.square = o.square;
   space.angle_hi = o.rotate ? (o.square ? 0.5 * pi : pi) : 0.0;
   if (!(space.x_hi > space.x_lo && space.y_hi > space.y_lo)) {
-    throw InputError(named(o.naming, "clamp_margin_m", num(o.clamp_margin_m)) + " with " +
-                     named(o.naming, "size_min_m", num(o.size_min_m)) + ": no room on the film of " +
-                     source + " (bounding box " + num(box[1] - box[0]) + " x " + num(box[3] - box[2]) +
+    throw InputError(named(o.naming, "clamp_margin_m", pvdf::format_g(o.clamp_margin_m)) + " with " +
+                     named(o.naming, "size_min_m", pvdf::format_g(o.size_min_m)) + ": no room on the film of " +
+                     source + " (bounding box " + pvdf::format_g(box[1] - box[0]) + " x " + pvdf::format_g(box[3] - box[2]) +
                      " m); give a smaller margin or size");
   }
 

@@ -80,6 +80,9 @@ CsvTable read_csv(std::istream& in, const std::string& source, BadRowPolicy poli
 std::vector<std::string> split_csv_line(const std::string& line);
 /// A number as printf's %g (six significant digits): for messages.
 std::string format_g(double x);
+/// One number printed with a printf conversion for a double (`"%.3g mm"`, `"%.1f %%"`); the
+/// text is cut at 127 bytes. The one home of the "printf of one number" helper.
+std::string format_printf(const char* format, double x);
 /// Parses a finite double from the whole of `text`; false if it is not one.
 bool parse_finite(const std::string& text, double& value);
 

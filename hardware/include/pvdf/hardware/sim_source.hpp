@@ -80,6 +80,8 @@ SimScene parse_sim_scene(const nlohmann::json& json, const std::string& source);
 SimScene load_sim_scene(const std::string& path);
 /// The built-in scene: 3 channels at 10 kHz for 1 s, one 1 N press.
 SimScene default_sim_scene();
+/// Largest |charge| the presses' `charges_C` drive (C; 0 when none is set).
+double largest_press_charge_C(const SimScene& scene);
 
 class SimSource final : public Source {
  public:

@@ -35,6 +35,10 @@ struct RestoredForces {
   double flat_fraction = 0;  ///< fraction of the samples judged flat (where the baseline was fitted)
   double mu_threshold_N = 0; ///< per sample
   double sample_spacing_m = 0;
+  /// Largest f_z (N/m; 0 when none is positive), and Σ f_x, Σ f_z over the samples (N).
+  double peak_fz_N_per_m() const;
+  double total_fx_N() const;
+  double total_fz_N() const;
 };
 
 /// Writes `x_m,fx_N,fz_N,mu,mu_valid,fx_N_per_m,fz_N_per_m` atomically.

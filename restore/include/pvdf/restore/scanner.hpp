@@ -65,6 +65,9 @@ struct Scan {
   std::vector<double> fx_N, fz_N;  ///< reference forces per sample (empty when unknown)
   double sample_spacing_m() const;
   std::size_t size() const { return x_m.size(); }
+  /// Largest |m1| and |m2| (V): what the ADC must hold.
+  double peak_m1_V() const;
+  double peak_m2_V() const;
   std::string source;
 };
 

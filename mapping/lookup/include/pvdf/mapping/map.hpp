@@ -97,6 +97,9 @@ struct ChargeMap {
   }
   /// Sizes all result arrays for the current axes, forces and electrodes; status = not_computed.
   void allocate();
+  /// Largest |charge| over every node, level and electrode (C; 0 for an empty map). Nodes
+  /// without a value (NaN) are skipped.
+  double largest_charge_C() const;
 };
 
 /// Checks every array shape, axis spacing, value range and finiteness. Throws pvdf::InputError
