@@ -115,29 +115,7 @@ int run_fit(const FitCliOptions& o) {
   for (const auto& e : scene.electrodes) names.push_back(e.name);
   pvdf::check_csv_file(o.measured_path, "MEASURED");  // rows, header and cells, before anything is read
   const pvdf::fit::MeasuredTable measured = pvdf::fit::read_measured(o.measured_path, names);
-  for (std::size_t i = 0; i < measured.force_N.size(); ++i) {
-    // The rule of loads[].force_N: a press of 1e-300 N would "fit" with a prediction of zero.
-    const double f = measured.force_N[i];
-    if (!(f >= 1e-9 && f <= 1e4)) {
-      throw pvdf::InputError(o.measured_path + ": press " + std::to_string(i + 1) + ": force_N = " + pvdf::format_g(f) +
-                             " must lie in [1e-9, 1e4] N (the rule of loads[].force_N); fix or remove the row");
-    }
-  }
-  for (const auto& column : measured.observed) {
-    // A 1-sigma finer than 1 ppm of the column's scale is no bench measurement, and a denormal one
-    // (1e-320) overflows the weighted residuals inside the solver.
-    if (!column.has_sigma) continue;
-    double scale = 0;
-    for (const double v : column.value) scale = std::max(scale, std::abs(v));
-    for (std::size_t i = 0; i < column.sigma.size(); ++i) {
-      if (i < column.value.size() && std::isnan(column.value[i])) continue;  // not observed in this row
-      if (!(column.sigma[i] >= 1e-6 * scale) || !(column.sigma[i] >= 1e-300)) {
-        throw pvdf::InputError(o.measured_path + ":" + std::to_string(measured.line[i]) + ": sigma_" + column.name + " = " +
-                               pvdf::format_g(column.sigma[i]) + " is below 1e-6 of the column's largest value (" +
-                               pvdf::format_g(scale) + "): no bench measures to 1 ppm; give the real 1-sigma");
-      }
-    }
-  }
+  pvdf::fit::check_measured_for_fit(measured, o.measured_path);
   pvdf::fit::FitOptions fo;
   if (o.params_given && !o.params.empty()) check_no_empty_item(o.params, "--params");
   fo.parameters = split(o.params);

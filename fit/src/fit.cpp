@@ -4,6 +4,7 @@
 #include "pvdf/fit/fit.hpp"
 
 #include "pvdf/core/error.hpp"
+#include "pvdf/core/io.hpp"
 #include "pvdf/core/piezo.hpp"
 
 #include <ceres/ceres.h>
@@ -439,6 +440,32 @@ Identifiability identify(const Eigen::MatrixXd& J, const std::vector<Eigen::Inde
 }
 
 }  // namespace
+
+void check_measured_for_fit(const MeasuredTable& m, const std::string& source) {
+  for (std::size_t i = 0; i < m.force_N.size(); ++i) {
+    // The rule of loads[].force_N: a press of 1e-300 N would "fit" with a prediction of zero.
+    const double f = m.force_N[i];
+    if (!(f >= 1e-9 && f <= 1e4)) {
+      throw InputError(source + ": press " + std::to_string(i + 1) + ": force_N = " + pvdf::format_g(f) +
+                       " must lie in [1e-9, 1e4] N (the rule of loads[].force_N); fix or remove the row");
+    }
+  }
+  for (const auto& column : m.observed) {
+    // A 1-sigma finer than 1 ppm of the column's scale is no bench measurement, and a denormal one
+    // (1e-320) overflows the weighted residuals inside the solver.
+    if (!column.has_sigma) continue;
+    double scale = 0;
+    for (const double v : column.value) scale = std::max(scale, std::abs(v));
+    for (std::size_t i = 0; i < column.sigma.size(); ++i) {
+      if (i < column.value.size() && std::isnan(column.value[i])) continue;  // not observed in this row
+      if (!(column.sigma[i] >= 1e-6 * scale) || !(column.sigma[i] >= 1e-300)) {
+        throw InputError(source + ":" + std::to_string(m.line[i]) + ": sigma_" + column.name + " = " +
+                         pvdf::format_g(column.sigma[i]) + " is below 1e-6 of the column's largest value (" +
+                         pvdf::format_g(scale) + "): no bench measures to 1 ppm; give the real 1-sigma");
+      }
+    }
+  }
+}
 
 FitResult fit_film(const pvdf::Scene& scene, const MeasuredTable& measured, const FitOptions& options) {
   prepare(scene, measured, options);  // bad names and values fail before any FEM work

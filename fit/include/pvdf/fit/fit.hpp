@@ -89,6 +89,12 @@ struct FitResult {
   double wall_s = 0;
 };
 
+/// The rules a measured table must meet before a fit, checked before any solve: every press's
+/// force in [1e-9, 1e4] N (the rule of loads[].force_N), every given 1-sigma at least 1e-6 of its
+/// column's largest value (no bench measures to 1 ppm; a denormal sigma overflows the weighted
+/// residuals). Throws pvdf::InputError naming `source`, the row or line, the value and the fix.
+void check_measured_for_fit(const MeasuredTable& measured, const std::string& source);
+
 /// Fits `options.parameters` to `measured`. Throws pvdf::InputError for an unknown parameter
 /// name, a negative pre-tension start, fewer observations than parameters, or presses outside
 /// the film. Numerical outcomes are the status.
