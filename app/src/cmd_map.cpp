@@ -189,6 +189,13 @@ void print_map_text(const MapCommandOptions& o, const ChargeMap& map, const MapR
               "%zu points above the tolerance (tolerance_not_met)\n",
               100 * map.estimated_relative_error, 100 * map.estimated_deflection_relative_error,
               report.n_tolerance_not_met);
+  const pvdf::mapping::LookupErrorSummary& total = report.lookup_total_relative_error;
+  if (std::isfinite(total.max)) {
+    std::printf("total error a lookup on this map carries (node estimate and the error between nodes and force levels, "
+                "docs/lookup.md section 1.10), relative to a press's largest charge: median %.3g %%, 90 %% of the "
+                "presses below %.3g %%, at most %.3g %%\n",
+                100 * total.median, 100 * total.p90, 100 * total.max);
+  }
   if (report.placement == "adaptive") {
     std::printf("adaptive placement:");
     for (std::size_t l = 0; l < report.level_solves.size(); ++l) {

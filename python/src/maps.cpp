@@ -105,6 +105,37 @@ std::vector<double> noise_list(py::object value, const std::string& what, bool b
   return v;
 }
 
+/// `call` (Locator::predict or Locator::charge_error) at every press (x_m[i], y_m[i], force_N[i] or
+/// one force for all), checked as `what`: shape (N, n_electrodes), NaN off the map.
+py::array_t<double> per_press(const pvdf::mapping::Locator& loc, py::object x_m, py::object y_m, py::object force_N, const std::string& what,
+                              bool (pvdf::mapping::Locator::*call)(double, double, double, double*) const) {
+  const auto xs = arg::vector(x_m, what + ": x_m", {false, true, "give positions in m"});
+  const auto ys = arg::vector(y_m, what + ": y_m", {false, true, "give positions in m"});
+  auto fs = arg::vector(force_N, what + ": force_N", {false, true, "give forces in N"});
+  if (xs.size() != ys.size()) {
+    throw pvdf::InputError(what + ": x_m has " + std::to_string(xs.size()) + " values and y_m " +
+                           std::to_string(ys.size()) + "; give one y_m per x_m");
+  }
+  if (fs.size() == 1) fs.assign(xs.size(), fs[0]);
+  if (fs.size() != xs.size()) {
+    throw pvdf::InputError(what + ": force_N has " + std::to_string(fs.size()) + " values for " +
+                           std::to_string(xs.size()) + " positions; give one value or one per position");
+  }
+  for (std::size_t i = 0; i < fs.size(); ++i) {
+    if (!(fs[i] > 0 && fs[i] <= 1e4)) {
+      throw pvdf::InputError(what + ": force_N[" + std::to_string(i) + "] = " + pvdf::format_g(fs[i]) +
+                             " must lie in (0, 1e4] N");
+    }
+  }
+  const std::size_t ne = loc.n_electrodes();
+  py::array_t<double> out({py::ssize_t(xs.size()), py::ssize_t(ne)});
+  double* p = out.mutable_data();
+  for (std::size_t i = 0; i < xs.size(); ++i, p += ne) {
+    if (!(loc.*call)(xs[i], ys[i], fs[i], p)) std::fill(p, p + ne, std::numeric_limits<double>::quiet_NaN());
+  }
+  return out;
+}
+
 const char* map_expected = "a pvdfkit.ChargeMap (from read_map, generate_map or synthetic_map)";
 
 void bind_charge_map(py::module_& m) {
@@ -361,34 +392,17 @@ Thread-safe in C++; the GIL is released while locating.)doc")
            "n_electrodes) gives an empty result); known_force_N (N): None (unknown), one value or one per row, each in "
            "(0, 1e4]. Returns Locations.")
       .def("predict", [](const Locator& loc, py::object x_m, py::object y_m, py::object force_N) {
-             const auto xs = arg::vector(x_m, "Locator.predict: x_m", {false, true, "give positions in m"});
-             const auto ys = arg::vector(y_m, "Locator.predict: y_m", {false, true, "give positions in m"});
-             auto fs = arg::vector(force_N, "Locator.predict: force_N", {false, true, "give forces in N"});
-             if (xs.size() != ys.size()) {
-               throw pvdf::InputError("Locator.predict: x_m has " + std::to_string(xs.size()) + " values and y_m " +
-                                      std::to_string(ys.size()) + "; give one y_m per x_m");
-             }
-             if (fs.size() == 1) fs.assign(xs.size(), fs[0]);
-             if (fs.size() != xs.size()) {
-               throw pvdf::InputError("Locator.predict: force_N has " + std::to_string(fs.size()) + " values for " +
-                                      std::to_string(xs.size()) + " positions; give one value or one per position");
-             }
-             for (std::size_t i = 0; i < fs.size(); ++i) {
-               if (!(fs[i] > 0 && fs[i] <= 1e4)) {
-                 throw pvdf::InputError("Locator.predict: force_N[" + std::to_string(i) + "] = " + pvdf::format_g(fs[i]) +
-                                        " must lie in (0, 1e4] N");
-               }
-             }
-             const std::size_t ne = loc.n_electrodes();
-             py::array_t<double> out({py::ssize_t(xs.size()), py::ssize_t(ne)});
-             double* p = out.mutable_data();
-             for (std::size_t i = 0; i < xs.size(); ++i, p += ne) {
-               if (!loc.predict(xs[i], ys[i], fs[i], p)) std::fill(p, p + ne, std::numeric_limits<double>::quiet_NaN());
-             }
-             return out;
+             return per_press(loc, x_m, y_m, force_N, "Locator.predict", &Locator::predict);
            },
            py::arg("x_m"), py::arg("y_m"), py::arg("force_N") = 1.0,
            "The map's (calibrated) charges (C) for presses at (x_m, y_m) (m) with force_N (N): shape (N, n_electrodes), NaN off the map.")
+      .def("charge_error", [](const Locator& loc, py::object x_m, py::object y_m, py::object force_N) {
+             return per_press(loc, x_m, y_m, force_N, "Locator.charge_error", &Locator::charge_error);
+           },
+           py::arg("x_m"), py::arg("y_m"), py::arg("force_N") = 1.0,
+           "The map's own error (C, 1-sigma) that the lookup adds to the charge noise for presses at (x_m, y_m) (m) with "
+           "force_N (N): the node estimate and the error between nodes and force levels in quadrature (docs/lookup.md "
+           "section 1.10), shape (N, n_electrodes), NaN off the map.")
       .def_property_readonly("n_electrodes", &Locator::n_electrodes)
       .def_property_readonly("electrode_names", &Locator::electrode_names)
       .def_property_readonly("noise_C", [](const Locator& l) { return to_array(l.noise_C()); }, "1-sigma noise per electrode (C)")

@@ -7,8 +7,9 @@ folder (`build/` and `examples/` are links to the real ones, `out/` is fresh), s
 verbatim. Commands listed in NOT_IN_CI are not run here, each for the reason given (they are
 printed); every other command must exit 0. The lookup recipe reads the main job's 4 mm map
 `out/seed001/map.h5`: it is made first exactly as scripts/main-job's step 4 makes it (about a minute).
-Then the numbers the README quotes for the fit and lookup recipes are parsed from the README's prose
-and compared with what that run printed, to the digits quoted.
+Then the numbers the README quotes for the fit and lookup recipes, and the main job map's statement of
+its total error, are parsed from the README's prose and compared with what that run printed, to the
+digits quoted.
 
 Usage: test_readme_recipes.py SOURCE_DIR BUILD_DIR
 """
@@ -70,6 +71,7 @@ def main():
         r = subprocess.run(["bash", "-c", main_job_map], cwd=top, capture_output=True, text=True, timeout=900)
         if r.returncode != 0:
             failures.append(f"exit {r.returncode}: {main_job_map}\n{r.stderr[-2000:]}")
+        main_job_output = r.stdout
         for cmd in commands:
             reason = next((why for frag, why in NOT_IN_CI.items() if frag in cmd), None)
             if reason:
@@ -108,6 +110,22 @@ def main():
             print(f"README quotes {label} {text}; this run printed {value * scale:.6g}: {'agrees' if ok else 'DIFFERS'}")
             if not ok:
                 failures.append(f"README quotes {label} = {text}, the run printed {value * scale:.6g}")
+    # The main job's map statement of its total error (the lookup paragraph quotes it).
+    statement = r"median ([0-9.]+) %, 90 % of the presses below ([0-9.]+) %, at most ([0-9.]+) %"
+    quoted_statement = re.search(statement, section)
+    printed_statement = re.search(statement, main_job_output)
+    if not quoted_statement:
+        failures.append(f"README: the main job map's statement was not found (pattern {statement!r}); update this test")
+    elif not printed_statement:
+        failures.append(f"the main job's map printed no statement of its total error (pattern {statement!r})")
+    else:
+        for label, text, value in zip(("median", "90th percentile", "largest"), quoted_statement.groups(),
+                                      printed_statement.groups()):
+            ok = agrees(text, float(value))
+            print(f"README quotes the map's {label} total error {text} %; the map printed {value} %: "
+                  f"{'agrees' if ok else 'DIFFERS'}")
+            if not ok:
+                failures.append(f"README quotes the main job map's {label} total error {text} %, the map printed {value} %")
     # The lookup recipe's quoted answers against its run (JSON on stdout).
     import json
     locate_cmds = [c for c in commands if "pvdfkit locate out/seed001/map.h5" in c]

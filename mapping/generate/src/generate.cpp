@@ -11,6 +11,7 @@
 
 #include "pvdf/core/error.hpp"
 #include "pvdf/core/resources.hpp"
+#include "pvdf/mapping/locator.hpp"
 #include "pvdf/version.hpp"
 
 #include <mpi.h>
@@ -19,6 +20,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <limits>
 
 namespace pvdf::mapping {
 namespace detail {
@@ -123,6 +125,7 @@ ChargeMap Generator::run(MapReport& report) {
   report.n_solved = counters[0];
   report.n_resumed = n_resumed_points_;
   count_points(report);
+  if (rank_ == 0 && !stopped_anywhere) report.lookup_total_relative_error = lookup_error_summary(map_);
   report.wall_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   report.per_position_s = counters[1] > 0 ? report.wall_s * size_ / double(counters[1]) : 0.0;
   report.placement_s = placement_s_;

@@ -61,6 +61,10 @@ nlohmann::json map_report_json(const MapReport& report, const ChargeMap& map) {
   }
   const double total_error = map.estimated_total_relative_error;
   j["estimated_total_relative_error"] = std::isfinite(total_error) ? nlohmann::json(total_error) : nlohmann::json(nullptr);
+  const auto number_or_null = [](double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); };
+  j["lookup_total_relative_error"] = number_or_null(report.lookup_total_relative_error.max);
+  j["lookup_total_relative_error_median"] = number_or_null(report.lookup_total_relative_error.median);
+  j["lookup_total_relative_error_p90"] = number_or_null(report.lookup_total_relative_error.p90);
   j["solve_cpu_s"] = report.solve_cpu_s;
   const std::size_t solves = report.n_solved;  // FEM solves of this run (resumed points are not counted)
   j["cpu_s_per_solve"] = solves > 0 ? nlohmann::json(report.solve_cpu_s / double(solves)) : nlohmann::json(nullptr);

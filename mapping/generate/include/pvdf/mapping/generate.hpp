@@ -5,6 +5,7 @@
 #pragma once
 
 #include "pvdf/core/scene.hpp"
+#include "pvdf/mapping/locator.hpp"
 #include "pvdf/mapping/map.hpp"
 
 #include <array>
@@ -223,6 +224,12 @@ struct MapReport {
   /// Largest stated total error of the map (max_k error_k / max_k |Q_k| over ok points; adaptive
   /// placement: node + between nodes + between force levels).
   double estimated_total_relative_error = 0;
+  /// What the lookup will carry at a press (lookup_error_summary: the stored totals of an adaptive
+  /// map, or a uniform map's node estimates with the lookup's own estimate between nodes and force
+  /// levels), relative to the press's largest charge: median, 90th percentile and largest over the
+  /// map; NaN when stopped early or no lookup can be built. The total a map states for its users,
+  /// whatever the placement.
+  LookupErrorSummary lookup_total_relative_error;
   double solve_cpu_s = 0;         ///< CPU-seconds of the FEM solves (all threads; all ranks under MPI)
   double placement_s = 0;         ///< wall seconds deciding the placement and filling (adaptive)
   int ranks = 1;                  ///< MPI ranks
