@@ -188,17 +188,6 @@ void FilmSolver::grade_toward_rim(Vector<double>* u, Model model) {
   }
 }
 
-// The cold fallback of a failed warm solve. A flat start has no held rim values (a new mesh's
-// setup_system clears them, and u = 0 has no slope to take them from), so with the clamp-layer
-// condition on it would return the plain clamp's answer under the condition's name and estimate;
-// its lagged passes are run again from the converged state. (Found in r18: seed 001 at
-// (−35.97, 18.98) mm, 1 N, came back 2.6 % off the bending-kept reference while stating 0.61 %.)
-NewtonOutcome FilmSolver::solve_from_flat_keeping_clamp_layer(Model model) {
-  NewtonOutcome o = solve_from_flat(model, solution_);
-  if (o.status == Status::converged && clamp_layer_) o = solve_with_clamp_layer(model, solution_);
-  return o;
-}
-
 // The reference path instead of the clamp-layer condition: plain clamp, bending kept, the rim graded
 // to l_b (docs/fem.md §3.4), solved from the current state (from flat if that fails).
 NewtonOutcome FilmSolver::leave_clamp_layer_for_graded_rim(Model model) {
@@ -214,118 +203,125 @@ NewtonOutcome FilmSolver::leave_clamp_layer_for_graded_rim(Model model) {
   return o;
 }
 
-// Output-driven refinement (docs/fem.md §6): on every mesh the dual-weighted residual estimates of
-// the outputs (goal_error.cpp); when `auto` left bending out, the bending estimate decides first
-// (bending_may_be_left_out, model_choice.cpp) and bending is switched on, on the same mesh, when it
-// matters. Then refine (goal or Kelly indicators) and re-solve from the transferred solution until
-// the discretization estimate meets what the model error leaves of the tolerance, the refinement
-// cap or the DOF cap. Leaves the estimates in summary_ and goal_; a failed re-solve is returned
-// with `where` naming the cycle.
-NewtonOutcome FilmSolver::refine_until_tolerance(Model model, std::string& where) {
-  Summary& s = summary_;
+// Output-driven refinement (docs/fem.md §6), the steps of run()'s cycle: on every mesh the
+// dual-weighted residual estimates of the outputs (goal_error.cpp); when `auto` left bending out,
+// the bending estimate decides first (bending_may_be_left_out, model_choice.cpp) and bending is
+// switched on, on the same mesh, when it matters (adapt_model). Then refine (goal or Kelly
+// indicators) and re-solve from the transferred solution (solve_on_refined_mesh) until the
+// discretization estimate meets what the model error leaves of the tolerance, the refinement cap
+// or the DOF cap (accurate_enough). The estimates are left in summary_ and goal_.
+void FilmSolver::describe_estimator() {
   const std::string q = "Q" + std::to_string(options_.fe_degree + 1);
-  s.error_estimator = "dual-weighted residual: adjoint of the converged tangent, solved in " + q +
-                      " on the same mesh for the charges, " + q + " patch extrapolation of the Q" +
-                      std::to_string(options_.fe_degree) + " adjoint for the deflections; residual in " + q + "; " +
-                      (options_.refinement == Refinement::goal ? "goal-oriented" : "Kelly") + " refinement";
-  const int max_cycles = options_.adaptive ? options_.max_refinements : 0;
-  while (true) {
-    goal_ = estimate_goal_errors(solution_, model, true);
-    if (goal_.model_estimated && bending_switchable_) {
-      const bool leave_out = bending_may_be_left_out(goal_.relative_model, options_.tolerance, bending_reason_);
-      if (!leave_out && !clamp_layer_ && !rim_graded_ && !clamp_failed_ && clamp_layer_wanted()) {
-        // Most of bending's effect near the clamp is its layer there: first as a boundary condition
-        // (clamp_layer.cpp), then bending's remaining effect is estimated again (rim terms dropped).
-        const Vector<double> clamped = solution_;
-        NewtonOutcome o = switch_to_clamp_layer(model, solution_);
-        if (o.status != Status::converged) {  // the reference path instead (below, on this same loop)
-          solution_ = clamped;
-          set_clamp_layer(false, solution_);
-          clamp_correction_ = 0;
-          summary_.clamp_layer = "none";
-          clamp_reason_ = "the clamp-layer condition did not converge (" + o.message + "): rim graded instead";
-          clamp_failed_ = true;
-        } else {
-          clamp_reason_ = bending_reason_ + " with the plain clamp; the clamp's layer as a boundary condition "
-                          "changed the charges by " + fmt(clamp_correction_) + " (l_b up to " +
-                          fmt(summary_.clamp_layer_width_m * 1e3, 3) + " mm)";
-          continue;
-        }
-      }
-      if (!leave_out) {  // the richer model, from the membrane solution on this mesh
-        enable_bending();
-        if (!clamp_layer_) grade_toward_rim(&solution_, model);
-        NewtonOutcome o = clamp_layer_ ? solve_with_clamp_layer(model, solution_) : newton(model, 0.0, solution_);
-        ++s.load_steps;
-        s.newton_iterations += o.iterations;
-        if (o.status != Status::converged) o = solve_from_flat_keeping_clamp_layer(model);
-        if (o.status != Status::converged && clamp_layer_) {  // bending beside the condition failed: the reference path
-          clamp_reason_ += "; bending switched on beside the condition did not converge (" + o.message +
-                           "): rim graded to l_b instead";
-          o = leave_clamp_layer_for_graded_rim(model);
-        }
-        if (o.status != Status::converged) {
-          where = "solve with bending switched on";
-          return o;
-        }
-        continue;
+  summary_.error_estimator = "dual-weighted residual: adjoint of the converged tangent, solved in " + q +
+                             " on the same mesh for the charges, " + q + " patch extrapolation of the Q" +
+                             std::to_string(options_.fe_degree) + " adjoint for the deflections; residual in " + q +
+                             "; " + (options_.refinement == Refinement::goal ? "goal-oriented" : "Kelly") + " refinement";
+}
+
+// After the estimate goal_ of this mesh: the clamp-layer condition, bending, or the reference path
+// (plain clamp, bending kept, rim graded) where the estimates ask for them, solved on this mesh.
+FilmSolver::ModelStep FilmSolver::adapt_model(Model model, NewtonOutcome& o, std::string& where) {
+  Summary& s = summary_;
+  if (goal_.model_estimated && bending_switchable_) {
+    const bool leave_out = bending_may_be_left_out(goal_.relative_model, options_.tolerance, bending_reason_);
+    if (!leave_out && !clamp_layer_ && !rim_graded_ && !clamp_failed_ && clamp_layer_wanted()) {
+      // Most of bending's effect near the clamp is its layer there: first as a boundary condition
+      // (clamp_layer.cpp), then bending's remaining effect is estimated again (rim terms dropped).
+      const Vector<double> clamped = solution_;
+      o = switch_to_clamp_layer(model, solution_);
+      if (o.status != Status::converged) {  // the reference path instead (below, on this same cycle)
+        solution_ = clamped;
+        set_clamp_layer(false, solution_);
+        clamp_correction_ = 0;
+        summary_.clamp_layer = "none";
+        clamp_reason_ = "the clamp-layer condition did not converge (" + o.message + "): rim graded instead";
+        clamp_failed_ = true;
+      } else {
+        clamp_reason_ = bending_reason_ + " with the plain clamp; the clamp's layer as a boundary condition "
+                        "changed the charges by " + fmt(clamp_correction_) + " (l_b up to " +
+                        fmt(summary_.clamp_layer_width_m * 1e3, 3) + " mm)";
+        return ModelStep::changed;
       }
     }
-    // The clamp-layer condition's own estimate against its share of the tolerance: what bending's
-    // remaining effect and the kinematics leave of 3/4 of it (a quarter is kept for the
-    // discretization). Beyond it the reference path takes over: plain clamp, bending kept, rim
-    // graded to l_b.
-    const double clamp_estimate = clamp_layer_estimate();
-    const double other_model =
-        (goal_.model_estimated && std::isfinite(goal_.relative_model) ? goal_.relative_model : 0.0) + kinematics_model_error_;
-    const double clamp_share = clamp_layer_share(options_.tolerance, other_model);
-    if (clamp_layer_ && clamp_estimate > clamp_share && !clamp_layer_accepted()) {
-      clamp_reason_ += "; its estimated error " + fmt(clamp_estimate) + " > its share of the tolerance " +
-                       fmt(clamp_share) + ": bending kept, rim graded to l_b instead";
-      const NewtonOutcome o = leave_clamp_layer_for_graded_rim(model);
-      if (o.status != Status::converged) {
-        where = "solve with bending on the rim-graded mesh";
-        return o;
-      }
-      continue;
-    }
-    s.estimated_clamp_layer_error = clamp_estimate;
-    if (clamp_layer_) clamp_share_reason_ = "clamp-layer estimate " + fmt(clamp_estimate) + " <= its share " + fmt(clamp_share);
-    const double disc = std::isfinite(goal_.relative_discretization) ? goal_.relative_discretization : 1.0;
-    const double bending_model = goal_.model_estimated && std::isfinite(goal_.relative_model) ? goal_.relative_model : 0.0;
-    s.estimated_discretization_error = disc;
-    s.estimated_model_error = bending_model + kinematics_model_error_ + clamp_estimate;
-    s.estimated_relative_error = disc + s.estimated_model_error;
-    if (options_.verbose)
-      std::printf("  mesh %d: %u dofs, estimated discretization error %.3e, model error %.3e\n", s.refinement_cycles,
-                  dof_handler_.n_dofs(), disc, s.estimated_model_error);
-    if (s.estimated_relative_error <= options_.tolerance || s.refinement_cycles >= max_cycles) break;
-    if (2 * static_cast<std::size_t>(dof_handler_.n_dofs()) > options_.max_dofs) {
-      dof_cap_reached_ = true;
-      break;
-    }
-    refine_mesh(solution_, options_.refinement == Refinement::goal ? &goal_.indicators : nullptr);
-    NewtonOutcome o = clamp_layer_ ? solve_with_clamp_layer(model, solution_) : newton(model, 0.0, solution_);
-    ++s.load_steps;
-    s.newton_iterations += o.iterations;
-    if (o.status != Status::converged) {
-      o = solve_from_flat_keeping_clamp_layer(model);
-      if (o.status != Status::converged && clamp_layer_) {  // the condition failed here: the reference path
-        clamp_reason_ += "; the condition did not converge on refinement cycle " +
-                         std::to_string(s.refinement_cycles + 1) + " (" + o.message + "): bending kept, rim graded to l_b instead";
+    if (!leave_out) {  // the richer model, from the membrane solution on this mesh
+      enable_bending();
+      if (!clamp_layer_) grade_toward_rim(&solution_, model);
+      o = clamp_layer_ ? solve_with_clamp_layer(model, solution_) : newton(model, 0.0, solution_);
+      ++s.load_steps;
+      s.newton_iterations += o.iterations;
+      if (o.status != Status::converged) o = solve_from_flat(model, solution_);  // the condition's passes again
+      if (o.status != Status::converged && clamp_layer_) {  // bending beside the condition failed: the reference path
+        clamp_reason_ += "; bending switched on beside the condition did not converge (" + o.message +
+                         "): rim graded to l_b instead";
         o = leave_clamp_layer_for_graded_rim(model);
       }
       if (o.status != Status::converged) {
-        where = "refinement cycle " + std::to_string(s.refinement_cycles + 1);
-        return o;
+        where = "solve with bending switched on";
+        return ModelStep::failed;
       }
+      return ModelStep::changed;
     }
-    ++s.refinement_cycles;
-    if (!options_.vtu_directory.empty()) vtu_files_.push_back(write_vtu(s.refinement_cycles, model));
   }
-  NewtonOutcome ok;
-  ok.status = Status::converged;
-  return ok;
+  // The clamp-layer condition's own estimate against its share of the tolerance: what bending's
+  // remaining effect and the kinematics leave of 3/4 of it (a quarter is kept for the
+  // discretization). Beyond it the reference path takes over: plain clamp, bending kept, rim
+  // graded to l_b.
+  const double clamp_estimate = clamp_layer_estimate();
+  const double other_model =
+      (goal_.model_estimated && std::isfinite(goal_.relative_model) ? goal_.relative_model : 0.0) + kinematics_model_error_;
+  const double clamp_share = clamp_layer_share(options_.tolerance, other_model);
+  if (clamp_layer_ && clamp_estimate > clamp_share && !clamp_layer_accepted()) {
+    clamp_reason_ += "; its estimated error " + fmt(clamp_estimate) + " > its share of the tolerance " +
+                     fmt(clamp_share) + ": bending kept, rim graded to l_b instead";
+    o = leave_clamp_layer_for_graded_rim(model);
+    if (o.status != Status::converged) {
+      where = "solve with bending on the rim-graded mesh";
+      return ModelStep::failed;
+    }
+    return ModelStep::changed;
+  }
+  s.estimated_clamp_layer_error = clamp_estimate;
+  if (clamp_layer_) clamp_share_reason_ = "clamp-layer estimate " + fmt(clamp_estimate) + " <= its share " + fmt(clamp_share);
+  return ModelStep::kept;
+}
+
+// The summary's estimates from goal_ (and the clamp-layer estimate adapt_model left there); true
+// when they meet the tolerance, or the refinement cap or the DOF cap stops the cycles.
+bool FilmSolver::accurate_enough() {
+  Summary& s = summary_;
+  const int max_cycles = options_.adaptive ? options_.max_refinements : 0;
+  const double disc = std::isfinite(goal_.relative_discretization) ? goal_.relative_discretization : 1.0;
+  const double bending_model = goal_.model_estimated && std::isfinite(goal_.relative_model) ? goal_.relative_model : 0.0;
+  s.estimated_discretization_error = disc;
+  s.estimated_model_error = bending_model + kinematics_model_error_ + s.estimated_clamp_layer_error;
+  s.estimated_relative_error = disc + s.estimated_model_error;
+  if (options_.verbose)
+    std::printf("  mesh %d: %u dofs, estimated discretization error %.3e, model error %.3e\n", s.refinement_cycles,
+                dof_handler_.n_dofs(), disc, s.estimated_model_error);
+  if (s.estimated_relative_error <= options_.tolerance || s.refinement_cycles >= max_cycles) return true;
+  if (2 * static_cast<std::size_t>(dof_handler_.n_dofs()) > options_.max_dofs) {
+    dof_cap_reached_ = true;
+    return true;
+  }
+  return false;
+}
+
+// Newton from the state refine_mesh transferred; from flat when that fails (with the condition's
+// lagged passes again, solve_from_flat), and the reference path when the condition fails here.
+NewtonOutcome FilmSolver::solve_on_refined_mesh(Model model, std::string& where) {
+  Summary& s = summary_;
+  NewtonOutcome o = clamp_layer_ ? solve_with_clamp_layer(model, solution_) : newton(model, 0.0, solution_);
+  ++s.load_steps;
+  s.newton_iterations += o.iterations;
+  if (o.status == Status::converged) return o;
+  o = solve_from_flat(model, solution_);
+  if (o.status != Status::converged && clamp_layer_) {  // the condition failed here: the reference path
+    clamp_reason_ += "; the condition did not converge on refinement cycle " + std::to_string(s.refinement_cycles + 1) +
+                     " (" + o.message + "): bending kept, rim graded to l_b instead";
+    o = leave_clamp_layer_for_graded_rim(model);
+  }
+  if (o.status != Status::converged) where = "refinement cycle " + std::to_string(s.refinement_cycles + 1);
+  return o;
 }
 
 }  // namespace pvdf::fem::detail

@@ -9,7 +9,8 @@
 // electrodes' charges from the state on the copy (they must agree to 1e-9 of the largest).
 #include "pvdf/fem/atlas.hpp"
 
-#include "film_solver.hpp"
+#include "atlas_quadrature.hpp"
+#include "probe_solver.hpp"
 
 #include "pvdf/core/constants.hpp"
 #include "pvdf/core/error.hpp"
@@ -82,13 +83,25 @@ std::vector<pvdf::Electrode> quadrants(const pvdf::FilmOutline& outline, double 
   return out;
 }
 
-// A FilmSolver on the mesh SweepEngine builds for (sizes, bending): the construction of
-// sweep_engine.cpp's constructor, so that the DOF numbering is the engine's (checked by the caller).
-std::unique_ptr<detail::FilmSolver> engine_mesh_copy(const pvdf::Scene& scene, const Options& solver, Model model,
-                                                     bool include_bending, const detail::SweepMeshSizes& sizes) {
-  auto copy = std::make_unique<detail::FilmSolver>(scene, detail::engine_solver_options(solver, model, include_bending, sizes));
-  if (!include_bending) copy->keep_bending_pattern(false);  // an estimating engine without bending does so
-  copy->prepare_sweep(sizes, nullptr);
+// The mesh SweepEngine builds for (sizes, bending) again, and the atlas quadrature on it: the
+// construction of sweep_engine.cpp's constructor, so that the DOF numbering is the engine's
+// (checked by the caller).
+struct MeshCopy {
+  std::unique_ptr<detail::ProbeSolver> solver;
+  std::unique_ptr<detail::AtlasQuadrature> atlas;  // on solver's mesh: dropped before it
+  void reset() {
+    atlas.reset();
+    solver.reset();
+  }
+};
+
+MeshCopy engine_mesh_copy(const pvdf::Scene& scene, const Options& solver, Model model, bool include_bending,
+                          const detail::SweepMeshSizes& sizes, const AtlasGrid& grid, std::vector<double>& geometry) {
+  MeshCopy copy;
+  // an estimating engine without bending keeps the bending pattern (its DOF coupling) as well
+  copy.solver = std::make_unique<detail::ProbeSolver>(
+      scene, detail::engine_solver_options(solver, model, include_bending, sizes), sizes, !include_bending);
+  copy.atlas = std::make_unique<detail::AtlasQuadrature>(copy.solver->film(), grid, geometry);
   return copy;
 }
 
@@ -102,21 +115,21 @@ struct AtlasSweep::Impl {
   double fe_size_m = 0;
   std::unique_ptr<ProbeSweep> sweep;
   Options solver;  // the options the sweep's engines were built with
-  std::unique_ptr<detail::FilmSolver> copy;  // the sweep mesh again (see the file comment)
+  MeshCopy copy;  // the sweep mesh again (see the file comment)
   // The rim model's meshes again, one per rim sector, built when a press first needs it; at most
   // two alive (as the sweep's own rim engines), the least recently used dropped.
   detail::SweepMeshSizes rim_sizes;
   int rim_sectors = 16;
-  std::vector<std::unique_ptr<detail::FilmSolver>> rim_copies;
+  std::vector<MeshCopy> rim_copies;
   std::vector<bool> rim_checked;  // the sector's copy has passed its first identity check
   std::vector<int> rim_recent;
-  detail::FilmSolver& rim_copy(int sector, std::size_t expected_dofs);
+  MeshCopy& rim_copy(int sector, std::size_t expected_dofs);
   Model model = Model::large_rotation;
   std::size_t presses = 0;
   std::string model_reason;
 };
 
-detail::FilmSolver& AtlasSweep::Impl::rim_copy(int sector, std::size_t expected_dofs) {
+MeshCopy& AtlasSweep::Impl::rim_copy(int sector, std::size_t expected_dofs) {
   if (sector < 0 || sector >= rim_sectors) throw std::runtime_error("atlas: rim sector " + std::to_string(sector) + " out of range (internal error)");
   auto& c = rim_copies[std::size_t(sector)];
   rim_recent.erase(std::remove(rim_recent.begin(), rim_recent.end(), sector), rim_recent.end());
@@ -125,20 +138,19 @@ detail::FilmSolver& AtlasSweep::Impl::rim_copy(int sector, std::size_t expected_
     rim_copies[std::size_t(rim_recent.front())].reset();
     rim_recent.erase(rim_recent.begin());
   }
-  if (!c) {
+  if (!c.solver) {
     detail::SweepMeshSizes sizes = rim_sizes;  // ProbeSweep::Impl::rim_engine's sector arc
     sizes.rim_angle_rad = 2 * pvdf::pi * sector / std::max(1, rim_sectors);
     sizes.rim_half_angle_rad = rim_sectors <= 1 ? 4.0 : 1.5 * 2 * pvdf::pi / rim_sectors;
-    c = engine_mesh_copy(scene, solver, model, true, sizes);
     std::vector<double> geometry;
-    c->prepare_atlas(grid, geometry);
+    c = engine_mesh_copy(scene, solver, model, true, sizes, grid, geometry);
   }
-  if (c->n_dofs() != expected_dofs) {
+  if (c.solver->n_dofs() != expected_dofs) {
     throw std::runtime_error("atlas: the copy of the rim mesh of sector " + std::to_string(sector) + " has " +
-                             std::to_string(c->n_dofs()) + " DOFs, the rim model's state " +
+                             std::to_string(c.solver->n_dofs()) + " DOFs, the rim model's state " +
                              std::to_string(expected_dofs) + " (internal error)");
   }
-  return *c;
+  return c;
 }
 
 AtlasSweep::AtlasSweep(const pvdf::Scene& scene, const AtlasSweepOptions& options) : impl_(std::make_unique<Impl>()) {
@@ -196,12 +208,11 @@ AtlasSweep::AtlasSweep(const pvdf::Scene& scene, const AtlasSweepOptions& option
   sizes.electrode_size_m = setup.electrode_size_m;
   sizes.probe_size_m = 0;
   sizes.grading = 1.0;
-  im.copy = engine_mesh_copy(im.scene, im.solver, setup.model, setup.include_bending, sizes);
-  if (im.copy->n_dofs() != setup.n_dofs) {
-    throw std::runtime_error("atlas: the copy of the sweep mesh has " + std::to_string(im.copy->n_dofs()) +
+  im.copy = engine_mesh_copy(im.scene, im.solver, setup.model, setup.include_bending, sizes, im.grid, im.geometry);
+  if (im.copy.solver->n_dofs() != setup.n_dofs) {
+    throw std::runtime_error("atlas: the copy of the sweep mesh has " + std::to_string(im.copy.solver->n_dofs()) +
                              " DOFs, the sweep " + std::to_string(setup.n_dofs) + " (internal error)");
   }
-  im.copy->prepare_atlas(im.grid, im.geometry);
   if (setup.rim_model_available) {
     im.rim_sizes = sizes;
     im.rim_sizes.rim_size_m = setup.rim_size_m;
@@ -230,7 +241,7 @@ AtlasPress AtlasSweep::solve(double x_m, double y_m, double force_N, const Sweep
   if (!usable(press.solution.status)) return press;
   // The moments of the solution kept: the cheap model's on the sweep mesh, or the rim model's on
   // its sector's mesh (the state's rim part, which the sweep sets when the rim model solved it).
-  detail::FilmSolver* on = im.copy.get();
+  MeshCopy* on = &im.copy;
   const std::vector<double>* dofs = &state.dofs;
   Model model = im.model;
   bool check = im.presses++ % 64 == 0;
@@ -244,14 +255,14 @@ AtlasPress AtlasSweep::solve(double x_m, double y_m, double force_N, const Sweep
   }
   dealii::Vector<double> u(dofs->size());
   std::copy(dofs->begin(), dofs->end(), u.begin());
-  on->atlas_moments(u, model, press.moments);
+  on->atlas->moments(u, model, press.moments);
   // The copy must be the solver's mesh: its reference charges from the same state agree (checked at
   // the first press, every 64th after it and the first press on each rim sector's copy: the check
   // costs a residual assembly).
   if (check) {
     detail::EngineSolution again;
-    on->set_probe(x_m, y_m, force_N);
-    on->probe_outputs(u, model, again);
+    on->solver->set_probe(x_m, y_m, force_N);
+    on->solver->outputs(u, model, again);
     double scale = 0, diff = 0;
     for (std::size_t k = 0; k < again.charge_C.size() && k < press.solution.charge_C.size(); ++k) {
       scale = std::max(scale, std::abs(press.solution.charge_C[k]));

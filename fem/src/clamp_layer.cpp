@@ -437,8 +437,8 @@ std::vector<double> FilmSolver::clamp_layer_charge_error_C(const std::vector<dou
   return e;
 }
 
-// A probe of a sweep (sweep_engine.cpp), the ladder of solve's refine_until_tolerance on one fixed
-// mesh: from the converged plain clamp without bending, the condition (bending-free, its correction
+// A probe of a sweep (ProbeSolver, sweep_engine.cpp), the ladder of run()'s adapt_model on one
+// fixed mesh: from the converged plain clamp without bending, the condition (bending-free, its correction
 // measured against that plain clamp), then bending's remaining effect estimated with the rim terms
 // dropped; above tolerance/2 bending is switched on and kept with the condition. Whether its
 // estimate is within its share is the caller's decision (clamp_layer_share).

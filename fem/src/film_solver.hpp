@@ -9,13 +9,13 @@
 //   outputs.cpp      electrode forces and charges, deflections, rim reaction, energy, samples
 //   vtu_output.cpp   VTU/PVD files
 //   solve.cpp        FilmSolver::run() and the public entry points (pvdf::fem::solve, names)
-//   checks.cpp       test hooks (tangent by finite differences, bending operator)
-//   sweep_engine.cpp the fixed-mesh probe solver behind pvdf::fem::ProbeSweep
+//   checks.cpp       SolverChecks: tangent by finite differences, bending operator (test checks)
+//   sweep_engine.cpp ProbeSolver (probe_solver.hpp): the fixed-mesh probe solver behind ProbeSweep
+//   atlas_quadrature.cpp AtlasQuadrature (atlas_quadrature.hpp): an atlas's cell moments on the mesh
 //   tension_field.cpp slack films: the relaxed (wrinkling) membrane, its continuation, wrinkled area
 // deal.II appears here and in those files only; public headers stay std/Eigen/pvdf.
 #pragma once
 
-#include "pvdf/fem/atlas.hpp"
 #include "pvdf/fem/solver.hpp"
 
 #include "sweep_engine.hpp"
@@ -138,16 +138,28 @@ struct WrinkleMap {
   std::vector<float> cell_state;
 };
 
-/// One film problem on one triangulation (step-8/step-15 shape: setup, assemble, solve, refine,
-/// output). Each group of members below is implemented in the file named in its comment.
+/// One film problem on one triangulation, in the shape of deal.II's step-15: setup, then cycles of
+/// solve, estimate, refine, then the outputs (run(), solve.cpp). Each group of members below is
+/// implemented in the file named in its comment. Three narrow friends use its parts on a fixed
+/// mesh: ProbeSolver (probe_solver.hpp, one probe moved over the mesh of a sweep), AtlasQuadrature
+/// (atlas_quadrature.hpp, the charge-density moments of an atlas) and SolverChecks (checks.cpp, the
+/// test checks of the tangent and of the bending operator); MembranePostprocessor writes its VTU.
 class FilmSolver {
  public:
   // setup.cpp
   FilmSolver(const pvdf::Scene& scene, const Options& options);
   void make_grid();
   void make_grid_from(const pvdf::mesh::FilmMesh& mesh);
+  /// Assemble the bending operator and its sparsity even when the model leaves bending out (call
+  /// before the first setup_system()): needed to estimate what bending would change.
+  /// `switchable`: the adaptive loop switches bending on when its estimated effect is too large
+  /// (`auto`); otherwise the effect is only reported.
+  void keep_bending_pattern(bool switchable) {
+    bending_pattern_ = true;
+    bending_switchable_ = switchable;
+  }
 
-  // solve.cpp: the method, step by step (setup, model, refinement, outputs).
+  // solve.cpp: the method, step by step (setup; cycles of solve, estimate, refine; outputs).
   Result run();
 
   // model_choice.cpp: the trial half of the `auto` rule on the current (first) mesh.
@@ -158,27 +170,7 @@ class FilmSolver {
     std::string reason;
     double relative_model_error = 0;  // what the chosen kinematics leave out, relative (0: most general)
   };
-  KinematicsChoice choose_kinematics(Vector<double>& u);
   KinematicsChoice choose_kinematics_on_first_mesh();
-
-  // checks.cpp (test hooks)
-  JacobianCheck check_jacobian(double amplitude_m, int n_directions, unsigned int seed);
-  BendingCheck check_bending(const std::array<double, 3>& coefficients, int n_directions, unsigned int seed);
-
-  // sweep_engine.cpp: one fixed mesh built without any probe load, then one probe moved over
-  // it; DOFs, sparsity and the symbolic factorization are kept.
-  void prepare_sweep(const SweepMeshSizes& sizes, const pvdf::mesh::FilmMesh* mesh = nullptr);
-  void set_probe(double x_m, double y_m, double force_N);
-  NewtonOutcome solve_probe(Model model, Vector<double>& u, bool warm, int& newton_iterations, bool& warm_used,
-                            bool cold_fallback = true);
-  void scale_state(Vector<double>& u, double inplane_factor, double w_factor) const;
-  /// u (on this mesh) = the interpolant of `other`'s state u_other, both meshes refined from the same
-  /// coarse mesh (the sweep mesh and a probe's footprint-refined copy of it).
-  void interpolate_state_from(const FilmSolver& other, const Vector<double>& u_other, Vector<double>& u) const;
-  /// Largest size (diameter/√2) of the active cells that reach within `radius_m` of (x, y).
-  double largest_cell_near(double x_m, double y_m, double radius_m) const;
-  // outputs.cpp
-  void probe_outputs(const Vector<double>& u, Model model, EngineSolution& out);
 
   // goal_error.cpp: dual-weighted residual estimates for the outputs (every electrode's charge,
   // w at every load). Each estimate is signed, (exact − computed).
@@ -191,12 +183,6 @@ class FilmSolver {
     double relative_model = 0;
     Vector<float> indicators;            // per active cell: Σ_outputs |η_K| / output scale
   };
-  /// Estimates at the converged state u of `model`. The bending-model part is computed when the
-  /// solver runs without bending but kept the bending pattern (keep_bending_pattern()).
-  /// `higher_order_adjoint`: the adjoint weights from a Q(p+1) solve on the same mesh (one more
-  /// factorization, reliable on coarse meshes) instead of the patch-wise extrapolation of the Q(p)
-  /// adjoint (cheap; what the probe sweep uses).
-  GoalErrors estimate_goal_errors(const Vector<double>& u, Model model, bool higher_order_adjoint = false);
   // clamp_layer.cpp: one probe of a sweep with the clamp-layer condition (docs/fem.md §3.4).
   struct ClampLayerProbe {
     bool wanted = false;   // tried: the layer matters (clamp_layer_wanted) and bending can be switched
@@ -208,61 +194,64 @@ class FilmSolver {
     double width_m = 0;
     int passes = 0, newton_iterations = 0;
   };
-  /// From the converged plain-clamp, bending-free state u of the current probe: the condition on,
-  /// solved, estimated (into `goal`); bending on with it when its remaining effect asks. The
-  /// condition stays on until reset_clamp_layer(); on failure u is as given.
-  ClampLayerProbe solve_probe_with_clamp_layer(Model model, Vector<double>& u, GoalErrors& goal);
-  bool clamp_layer_on() const { return clamp_layer_; }
-  /// Back to the plain clamp without bending (DOFs unchanged), for the next probe.
-  void reset_clamp_layer();
-  /// A cold probe solve's start: no chord step from an earlier probe's tangent, no LDLᵀ-first
-  /// countdown left by one (TangentFactorization::forget_history).
-  void forget_solve_history() {
-    factorization_.forget_history();
-    chord_first_step_ = false;
-  }
-  /// Assemble the bending operator and its sparsity even when the model leaves bending out (call
-  /// before the first setup_system()): needed to estimate what bending would change.
-  /// `switchable`: the adaptive loop switches bending on when its estimated effect is too large
-  /// (`auto`); otherwise the effect is only reported.
-  void keep_bending_pattern(bool switchable) {
-    bending_pattern_ = true;
-    bending_switchable_ = switchable;
-  }
-  /// Switch the bending term of the residual on (the pattern must hold it).
-  void enable_bending() { options_.include_bending = true; }
-  bool bending_included() const { return options_.include_bending; }
 
   const Summary& summary() const { return summary_; }
   unsigned int n_dofs() const { return dof_handler_.n_dofs(); }
   unsigned int n_cells() const { return triangulation_.n_active_cells(); }
   int n_factorizations() const { return factorization_.n_factorizations(); }
-  double load_vector_s = 0;
+
+ private:
+  friend class ProbeSolver;
+  friend class AtlasQuadrature;
+  friend class SolverChecks;
+  friend class MembranePostprocessor;
+
+  // solve.cpp: the first and last steps of run().
+  /// The model (requested, or the `auto` rule's trial solves) solved on the first mesh into solution_.
+  NewtonOutcome solve_on_first_mesh(Model& model, std::string& where);
+  /// The model's reasons, the final status, the outputs and their error bars.
+  Result output_results(Model model, Clock::time_point t_start);
+
+  // adaptivity.cpp: the steps of run()'s cycle.
+  /// The error estimator's description in the summary.
+  void describe_estimator();
+  enum class ModelStep { kept, changed, failed };
+  /// After an estimate (goal_): bending or the clamp-layer condition switched on, or the reference
+  /// path taken, where the estimates ask; `changed`: solved again on this mesh (estimate again),
+  /// `failed`: that solve failed (`o`, `where`).
+  ModelStep adapt_model(Model model, NewtonOutcome& o, std::string& where);
+  /// The summary's estimates from goal_; true when they meet the tolerance or refinement must stop
+  /// (the cycle cap, the DOF cap).
+  bool accurate_enough();
+  /// After refine_mesh: Newton from the transferred state, the fallbacks after it.
+  NewtonOutcome solve_on_refined_mesh(Model model, std::string& where);
+
+  // model_choice.cpp
+  KinematicsChoice choose_kinematics(Vector<double>& u);
+
+  // sweep_engine.cpp: in-plane DOFs times inplane_factor, w DOFs times w_factor (each DOF once).
+  void scale_state(Vector<double>& u, double inplane_factor, double w_factor) const;
+  // outputs.cpp: what a probe sweep keeps (ProbeSolver::outputs).
+  void probe_outputs(const Vector<double>& u, Model model, EngineSolution& out);
+
+  /// Estimates at the converged state u of `model`. The bending-model part is computed when the
+  /// solver runs without bending but kept the bending pattern (keep_bending_pattern()).
+  /// `higher_order_adjoint`: the adjoint weights from a Q(p+1) solve on the same mesh (one more
+  /// factorization, reliable on coarse meshes) instead of the patch-wise extrapolation of the Q(p)
+  /// adjoint (cheap; what the probe sweep uses).
+  GoalErrors estimate_goal_errors(const Vector<double>& u, Model model, bool higher_order_adjoint = false);
+  /// From the converged plain-clamp, bending-free state u of the current probe: the condition on,
+  /// solved, estimated (into `goal`); bending on with it when its remaining effect asks. The
+  /// condition stays on until reset_clamp_layer(); on failure u is as given.
+  ClampLayerProbe solve_probe_with_clamp_layer(Model model, Vector<double>& u, GoalErrors& goal);
+  /// Back to the plain clamp without bending (DOFs unchanged), for the next probe.
+  void reset_clamp_layer();
+  /// Switch the bending term of the residual on (the pattern must hold it).
+  void enable_bending() { options_.include_bending = true; }
 
   // outputs.cpp (also used by the VTU postprocessor)
   MembraneForce membrane_force(const Kinematics& k, const Point<dim>& x) const;
   double charge_density(const MembraneForce& n) const;
-
-  // outputs.cpp: the charge-density atlas (pvdf/fem/atlas.hpp, atlas_sweep.cpp, docs/atlas.md).
-  /// Builds, once for this mesh, the quadrature of every FE cell ∩ atlas cell (the exact
-  /// intersection of the cell's straight-sided quadrilateral with the atlas square,
-  /// electrode_cells.hpp) and returns the geometry of each atlas cell ∩ film, [ny][nx][6]:
-  /// ∫dA, ∫dx, ∫dy, ∫dx², ∫dx·dy, ∫dy² with (dx, dy) = (x − xc, y − yc).
-  void prepare_atlas(const AtlasGrid& grid, std::vector<double>& geometry);
-  /// [ny][nx][3]: ∫q dA, ∫q·dx dA, ∫q·dy dA at the state u of `model`, q = charge_density (C/m²).
-  void atlas_moments(const Vector<double>& u, Model model, std::vector<double>& moments) const;
-
- private:
-  // outputs.cpp: the atlas quadrature (prepare_atlas): per FE cell, its points (unit cell) with
-  // their weight (m²), atlas cell index and offsets from that cell's centre (m).
-  struct AtlasCellPoints {
-    DoFHandler<dim>::active_cell_iterator cell;
-    std::unique_ptr<dealii::FEValues<dim>> values;
-    std::vector<double> jxw, dx, dy;
-    std::vector<std::size_t> atlas_cell;
-  };
-  std::vector<AtlasCellPoints> atlas_points_;
-  std::size_t atlas_n_cells_ = 0;
 
   // setup.cpp
   void refine_initial_mesh();
@@ -304,8 +293,6 @@ class FilmSolver {
   NewtonOutcome switch_to_clamp_layer(Model model, Vector<double>& u);
   /// Its estimated remaining error, relative (largest charge change × clamp_ratio_).
   double clamp_layer_estimate() const;
-  /// solve_from_flat on solution_, then (condition on) its lagged passes again (adaptivity.cpp).
-  NewtonOutcome solve_from_flat_keeping_clamp_layer(Model model);
   /// The reference path instead of the condition: plain clamp, bending kept, rim graded (adaptivity.cpp).
   NewtonOutcome leave_clamp_layer_for_graded_rim(Model model);
   /// The layer's width l_b = sqrt(D_nn/N_nn) at the rim's face quadrature points of state u (N_nn
@@ -334,12 +321,14 @@ class FilmSolver {
   LineSearch line_search(Model model, double artificial_tension, const Vector<double>& u, const Vector<double>& du,
                          double slope, double energy0, double r_norm, Vector<double>& trial, Vector<double>& r_trial);
   double estimate_tension() const;
+  /// From the flat film (with the clamp-layer condition on: its lagged passes after it).
   NewtonOutcome solve_from_flat(Model model, Vector<double>& u);
+  /// The artificial-pretension continuation from the flat film.
+  NewtonOutcome solve_by_continuation(Model model, Vector<double>& u);
 
   // adaptivity.cpp
   OutputVector outputs(const Vector<double>& u, Model model) const;
   void refine_mesh(Vector<double>& u, const Vector<float>* goal_indicators = nullptr);
-  NewtonOutcome refine_until_tolerance(Model model, std::string& where);
 
   // goal_error.cpp
   Vector<double> charge_derivative(const Vector<double>& u, Model model, std::size_t k) const;
@@ -388,8 +377,6 @@ class FilmSolver {
   double tension_field_regularization() const;
   WrinkleMap wrinkle_map(const Vector<double>& u, Model model) const;
 
-  friend class MembranePostprocessor;
-
   const pvdf::Scene& scene_;
   Options options_;
   double thickness_ = 0;
@@ -404,7 +391,7 @@ class FilmSolver {
   Stiffness3 membrane_C_;  // h·Q̄
   Stiffness3 bending_D_;   // h³/12·Q̄
   double bending_penalty_scale_ = 0;
-  bool bending_rim_terms_ = true;  // false only in check_bending (interior terms of the operator)
+  bool bending_rim_terms_ = true;  // false: interior terms only (SolverChecks::bending, the clamp-layer condition)
   double draw_angle_ = 0;
   double radius_ = 0;  // characteristic film radius
   std::vector<LoadCase> loads_;

@@ -1,7 +1,6 @@
 // The film solver's method (FilmSolver::run: setup, model, refinement, outputs) and the public
-// entry points of pvdf::fem: solve(), the model and status names, options from a scene, and the
-// test hooks' constructors. docs/fem.md explains every equation; the parts are listed in
-// film_solver.hpp.
+// entry points of pvdf::fem: solve(), the model and status names, options from a scene. docs/fem.md
+// explains every equation; the parts are listed in film_solver.hpp (the test checks: checks.cpp).
 #include "film_solver.hpp"
 #include "pvdf/fem/plausibility.hpp"
 
@@ -55,43 +54,80 @@ Options options_from_scene(const pvdf::Scene& scene) {
 
 namespace detail {
 
-// The method, step by step (step-15 shape). A failure of any Newton solve ends it with that
-// status and no fields; the output error is estimated by refinement (adaptivity.cpp).
+// The method, step by step (step-15 shape): the first mesh and the model; then cycles of estimate
+// (dual-weighted residual, goal_error.cpp), model switches on the same mesh where the estimate asks
+// (bending, the clamp-layer condition), refine and solve, until the estimated output error meets
+// the tolerance (adaptivity.cpp); then the outputs. A failure of any Newton solve ends it with
+// that status and no fields.
 Result FilmSolver::run() {
   const auto t_start = Clock::now();
   reuse_factorization_ = true;  // chord steps while Newton contracts >= 10x per step (see newton())
   setup_system();
   if (total_force_ == 0) return zero_load_result(t_start);
-  Summary& s = summary_;
 
-  // 1. The model: requested, or the `auto` rule's trial solves on this first mesh.
+  // 1. The model (requested, or the `auto` rule's trial solves) on the first mesh.
   Model model = options_.model;
+  std::string where;
+  NewtonOutcome o = solve_on_first_mesh(model, where);
+  if (o.status != Status::converged) return failure_result(o, where, t_start);
+  if (!options_.vtu_directory.empty()) vtu_files_.push_back(write_vtu(0, model));
+
+  // 2. Estimate, adapt the model, refine and solve, until the estimated output error is met.
+  describe_estimator();
+  for (int& cycle = summary_.refinement_cycles;;) {  // cycle: meshes solved after the first
+    goal_ = estimate_goal_errors(solution_, model, true);
+    const ModelStep step = adapt_model(model, o, where);
+    if (step == ModelStep::failed) return failure_result(o, where, t_start);
+    if (step == ModelStep::changed) continue;  // solved again on this mesh: estimate again
+    if (accurate_enough()) break;
+    refine_mesh(solution_, options_.refinement == Refinement::goal ? &goal_.indicators : nullptr);
+    o = solve_on_refined_mesh(model, where);
+    if (o.status != Status::converged) return failure_result(o, where, t_start);
+    ++cycle;
+    if (!options_.vtu_directory.empty()) vtu_files_.push_back(write_vtu(cycle, model));
+  }
+
+  // 3. Outputs, with their error bars.
+  return output_results(model, t_start);
+}
+
+// The model: requested (solved from the flat film), or the `auto` rule's trial solves; the
+// converged state is solution_.
+NewtonOutcome FilmSolver::solve_on_first_mesh(Model& model, std::string& where) {
+  Summary& s = summary_;
   Vector<double> u(dof_handler_.n_dofs());
+  NewtonOutcome o;
   if (model == Model::automatic) {
     const KinematicsChoice c = choose_kinematics(u);
-    if (c.outcome.status != Status::converged) return failure_result(c.outcome, c.where, t_start);
+    o = c.outcome;
+    if (o.status != Status::converged) {
+      where = c.where;
+      return o;
+    }
     model = c.model;
     s.model_reason = c.reason;
     kinematics_model_error_ = c.relative_model_error;
   } else {
     s.model_reason = "requested";
-    const NewtonOutcome o = solve_from_flat(model, u);
-    if (o.status != Status::converged) return failure_result(o, model_name(model) + " solve", t_start);
+    o = solve_from_flat(model, u);
+    if (o.status != Status::converged) {
+      where = model_name(model) + " solve";
+      return o;
+    }
   }
   s.model = model;
   solution_ = u;
-  if (!options_.vtu_directory.empty()) vtu_files_.push_back(write_vtu(0, model));
+  return o;
+}
 
-  // 2. Output-driven refinement until the estimated output error meets the tolerance.
-  std::string where;
-  const NewtonOutcome refined = refine_until_tolerance(model, where);
-  if (refined.status != Status::converged) return failure_result(refined, where, t_start);
+// The model's reasons and the final status; the outputs (never NaN: a non-finite output is a
+// numerical failure) with their error bars, refused when physically absurd.
+Result FilmSolver::output_results(Model model, Clock::time_point t_start) {
+  Summary& s = summary_;
   if (!clamp_reason_.empty()) s.model_reason += "; " + clamp_reason_;
   if (!bending_reason_.empty()) s.model_reason += "; " + bending_reason_;
   if (clamp_layer_ && !clamp_share_reason_.empty()) s.model_reason += "; " + clamp_share_reason_;
   set_final_status();
-
-  // 3. Outputs. Never NaN: a non-finite output is a numerical failure.
   s.n_dofs = dof_handler_.n_dofs();
   s.n_cells = triangulation_.n_active_cells();
   Result result;
@@ -234,20 +270,6 @@ Result solve(const pvdf::Scene& scene, const Options& options) {
 
 Result solve(const pvdf::Scene& scene, const pvdf::mesh::FilmMesh& mesh, const Options& options) {
   return detail::run_with_model_choice(scene, options, [&mesh](detail::FilmSolver& s) { s.make_grid_from(mesh); });
-}
-
-JacobianCheck check_jacobian(const pvdf::Scene& scene, const Options& options, double amplitude_m, int n_directions,
-                             unsigned int seed) {
-  detail::FilmSolver solver(scene, options);
-  solver.make_grid();
-  return solver.check_jacobian(amplitude_m, n_directions, seed);
-}
-
-BendingCheck check_bending(const pvdf::Scene& scene, const Options& options, const std::array<double, 3>& coefficients,
-                           int n_directions, unsigned int seed) {
-  detail::FilmSolver solver(scene, options);
-  solver.make_grid();
-  return solver.check_bending(coefficients, n_directions, seed);
 }
 
 }  // namespace pvdf::fem

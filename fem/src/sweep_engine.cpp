@@ -5,7 +5,7 @@
 // neighbour's state stored on the sweep mesh and scaled by the pure-membrane laws across forces
 // (pvdf/core/membrane_scaling.hpp).
 #include "pvdf/core/constants.hpp"
-#include "film_solver.hpp"
+#include "probe_solver.hpp"
 
 #include "pvdf/core/membrane_scaling.hpp"
 
@@ -21,67 +21,74 @@ using namespace dealii;
 // The sweep mesh is graded to the electrodes only (the scene copy given to this solver carries
 // no loads), capped everywhere by the coarse size, which is therefore the size under any probe.
 // A given mesh (map --mesh) is the starting mesh of that grading.
-void FilmSolver::prepare_sweep(const SweepMeshSizes& sizes, const pvdf::mesh::FilmMesh* mesh) {
-  if (mesh) make_grid_from(*mesh);
-  else make_grid();
+ProbeSolver::ProbeSolver(const pvdf::Scene& scene, const Options& options, const SweepMeshSizes& sizes,
+                         bool keep_bending_pattern, const pvdf::mesh::FilmMesh* mesh)
+    : solver_(scene, options) {
+  FilmSolver& s = solver_;
+  if (keep_bending_pattern) s.keep_bending_pattern(false);
+  if (mesh) s.make_grid_from(*mesh);
+  else s.make_grid();
   if (sizes.rim_size_m > 0) {
-    refine_toward_rim(sizes.rim_size_m, sizes.rim_grading, sizes.rim_angle_rad, sizes.rim_half_angle_rad, nullptr);
-    set_material_ids();
+    s.refine_toward_rim(sizes.rim_size_m, sizes.rim_grading, sizes.rim_angle_rad, sizes.rim_half_angle_rad, nullptr);
+    s.set_material_ids();
   }
-  setup_system();
+  s.setup_system();
 }
 
 // A new probe position or force changes only the load vector: it is re-integrated on the fixed
 // mesh (cut cells sub-sampled, then scaled so the total vertical force is exactly F).
-void FilmSolver::set_probe(double x_m, double y_m, double force_N) {
+void ProbeSolver::set_probe(double x_m, double y_m, double force_N) {
+  FilmSolver& s = solver_;
   const auto t0 = Clock::now();
   LoadCase c;
   c.probe = true;
   c.center = Point<dim>(x_m, y_m);
-  c.radius_m = scene_.probe.radius_m;
+  c.radius_m = s.scene_.probe.radius_m;
   c.force_N = force_N;
-  loads_ = {c};
-  total_force_ = std::abs(force_N);
-  assemble_load_vector();
-  load_vector_s += seconds_since(t0);
+  s.loads_ = {c};
+  s.total_force_ = std::abs(force_N);
+  s.assemble_load_vector();
+  load_vector_s_ += seconds_since(t0);
 }
 
 // Warm: Newton from the given state (no continuation: a neighbour's state is already tensioned);
 // if that fails (unless cold_fallback is false: then the failure is returned, u as given), or when
 // cold, the artificial-pretension continuation from the flat film.
-NewtonOutcome FilmSolver::solve_probe(Model model, Vector<double>& u, bool warm, int& newton_iterations,
-                                      bool& warm_used, bool cold_fallback) {
-  const int before = summary_.newton_iterations;
+NewtonOutcome ProbeSolver::solve(Model model, Vector<double>& u, bool warm, int& newton_iterations, bool& warm_used,
+                                 bool cold_fallback) {
+  FilmSolver& s = solver_;
+  const int before = s.summary_.newton_iterations;
   warm_used = false;
-  reuse_factorization_ = true;
+  s.reuse_factorization_ = true;
   if (warm) {
     // The warm state is a neighbour's converged one: its last factorized tangent is a good chord.
-    chord_first_step_ = true;
-    const int cap = options_.max_newton_iterations;
-    options_.max_newton_iterations = cold_fallback ? std::min(cap, 25) : cap;
+    s.chord_first_step_ = true;
+    const int cap = s.options_.max_newton_iterations;
+    s.options_.max_newton_iterations = cold_fallback ? std::min(cap, 25) : cap;
     Vector<double> start = u;
-    NewtonOutcome o = newton(model, 0.0, u);
-    options_.max_newton_iterations = cap;
-    summary_.newton_iterations += o.iterations;
+    NewtonOutcome o = s.newton(model, 0.0, u);
+    s.options_.max_newton_iterations = cap;
+    s.summary_.newton_iterations += o.iterations;
     if (o.status == Status::converged) {
-      newton_iterations = summary_.newton_iterations - before;
+      newton_iterations = s.summary_.newton_iterations - before;
       warm_used = true;
       return o;
     }
     u = start;
     if (!cold_fallback) {
-      newton_iterations = summary_.newton_iterations - before;
+      newton_iterations = s.summary_.newton_iterations - before;
       o.iterations = newton_iterations;
       return o;
     }
   }
-  NewtonOutcome o = solve_from_flat(model, u);
-  newton_iterations = summary_.newton_iterations - before;
+  NewtonOutcome o = s.solve_from_flat(model, u);
+  newton_iterations = s.summary_.newton_iterations - before;
   o.iterations = newton_iterations;
   return o;
 }
 
-// Multiplies the in-plane DOFs by inplane_factor and the w DOFs by w_factor (each DOF once).
+// Multiplies the in-plane DOFs by inplane_factor and the w DOFs by w_factor (each DOF once); also
+// the slack film's cone predictor (tension_field.cpp).
 void FilmSolver::scale_state(Vector<double>& u, double inplane_factor, double w_factor) const {
   std::vector<bool> done(u.size(), false);
   std::vector<types::global_dof_index> dofs(fe_->n_dofs_per_cell());
@@ -98,15 +105,17 @@ void FilmSolver::scale_state(Vector<double>& u, double inplane_factor, double w_
 // u = the interpolant of other's u_other: cell by cell through the common coarse mesh (where this
 // mesh is finer, by interpolation of other's cell; where coarser, of its children), then the
 // hanging nodes and the clamped rim made consistent.
-void FilmSolver::interpolate_state_from(const FilmSolver& other, const Vector<double>& u_other, Vector<double>& u) const {
-  u.reinit(dof_handler_.n_dofs());
-  VectorTools::interpolate_to_different_mesh(other.dof_handler_, u_other, dof_handler_, constraints_, u);
+void ProbeSolver::interpolate_state_from(const ProbeSolver& other, const Vector<double>& u_other,
+                                         Vector<double>& u) const {
+  const FilmSolver& s = solver_;
+  u.reinit(s.dof_handler_.n_dofs());
+  VectorTools::interpolate_to_different_mesh(other.solver_.dof_handler_, u_other, s.dof_handler_, s.constraints_, u);
 }
 
-double FilmSolver::largest_cell_near(double x_m, double y_m, double radius_m) const {
+double ProbeSolver::largest_cell_near(double x_m, double y_m, double radius_m) const {
   const Point<dim> p(x_m, y_m);
   double largest = 0;
-  for (const auto& cell : triangulation_.active_cell_iterators()) {
+  for (const auto& cell : solver_.triangulation_.active_cell_iterators()) {
     const double half = 0.5 * cell->diameter();
     if (cell->center().distance(p) - half > radius_m) continue;
     largest = std::max(largest, cell->diameter() / std::sqrt(2.0));
@@ -118,7 +127,7 @@ struct SweepEngine::Impl {
   pvdf::Scene scene;  // outlives the solver, which keeps a reference
   Options options;
   Model model = Model::large_rotation;
-  std::unique_ptr<FilmSolver> solver;  // the sweep mesh: every state lives on it
+  std::unique_ptr<ProbeSolver> solver;  // the sweep mesh: every state lives on it
   EngineTiming timing;
   bool estimate_errors = false;
   bool include_bending = false;
@@ -127,7 +136,7 @@ struct SweepEngine::Impl {
   // With sizes.probe_size_m > 0: the last probe's footprint-refined mesh (kept while the probe
   // stays at that position, e.g. across force levels) and its scene (with that probe as its load).
   pvdf::Scene probe_scene;
-  std::unique_ptr<FilmSolver> probe_solver;
+  std::unique_ptr<ProbeSolver> probe_solver;
   double probe_x = 0, probe_y = 0;
   Summary retired;  // time and iterations of the probe meshes already dropped
   int retired_factorizations = 0;
@@ -136,10 +145,10 @@ struct SweepEngine::Impl {
   int probe_meshes = 0;
   // The last converged probe (for solve_clamp_layer): its solver (the sweep's or the probe's own)
   // and its state on that solver's mesh.
-  FilmSolver* last_solver = nullptr;
+  ProbeSolver* last_solver = nullptr;
   Vector<double> last_u;
   void retire_probe_solver();
-  FilmSolver& probe_solver_at(double x_m, double y_m, double force_N);
+  ProbeSolver& probe_solver_at(double x_m, double y_m, double force_N);
 };
 
 void SweepEngine::Impl::retire_probe_solver() {
@@ -149,14 +158,14 @@ void SweepEngine::Impl::retire_probe_solver() {
   retired.linear_solve_s += s.linear_solve_s;
   retired.newton_iterations += s.newton_iterations;
   retired_factorizations += probe_solver->n_factorizations();
-  retired_load_s += probe_solver->load_vector_s;
+  retired_load_s += probe_solver->load_vector_s();
   probe_solver.reset();
 }
 
 // The sweep mesh refined around this probe's footprint: the same construction as the sweep mesh
 // (same coarse mesh, electrode and rim grading) with the probe as the scene's load, so the graded
 // a-priori refinement (setup.cpp) also brings the cells under the footprint to sizes.probe_size_m.
-FilmSolver& SweepEngine::Impl::probe_solver_at(double x_m, double y_m, double force_N) {
+ProbeSolver& SweepEngine::Impl::probe_solver_at(double x_m, double y_m, double force_N) {
   if (probe_solver && probe_x == x_m && probe_y == y_m) return *probe_solver;
   const auto t0 = Clock::now();
   retire_probe_solver();
@@ -167,9 +176,7 @@ FilmSolver& SweepEngine::Impl::probe_solver_at(double x_m, double y_m, double fo
   probe_scene.loads = {load};
   Options o = options;
   o.probe_size_m = sizes.probe_size_m;
-  probe_solver = std::make_unique<FilmSolver>(probe_scene, o);
-  if (estimate_errors && !include_bending) probe_solver->keep_bending_pattern(false);
-  probe_solver->prepare_sweep(sizes, mesh);
+  probe_solver = std::make_unique<ProbeSolver>(probe_scene, o, sizes, estimate_errors && !include_bending, mesh);
   probe_x = x_m;
   probe_y = y_m;
   probe_dofs_sum += probe_solver->n_dofs();
@@ -206,9 +213,7 @@ SweepEngine::SweepEngine(const pvdf::Scene& scene, const Options& options, Model
   impl_->model = model;
   const Options o = engine_solver_options(options, model, include_bending, sizes);
   impl_->options = o;
-  impl_->solver = std::make_unique<FilmSolver>(impl_->scene, o);
-  if (estimate_errors && !include_bending) impl_->solver->keep_bending_pattern(false);
-  impl_->solver->prepare_sweep(sizes, mesh);
+  impl_->solver = std::make_unique<ProbeSolver>(impl_->scene, o, sizes, estimate_errors && !include_bending, mesh);
 }
 
 SweepEngine::~SweepEngine() = default;
@@ -220,7 +225,7 @@ EngineTiming SweepEngine::timing() const {
   EngineTiming t = impl_->timing;
   Summary s = impl_->solver->summary();
   int factorizations = impl_->solver->n_factorizations() + impl_->retired_factorizations;
-  double load_s = impl_->solver->load_vector_s + impl_->retired_load_s;
+  double load_s = impl_->solver->load_vector_s() + impl_->retired_load_s;
   s.assembly_s += impl_->retired.assembly_s;
   s.linear_solve_s += impl_->retired.linear_solve_s;
   s.newton_iterations += impl_->retired.newton_iterations;
@@ -230,7 +235,7 @@ EngineTiming SweepEngine::timing() const {
     s.linear_solve_s += p.linear_solve_s;
     s.newton_iterations += p.newton_iterations;
     factorizations += impl_->probe_solver->n_factorizations();
-    load_s += impl_->probe_solver->load_vector_s;
+    load_s += impl_->probe_solver->load_vector_s();
   }
   t.assembly_s = s.assembly_s;
   t.linear_solve_s = s.linear_solve_s;
@@ -243,14 +248,14 @@ EngineTiming SweepEngine::timing() const {
 
 EngineSolution SweepEngine::solve(double x_m, double y_m, double force_N, std::vector<double>& state, bool warm,
                                   double state_force_N, bool cold_fallback) {
-  FilmSolver& sweep = *impl_->solver;
+  ProbeSolver& sweep = *impl_->solver;
   // Where the sweep mesh already resolves the footprint (near the electrodes, or the rim model's
   // graded cells near the clamp), the probe is solved on it directly.
   const double probe_size = impl_->sizes.probe_size_m;
   const bool refine_probe =
       probe_size > 0 && sweep.largest_cell_near(x_m, y_m, impl_->scene.probe.radius_m) > 1.3 * probe_size;
   impl_->last_solver = nullptr;
-  FilmSolver& fs = refine_probe ? impl_->probe_solver_at(x_m, y_m, force_N) : sweep;
+  ProbeSolver& fs = refine_probe ? impl_->probe_solver_at(x_m, y_m, force_N) : sweep;
   if (fs.clamp_layer_on()) fs.reset_clamp_layer();  // left on by solve_clamp_layer at the last probe
   EngineSolution out;
   const int factorizations_before = fs.n_factorizations();
@@ -274,16 +279,16 @@ EngineSolution SweepEngine::solve(double x_m, double y_m, double force_N, std::v
       u = s;
     }
   }
-  NewtonOutcome o = fs.solve_probe(impl_->model, u, use_warm, out.newton_iterations, out.warm_started, cold_fallback);
+  NewtonOutcome o = fs.solve(impl_->model, u, use_warm, out.newton_iterations, out.warm_started, cold_fallback);
   out.status = o.status;
   out.message = o.message;
   out.factorizations = fs.n_factorizations() - factorizations_before;
   if (o.status != Status::converged) return out;
   const auto t0 = Clock::now();
-  fs.probe_outputs(u, impl_->model, out);
+  fs.outputs(u, impl_->model, out);
   if (impl_->estimate_errors) {
     const auto t_estimate = Clock::now();
-    const FilmSolver::GoalErrors ge = fs.estimate_goal_errors(u, impl_->model);
+    const ProbeSolver::GoalErrors ge = fs.estimate_errors(u, impl_->model);
     impl_->timing.estimate_s += seconds_since(t_estimate);
     out.errors_estimated = true;
     out.charge_error_discretization_C = ge.charge_discretization_C;
@@ -318,8 +323,8 @@ EngineSolution SweepEngine::solve(double x_m, double y_m, double force_N, std::v
 // lagged Newton solves on the cheap model's mesh instead of a bending solve on a rim-graded one.
 // The condition stays on in that solver until its next probe (solve() resets it).
 void SweepEngine::forget_history() {
-  impl_->solver->forget_solve_history();
-  if (impl_->probe_solver) impl_->probe_solver->forget_solve_history();  // kept: it serves its position again
+  impl_->solver->forget_history();
+  if (impl_->probe_solver) impl_->probe_solver->forget_history();  // kept: it serves its position again
   impl_->last_solver = nullptr;
 }
 
@@ -328,13 +333,13 @@ EngineSolution SweepEngine::solve_clamp_layer() {
   EngineSolution out;
   out.message = "the clamp-layer condition is not wanted here";
   if (!im.last_solver || !im.estimate_errors || im.include_bending) return out;
-  FilmSolver& fs = *im.last_solver;
+  ProbeSolver& fs = *im.last_solver;
   im.last_solver = nullptr;
   Vector<double> u = im.last_u;
   const int factorizations_before = fs.n_factorizations();
-  FilmSolver::GoalErrors ge;
+  ProbeSolver::GoalErrors ge;
   // (its time, estimates included, is counted by the sweep as clamp_layer_s)
-  const FilmSolver::ClampLayerProbe c = fs.solve_probe_with_clamp_layer(im.model, u, ge);
+  const ProbeSolver::ClampLayerProbe c = fs.solve_with_clamp_layer(im.model, u, ge);
   out.newton_iterations = c.newton_iterations;
   out.factorizations = fs.n_factorizations() - factorizations_before;
   out.clamp_layer = c.wanted;
@@ -346,7 +351,7 @@ EngineSolution SweepEngine::solve_clamp_layer() {
   out.clamp_layer_passes = c.passes;
   out.clamp_layer_width_m = c.width_m;
   if (c.outcome.status != Status::converged) return out;
-  fs.probe_outputs(u, im.model, out);
+  fs.outputs(u, im.model, out);
   out.errors_estimated = true;
   out.charge_error_discretization_C = ge.charge_discretization_C;
   out.charge_error_model_C = ge.charge_model_C;

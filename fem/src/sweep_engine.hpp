@@ -37,9 +37,9 @@ struct SweepMeshSizes {
 };
 
 /// The solver options of a sweep engine's mesh: `options` with the engine's model and bending, no
-/// adaptivity and no rim grading of its own, and the mesh sizes of `sizes`. Every FilmSolver that must
-/// number its DOFs as an engine does (the engine itself, the atlas's copies of its mesh) is built
-/// from these.
+/// adaptivity and no rim grading of its own, and the mesh sizes of `sizes`. Every ProbeSolver that
+/// must number its DOFs as an engine does (the engine itself, the atlas's copies of its mesh) is
+/// built from these.
 Options engine_solver_options(const Options& options, Model model, bool include_bending, const SweepMeshSizes& sizes);
 
 /// Outcome of one probe solve on the sweep mesh.
@@ -111,7 +111,7 @@ class SweepEngine {
   EngineSolution solve(double x_m, double y_m, double force_N, std::vector<double>& state, bool warm,
                        double state_force_N = 0, bool cold_fallback = true);
 
-  /// Forgets what earlier solves left in the solvers (FilmSolver::forget_solve_history, the
+  /// Forgets what earlier solves left in the solvers (ProbeSolver::forget_history, the
   /// footprint-refined probe mesh's too): the next solve depends only on its own inputs.
   void forget_history();
 
@@ -136,7 +136,7 @@ double rim_boundary_layer_m(const pvdf::Scene& scene, double force_N);
 /// What the `auto` rule decided.
 struct ModelChoice {
   /// Kinematics; `automatic` = still open: chosen by trial solves on the solve's first mesh
-  /// (FilmSolver::choose_kinematics, only when no force range is given).
+  /// (FilmSolver::run's first step, only when no force range is given).
   Model model = Model::automatic;
   bool include_bending = true;
   std::string reason;  ///< why (empty while the kinematics are open)
