@@ -93,8 +93,7 @@ def main():
                 row = dict(map=path, x_m=x, y_m=y, force_N=force, force_known=known, draws=a.draws,
                            ok=sum(ok), covered=sum(cov), silent=sum(1 for o, c in zip(ok, cov) if o and not c),
                            median_error_m=float(np.median(err)) if err else None,
-                           median_sigma_m=float(np.median(sig)) if sig else None,
-                           map_total_error_stored=bool(m.charge_error_is_total) if hasattr(m, "charge_error_is_total") else None)
+                           median_sigma_m=float(np.median(sig)) if sig else None)
                 rows.append(row)
                 print(f"{path:28} ({1e3 * x:6.2f}, {1e3 * y:6.2f}) mm {force:g} N force {'known  ' if known else 'unknown'}: "
                       f"ok {row['ok']:4d}, covered {row['covered']:4d}, silent {row['silent']:4d} of {a.draws}; "

@@ -54,8 +54,7 @@ if [[ -n $map ]]; then
   echo "using the given map $map"
 elif has_command map; then
   map=$out/map.h5
-  # Not --quiet: its summary states the map's errors, among them the total a lookup on it carries.
-  "$pvdfkit" map "$scene" -o "$map" --spacing-m "$spacing" --region "$region" --forces-N 1
+  "$pvdfkit" map "$scene" -o "$map" --spacing-m "$spacing" --region "$region" --forces-N 1 --quiet
 else
   # Until `pvdfkit map` is built, the pipeline still runs on the analytic stand-in, loudly.
   echo "NOTE: this pvdfkit has no 'map' command: using the analytic stand-in map (NOT an FEM result)"

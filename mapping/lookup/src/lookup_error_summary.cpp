@@ -1,5 +1,5 @@
-// lookup_error_summary (pvdf/mapping/locator.hpp): the one number a map states for the
-// error the lookup will carry at a press, whatever the placement (docs/lookup.md §1.10).
+// lookup_error_summary (pvdf/mapping/locator.hpp): what a map states about the error the lookup
+// will carry at a press, whatever the placement (docs/lookup.md §1.12).
 #include "pvdf/mapping/locator.hpp"
 
 #include "pvdf/core/error.hpp"

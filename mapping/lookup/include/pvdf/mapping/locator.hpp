@@ -394,10 +394,9 @@ class Locator {
 /// The map error the lookup carries at a press (Locator::charge_error: node estimate and the error
 /// between nodes and force levels, in quadrature, or a map's stored totals), relative to that
 /// press's largest charge, over 5 x 5 points in every usable cell, at every force level and half
-/// way (in ln F) between consecutive levels: its median,
-/// 90th percentile and largest value. What a map states as its total error for a user of the
-/// lookup (`map` prints it; MapReport). NaN where no lookup can be built (fewer than three
-/// electrodes, no usable cell).
+/// way (in ln F) between consecutive levels: its median, 90th percentile and largest value. What a
+/// map states as its total error for a user of the lookup (`map` prints it; MapReport). NaN where
+/// no lookup can be built (fewer than three electrodes, no usable cell).
 struct LookupErrorSummary {
   double median = std::numeric_limits<double>::quiet_NaN();
   double p90 = std::numeric_limits<double>::quiet_NaN();
