@@ -310,38 +310,50 @@ void write_sweep_figure(const std::vector<Candidate>& all, const std::vector<std
 
 // ---------------------------------------------------------------------------------------------
 
-/// The analysis options from the command's flags, each checked against its rule.
+/// How check_design_options names an option: as this command's flag ("--noise-C -1e-14",
+/// "--target-mm 0", "--force-range-N MIN 0").
+std::string design_flag_named(const std::string& key, const std::string& value) {
+  if (key == "min_force_N") return "--force-range-N MIN " + value;
+  if (key == "max_force_N") return "--force-range-N MAX " + value;
+  if (key == "target_m") {
+    double m = 0;
+    try {
+      m = std::stod(value);
+    } catch (const std::exception&) {
+      return "--target-mm (" + value + " m)";
+    }
+    return "--target-mm " + pvdf::format_g(m * 1e3);
+  }
+  if (key.rfind("noise_C", 0) == 0) return "--noise-C " + value;
+  if (key == "ambiguity_min_distance_m") return "--ambiguity-distance-m " + value;
+  std::string flag = "--" + key;  // force_N, adc_bits, full_scale_C
+  std::replace(flag.begin(), flag.end(), '_', '-');
+  return value.empty() ? flag : flag + " " + value;
+}
+
+/// The analysis options from the command's flags, checked by the library's rule
+/// (check_design_options, which the Python design and optimize_layouts share).
 DesignOptions design_options(const DesignCommandOptions& o) {
   if (o.scenes.empty() && o.maps.empty()) {
     throw pvdf::InputError("nothing to compare: give one or more SCENE files (or --map MAP.h5)");
   }
   if (!o.vary.empty() && o.scenes.empty()) throw pvdf::InputError("--vary needs a SCENE to vary");
-  if (!(o.target_mm > 0)) throw pvdf::InputError("--target-mm " + pvdf::format_printf("%g", o.target_mm) + " must be > 0 (mm)");
   if (o.spacing_m < 0 || o.refine_spacing_m < 0) throw pvdf::InputError("--spacing-m and --refine-spacing-m must be > 0 (m)");
   if (o.refine_best < 0) throw pvdf::InputError("--refine-best must be >= 0");
 
   DesignOptions d;
   d.noise_C = pvdf::parse_number_list(o.noise, "--noise-C");
-  for (const double n : d.noise_C) {
-    if (!(n > 0 && n < 1e-6)) {
-      throw pvdf::InputError("--noise-C " + pvdf::escape_control_bytes(o.noise) + ": " + pvdf::format_printf("%g", n) +
-                             " must lie in (0, 1e-6) C (a 1-sigma charge noise)");
-    }
-  }
   const auto range = pvdf::parse_number_list(o.force_range, "--force-range-N", 2);
-  if (!(range[0] > 0) || !(range[1] > range[0]) || !std::isfinite(range[1])) {
-    throw pvdf::InputError("--force-range-N " + pvdf::escape_control_bytes(o.force_range) + ": need 0 < MIN < MAX (N)");
-  }
   d.min_force_N = range[0];
   d.max_force_N = range[1];
   d.force_N = o.force_N;
   d.force_known = o.force_known;
   d.target_m = o.target_mm * 1e-3;
-  if (o.adc_bits == 1) throw pvdf::InputError("--adc-bits 1: use 0 (ideal) or 2..32 bits");
   d.adc_bits = o.adc_bits;
   d.include_map_error = o.include_map_error;
   d.full_scale_C = o.full_scale_C;
   d.ambiguity_min_distance_m = o.ambiguity_min_distance_m;
+  pvdf::mapping::check_design_options(d, design_flag_named);
   return d;
 }
 

@@ -61,7 +61,7 @@ std::size_t ItemCostEta::bin_of(double feature) const {
 }
 
 void ItemCostEta::block_done(const std::vector<std::size_t>& items, const std::vector<std::vector<double>>& work,
-                             double cpu_s, double start_s, double end_s) {
+                             double cpu_s, double start_s, double end_s, const std::vector<double>& item_cpu_s) {
   // The block is no longer in flight (matched by any of its items).
   for (std::size_t f = 0; f < in_flight_.size();) {
     const auto& fi = in_flight_[f].items;
@@ -70,10 +70,12 @@ void ItemCostEta::block_done(const std::vector<std::size_t>& items, const std::v
     else ++f;
   }
   std::vector<double> sum(n_kinds_, 0.0);
+  const bool by_item = !items.empty() && item_cpu_s.size() == items.size();
   for (std::size_t n = 0; n < items.size() && n < work.size(); ++n) {
     const std::size_t id = items[n];
     if (id >= feature_.size() || done_[id]) continue;
     done_[id] = 1;
+    std::vector<double> own(n_kinds_, 0.0);
     const std::size_t b = bin_of(feature_[id]);
     if (b >= bin_items_.size()) {
       bin_items_.resize(b + 1, 0);
@@ -86,11 +88,19 @@ void ItemCostEta::block_done(const std::vector<std::size_t>& items, const std::v
       const double w = std::isfinite(work[n][c]) ? std::max(0.0, work[n][c]) : 0.0;
       bin_work_[b][c] += w;
       sum[c] += w;
+      own[c] = w;
+    }
+    if (by_item) {
+      row_work_.push_back(own);
+      row_cpu_s_.push_back(std::isfinite(item_cpu_s[n]) ? std::max(0.0, item_cpu_s[n]) : 0.0);
     }
   }
   if (!(cpu_s >= 0) || !std::isfinite(cpu_s)) cpu_s = 0;
-  block_work_.push_back(sum);
-  block_cpu_s_.push_back(cpu_s);
+  if (!by_item) {
+    row_work_.push_back(sum);
+    row_cpu_s_.push_back(cpu_s);
+  }
+  ++blocks_done_;
   cpu_done_s_ += cpu_s;
   if (std::isfinite(end_s - start_s) && end_s > start_s) wall_done_s_ += end_s - start_s;
   last_end_s_ = end_s;
@@ -101,23 +111,25 @@ void ItemCostEta::block_done(const std::vector<std::size_t>& items, const std::v
 // ones and solving again (at most n_kinds rounds; n_kinds is a handful).
 void ItemCostEta::fit() {
   const std::size_t n = n_kinds_;
-  double units = 0;
-  for (const auto& w : block_work_)
-    for (double x : w) units += x;
-  const double mean = units > 0 ? cpu_done_s_ / units : 0.0;
+  double units = 0, cpu = 0;
+  for (std::size_t b = 0; b < row_work_.size(); ++b) {
+    for (double x : row_work_[b]) units += x;
+    cpu += row_cpu_s_[b];
+  }
+  const double mean = units > 0 ? cpu / units : 0.0;
   std::vector<char> free(n, 1);
   std::vector<double> k(n, mean);
   for (std::size_t round = 0; round <= n; ++round) {
     // Normal equations (AᵀA + Λ) k = Aᵀb + Λ·mean over the free kinds; Λ_c = 10⁻³ Σ_b A_bc² (+1e-12).
     std::vector<double> M(n * n, 0.0), r(n, 0.0);
-    for (std::size_t b = 0; b < block_work_.size(); ++b) {
-      const auto& a = block_work_[b];
+    for (std::size_t b = 0; b < row_work_.size(); ++b) {
+      const auto& a = row_work_[b];
       for (std::size_t i = 0; i < n; ++i) {
-        r[i] += a[i] * block_cpu_s_[b];
+        r[i] += a[i] * row_cpu_s_[b];
         for (std::size_t j = 0; j < n; ++j) M[i * n + j] += a[i] * a[j];
       }
     }
-    for (std::size_t i = 0; i < n; ++i) {  // the priors: that many units done at their cost
+    for (std::size_t i = 0; i < n; ++i) {  // the priors: one block of that many units done at their cost
       const double w2 = prior_weight_[i] * prior_weight_[i];
       M[i * n + i] += w2;
       r[i] += w2 * prior_cost_[i];
@@ -205,16 +217,45 @@ double ItemCostEta::predicted_cpu_s(std::size_t id) const {
 }
 
 double ItemCostEta::seconds_left(double t_s) const {
-  const bool fitted = !block_cpu_s_.empty() && !cost_.empty() && wall_done_s_ > 0;
+  const bool fitted = blocks_done_ > 0 && !cost_.empty() && wall_done_s_ > 0;
   if (!fitted && !(prior_rate_ > 0 && prior_weight_[0] > 0)) return std::numeric_limits<double>::quiet_NaN();
   const double per_thread = fitted ? cpu_done_s_ / wall_done_s_ : prior_rate_;  // CPU-s per wall-s of one thread
   if (!(per_thread > 0)) return std::numeric_limits<double>::quiet_NaN();
   std::vector<char> flying(feature_.size(), 0);
   for (const auto& b : in_flight_)
     for (std::size_t id : b.items) flying[id] = 1;
+  // Before any block is done, the blocks in flight say what the prior cannot: a block that has run
+  // r seconds costs at least r × the per-thread rate, so an item to do in the feature bin of one of
+  // its items costs per unit at least that over the block's units (the largest such bound of its
+  // bin, else of the nearest bin in flight; an item farther from the clamp than every item in
+  // flight keeps the prior, as add_predicted_work gives it kind 0 alone).
+  std::vector<double> floor_per_unit;
+  if (blocks_done_ == 0) {
+    for (const auto& b : in_flight_) {
+      double units = 0;
+      for (std::size_t id : b.items) units += units_[id];
+      if (!(units > 0)) continue;
+      const double per_unit = std::max(0.0, t_s - b.start_s) * per_thread / units;
+      for (std::size_t id : b.items) {
+        const std::size_t bin = bin_of(feature_[id]);
+        if (bin >= floor_per_unit.size()) floor_per_unit.resize(bin + 1, -1.0);
+        floor_per_unit[bin] = std::max(floor_per_unit[bin], per_unit);
+      }
+    }
+  }
+  const auto cost_s = [&](std::size_t id) {
+    const double cpu = predicted_cpu_s(id);
+    const std::size_t nb = floor_per_unit.size(), bin = bin_of(feature_[id]);
+    if (nb == 0 || bin >= nb) return cpu;
+    for (std::size_t d = 0; d < nb; ++d) {  // the nearest bin in flight (ties: farther from the clamp)
+      if (bin + d < nb && floor_per_unit[bin + d] >= 0) return std::max(cpu, floor_per_unit[bin + d] * units_[id]);
+      if (d <= bin && floor_per_unit[bin - d] >= 0) return std::max(cpu, floor_per_unit[bin - d] * units_[id]);
+    }
+    return cpu;
+  };
   double cpu_left = 0;
   for (std::size_t id = 0; id < feature_.size(); ++id)
-    if (!done_[id] && !flying[id]) cpu_left += predicted_cpu_s(id);
+    if (!done_[id] && !flying[id]) cpu_left += cost_s(id);
   if (!tracking_) {
     // Counted down from the last block's end: the blocks in flight have run since then.
     const double left = cpu_left / (per_thread * double(threads_)) - (fitted ? std::max(0.0, t_s - last_end_s_) : 0.0);
@@ -226,7 +267,7 @@ double ItemCostEta::seconds_left(double t_s) const {
   for (const auto& b : in_flight_) {
     double cpu = 0;
     for (std::size_t id : b.items)
-      if (!done_[id]) cpu += predicted_cpu_s(id);
+      if (!done_[id]) cpu += cost_s(id);
     const double run_s = std::max(0.0, t_s - b.start_s);
     free_s.push_back(std::max(cpu / per_thread - run_s, overrun_share * run_s));
   }
@@ -240,14 +281,14 @@ double ItemCostEta::seconds_left(double t_s) const {
     if (!waiting) continue;
     double cpu = 0;
     for (std::size_t id : b) {
-      cpu += predicted_cpu_s(id);
+      cpu += cost_s(id);
       queued[id] = 1;
     }
     *std::min_element(free_s.begin(), free_s.end()) += cpu / per_thread;
   }
   double loose_cpu = 0;
   for (std::size_t id = 0; id < feature_.size(); ++id)
-    if (!done_[id] && !flying[id] && !queued[id]) loose_cpu += predicted_cpu_s(id);
+    if (!done_[id] && !flying[id] && !queued[id]) loose_cpu += cost_s(id);
   double sum_s = loose_cpu / per_thread, last_s = 0;
   for (double f : free_s) {
     sum_s += f;
@@ -258,7 +299,7 @@ double ItemCostEta::seconds_left(double t_s) const {
 
 double ItemCostEta::cpu_s_per_item(const std::vector<std::size_t>& kinds) const {
   if (feature_.empty()) return std::numeric_limits<double>::quiet_NaN();
-  const bool fitted = !block_cpu_s_.empty() && cost_.size() == n_kinds_;
+  const bool fitted = blocks_done_ > 0 && cost_.size() == n_kinds_;
   if (!fitted && !(prior_weight_[0] > 0)) return std::numeric_limits<double>::quiet_NaN();
   const std::vector<double>& k = fitted ? cost_ : prior_cost_;
   // The work of the items done (the bins' sums) and the predicted work of the others.

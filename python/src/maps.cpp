@@ -488,21 +488,23 @@ DesignSummary (pvdfkit.design). Returns the list of indices, best first.)doc");
 pvdf::mapping::DesignOptions design_options_arg(py::object force_N, py::object min_force_N, py::object max_force_N,
                                                 py::object noise_C, py::object target_m, py::object force_known,
                                                 py::object adc_bits, py::object full_scale_C, const std::string& f) {
+  // Types here; the rules are the command's, in one function (check_design_options), whose
+  // messages name each keyword after the function's name ("design: adc_bits = 1").
   pvdf::mapping::DesignOptions o;
-  // The rules of `pvdfkit design`'s flags (app/src/cmd_design.cpp).
-  o.force_N = arg::number_in(force_N, f + "force_N", 0, 1e4, "N (the rule of loads[].force_N, pushing)", true);
-  o.min_force_N = arg::number_in(min_force_N, f + "min_force_N", 0, 1e4, "N", true);
-  o.max_force_N = arg::number_in(max_force_N, f + "max_force_N", 0, 1e4, "N", true);
-  if (!(o.min_force_N < o.max_force_N)) {
-    throw pvdf::InputError(f + "min_force_N = " + pvdf::format_g(o.min_force_N) + " and max_force_N = " +
-                           pvdf::format_g(o.max_force_N) + ": need 0 < min_force_N < max_force_N (N)");
-  }
-  o.noise_C = noise_list(noise_C, f + "noise_C", true);
-  o.target_m = arg::number_in(target_m, f + "target_m", 0, 1, "m (the position-error target)", true);
+  o.force_N = arg::number(force_N, f + "force_N", "(N)");
+  o.min_force_N = arg::number(min_force_N, f + "min_force_N", "(N)");
+  o.max_force_N = arg::number(max_force_N, f + "max_force_N", "(N)");
+  if (!noise_C.is_none()) o.noise_C = arg::vector(noise_C, f + "noise_C", {false, true, "give 1-sigma charge noise in C, one value or one per electrode"});
+  o.target_m = arg::number(target_m, f + "target_m", "(m)");
   o.force_known = arg::flag(force_known, f + "force_known");
-  o.adc_bits = int(arg::integer_in(adc_bits, f + "adc_bits", 0, 32, "(0 = ideal)"));
-  if (o.adc_bits == 1) throw pvdf::InputError(f + "adc_bits = 1: use 0 (ideal) or 2..32 bits");
-  o.full_scale_C = arg::number_in(full_scale_C, f + "full_scale_C", 0, 1e-3, "C (0 = 1.25 x the largest charge at max_force_N)");
+  const long long int_max = std::numeric_limits<int>::max();
+  o.adc_bits = int(arg::integer_in(adc_bits, f + "adc_bits", -int_max, int_max, "(0 = ideal)"));
+  o.full_scale_C = arg::number(full_scale_C, f + "full_scale_C", "(C)");
+  try {
+    pvdf::mapping::check_design_options(o);  // named as the keywords: "adc_bits = 1"
+  } catch (const pvdf::InputError& e) {
+    throw pvdf::InputError(f + e.what());
+  }
   return o;
 }
 

@@ -48,6 +48,35 @@ def test_design_refuses_bad_options():
         pvdfkit.design(amap, noise_C=[-1.0])
 
 
+def test_design_options_refused_alike_by_python_and_the_command(tmp_path):
+    """One rule (pvdf::mapping::check_design_options) behind `pvdfkit.design` and `pvdfkit design`:
+    values the command's flag parser lets through are refused by both with the same rule text, the
+    command with exit 2 and the flag, Python with InputError and the keyword."""
+    import subprocess
+    from cli_path import pvdfkit_cli
+    cli = pvdfkit_cli()
+    amap = analytic_map(spacing=0.002)
+    path = tmp_path / "analytic.h5"
+    pvdfkit.write_map(str(path), amap)
+    cases = [  # (Python keywords, command flags, the rule's words, Python's name, the command's name)
+        (dict(noise_C=2e-6), ["--noise-C", "2e-6"], "must lie in (0, 1e-6) C", "design: noise_C = 2e-06",
+         "--noise-C 2e-06"),
+        (dict(min_force_N=3.0, max_force_N=1.0), ["--force-range-N", "3,1"], "need 0 < min_force_N < max_force_N",
+         "design: min_force_N = 3", "--force-range-N MIN 3"),
+        (dict(min_force_N=0.0, max_force_N=1.0), ["--force-range-N", "0,1"], "must lie in (0, 1e4] N",
+         "design: min_force_N = 0", "--force-range-N MIN 0"),
+        (dict(adc_bits=1), ["--adc-bits", "1"], "use 0 (ideal) or 2..32 bits", "design: adc_bits = 1", "--adc-bits 1"),
+    ]
+    for keywords, flags, rule, py_name, flag_name in cases:
+        with pytest.raises(pvdfkit.InputError) as e:
+            pvdfkit.design(amap, **keywords)
+        assert rule in str(e.value) and py_name in str(e.value), str(e.value)
+        out = subprocess.run([cli, "design", "--map", str(path), "--no-plots", "--quiet"] + flags,
+                             capture_output=True, text=True, timeout=120)
+        assert out.returncode == 2, (flags, out.returncode, out.stderr)
+        assert rule in out.stderr and flag_name in out.stderr, out.stderr
+
+
 def test_rank_designs_orders_as_the_command_rule():
     """Two layouts whose usable areas differ by construction: a finer noise gives the larger usable
     fraction, so it ranks first whatever the order given; bad input raises InputError."""

@@ -210,6 +210,7 @@ void Generator::plan_time_left() {
     time_left_ = pvdf::ItemCostEta(4, grid_.spacing > 0 ? grid_.spacing : 1e-3, std::max(1, threads_));
     time_left_id_.assign(n, std::size_t(-1));
     time_left_work_.assign(n, {});
+    time_left_cpu_s_.assign(n, 0.0);
   }
   if (map_.mask.size() != n || known_.size() != n) return;
   std::vector<double> features;

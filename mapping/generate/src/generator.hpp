@@ -202,6 +202,7 @@ class Generator {
   pvdf::ItemCostEta time_left_{4, 1.0, 1};
   std::vector<std::size_t> time_left_id_;
   std::vector<std::array<double, 4>> time_left_work_;
+  std::vector<double> time_left_cpu_s_;  ///< [p]: the thread CPU seconds its solves took, same writer
   std::chrono::steady_clock::time_point clock0_ = std::chrono::steady_clock::now();
   std::chrono::steady_clock::time_point last_checkpoint_;
   std::string first_failure_;

@@ -102,6 +102,7 @@ void Generator::solve_block(fem::ProbeSweep& sweep, const Block& block, std::vec
     // clamp-layer solves the sweep ran (kept or not) and the direct solves tried.
     std::array<double, 4> work{};
     const fem::SweepTiming timing0 = sweep.timing();
+    const double position_cpu0_s = thread_cpu_s();
     std::vector<double> rec(layout_.size(), nan);
     rec[Layout::point_index] = double(task.j * grid_.nx + task.i);
     auto put = [&](std::size_t f, const fem::ProbeSolution* s, std::uint8_t prov) {
@@ -183,7 +184,10 @@ void Generator::solve_block(fem::ProbeSweep& sweep, const Block& block, std::vec
     work[std::size_t(fem::SweepModel::rim)] += double(timing1.rim_solves - timing0.rim_solves);
     work[std::size_t(fem::SweepModel::clamp_layer)] += double(timing1.clamp_layer_solves - timing0.clamp_layer_solves);
     const std::size_t p = task.j * grid_.nx + task.i;
-    if (p < time_left_work_.size()) time_left_work_[p] = work;  // this thread's own position
+    if (p < time_left_work_.size()) {  // this thread's own position
+      time_left_work_[p] = work;
+      time_left_cpu_s_[p] = thread_cpu_s() - position_cpu0_s;
+    }
     records.insert(records.end(), rec.begin(), rec.end());
     const std::size_t solved = positions_solved_.fetch_add(1) + 1;
     if (o_.stop_after_positions > 0 && solved >= o_.stop_after_positions) {
@@ -203,14 +207,16 @@ void Generator::commit(const std::vector<double>& records, std::size_t n_positio
   // The time left: the solves of each kind each position of the block ran (solve_block).
   std::vector<std::size_t> items;
   std::vector<std::vector<double>> work;
+  std::vector<double> item_cpu_s;  // each position's own CPU: the cost fit's rows (ItemCostEta)
   for (std::size_t r = 0; r < records.size(); r += layout_.size()) {
     const std::size_t p = std::size_t(records[r + Layout::point_index]);
     if (p >= time_left_id_.size() || time_left_id_[p] == std::size_t(-1) || p >= time_left_work_.size()) continue;
     items.push_back(time_left_id_[p]);
     work.emplace_back(time_left_work_[p].begin(), time_left_work_[p].end());
+    item_cpu_s.push_back(time_left_cpu_s_[p]);
   }
   const double now_s = eta_clock_s();
-  time_left_.block_done(items, work, cpu_s, start_s, now_s);
+  time_left_.block_done(items, work, cpu_s, start_s, now_s, item_cpu_s);
   for (std::size_t r = 0; r < records.size(); r += layout_.size()) {
     const double* rec = records.data() + r;
     store_record(rec, false);
@@ -235,7 +241,7 @@ void Generator::commit(const std::vector<double>& records, std::size_t n_positio
       line += std::to_string(items[n]) + ":" + std::to_string(time_left_.feature(items[n])) + ":" +
               std::to_string(time_left_.units(items[n]));
       for (double w : work[n]) line += ":" + std::to_string(int(w));
-      line += ";";
+      line += ":" + std::to_string(item_cpu_s[n]) + ";";
     }
     std::fprintf(stderr, "%s\n", line.c_str());
   }

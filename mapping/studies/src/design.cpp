@@ -788,4 +788,42 @@ nlohmann::json set_scene_key(const nlohmann::json& scene, const std::string& key
   return n;
 }
 
+std::string named_option(const OptionNaming& naming, const std::string& key, const std::string& value) {
+  if (naming) return naming(key, value);
+  return value.empty() ? key : key + " = " + value;
+}
+
+void check_design_options(const DesignOptions& o, const OptionNaming& naming) {
+  const auto name = [&naming](const std::string& key, double value) { return named_option(naming, key, pvdf::format_g(value)); };
+  const auto in = [](double v, double lo, double hi) { return std::isfinite(v) && v >= lo && v <= hi; };
+  if (!(o.force_N > 0) || !in(o.force_N, 0, 1e4)) {
+    throw InputError(name("force_N", o.force_N) + " must lie in (0, 1e4] N (the evaluated press, pushing), e.g. 1");
+  }
+  if (!(o.min_force_N > 0) || !in(o.min_force_N, 0, 1e4)) {
+    throw InputError(name("min_force_N", o.min_force_N) + " must lie in (0, 1e4] N (the smallest force served), e.g. 0.25");
+  }
+  if (!in(o.max_force_N, 0, 1e4) || !(o.min_force_N < o.max_force_N)) {
+    throw InputError(name("min_force_N", o.min_force_N) + " and " + name("max_force_N", o.max_force_N) +
+                     ": need 0 < min_force_N < max_force_N <= 1e4 (N)");
+  }
+  for (std::size_t k = 0; k < o.noise_C.size(); ++k) {
+    const std::string key = o.noise_C.size() == 1 ? "noise_C" : "noise_C[" + std::to_string(k) + "]";
+    if (!(o.noise_C[k] > 0 && o.noise_C[k] < 1e-6)) {
+      throw InputError(name(key, o.noise_C[k]) + " must lie in (0, 1e-6) C (a 1-sigma charge noise; 0.05 pC = 5e-14 C)");
+    }
+  }
+  if (!(o.target_m > 0) || !in(o.target_m, 0, 1)) {
+    throw InputError(name("target_m", o.target_m) + " must lie in (0, 1] m, i.e. (0, 1000] mm (the position-error target), e.g. 0.0005 m = 0.5 mm");
+  }
+  if (o.adc_bits < 0 || o.adc_bits == 1 || o.adc_bits > 32) {
+    throw InputError(named_option(naming, "adc_bits", std::to_string(o.adc_bits)) + ": use 0 (ideal) or 2..32 bits");
+  }
+  if (!in(o.full_scale_C, 0, 1e-3)) {
+    throw InputError(name("full_scale_C", o.full_scale_C) + " must lie in [0, 1e-3] C (0 = 1.25 x the largest charge at the largest force)");
+  }
+  if (!in(o.ambiguity_min_distance_m, 0, 1)) {
+    throw InputError(name("ambiguity_min_distance_m", o.ambiguity_min_distance_m) + " must lie in [0, 1] m (0 = the target)");
+  }
+}
+
 }  // namespace pvdf::mapping

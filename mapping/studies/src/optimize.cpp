@@ -85,8 +85,7 @@ nlohmann::json finite_or_null(double v) { return std::isfinite(v) ? nlohmann::js
 
 /// The option as `naming` spells it, or by its field name when none is given.
 std::string named(const OptionNaming& naming, const std::string& key, const std::string& value) {
-  if (naming) return naming(key, value);
-  return value.empty() ? key : key + " = " + value;
+  return named_option(naming, key, value);
 }
 
 }  // namespace

@@ -13,9 +13,13 @@ namespace pvdf {
 ///
 /// The model (docs/design.md §6):
 /// - cost: an item that needed n_c units of work kind c costs Σ_c n_c k_c CPU-seconds; the k_c ≥ 0
-///   are fitted by least squares to the CPU seconds of the blocks done (a small ridge pulls them
-///   toward the mean cost per unit of work, so that one block already gives an answer; a prior,
-///   set_prior, enters as that many units of its kind done at its cost);
+///   are fitted by least squares to the CPU seconds of the items done where each item's own CPU
+///   seconds are known (block_done's `item_cpu_s`), else of the blocks done (a small ridge pulls
+///   them toward the mean cost per unit of work, so that one block already gives an answer; a
+///   prior, set_prior, enters as one block of that many units of its kind done at its cost). Items
+///   separate kinds that blocks cannot: the first rows of a map, next to the clamp, hold a
+///   clamp-layer solve at every position and a rim-model solve at one, in the same proportion in
+///   every row, and the block fit then shares the rim-model's cost with the clamp layer;
 /// - work of an item still to do: its expected number of units (set_units; default 1: e.g. the
 ///   force levels a map position will solve) × the work of each kind per unit of the items done
 ///   whose feature lies in the same bin (bins of `bin_width` in the feature), else in the nearest
@@ -49,17 +53,18 @@ class ItemCostEta {
   /// The expected units of work (> 0; e.g. solves) of planned item `id` not yet done (default 1).
   void set_units(std::size_t id, double units);
   /// A block started at wall time `start_s` is done at `end_s`: its items (ids from plan), the
-  /// work each needed ([item][kind], counts), and the CPU seconds it took.
+  /// work each needed ([item][kind], counts), the CPU seconds the block took (its throughput), and,
+  /// when known, each item's own CPU seconds (the cost fit's rows; empty: the block is one row).
   void block_done(const std::vector<std::size_t>& items, const std::vector<std::vector<double>>& work,
-                  double cpu_s, double start_s, double end_s);
+                  double cpu_s, double start_s, double end_s, const std::vector<double>& item_cpu_s = {});
   /// The blocks the items will be solved in, in the order the threads take them (each thread the
   /// next when it is free): the time left then follows that schedule (a dear block taken last runs
   /// alone). Items in no block queued are spread over the threads.
   void queue_blocks(const std::vector<std::vector<std::size_t>>& blocks);
   /// A block of planned items (ids from plan) starts at wall time `start_s` on one thread.
   void block_started(const std::vector<std::size_t>& items, double start_s);
-  /// A prior for kind `kind`: `cpu_s_per_unit` as if `weight_units` units of it had been done at
-  /// that cost (e.g. the setup checks' CPU seconds per solve, the number of checks), and the CPU
+  /// A prior for kind `kind`: `cpu_s_per_unit` as if one block of `weight_units` units of it had
+  /// been done at that cost (e.g. the setup checks' CPU seconds per solve, the number of checks), and the CPU
   /// seconds per wall second of one thread until a block is done (`cpu_per_wall_s_per_thread`).
   void set_prior(std::size_t kind, double cpu_s_per_unit, double weight_units, double cpu_per_wall_s_per_thread);
   /// Seconds left at wall time `t_s` (NaN until a block is done or a prior is set).
@@ -98,9 +103,11 @@ class ItemCostEta {
   std::vector<std::size_t> bin_items_;
   std::vector<std::vector<double>> bin_work_;
   std::vector<double> bin_units_;  ///< summed units (set_units) of the items done in each bin
-  // per block done: work per kind and CPU seconds (the least-squares rows)
-  std::vector<std::vector<double>> block_work_;
-  std::vector<double> block_cpu_s_;
+  // the least-squares rows: work per kind and CPU seconds of each item done with its own CPU
+  // seconds, or of each block done without them
+  std::vector<std::vector<double>> row_work_;
+  std::vector<double> row_cpu_s_;
+  std::size_t blocks_done_ = 0;
   std::vector<double> cost_;
   double cpu_done_s_ = 0, wall_done_s_ = 0;
   int threads_ = 1;

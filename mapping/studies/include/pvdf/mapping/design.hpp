@@ -13,11 +13,21 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <string>
 #include <vector>
 
 namespace pvdf::mapping {
+
+/// How messages name an option, given its key (snake_case, the options' field: "size_min_m",
+/// "noise_C[0]") and its value as text (empty for a switch named alone). The command passes its
+/// flags' spelling ("--size-min-m 0"), the Python package its keywords' ("optimize_layouts:
+/// size_min_m = 0"); empty = the field's own name ("size_min_m = 0"). The library spells no flag.
+using OptionNaming = std::function<std::string(const std::string& key, const std::string& value)>;
+
+/// `key` and `value` as `naming` spells them (empty naming: "key = value", or "key" alone).
+std::string named_option(const OptionNaming& naming, const std::string& key, const std::string& value);
 
 /// Settings of a layout evaluation (public members with defaults).
 struct DesignOptions {
@@ -55,6 +65,14 @@ struct DesignOptions {
   /// diagonal equilibration is below this × the largest.
   double singular_rcond = 1e-12;
 };
+
+/// The one check of a layout evaluation's settings, for `pvdfkit design` (typed layouts and
+/// `--optimize`) and the Python `design`/`optimize_layouts` alike: throws InputError naming the
+/// option as `naming` spells it, its value, the rule and the fix. The rules: force_N in (0, 1e4] N;
+/// 0 < min_force_N < max_force_N ≤ 1e4 N; each noise_C in (0, 1e-6) C; target_m in (0, 1] m;
+/// adc_bits 0 (ideal) or 2..32; full_scale_C in [0, 1e-3] C (0 = from the map);
+/// ambiguity_min_distance_m in [0, 1] m.
+void check_design_options(const DesignOptions& options, const OptionNaming& naming = {});
 
 /// Cramér–Rao bound at one press from the noise-weighted Jacobian.
 struct PointBound {

@@ -24,11 +24,6 @@ namespace pvdf::mapping {
 /// The charge map of a candidate layout (a scene whose electrodes are the candidate's).
 using MapProvider = std::function<ChargeMap(const pvdf::Scene&)>;
 
-/// How messages name an option, given its key (snake_case, the OptimizeOptions / OptimizeMaps field:
-/// "size_min_m") and its value as text (empty for a switch named alone). The command passes its
-/// flags' spelling ("--size-min-m 0"), the Python package its keywords' ("optimize_layouts:
-/// size_min_m = 0"); empty = the field's own name ("size_min_m = 0"). The library spells no flag.
-using OptionNaming = std::function<std::string(const std::string& key, const std::string& value)>;
 
 /// Settings of a layout search (public members with defaults).
 struct OptimizeOptions {
