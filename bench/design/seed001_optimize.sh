@@ -14,13 +14,15 @@
 # Every heavy step runs under `nice -n 19`, and each is timed with /usr/bin/time -v (*.time).
 # Steps whose output exists are skipped, so an interrupted run is resumed by running it again.
 # Usage: bench/design/seed001_optimize.sh OUT_DIR [PVDFKIT (default build/app/pvdfkit)]
-# Environment: SPACING_M (default 0.006: the atlas's probe grid, also the FEM maps'), BUDGET
-# (default 1500 evaluations per count), THREADS (default 2), SEEDS (default "1 2 3").
+# Environment: SPACING_M (default 0.006: the atlas's probe grid, also the FEM maps'), FE_SIZE_M
+# (default 0.002: the atlas's FE size; 0 = the atlas's default, 1 mm), BUDGET (default 1500
+# evaluations per count), THREADS (default 2), SEEDS (default "1 2 3").
 set -euo pipefail
 root=$(cd "$(dirname "$0")/../.." && pwd)
 out=${1:?usage: seed001_optimize.sh OUT_DIR [PVDFKIT]}
 pvdfkit=${2:-$root/build/app/pvdfkit}
 spacing=${SPACING_M:-0.006}
+fe_size=${FE_SIZE_M:-0.002}
 budget=${BUDGET:-1500}
 threads=${THREADS:-2}
 seeds=${SEEDS:-1 2 3}
@@ -39,8 +41,9 @@ run() {  # run NAME CMD...: nice -n 19, timed into OUT/NAME.time, stdout to OUT/
 # the geometric middle of 0.5-2 N).
 eval_flags=(--force-N 1 --force-range-N 0.5,2 --noise-C 5e-14 --target-mm 0.5)
 
-# 1. The atlas (1 mm cells and the default FE size; keep-out 1 mm = the search's clamp margin).
-[ -f "$atlas" ] || run atlas "$pvdfkit" atlas "$triangle" -o "$atlas" --spacing-m "$spacing" --threads "$threads" --json --quiet
+# 1. The atlas (1 mm cells, FE size FE_SIZE_M; keep-out 1 mm = the search's clamp margin).
+[ -f "$atlas" ] || run atlas "$pvdfkit" atlas "$triangle" -o "$atlas" --spacing-m "$spacing" --fe-size-m "$fe_size" \
+  --threads "$threads" --json --quiet
 
 # 2. The search, three seeds; seed 1 verified by FEM maps.
 for seed in $seeds; do
@@ -50,6 +53,12 @@ for seed in $seeds; do
   [ "$seed" = 1 ] && verify=(--verify --threads "$threads")
   run "opt-seed$seed" "$pvdfkit" design --optimize --atlas "$atlas" "$triangle" "${eval_flags[@]}" \
     --electrodes-min 3 --electrodes-max 5 --seed "$seed" --budget "$budget" "${verify[@]}" -o "$dir" --json --quiet
+done
+
+# 2b. The same searches with a four times larger budget (no files but the JSON): is the search converged?
+for seed in $seeds; do
+  [ -f "$out/optlong-seed$seed.json" ] || run "optlong-seed$seed" "$pvdfkit" design --optimize --atlas "$atlas" "$triangle" \
+    "${eval_flags[@]}" --electrodes-min 3 --electrodes-max 5 --seed "$seed" --budget $((4 * budget)) --no-plots --json --quiet
 done
 
 # 3a. The typed layouts, maps from the atlas.
@@ -63,5 +72,6 @@ mkdir -p "$out/typed-atlas"
 [ -f "$out/typed-fem.json" ] || run typed-fem "$pvdfkit" design "$triangle" "$four" --spacing-m "$spacing" \
   "${eval_flags[@]}" --threads "$threads" --out-dir "$out/typed-fem" --json --quiet
 
-# 4. The table.
+# 4. The table and the figures.
 /usr/bin/python3 "$root/bench/design/seed001_optimize_table.py" "$out" | tee "$out/summary.md"
+/usr/bin/python3 "$root/bench/design/seed001_optimize_figure.py" "$out"

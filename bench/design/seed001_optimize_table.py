@@ -28,6 +28,8 @@ def time_of(path):
     if not os.path.exists(path):
         return None
     text = open(path).read()
+    if "Exit status" not in text:  # still running
+        return None
     user = float(re.search(r"User time \(seconds\): ([0-9.]+)", text).group(1))
     wall_s = re.search(r"Elapsed \(wall clock\) time \(h:mm:ss or m:ss\): ([0-9:.]+)", text).group(1)
     wall = 0.0
@@ -69,6 +71,23 @@ def main():
         fem_c = pct(v["coverage_fem"]) if v else "not run"
         print(f"| {n} | " + " | ".join(pct(u) for u in usable) +
               f" | {spread} | {pct(row[0].get('coverage'))} | {fem_u} | {fem_c} |")
+    long_runs = {}
+    for path in sorted(glob.glob(os.path.join(out, "optlong-seed*.json"))):
+        j = json.load(open(path))
+        long_runs[j["settings"]["seed"]] = j
+    if long_runs:
+        ls = sorted(long_runs)
+        b = long_runs[ls[0]]["settings"]["budget"]
+        print(f"\nThe same searches with budget {b} (atlas map; usable / coverage):\n")
+        print("| electrodes | " + " | ".join(f"seed {s}" for s in ls) + " | spread (max − min) |")
+        print("|---" * (len(ls) + 2) + "|")
+        for n in counts:
+            row = [long_runs[s]["counts"][counts.index(n)] for s in ls]
+            u = [r.get("usable_fraction") for r in row]
+            found = [x for x in u if x is not None]
+            spread = f"{100 * (max(found) - min(found)):.1f} points" if found else "—"
+            print(f"| {n} | " + " | ".join(f"{pct(r.get('usable_fraction'))} / {pct(r.get('coverage'))}" for r in row) +
+                  f" | {spread} |")
     ref = first.get("reference")
     if ref:
         print(f"\nThe search's reference (the SCENE's own {ref['n_electrodes']} electrodes, atlas map): usable "
