@@ -35,6 +35,20 @@ def scene_rects(scene):
             for e in scene["electrodes"]]
 
 
+def partial_verify(out, seed, runs_json):
+    """FEM verification entries of OUT/verify-seedS/best-N.json (`design --map` of a winner's FEM map,
+    written when `--verify` did not finish), in the form of optimize.json's `verify`."""
+    entries = []
+    for path in sorted(glob.glob(os.path.join(out, f"verify-seed{seed}", "best-*.json"))):
+        n = int(os.path.basename(path)[5:-5])
+        lay = json.load(open(path))["layouts"][0]
+        count = next(c for c in runs_json["counts"] if c["n_electrodes"] == n)
+        entries.append({"n_electrodes": n, "usable_fraction_fem": lay["usable_fraction"],
+                        "coverage_fem": lay["coverage"], "usable_fraction_atlas": count["usable_fraction"],
+                        "coverage_atlas": count["coverage"], "median_sigma_pos_m_fem": lay["median_sigma_pos_m"]})
+    return entries
+
+
 def main():
     out = sys.argv[1]
     root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -57,7 +71,7 @@ def main():
     # Figure 1: the front.
     fig, axes = plt.subplots(1, 2, figsize=(11, 5.6), sharey=True)
     for ax, key, title in ((axes[0], "usable_fraction", f"usable area (σ$_{{pos}}$ ≤ {target_mm:g} mm)"),
-                           (axes[1], "coverage", "coverage (σ$_{pos}$ ≤ target, not ambiguous or not)")):
+                           (axes[1], "coverage", "coverage (σ$_{pos}$ ≤ target, ambiguity not counted)")):
         for k, s in enumerate(seeds):
             j = runs[s][0]
             n = [c["n_electrodes"] for c in j["counts"] if c["found"]]
@@ -65,7 +79,7 @@ def main():
             ax.plot([x + 0.06 * (k - 1) for x in n], v, "o-", color=SEED_COLORS[k % len(SEED_COLORS)], ms=5, lw=1.2,
                     label=f"search, seed {s} (atlas map)")
         for s in seeds:
-            ver = runs[s][0].get("verify", [])
+            ver = runs[s][0].get("verify") or partial_verify(out, s, runs[s][0])
             if ver:
                 fem_key = "usable_fraction_fem" if key == "usable_fraction" else "coverage_fem"
                 ax.plot([v["n_electrodes"] for v in ver], [100 * v[fem_key] for v in ver], "D", mfc="none", mec="k",

@@ -39,6 +39,20 @@ def time_of(path):
     return wall, user, rss
 
 
+def partial_verify(out, seed, runs_json):
+    """FEM verification entries of OUT/verify-seedS/best-N.json (`design --map` of a winner's FEM map,
+    written when `--verify` did not finish), in the form of optimize.json's `verify`."""
+    entries = []
+    for path in sorted(glob.glob(os.path.join(out, f"verify-seed{seed}", "best-*.json"))):
+        n = int(os.path.basename(path)[5:-5])
+        lay = json.load(open(path))["layouts"][0]
+        count = next(c for c in runs_json["counts"] if c["n_electrodes"] == n)
+        entries.append({"n_electrodes": n, "usable_fraction_fem": lay["usable_fraction"],
+                        "coverage_fem": lay["coverage"], "usable_fraction_atlas": count["usable_fraction"],
+                        "coverage_atlas": count["coverage"], "median_sigma_pos_m_fem": lay["median_sigma_pos_m"]})
+    return entries
+
+
 def main():
     out = sys.argv[1]
     runs = {}
@@ -59,7 +73,7 @@ def main():
     print("|---" * (len(seeds) + 5) + "|")
     verified = {}
     for s in seeds:
-        for v in runs[s].get("verify", []):
+        for v in runs[s].get("verify") or partial_verify(out, s, runs[s]):
             verified[(s, v["n_electrodes"])] = v
     for n in counts:
         row = [runs[s]["counts"][counts.index(n)] for s in seeds]
