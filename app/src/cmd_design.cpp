@@ -140,7 +140,7 @@ std::vector<std::array<double, 2>> outline_mm(const pvdf::FilmOutline& o) {
 }
 
 /// One panel: `values` × `scale` (m → mm, or a fraction → %) over the map on a log colour scale
-/// labelled in those units, the target contour, ambiguous (red ×) and dead (grey) nodes, the
+/// labelled in those units, the target contour, ambiguous (red ×), dead (grey) and failed (dark grey ○) nodes, the
 /// electrodes and the film outline; the legend below the panel, off the data.
 void map_panel(pvdf::plot::Axes& ax, const Candidate& c, const std::vector<double>& values, double scale, double vmin,
                double vmax, double contour_at, const std::string& bar_label) {
@@ -154,8 +154,19 @@ void map_panel(pvdf::plot::Axes& ax, const Candidate& c, const std::vector<doubl
   g.y1 = m.y_m.back() * 1e3;
   g.values.assign(g.nx * g.ny, std::nan(""));
   pvdf::plot::Grid for_contour = g;
-  std::vector<double> ax_x, ax_y, dx, dy;
+  std::vector<double> ax_x, ax_y, dx, dy, fx, fy;
+  const std::size_t n_nodes = c.map.mask.size();
   for (std::size_t p = 0; p < g.values.size(); ++p) {
+    // A node of the film whose solve failed at some level (not converged, or never computed) has no
+    // value to draw: marked, so that the blank there is not read as the film's edge.
+    if (p < n_nodes && c.map.mask[p]) {
+      bool failed = false;
+      for (std::size_t q = p; q < c.map.status.size(); q += n_nodes) failed = failed || c.map.status[q] != std::uint8_t(pvdf::mapping::PointStatus::ok);
+      if (failed) {
+        fx.push_back(m.x_m[p % g.nx] * 1e3);
+        fy.push_back(m.y_m[p / g.nx] * 1e3);
+      }
+    }
     if (!m.evaluated[p]) continue;
     const double v = values[p] * scale;
     // Not clamped: values beyond [vmin, vmax] take the end colours and the colour bar marks that
@@ -186,6 +197,7 @@ void map_panel(pvdf::plot::Axes& ax, const Candidate& c, const std::vector<doubl
   if (scene) ax.field_domain(outline_mm(scene->membrane.outline), 1e3 * c.map.rim_margin_m);
   if (!ax_x.empty()) ax.scatter(ax_x, ax_y, "ambiguous", pvdf::plot::Color{220, 30, 30}, pvdf::plot::Marker::cross, 2.0);
   if (!dx.empty()) ax.scatter(dx, dy, "dead zone", pvdf::plot::Color{150, 150, 150}, pvdf::plot::Marker::square, 2.0);
+  if (!fx.empty()) ax.scatter(fx, fy, "no map value (solve failed)", pvdf::plot::Color{60, 60, 60}, pvdf::plot::Marker::plus, 4.0);
   // The target line last, so that the markers do not hide it.
   if (contour_at > vmin && contour_at < vmax) ax.contour(for_contour, {std::log10(contour_at)}, pvdf::plot::Color{255, 255, 255}, 2.0);
   if (scene) {
@@ -203,7 +215,7 @@ void map_panel(pvdf::plot::Axes& ax, const Candidate& c, const std::vector<doubl
     }
     ax.scatter(ex, ey, "electrodes", pvdf::plot::Color{255, 255, 255}, pvdf::plot::Marker::square, 7.0);
   }
-  ax.xlabel("x (mm)").ylabel("y (mm)").equal_aspect().legend(ax_x.empty() && dx.empty() ? "none" : "outside below");
+  ax.xlabel("x (mm)").ylabel("y (mm)").equal_aspect().legend(ax_x.empty() && dx.empty() && fx.empty() ? "none" : "outside below");
 }
 
 void write_map_figures(const std::vector<const Candidate*>& ranked, const DesignCommandOptions& o,
