@@ -140,7 +140,7 @@ std::vector<std::array<double, 2>> outline_mm(const pvdf::FilmOutline& o) {
 }
 
 /// One panel: `values` × `scale` (m → mm, or a fraction → %) over the map on a log colour scale
-/// labelled in those units, the target contour, ambiguous (red ×), dead (grey) and failed (dark grey ○) nodes, the
+/// labelled in those units, the target contour, ambiguous (red ×), dead (grey) and failed (dark grey +) nodes, the
 /// electrodes and the film outline; the legend below the panel, off the data.
 void map_panel(pvdf::plot::Axes& ax, const Candidate& c, const std::vector<double>& values, double scale, double vmin,
                double vmax, double contour_at, const std::string& bar_label) {
