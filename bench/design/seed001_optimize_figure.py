@@ -20,6 +20,9 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 from matplotlib.patches import Circle, Polygon  # noqa: E402
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from seed001_optimize_table import partial_verify  # noqa: E402  (one home: the table's reader)
+
 SEED_COLORS = ["#0072b2", "#e69f00", "#009e73", "#cc79a7", "#56b4e9"]
 
 
@@ -33,20 +36,6 @@ def rect_corners(center, size, angle_deg):
 def scene_rects(scene):
     return [rect_corners(e["center_m"], e.get("size_m", [0.002, 0.002]), e.get("angle_deg", 0.0))
             for e in scene["electrodes"]]
-
-
-def partial_verify(out, seed, runs_json):
-    """FEM verification entries of OUT/verify-seedS/best-N.json (`design --map` of a winner's FEM map,
-    written when `--verify` did not finish), in the form of optimize.json's `verify`."""
-    entries = []
-    for path in sorted(glob.glob(os.path.join(out, f"verify-seed{seed}", "best-*.json"))):
-        n = int(os.path.basename(path)[5:-5])
-        lay = json.load(open(path))["layouts"][0]
-        count = next(c for c in runs_json["counts"] if c["n_electrodes"] == n)
-        entries.append({"n_electrodes": n, "usable_fraction_fem": lay["usable_fraction"],
-                        "coverage_fem": lay["coverage"], "usable_fraction_atlas": count["usable_fraction"],
-                        "coverage_atlas": count["coverage"], "median_sigma_pos_m_fem": lay["median_sigma_pos_m"]})
-    return entries
 
 
 def main():
