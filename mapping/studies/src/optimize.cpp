@@ -83,15 +83,10 @@ nlohmann::json rect_json(const OrientedRect& r) {
 
 nlohmann::json finite_or_null(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
-/// The option as `naming` spells it, or by its field name when none is given.
-std::string named(const OptionNaming& naming, const std::string& key, const std::string& value) {
-  return named_option(naming, key, value);
-}
-
 }  // namespace
 
 void check_optimize_options(const OptimizeOptions& o) {
-  const auto name = [&o](const std::string& key, const std::string& value) { return named(o.naming, key, value); };
+  const auto name = [&o](const std::string& key, const std::string& value) { return named_option(o.naming, key, value); };
   const auto integer = [](long long v) { return std::to_string(v); };
   if (o.electrodes_min < 3) {
     throw InputError(name("electrodes_min", integer(o.electrodes_min)) +
@@ -127,7 +122,7 @@ void check_optimize_options(const OptimizeOptions& o) {
 }
 
 void check_optimize_maps(const OptimizeMaps& m, const OptionNaming& naming) {
-  const auto name = [&naming](const std::string& key, const std::string& value) { return named(naming, key, value); };
+  const auto name = [&naming](const std::string& key, const std::string& value) { return named_option(naming, key, value); };
   if (m.atlas_path.empty() && !m.synthetic) {
     throw InputError("no map source: give " + name("atlas", "FILE") +
                      " (a charge-density atlas of the film, `pvdfkit atlas SCENE -o FILE`) or " + name("synthetic", "") +
@@ -226,8 +221,8 @@ OptimizeSummary optimize_layouts(const nlohmann::json& scene_json, const std::st
   space.square = o.square;
   space.angle_hi = o.rotate ? (o.square ? 0.5 * pi : pi) : 0.0;
   if (!(space.x_hi > space.x_lo && space.y_hi > space.y_lo)) {
-    throw InputError(named(o.naming, "clamp_margin_m", pvdf::format_g(o.clamp_margin_m)) + " with " +
-                     named(o.naming, "size_min_m", pvdf::format_g(o.size_min_m)) + ": no room on the film of " +
+    throw InputError(named_option(o.naming, "clamp_margin_m", pvdf::format_g(o.clamp_margin_m)) + " with " +
+                     named_option(o.naming, "size_min_m", pvdf::format_g(o.size_min_m)) + ": no room on the film of " +
                      source + " (bounding box " + pvdf::format_g(box[1] - box[0]) + " x " + pvdf::format_g(box[3] - box[2]) +
                      " m); give a smaller margin or size");
   }
