@@ -8,6 +8,21 @@
 
 namespace pvdf {
 
+namespace {
+
+/// The bin nearest `bin` among [0, nb) for which `has(bin)` holds (ties: the larger bin, i.e. farther
+/// from the clamp); nb when none does.
+template <class Has>
+std::size_t nearest_bin(std::size_t bin, std::size_t nb, Has has) {
+  for (std::size_t d = 0; d < nb; ++d) {
+    if (bin + d < nb && has(bin + d)) return bin + d;
+    if (d <= bin && bin - d < nb && has(bin - d)) return bin - d;
+  }
+  return nb;
+}
+
+}  // namespace
+
 ItemCostEta::ItemCostEta(std::size_t n_kinds, double bin_width, int threads)
     : n_kinds_(std::max<std::size_t>(1, n_kinds)),
       bin_width_(bin_width > 0 ? bin_width : 1.0),
@@ -196,11 +211,7 @@ void ItemCostEta::add_predicted_work(std::size_t id, double scale, std::vector<d
     return;
   }
   // The nearest bin with items done (ties: the larger feature, i.e. farther from the clamp).
-  std::size_t best = nb;
-  for (std::size_t d = 0; d < nb && best == nb; ++d) {
-    if (b + d < nb && bin_items_[b + d] > 0) best = b + d;
-    else if (d <= b && bin_items_[b - d] > 0) best = b - d;
-  }
+  const std::size_t best = nearest_bin(b, nb, [this](std::size_t k) { return bin_items_[k] > 0; });
   if (best == nb) return;
   // The bin's work per unit of its items done (their units as set when done), times this item's units.
   const double per = bin_units_[best] > 0 ? units / bin_units_[best] : 1.0 / double(bin_items_[best]);
@@ -247,11 +258,8 @@ double ItemCostEta::seconds_left(double t_s) const {
     const double cpu = predicted_cpu_s(id);
     const std::size_t nb = floor_per_unit.size(), bin = bin_of(feature_[id]);
     if (nb == 0 || bin >= nb) return cpu;
-    for (std::size_t d = 0; d < nb; ++d) {  // the nearest bin in flight (ties: farther from the clamp)
-      if (bin + d < nb && floor_per_unit[bin + d] >= 0) return std::max(cpu, floor_per_unit[bin + d] * units_[id]);
-      if (d <= bin && floor_per_unit[bin - d] >= 0) return std::max(cpu, floor_per_unit[bin - d] * units_[id]);
-    }
-    return cpu;
+    const std::size_t k = nearest_bin(bin, nb, [&](std::size_t j) { return floor_per_unit[j] >= 0; });
+    return k < nb ? std::max(cpu, floor_per_unit[k] * units_[id]) : cpu;
   };
   double cpu_left = 0;
   for (std::size_t id = 0; id < feature_.size(); ++id)
