@@ -27,7 +27,9 @@
 #include <csignal>
 #include <cstdio>
 #include <iostream>
+#include <functional>
 #include <memory>
+#include <mutex>
 #include <optional>
 
 namespace {
@@ -316,18 +318,31 @@ int run_map(const MapCommandOptions& o) {
     options.description += " --mesh " + o.mesh_path;
   }
 
-  std::unique_ptr<pvdf::Progress> bar;
+  std::mutex live_mutex;            // guards live, held while it is called
+  std::function<double()> live;     // the generator's time left as of now (MapOptions::time_left_now)
+  std::unique_ptr<pvdf::Progress> bar;  // destroyed first: its heartbeat stops before live goes
   if (rank == 0 && !o.quiet) {
+    // From the start: the setup (mesh, check solves) says "starting" with its elapsed time, and
+    // the first line after it has the positions to do and the setup's ETA (generate_map reports
+    // 0 of the total before the first row).
+    bar = std::make_unique<pvdf::Progress>("map", 0);
     options.progress = [&bar](std::size_t done, std::size_t total) {
-      if (!bar) bar = std::make_unique<pvdf::Progress>("map", total);
       bar->set_total(total);  // adaptive placement learns each level's solves when it gets there
       bar->update(done);
     };
     // The generator's own estimate of its time left (each position's cost predicted from its
     // distance to the clamp, pvdf::ItemCostEta) replaces the bar's items-over-rate ETA, which
     // is wrong early on: the positions near the clamp cost several times those in the middle.
-    options.time_left = [&bar](double seconds_left) {
-      if (bar) bar->set_eta_s(seconds_left);
+    options.time_left = [&bar](double seconds_left) { bar->set_eta_s(seconds_left); };
+    // ... and is asked again before each line, so that rows in flight count as they run. The
+    // heartbeat calls it under live_mutex, which the generator's withdrawal (at its end) waits for.
+    bar->set_refresh([&] {
+      std::lock_guard<std::mutex> lock(live_mutex);
+      if (live) bar->set_eta_s(live());
+    });
+    options.time_left_now = [&](std::function<double()> seconds_left_now) {
+      std::lock_guard<std::mutex> lock(live_mutex);
+      live = std::move(seconds_left_now);
     };
   }
   // One writer per output: a second `map` to the same file (or checkpoint) refuses at once.

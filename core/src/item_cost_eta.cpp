@@ -75,6 +75,37 @@ std::size_t ItemCostEta::bin_of(double feature) const {
   return std::size_t(std::min(1e6, std::floor(feature / bin_width_)));
 }
 
+bool ItemCostEta::mark_done(std::size_t id, const std::vector<double>& work, std::vector<double>& sum, std::vector<double>& own) {
+  own.assign(n_kinds_, 0.0);
+  if (id >= feature_.size() || done_[id]) return false;
+  done_[id] = 1;
+  const std::size_t b = bin_of(feature_[id]);
+  if (b >= bin_items_.size()) {
+    bin_items_.resize(b + 1, 0);
+    bin_work_.resize(b + 1, std::vector<double>(n_kinds_, 0.0));
+    bin_units_.resize(b + 1, 0.0);
+  }
+  ++bin_items_[b];
+  bin_units_[b] += units_[id];
+  for (std::size_t c = 0; c < n_kinds_ && c < work.size(); ++c) {
+    const double w = std::isfinite(work[c]) ? std::max(0.0, work[c]) : 0.0;
+    bin_work_[b][c] += w;
+    sum[c] += w;
+    own[c] = w;
+  }
+  return true;
+}
+
+void ItemCostEta::item_done(std::size_t id, const std::vector<double>& work, double item_cpu_s, double end_s) {
+  std::vector<double> sum(n_kinds_, 0.0), own;
+  if (!mark_done(id, work, sum, own)) return;
+  row_work_.push_back(own);
+  row_cpu_s_.push_back(std::isfinite(item_cpu_s) ? std::max(0.0, item_cpu_s) : 0.0);
+  for (auto& b : in_flight_)
+    if (std::find(b.items.begin(), b.items.end(), id) != b.items.end()) b.last_item_s = std::max(b.last_item_s, end_s);
+  fit();
+}
+
 void ItemCostEta::block_done(const std::vector<std::size_t>& items, const std::vector<std::vector<double>>& work,
                              double cpu_s, double start_s, double end_s, const std::vector<double>& item_cpu_s) {
   // The block is no longer in flight (matched by any of its items).
@@ -84,27 +115,11 @@ void ItemCostEta::block_done(const std::vector<std::size_t>& items, const std::v
     if (mine) in_flight_.erase(in_flight_.begin() + std::ptrdiff_t(f));
     else ++f;
   }
-  std::vector<double> sum(n_kinds_, 0.0);
+  // Its items not already done one by one (item_done).
+  std::vector<double> sum(n_kinds_, 0.0), own;
   const bool by_item = !items.empty() && item_cpu_s.size() == items.size();
   for (std::size_t n = 0; n < items.size() && n < work.size(); ++n) {
-    const std::size_t id = items[n];
-    if (id >= feature_.size() || done_[id]) continue;
-    done_[id] = 1;
-    std::vector<double> own(n_kinds_, 0.0);
-    const std::size_t b = bin_of(feature_[id]);
-    if (b >= bin_items_.size()) {
-      bin_items_.resize(b + 1, 0);
-      bin_work_.resize(b + 1, std::vector<double>(n_kinds_, 0.0));
-      bin_units_.resize(b + 1, 0.0);
-    }
-    ++bin_items_[b];
-    bin_units_[b] += units_[id];
-    for (std::size_t c = 0; c < n_kinds_ && c < work[n].size(); ++c) {
-      const double w = std::isfinite(work[n][c]) ? std::max(0.0, work[n][c]) : 0.0;
-      bin_work_[b][c] += w;
-      sum[c] += w;
-      own[c] = w;
-    }
+    if (!mark_done(items[n], work[n], sum, own)) continue;
     if (by_item) {
       row_work_.push_back(own);
       row_cpu_s_.push_back(std::isfinite(item_cpu_s[n]) ? std::max(0.0, item_cpu_s[n]) : 0.0);
@@ -240,14 +255,18 @@ double ItemCostEta::seconds_left(double t_s) const {
   // its items costs per unit at least that over the block's units (the largest such bound of its
   // bin, else of the nearest bin in flight; an item farther from the clamp than every item in
   // flight keeps the prior, as add_predicted_work gives it kind 0 alone).
+  // (An item of the block already done, item_done, is measured: the bound then counts the run since
+  // the block's latest item over its items not yet done.)
   std::vector<double> floor_per_unit;
   if (blocks_done_ == 0) {
     for (const auto& b : in_flight_) {
       double units = 0;
-      for (std::size_t id : b.items) units += units_[id];
+      for (std::size_t id : b.items)
+        if (!done_[id]) units += units_[id];
       if (!(units > 0)) continue;
-      const double per_unit = std::max(0.0, t_s - b.start_s) * per_thread / units;
+      const double per_unit = std::max(0.0, t_s - std::max(b.start_s, b.last_item_s)) * per_thread / units;
       for (std::size_t id : b.items) {
+        if (done_[id]) continue;
         const std::size_t bin = bin_of(feature_[id]);
         if (bin >= floor_per_unit.size()) floor_per_unit.resize(bin + 1, -1.0);
         floor_per_unit[bin] = std::max(floor_per_unit[bin], per_unit);
@@ -270,13 +289,13 @@ double ItemCostEta::seconds_left(double t_s) const {
     return std::max(0.0, left);
   }
   // Each block in flight holds its thread for its predicted time less its run so far, and at least
-  // overrun_share × its run so far.
+  // overrun_share × its run so far: of its items not yet done, run since its latest item done.
   std::vector<double> free_s;  // when each thread is free, from now
   for (const auto& b : in_flight_) {
     double cpu = 0;
     for (std::size_t id : b.items)
       if (!done_[id]) cpu += cost_s(id);
-    const double run_s = std::max(0.0, t_s - b.start_s);
+    const double run_s = std::max(0.0, t_s - std::max(b.start_s, b.last_item_s));
     free_s.push_back(std::max(cpu / per_thread - run_s, overrun_share * run_s));
   }
   free_s.resize(std::max<std::size_t>(free_s.size(), std::size_t(threads_)), 0.0);
@@ -307,7 +326,7 @@ double ItemCostEta::seconds_left(double t_s) const {
 
 double ItemCostEta::cpu_s_per_item(const std::vector<std::size_t>& kinds) const {
   if (feature_.empty()) return std::numeric_limits<double>::quiet_NaN();
-  const bool fitted = blocks_done_ > 0 && cost_.size() == n_kinds_;
+  const bool fitted = cost_.size() == n_kinds_;  // a block or an item done (fit)
   if (!fitted && !(prior_weight_[0] > 0)) return std::numeric_limits<double>::quiet_NaN();
   const std::vector<double>& k = fitted ? cost_ : prior_cost_;
   // The work of the items done (the bins' sums) and the predicted work of the others.

@@ -606,3 +606,29 @@ TEST_CASE("item-cost ETA: blocks in flight past the prior make their bins dear b
   // the blocks' distance were raised, to 8 s / 4 items = 2 CPU-s each.
   CHECK(late == Approx((2 * 4.0 + 8 * 2.0 + 40 * 0.5) / 2).epsilon(1e-9));
 }
+
+TEST_CASE("item-cost ETA: items done inside a block in flight give their cost before the block ends", "[core][progress]") {
+  // Two rows of 4 positions next to the clamp (a sweep and a clamp-layer solve each: 3 CPU-s), 8
+  // more such positions and 40 farther in (a sweep solve: 0.5 CPU-s); a prior of 0.5 CPU-s a solve.
+  std::vector<double> features;
+  for (int n = 0; n < 16; ++n) features.push_back(0.5);
+  for (int n = 0; n < 40; ++n) features.push_back(3.0 + 0.1 * n);
+  const auto run = [&](bool items) {
+    pvdf::ItemCostEta eta(4, 1.0, 2);
+    REQUIRE(eta.plan(features) == 0);
+    eta.set_prior(0, 0.5, 3, 1.0);
+    eta.block_started({0, 1, 2, 3}, 0.0);
+    eta.block_started({4, 5, 6, 7}, 0.0);
+    if (items) {
+      for (std::size_t id : {0, 4}) eta.item_done(id, {1, 0, 0, 1}, 3.0, 3.0);
+      for (std::size_t id : {1, 5}) eta.item_done(id, {1, 0, 0, 1}, 3.0, 6.0);
+    }
+    return eta.seconds_left(6.5);
+  };
+  // Truth at 6.5 s: each row has 2 positions left (6 CPU-s), 0.5 s of which ran; then 8 × 3 + 40 × 0.5.
+  const double truth = 5.5 + (8 * 3.0 + 40 * 0.5) / 2;
+  const double by_items = run(true), by_blocks = run(false);
+  INFO("time left 6.5 s in: by items " << by_items << " s, by blocks " << by_blocks << " s, truth " << truth << " s");
+  CHECK(by_items / truth == Approx(1.0).margin(0.05));
+  CHECK(by_blocks / truth < 0.8);  // the rows' run alone cannot say what a position costs
+}

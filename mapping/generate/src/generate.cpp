@@ -47,12 +47,12 @@ ChargeMap Generator::run(MapReport& report) {
     time_left_.set_prior(std::size_t(fem::SweepModel::cheap), setup_cpu_s / o_.n_setup_checks, double(o_.n_setup_checks),
                          setup_cpu_s / setup_wall_s);
     const double now_s = eta_clock_s();
-    if (o_.common_seconds_per_position) {
-      o_.common_seconds_per_position(time_left_.cpu_s_per_item({std::size_t(fem::SweepModel::cheap), std::size_t(fem::SweepModel::clamp_layer)}) /
-                                     time_left_.cpu_per_wall_s());
-    }
+    report_common_cost();
     if (o_.time_left) o_.time_left(time_left_.seconds_left(now_s));
   }
+  // The positions to do, known now: the caller's progress shows them (and the ETA above) before
+  // the first row ends, which near the clamp can take a minute.
+  if (o_.progress) o_.progress(std::min(progress_total_, progress_done_ * std::size_t(size_)), progress_total_);
   // The time left as of any moment, for the caller's heartbeat; withdrawn however run() ends.
   struct Withdraw {
     const std::function<void(std::function<double()>)>& f;

@@ -160,6 +160,8 @@ class Generator {
   void solve_block(fem::ProbeSweep& sweep, const Block& block, std::vector<double>& records, bool& abandoned);
   /// `cpu_s`, `start_s`: the block's thread CPU seconds and its start on the time-left clock.
   void commit(const std::vector<double>& records, std::size_t n_positions, double cpu_s, double start_s);
+  /// MapOptions::common_seconds_per_position from the time left's fit (the caller holds mutex_).
+  void report_common_cost();
   double eta_clock_s() const;  ///< seconds on the time-left clock (steady, since construction)
   void plan_time_left();       ///< adds the counted positions not yet planned to time_left_
   void improve_by_direct_solve(double x_m, double y_m, fem::ProbeSolution& s);  // direct_solve.cpp

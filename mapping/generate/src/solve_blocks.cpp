@@ -187,6 +187,13 @@ void Generator::solve_block(fem::ProbeSweep& sweep, const Block& block, std::vec
     if (p < time_left_work_.size()) {  // this thread's own position
       time_left_work_[p] = work;
       time_left_cpu_s_[p] = thread_cpu_s() - position_cpu0_s;
+      // The time left learns this position's cost now, not at the row's end (a first row next to
+      // the clamp runs a minute: its positions say what the clamp's work costs; ItemCostEta::item_done).
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (p < time_left_id_.size() && time_left_id_[p] != std::size_t(-1)) {
+        time_left_.item_done(time_left_id_[p], std::vector<double>(work.begin(), work.end()), time_left_cpu_s_[p], eta_clock_s());
+        report_common_cost();
+      }
     }
     records.insert(records.end(), rec.begin(), rec.end());
     const std::size_t solved = positions_solved_.fetch_add(1) + 1;
@@ -200,6 +207,14 @@ void Generator::solve_block(fem::ProbeSweep& sweep, const Block& block, std::vec
 
 double Generator::eta_clock_s() const {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - clock0_).count();
+}
+
+// The cost per position of the solves every layout of this film needs (sweep and clamp-layer
+// solves), for the caller's prediction of other maps (MapOptions::common_seconds_per_position).
+void Generator::report_common_cost() {
+  if (!o_.common_seconds_per_position) return;
+  const double cpu_s = time_left_.cpu_s_per_item({std::size_t(fem::SweepModel::cheap), std::size_t(fem::SweepModel::clamp_layer)});
+  o_.common_seconds_per_position(cpu_s / time_left_.cpu_per_wall_s());
 }
 
 void Generator::commit(const std::vector<double>& records, std::size_t n_positions, double cpu_s, double start_s) {
@@ -228,10 +243,7 @@ void Generator::commit(const std::vector<double>& records, std::size_t n_positio
   progress_done_ += n_positions;
   // Under MPI the total is global; this rank's count × ranks estimates the global count.
   if (o_.progress) o_.progress(std::min(progress_total_, progress_done_ * std::size_t(size_)), progress_total_);
-  if (o_.common_seconds_per_position) {  // before time_left, whose report refreshes the caller's ETA
-    const double cpu_s = time_left_.cpu_s_per_item({std::size_t(fem::SweepModel::cheap), std::size_t(fem::SweepModel::clamp_layer)});
-    o_.common_seconds_per_position(cpu_s / time_left_.cpu_per_wall_s());
-  }
+  report_common_cost();  // before time_left, whose report refreshes the caller's ETA
   const double left_s = time_left_.seconds_left(now_s);
   if (o_.time_left) o_.time_left(left_s);
   if (eta_trace()) {

@@ -57,6 +57,13 @@ class ItemCostEta {
   /// when known, each item's own CPU seconds (the cost fit's rows; empty: the block is one row).
   void block_done(const std::vector<std::size_t>& items, const std::vector<std::vector<double>>& work,
                   double cpu_s, double start_s, double end_s, const std::vector<double>& item_cpu_s = {});
+  /// Item `id` of a block in flight is done at wall time `end_s`, before its block: the work it
+  /// needed ([kind], counts) and its own CPU seconds (a row of the cost fit). The time left then
+  /// knows its cost at once (a map's first rows, next to the clamp, take a minute each: their
+  /// positions say which kinds of work the clamp needs long before the row ends), and the block
+  /// in flight holds its thread for its items not yet done, counted from `end_s`. block_done later
+  /// counts the block's throughput and its other items only.
+  void item_done(std::size_t id, const std::vector<double>& work, double item_cpu_s, double end_s);
   /// The blocks the items will be solved in, in the order the threads take them (each thread the
   /// next when it is free): the time left then follows that schedule (a dear block taken last runs
   /// alone). Items in no block queued are spread over the threads.
@@ -90,6 +97,8 @@ class ItemCostEta {
 
  private:
   void fit();
+  /// Marks item `id` done with its `work` (into its bin and `sum`); false if it was done already.
+  bool mark_done(std::size_t id, const std::vector<double>& work, std::vector<double>& sum, std::vector<double>& own);
   std::size_t bin_of(double feature) const;
   /// Predicted work per kind of item `id` (as if not done), added × `scale` to `out`.
   void add_predicted_work(std::size_t id, double scale, std::vector<double>& out) const;
@@ -115,6 +124,7 @@ class ItemCostEta {
   struct InFlight {
     std::vector<std::size_t> items;
     double start_s = 0;
+    double last_item_s = -1;  ///< when its latest item was done (item_done; < 0: none)
   };
   std::vector<InFlight> in_flight_;
   std::vector<std::vector<std::size_t>> queued_;  ///< queue_blocks', in order
