@@ -104,6 +104,17 @@ double FilmSolver::relax_membrane_point(const Kinematics& k, Model model, double
   // film: it differs from the plain one by a constant where nothing wrinkles, and it stays small
   // when a slack film carries a small load (the line search compares energies to round-off).
   S = L.S;
+  if (convexified_tangent_ && want_tangent) {
+    // The convexified tangent (newton.cpp): the force's compressive principal part dropped, so the
+    // geometric stiffness S:(∇δu)ᵀ∇δu is positive semidefinite. Only ε·C·e can compress (the relaxed
+    // force is tension: taut, or σ n⊗n with σ > 0). S₊ = λ₁ n₁⊗n₁ = λ₁ (S − λ₂I)/(λ₁ − λ₂).
+    const double mean = 0.5 * (S[0] + S[1]), rad = std::hypot(0.5 * (S[0] - S[1]), S[2]);
+    const double l1 = mean + rad, l2 = mean - rad;
+    if (l2 < 0) {
+      const double f = l1 > 0 ? l1 / (l1 - l2) : 0.0;
+      S = {f * (S[0] - l2), f * (S[1] - l2), f * S[2]};
+    }
+  }
   if (want_tangent) {
     const double eta = L.state == MembraneState::taut ? 0.0 : tension_field_regularization();
     for (int i = 0; i < 3; ++i)
