@@ -6,7 +6,8 @@
 // path (centre cold, then the press warm from it), parameters from the environment:
 //   PVDF_SLACK_N0 (N/m, default −2800), PVDF_SLACK_X, PVDF_SLACK_Y (m, default 4.66e-3, −5e-3),
 //   PVDF_SLACK_EPS (default 1e-3), PVDF_SLACK_MODE (direct | sweep | both, default both),
-//   PVDF_SLACK_VERBOSE (Newton progress).
+//   PVDF_SLACK_VERBOSE (Newton progress), PVDF_SLACK_DF (sweep: then the press at 1 + DF newton warm
+//   from 1 N, the fit's force difference), PVDF_SLACK_SWEEP_COLD (sweep: then the press cold).
 #include "pvdf/core/scene.hpp"
 #include "pvdf/fem/probe_sweep.hpp"
 #include "pvdf/fem/solver.hpp"
@@ -134,6 +135,13 @@ TEST_CASE("slack press: reproduction driver (environment parameters)", "[.slack-
                   pvdf::fem::status_name(w.status).c_str(), w.message.c_str(), w.newton_iterations, w.wall_s,
                   w.deflection_at_load_m * 1e3);
       print_charges(w.charge_C);
+      if (std::getenv("PVDF_SLACK_DF") && pvdf::fem::usable(w.status)) {  // the fit's force difference
+        const double f = 1 + env("PVDF_SLACK_DF", 1e-4);
+        const auto d = sweep.solve(x, y, f, &press);
+        std::printf("SLACK sweep press at %.6g N warm from 1 N: %s (%s), %d Newton, %.1f s, w = %.6f mm\n", f,
+                    pvdf::fem::status_name(d.status).c_str(), d.message.c_str(), d.newton_iterations, d.wall_s,
+                    d.deflection_at_load_m * 1e3);
+      }
     }
     if (std::getenv("PVDF_SLACK_SWEEP_COLD")) {
       const auto k = sweep.solve(x, y, 1.0);
