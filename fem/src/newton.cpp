@@ -136,7 +136,7 @@ NewtonOutcome FilmSolver::newton(Model model, double artificial_tension, Vector<
   // law's tangent is, ε·C is, the bending is), whose step is a descent direction of Π: the line
   // search then leads to a minimum of Π (a stable equilibrium) instead of stalling at a saddle. Where
   // the exact tangent is positive definite it is used as is (quadratic convergence at the end).
-  // Returns true when it factorized (the caller then solves with the held factorization).
+  // It leaves the factorization held; the caller solves with it (no residual check of that solve).
   const auto convexify_if_indefinite = [&]() {
     const auto t0 = Clock::now();
     factorization_.forget_history();  // the Cholesky first every time: its failure is the test
