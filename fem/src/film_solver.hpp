@@ -386,6 +386,9 @@ class FilmSolver {
   std::array<double, 3> initial_stress_{0, 0, 0}, compliance_initial_stress_{0, 0, 0}, unit_compliance_{0, 0, 0};
   double tangent_regularization_ = tension_field_tangent_regularization;  // 0 in check_jacobian
   double residual_stiffness_ = 0;
+  // Set while newton() assembles the convexified tangent of the residual-stiffness law (newton.cpp):
+  // the geometric stiffness then takes only the tensile part of each point's membrane force.
+  bool convexified_tangent_ = false;
   double load_factor_ = 1;  // the slack continuation's force factor on load_
   mutable double regularization_force_ = -1, regularization_eta_ = 0;
   Stiffness3 membrane_C_;  // h·Q̄

@@ -120,6 +120,44 @@ NewtonOutcome FilmSolver::newton(Model model, double artificial_tension, Vector<
     if (!std::isfinite(first_full_decrement) && stepping_stone) first_full_decrement = d;
     best_decrement.push_back(std::min(d, best_decrement.empty() ? d : best_decrement.back()));
   };
+  // Residual-stiffness slack films: the tangent of a stationary point that is not a minimum is
+  // indefinite (see convexify_if_indefinite below).
+  const bool convexify = tension_field_ && residual_stiffness_ > 0 && !options_.iterative_solver;
+  Vector<double> r_scratch;
+  bool step_convexified = false;  // this step's tangent was convexified (verbose output)
+  // With the residual stiffness ε the wrinkled and slack regions keep the compressive force ε·C·e
+  // (about ε·N0), a compressed plate there: along the pretension steps and the probe walk the
+  // equilibrium followed can turn unstable (a fold or a bifurcation of the ε-model), where the exact
+  // tangent is indefinite and its Newton step neither descends Π nor reaches an equilibrium
+  // (measured on the seed-001 sweep mesh at N0 = −2800 N/m: Newton stalled with r·du > 0 at
+  // artificial tension 912.9 N/m, docs/fem.md §3.3). So each new tangent is first tried by the
+  // Cholesky; where it meets a non-positive pivot, the tangent is assembled again with only the
+  // tensile part of each point's force in the geometric stiffness (positive semidefinite: the relaxed
+  // law's tangent is, ε·C is, the bending is), whose step is a descent direction of Π: the line
+  // search then leads to a minimum of Π (a stable equilibrium) instead of stalling at a saddle. Where
+  // the exact tangent is positive definite it is used as is (quadratic convergence at the end).
+  // It leaves the factorization held; the caller solves with it (no residual check of that solve).
+  const auto convexify_if_indefinite = [&]() {
+    const auto t0 = Clock::now();
+    factorization_.forget_history();  // the Cholesky first every time: its failure is the test
+    const int before = factorization_.n_ldlt_fallbacks();
+    factorization_.factorize(tangent_);
+    if (factorization_.n_ldlt_fallbacks() > before) {
+      summary_.linear_solve_s += seconds_since(t0);
+      const double energy = last_energy_;
+      convexified_tangent_ = true;
+      assemble(u, model, artificial_tension, true, r_scratch);
+      convexified_tangent_ = false;
+      last_energy_ = energy;
+      const auto t1 = Clock::now();
+      factorization_.forget_history();
+      factorization_.factorize(tangent_);
+      summary_.linear_solve_s += seconds_since(t1);
+      step_convexified = true;
+    } else {
+      summary_.linear_solve_s += seconds_since(t0);
+    }
+  };
   for (int it = 0; it <= options_.max_newton_iterations; ++it) {
     if (!have_r || refactorize) assemble(u, model, artificial_tension, refactorize, r);
     have_r = false;
@@ -131,8 +169,10 @@ NewtonOutcome FilmSolver::newton(Model model, double artificial_tension, Vector<
       return out;
     }
     if (options_.verbose) {
-      std::printf("    newton %2d  |r| = %.3e  (tol %.3e)  N_art = %.3e N/m  dofs %u  t %.2f s\n", it, r_norm, r_tol,
-                  artificial_tension, dof_handler_.n_dofs(), summary_.assembly_s + summary_.linear_solve_s);
+      std::printf("    newton %2d  |r| = %.3e  (tol %.3e)  N_art = %.3e N/m  dofs %u  t %.2f s  Pi %.6e J  ldlt %d/%d\n",
+                  it, r_norm, r_tol, artificial_tension, dof_handler_.n_dofs(),
+                  summary_.assembly_s + summary_.linear_solve_s, last_energy_, factorization_.n_ldlt_fallbacks(),
+                  factorization_.n_factorizations());
       std::fflush(stdout);
     }
     const double u_norm = u.l2_norm();
@@ -179,7 +219,13 @@ NewtonOutcome FilmSolver::newton(Model model, double artificial_tension, Vector<
     rhs = r;
     rhs *= -1.0;
     std::string msg;
-    if (!solve_linear(rhs, du, msg, refactorize)) {
+    bool factorize = refactorize;
+    step_convexified = false;
+    if (convexify && refactorize) {
+      convexify_if_indefinite();
+      factorize = !factorization_.usable();
+    }
+    if (!solve_linear(rhs, du, msg, factorize)) {
       out.status = Status::linear_solver_failed;
       out.message = msg;
       return out;
@@ -222,7 +268,8 @@ NewtonOutcome FilmSolver::newton(Model model, double artificial_tension, Vector<
       }
     }
     if (options_.verbose) {
-      std::printf("      step alpha = %.3g, |du| = %.3e, slope r.du = %.3e\n", best_alpha, du.l2_norm(), s0);
+      std::printf("      step alpha = %.3g, |du| = %.3e, slope r.du = %.3e%s\n", best_alpha, du.l2_norm(), s0,
+                  step_convexified ? " (convexified tangent)" : "");
     }
   }
   out.status = Status::no_convergence;
