@@ -197,7 +197,7 @@ void TangentFactorization::set_pattern(const dealii::SparsityPattern& pattern) {
   usable_ = false;
 }
 
-bool TangentFactorization::factorize(const dealii::SparseMatrix<double>& matrix) {
+bool TangentFactorization::factorize(const dealii::SparseMatrix<double>& matrix, Fallback fallback) {
   openmp_serial_on_this_thread();
   const auto blas = blas_turn();
   Impl& m = *impl_;
@@ -212,7 +212,7 @@ bool TangentFactorization::factorize(const dealii::SparseMatrix<double>& matrix)
   usable_ = false;
   // A tangent that was indefinite tends to stay so for a few Newton steps (a slack or compressed
   // film): after a failed Cholesky the next four factorizations go straight to the LDLᵀ.
-  if (method_ == Method::supernodal_cholesky && m.skip_cholesky > 0) --m.skip_cholesky;
+  if (method_ == Method::supernodal_cholesky && m.skip_cholesky > 0 && fallback == Fallback::ldlt) --m.skip_cholesky;
   else if (method_ == Method::supernodal_cholesky) {
     if (!m.cholesky_analyzed) {
       std::lock_guard<std::mutex> one_at_a_time(cholmod_analysis_mutex());
@@ -228,6 +228,7 @@ bool TangentFactorization::factorize(const dealii::SparseMatrix<double>& matrix)
     }
     // Its partial factor is of no use while the LDLᵀ serves: only the analysis is kept.
     m.cholesky.release_numeric();
+    if (fallback == Fallback::none) return false;
     m.skip_cholesky = 4;
   }
   if (method_ == Method::supernodal_cholesky) ++n_ldlt_fallbacks_;

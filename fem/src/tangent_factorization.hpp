@@ -39,10 +39,15 @@ class TangentFactorization {
 
   /// A new pattern (a new mesh or DOF numbering): copies it and forgets the symbolic analysis.
   void set_pattern(const dealii::SparsityPattern& pattern);
+  /// What a failed Cholesky (an indefinite tangent) is followed by: the LDLᵀ, or nothing (the
+  /// caller has a positive definite tangent to try instead: newton.cpp's convexified one).
+  enum class Fallback { ldlt, none };
   /// Numeric factorization of `matrix` (same pattern as set_pattern's); the symbolic analysis is
   /// done on the first call after set_pattern. Returns false when neither the Cholesky nor the
-  /// LDLᵀ produced a factorization (the caller then uses a pivoting LU).
-  bool factorize(const dealii::SparseMatrix<double>& matrix);
+  /// LDLᵀ produced a factorization (the caller then uses a pivoting LU); with Fallback::none, false
+  /// when the Cholesky failed (the tangent is not positive definite), the LDLᵀ not tried and the
+  /// next factorization again tried by the Cholesky first.
+  bool factorize(const dealii::SparseMatrix<double>& matrix, Fallback fallback = Fallback::ldlt);
   /// x = A⁻¹ b with the last successful factorization (b and x of size n, may not alias).
   void solve(const double* b, double* x, std::size_t n) const;
   /// A factorization of the current pattern is held (factorize() succeeded since set_pattern).
