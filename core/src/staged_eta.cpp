@@ -35,6 +35,10 @@ void StagedEta::items_done(std::size_t index, std::size_t done, std::size_t tota
   Stage& s = stages_[index];
   if (!s.started) start_stage(index, t_s);
   s.planned = total;
+  current_ = index;
+  // A report of no items (a map's total, shown as soon as its setup ends) measures nothing: the
+  // stage counts as reported from its first items on (its rate and setup are measured from those).
+  if (!s.reported && done == 0) return;
   if (!s.reported) {
     s.reported = true;
     s.first_done = done;

@@ -632,3 +632,22 @@ TEST_CASE("item-cost ETA: items done inside a block in flight give their cost be
   CHECK(by_items / truth == Approx(1.0).margin(0.05));
   CHECK(by_blocks / truth < 0.8);  // the rows' run alone cannot say what a position costs
 }
+
+TEST_CASE("staged ETA: a report of no items at a setup's end does not turn the stage's prior into a measurement",
+          "[core][progress]") {
+  // Stage 0 measured 1 s an item; stage 1's own estimate right after its setup is a prior (60 s for
+  // 10 items). Its total is reported (0 of 10) as soon as its setup ends: the seconds per item stage 0
+  // measured still serve until stage 1's first items.
+  pvdf::StagedEta eta({10, 10});
+  eta.start_stage(0, 0.0);
+  eta.items_done(0, 1, 10, 1.0);
+  eta.items_done(0, 10, 10, 10.0);
+  eta.stage_item_seconds(0, 1.0);
+  eta.start_stage(1, 10.0);
+  eta.items_done(1, 0, 10, 11.0);
+  eta.stage_seconds_left(1, 60.0, 11.0);
+  CHECK(eta.seconds_left(11.0) == Approx(10.0));
+  eta.items_done(1, 2, 10, 13.0);  // its first items: its own estimate now stands
+  eta.stage_seconds_left(1, 8.0, 13.0);
+  CHECK(eta.seconds_left(13.0) == Approx(8.0));
+}

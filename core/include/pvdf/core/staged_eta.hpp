@@ -32,7 +32,9 @@ class StagedEta {
   explicit StagedEta(std::vector<std::size_t> planned_items);
   /// Stage `index` starts its setup at `t_s`.
   void start_stage(std::size_t index, double t_s);
-  /// Stage `index` has `done` of `total` items at `t_s` (`total` replaces the planned count).
+  /// Stage `index` has `done` of `total` items at `t_s` (`total` replaces the planned count). A
+  /// report of 0 items before any other only sets the total: the stage is measured from its first
+  /// items.
   void items_done(std::size_t index, std::size_t done, std::size_t total, double t_s);
   /// The stage's own estimate of its seconds left at `t_s` (e.g. a map's, which knows which of its
   /// positions are dear): used for the current stage in place of items left / rate, counted down
