@@ -108,8 +108,7 @@ double FilmSolver::relax_membrane_point(const Kinematics& k, Model model, double
     // The convexified tangent (newton.cpp): the force's compressive principal part dropped, so the
     // geometric stiffness S:(∇δu)ᵀ∇δu is positive semidefinite. Only ε·C·e can compress (the relaxed
     // force is tension: taut, or σ n⊗n with σ > 0). S₊ = λ₁ n₁⊗n₁ = λ₁ (S − λ₂I)/(λ₁ − λ₂).
-    const double mean = 0.5 * (S[0] + S[1]), rad = std::hypot(0.5 * (S[0] - S[1]), S[2]);
-    const double l1 = mean + rad, l2 = mean - rad;
+    const auto [l1, l2] = principal_values(S[0], S[1], S[2]);
     if (l2 < 0) {
       const double f = l1 > 0 ? l1 / (l1 - l2) : 0.0;
       S = {f * (S[0] - l2), f * (S[1] - l2), f * S[2]};

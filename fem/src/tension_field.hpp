@@ -12,6 +12,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 
 namespace pvdf::fem::detail {
 
@@ -25,6 +26,13 @@ struct RelaxedMembrane {
   double D[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};  ///< ∂S/∂e (filled when asked for)
   double wrinkle_angle_rad = 0;      ///< θ of the wrinkle direction t (wrinkled state)
 };
+
+/// The principal values {larger, smaller} of a symmetric 2×2 stress resultant in Voigt form
+/// [S11, S22, S12] (N/m): mean ± radius of its Mohr circle.
+inline std::array<double, 2> principal_values(double s11, double s22, double s12) {
+  const double mean = 0.5 * (s11 + s22), rad = std::hypot(0.5 * (s11 - s22), s12);
+  return {mean + rad, mean - rad};
+}
 
 /// Relaxed law for the plane-stress stiffness C (N/m, Voigt, engineering shear; symmetric positive
 /// definite) at the elastic strain e. want_tangent: fill D.

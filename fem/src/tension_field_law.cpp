@@ -61,8 +61,7 @@ RelaxedMembrane relaxed_membrane(const double C[3][3], const std::array<double, 
   mul3(C, e.data(), Se);
   const double W_plain = 0.5 * dot3(e.data(), Se);
   // Taut: the smaller principal stress of C·e is positive.
-  const double mean = 0.5 * (Se[0] + Se[1]), rad = std::hypot(0.5 * (Se[0] - Se[1]), Se[2]);
-  if (mean - rad > 0) {
+  if (principal_values(Se[0], Se[1], Se[2])[1] > 0) {
     L.state = MembraneState::taut;
     L.S = {Se[0], Se[1], Se[2]};
     L.W = W_plain;
