@@ -163,7 +163,10 @@ void Progress::print_line(bool final_line) {
   std::ostringstream os;
   os.precision(3);
   if (total_ == 0 && !final_line) {
-    os << label_ << ": starting, elapsed " << format_duration(elapsed) << '\n';
+    // The setup's own estimate of the whole job's time left, once it has one (set_eta_s).
+    os << label_ << ": starting, elapsed " << format_duration(elapsed);
+    if (eta_hint_s_ >= 0) os << ", ETA " << format_duration(eta);
+    os << '\n';
     std::fputs(os.str().c_str(), stderr);
     std::fflush(stderr);
     printed_ = true;

@@ -329,9 +329,11 @@ ProbeSweep::ProbeSweep(const pvdf::Scene& scene, const SweepOptions& options) : 
     double disc = 0, total = 0, deflection = 0;
     std::string where = "none";
     bool failed = false;
+    std::size_t n_checked = 0;
     for (const auto& p : checks) {
       std::vector<double> state;
       const ProbeSolution c = im.from_engine(im.engine->solve(p[0], p[1], f_max, state, false), SweepModel::cheap);
+      if (options.on_setup_check) options.on_setup_check(++n_checked, checks.size());
       if (!usable(c.status)) {
         failed = true;
         where = "check solve at (" + fmt(p[0]) + ", " + fmt(p[1]) + ") m did not converge";

@@ -363,4 +363,46 @@ TEST_CASE("map reports progress as plain lines when stderr is not a terminal; --
   CHECK(std::filesystem::file_size(log) == 0);
   fs::remove_all(dir);
 }
+
+// Issue 31: a setup of minutes (the check solves that size the sweep mesh) is not silent about its
+// end: once its first check is solved, the line says the ETA of the whole map (the checks left
+// plus every position at the checks' cost). Until r22 it said "starting, elapsed" alone.
+TEST_CASE("map states an ETA during its setup, once the first setup check is solved", "[cli][map][progress]") {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("pvdf_test_progress_setup_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string scene = write_temp("pvdf_test_progress_setup_scene.json", R"({
+    "membrane": {"shape": "circle", "radius_m": 0.010, "thickness_m": 25e-6},
+    "material": {"E1_Pa": 2.2e9, "E2_Pa": 1.8e9, "G12_Pa": 0.58e9, "nu12": 0.35,
+                 "draw_angle_deg": 0.0, "d31_C_per_N": 6.5e-12, "d32_C_per_N": 0.65e-12},
+    "electrodes": [{"name": "A", "center_m": [0.0, 0.004], "size_m": [0.0015, 0.0015]},
+                   {"name": "B", "center_m": [-0.0035, -0.002], "size_m": [0.0015, 0.0015]},
+                   {"name": "C", "center_m": [0.0035, -0.002], "size_m": [0.0015, 0.0015]}],
+    "probe": {"radius_m": 0.001},
+    "model": {"kinematics": "auto", "tolerance": 0.01, "max_refinements": 0}})");
+  const std::string log = (dir / "log.txt").string();
+  const std::string cmd = "env PVDF_PROGRESS_INTERVAL_S=0.01 '" + std::string(PVDFKIT_EXE) + "' map " + scene +
+                          " --spacing-m 0.002 --region -0.004,0.004,-0.002,0.002 --setup-checks 3 --threads 1"
+                          " --no-checkpoint -o " + (dir / "m.h5").string() + " >/dev/null 2>" + log;
+  REQUIRE(std::system(cmd.c_str()) == 0);
+  std::ifstream in(log);
+  std::size_t starting = 0, starting_with_eta = 0;
+  bool counted = false;
+  const std::regex with_eta(R"(map: starting, elapsed [0-9:]+, ETA [0-9]+:[0-9]{2})");
+  for (std::string line; std::getline(in, line);) {
+    INFO(line);
+    if (line.rfind("map: starting", 0) == 0) {
+      CHECK_FALSE(counted);  // the setup comes first
+      ++starting;
+      starting_with_eta += std::regex_match(line, with_eta) ? 1 : 0;
+      CHECK(line.find("ETA ?") == std::string::npos);  // no ETA at all rather than an unknown one
+    }
+    counted = counted || line.rfind("map: 0/", 0) == 0;
+  }
+  INFO("setup lines " << starting << ", with an ETA " << starting_with_eta);
+  REQUIRE(starting >= 2);  // the setup outlasts the line interval (else the case says nothing)
+  CHECK(starting_with_eta >= 1);
+  fs::remove_all(dir);
+}
 #endif

@@ -33,27 +33,10 @@ ChargeMap Generator::run(MapReport& report) {
   build_grid();
   layout_ = Layout{o_.forces_N.size(), scene_.electrodes.size()};
   init_map();
-  const double setup_wall0_s = eta_clock_s(), setup_cpu0_s = pvdf::thread_cpu_s();
-  setup_sweeps();
-  const double setup_wall_s = eta_clock_s() - setup_wall0_s, setup_cpu_s = pvdf::thread_cpu_s() - setup_cpu0_s;
-  hash_ = run_hash();
-  resume();
-  last_checkpoint_ = std::chrono::steady_clock::now();
   scaling_ = o_.use_force_scaling && layout_.nf > 1;
-  count_progress_total();
-  // The time left before any row is done: each position's solves at the setup checks' CPU seconds
-  // each (mesh included), at the setup's CPU per wall second on every thread (docs/design.md §6).
-  if (o_.n_setup_checks > 0 && setup_cpu_s > 0 && setup_wall_s > 0) {
-    time_left_.set_prior(std::size_t(fem::SweepModel::cheap), setup_cpu_s / o_.n_setup_checks, double(o_.n_setup_checks),
-                         setup_cpu_s / setup_wall_s);
-    const double now_s = eta_clock_s();
-    report_common_cost();
-    if (o_.time_left) o_.time_left(time_left_.seconds_left(now_s));
-  }
-  // The positions to do, known now: the caller's progress shows them (and the ETA above) before
-  // the first row ends, which near the clamp can take a minute.
-  if (o_.progress) o_.progress(std::min(progress_total_, progress_done_ * std::size_t(size_)), progress_total_);
-  // The time left as of any moment, for the caller's heartbeat; withdrawn however run() ends.
+  // The time left as of any moment, for the caller's heartbeat, from the setup on; withdrawn
+  // however run() ends. During the setup it is the setup's checks still to run plus every
+  // position at the checks' cost so far (NaN before the first check); then the positions' alone.
   struct Withdraw {
     const std::function<void(std::function<double()>)>& f;
     ~Withdraw() {
@@ -63,9 +46,47 @@ ChargeMap Generator::run(MapReport& report) {
   if (o_.time_left_now) {
     o_.time_left_now([this] {
       std::lock_guard<std::mutex> lock(mutex_);
-      return time_left_.seconds_left(eta_clock_s());
+      return time_left_now_s(eta_clock_s());
     });
   }
+  const double setup_wall0_s = eta_clock_s(), setup_cpu0_s = pvdf::thread_cpu_s();
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    plan_time_left();  // every position, as if none were known (the checkpoint is read after the setup)
+  }
+  setup_sweeps([this, setup_wall0_s, setup_cpu0_s](std::size_t done, std::size_t planned) {
+    if (done == 0 || o_.n_setup_checks <= 0) return;
+    std::lock_guard<std::mutex> lock(mutex_);
+    const double now_s = eta_clock_s(), cpu_s = pvdf::thread_cpu_s() - setup_cpu0_s, wall_s = now_s - setup_wall0_s;
+    if (!(cpu_s > 0 && wall_s > 0)) return;
+    time_left_.set_prior(std::size_t(fem::SweepModel::cheap), cpu_s / double(done), double(done), cpu_s / wall_s);
+    setup_left_s_ = wall_s / double(done) * double(planned - std::min(done, planned));
+    setup_left_at_s_ = now_s;
+    report_common_cost();
+    if (o_.time_left) o_.time_left(time_left_now_s(now_s));
+  });
+  const double setup_wall_s = eta_clock_s() - setup_wall0_s, setup_cpu_s = pvdf::thread_cpu_s() - setup_cpu0_s;
+  hash_ = run_hash();
+  resume();
+  last_checkpoint_ = std::chrono::steady_clock::now();
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    setup_left_s_ = 0;
+    time_left_id_.clear();  // planned again below without the positions the checkpoint holds
+    count_progress_total();
+    // The time left before any row is done: each position's solves at the setup checks' CPU seconds
+    // each (mesh included), at the setup's CPU per wall second on every thread (docs/design.md §6).
+    if (o_.n_setup_checks > 0 && setup_cpu_s > 0 && setup_wall_s > 0) {
+      time_left_.set_prior(std::size_t(fem::SweepModel::cheap), setup_cpu_s / o_.n_setup_checks, double(o_.n_setup_checks),
+                           setup_cpu_s / setup_wall_s);
+      const double now_s = eta_clock_s();
+      report_common_cost();
+      if (o_.time_left) o_.time_left(time_left_.seconds_left(now_s));
+    }
+  }
+  // The positions to do, known now: the caller's progress shows them (and the ETA above) before
+  // the first row ends, which near the clamp can take a minute.
+  if (o_.progress) o_.progress(std::min(progress_total_, progress_done_ * std::size_t(size_)), progress_total_);
 
   bool stopped_anywhere = run_scaling_checks(report);      // phase A
   if (!stopped_anywhere) {
@@ -168,7 +189,7 @@ void Generator::init_map() {
 }
 
 // Solver setup (one sweep per thread; the first here, so bad input fails before the threads).
-void Generator::setup_sweeps() {
+void Generator::setup_sweeps(const std::function<void(std::size_t, std::size_t)>& on_check) {
   sweep_options_.solver = fem::options_from_scene(scene_);
   if (!o_.model.empty()) sweep_options_.solver.model = fem::parse_model(o_.model, "MapOptions::model");
   sweep_options_.solver.tolerance = tolerance_;
@@ -181,7 +202,9 @@ void Generator::setup_sweeps() {
   sweep_options_.mesh = o_.mesh;
   if (o_.probe_refinement == ProbeRefinement::none) sweep_options_.probe_size_m = -1;
   sweeps_.resize(std::size_t(threads_));
-  sweeps_[0] = std::make_unique<fem::ProbeSweep>(scene_, sweep_options_);
+  fem::SweepOptions first = sweep_options_;  // the other threads' sweeps run no checks
+  first.on_setup_check = on_check;
+  sweeps_[0] = std::make_unique<fem::ProbeSweep>(scene_, first);
 }
 
 // Canonical positions still to compute count for the progress total (phase B decided later).

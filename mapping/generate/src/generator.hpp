@@ -21,6 +21,7 @@
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <mutex>
@@ -118,7 +119,8 @@ class Generator {
  private:
   // steps of run() (generate.cpp)
   void init_map();
-  void setup_sweeps();
+  /// The first sweep (its setup checks; `on_check(done, planned)` after each) — more are made per thread.
+  void setup_sweeps(const std::function<void(std::size_t, std::size_t)>& on_check);
   std::string run_hash() const;
   void resume();  // with run_hash: checkpoint.cpp
   void count_progress_total();
@@ -164,6 +166,9 @@ class Generator {
   void report_common_cost();
   double eta_clock_s() const;  ///< seconds on the time-left clock (steady, since construction)
   void plan_time_left();       ///< adds the counted positions not yet planned to time_left_
+  /// MapOptions::time_left_now's answer at `t_s`: the positions' time left plus, during the setup,
+  /// its checks still to run (setup_left_s_ counted down). The caller holds mutex_.
+  double time_left_now_s(double t_s) const;
   void improve_by_direct_solve(double x_m, double y_m, fem::ProbeSolution& s);  // direct_solve.cpp
   void maybe_checkpoint(bool force);
   std::vector<double> known_records(bool only_this_run) const;
@@ -205,6 +210,7 @@ class Generator {
   std::vector<std::size_t> time_left_id_;
   std::vector<std::array<double, 4>> time_left_work_;
   std::vector<double> time_left_cpu_s_;  ///< [p]: the thread CPU seconds its solves took, same writer
+  double setup_left_s_ = 0, setup_left_at_s_ = 0;  ///< the setup's checks left (wall s) as of setup_left_at_s_
   std::chrono::steady_clock::time_point clock0_ = std::chrono::steady_clock::now();
   std::chrono::steady_clock::time_point last_checkpoint_;
   std::string first_failure_;

@@ -209,6 +209,10 @@ double Generator::eta_clock_s() const {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - clock0_).count();
 }
 
+double Generator::time_left_now_s(double t_s) const {
+  return time_left_.seconds_left(t_s) + std::max(0.0, setup_left_s_ - (t_s - setup_left_at_s_));
+}
+
 // The cost per position of the solves every layout of this film needs (sweep and clamp-layer
 // solves), for the caller's prediction of other maps (MapOptions::common_seconds_per_position).
 void Generator::report_common_cost() {

@@ -18,7 +18,7 @@ namespace pvdf {
 /// seconds — from a heartbeat thread, so also while no item completes (a setup phase, a long
 /// item) — and `label: 100/100 done in 0:32 (3.1/s)` at the end when a line was printed before
 /// (a job shorter than the interval stays silent). A total of 0 means "not known yet": the line
-/// then says `starting`. The rate shown counts from construction; the ETA divides the items left
+/// then says `starting` (with the caller's ETA once set_eta_s gave one). The rate shown counts from construction; the ETA divides the items left
 /// by the rate since the first item was reported (a setup phase before it does not make every
 /// item look slow). Callers honour `--quiet` by not making one. Thread-safe.
 class Progress {

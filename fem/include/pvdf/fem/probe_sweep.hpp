@@ -7,6 +7,7 @@
 #include "pvdf/fem/solver.hpp"
 
 #include <array>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -64,6 +65,10 @@ struct SweepOptions {
   /// per probe. Off (e.g. a fit that solves the same presses many times): probes carry no estimate
   /// (NaN) and no rim model is used; the setup still sizes the mesh with them and reports its estimate.
   bool estimate_errors = true;
+  /// Called on the constructing thread after each setup check solve with the checks done and those
+  /// planned for the present mesh (n_setup_checks; the setup may halve the mesh and check again), so
+  /// that a caller can show a setup of minutes with an ETA (MapOptions::time_left). Null = none.
+  std::function<void(std::size_t done, std::size_t planned)> on_setup_check;
   /// Start the sweep mesh from this mesh (e.g. read_msh of `pvdfkit mesh`'s file) instead of the
   /// built-in one: it is refined to the sizes above (never coarsened). Null = built-in mesh.
   std::shared_ptr<const pvdf::mesh::FilmMesh> mesh;
