@@ -373,6 +373,38 @@ int run(int argc, char** argv) {
     return finish_stdout(root.exit(e));
   } catch (const CLI::CallForVersion& e) {
     return finish_stdout(root.exit(e));
+  } catch (const CLI::ExtrasError&) {
+    // CLI11 lists the arguments it did not expect last first ("1 --threads"): name them in the
+    // order typed, with the command they were given to and where its options are listed.
+    std::vector<std::string> extras = root.remaining(true), typed;
+    for (int i = 1; i < argc; ++i) {
+      const auto it = std::find(extras.begin(), extras.end(), std::string(argv[i]));
+      if (it == extras.end()) continue;
+      typed.push_back(*it);
+      extras.erase(it);
+    }
+    typed.insert(typed.end(), extras.begin(), extras.end());
+    std::string command = "pvdfkit";
+    const CLI::App* given = &root;
+    for (const auto* sub : root.get_subcommands([](const CLI::App*) { return true; }))
+      if (sub->parsed()) {
+        command += " " + sub->get_name();
+        given = sub;
+      }
+    std::string list, guess;
+    for (const auto& t : typed) {
+      list += (list.empty() ? "" : " ") + (t.find(' ') == std::string::npos ? pvdf::quote_cell(t) : "'" + pvdf::quote_cell(t) + "'");
+      // An option typed short of its name (--spacing for --spacing-m): name the ones it begins.
+      if (t.size() > 2 && t.compare(0, 2, "--") == 0 && guess.empty()) {
+        for (const auto* opt : given->get_options())
+          for (const auto& name : opt->get_lnames())
+            if (name.compare(0, t.size() - 2, t, 2) == 0) guess += (guess.empty() ? "" : " or ") + ("--" + name);
+        if (!guess.empty()) guess = " (" + t + " is short for " + guess + "?)";
+      }
+    }
+    return fail(pvdf::exit_code::bad_input, "'" + command + "' does not take " + list +
+                                                ": not one of its options or arguments" + guess + "; run '" + command +
+                                                " --help' for those it takes");
   } catch (const CLI::ParseError& e) {
     std::string what = e.what();
     if (what.empty()) what = e.get_name();

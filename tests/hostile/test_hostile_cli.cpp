@@ -418,6 +418,10 @@ const std::vector<Row> rows = {
   {"unknown-command-ctl", "$X $'fro\\x1bbnicate' 2>.err", 2, "fro\\x1bbnicate"},
   {"no-command", "", 2, "command"},
   {"unknown-flag", "solve good.json --bogus", 2, "--bogus"},
+  // named in the order typed (CLI11 lists them last first: "1 --threads"), with the command
+  {"unknown-flag-order", "solve good.json --threads 1", 2, "'pvdfkit solve' does not take --threads 1"},
+  // an option typed short of its name: the ones it begins are named
+  {"flag-short-name", "map good.json -o m14.h5 --spacing 0.004", 2, "--spacing is short for --spacing-m", "m14.h5"},
   {"missing-scene-arg", "solve", 2, "SCENE is required"},
 };
 // clang-format on
