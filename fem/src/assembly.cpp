@@ -23,8 +23,14 @@ using namespace dealii;
 //   a(w,v) = Σ_K ∫ M(w):∇²v − Σ_F ∫ ({M_nn(w)}[[∂_n v]] + {M_nn(v)}[[∂_n w]]) + Σ_F ∫ γ/h [[∂_n w]][[∂_n v]],
 // M(w) = D κ(w), κ = ∇²w (Voigt [w,xx, w,yy, 2w,xy]), M_nn = n·M·n; rim faces impose ∂_n w = 0
 // weakly with the same terms (one-sided). Linear in w, so it is assembled once per mesh.
-void FilmSolver::assemble_bending_matrix() {
-  const bool raw = !bending_raw_.empty();  // empty in the enriched space (setup_system)
+// The local matrices hold the w DOFs only (a third of a cell's DOFs, the only ones the operator
+// couples): the constraints then resolve 9x fewer local entries (round 22, docs/bench-fem.md:
+// resolve_matrix_row was most of this function, 0.06 s per call on seed 001's first mesh). The
+// entries are the same numbers added in the same order; only the diagonal deal.II puts on a
+// constrained row differs (none on an in-plane row), a row the condensed system decouples.
+// `with_raw` false: the condensed operator only (bending_raw_ left as it was).
+void FilmSolver::assemble_bending_matrix(bool with_raw) {
+  const bool raw = with_raw && !bending_raw_.empty();  // empty in the enriched space (setup_system)
   bending_ = 0;
   if (raw) bending_raw_ = 0;
   if (!options_.include_bending && !bending_pattern_) return;
@@ -37,43 +43,72 @@ void FilmSolver::assemble_bending_matrix() {
                                  update_normal_vectors);
   const FEValuesExtractors::Scalar w(2);
   const unsigned int n_cell_dofs = fe_->n_dofs_per_cell();
-  FullMatrix<double> cell_matrix(n_cell_dofs, n_cell_dofs);
-  std::vector<types::global_dof_index> dofs(n_cell_dofs);
+  std::vector<unsigned int> w_local;  // the cell's w DOFs (local indices, in order)
+  for (unsigned int i = 0; i < n_cell_dofs; ++i)
+    if (fe_->system_to_component_index(i).first == 2) w_local.push_back(i);
+  const unsigned int n_w = w_local.size();
+  FullMatrix<double> cell_matrix(n_w, n_w);
+  std::vector<types::global_dof_index> dofs(n_cell_dofs), w_dofs(n_w);
+  std::vector<Tensor<2, dim>> hess(n_w);
   const Stiffness3& D = bending_D_;
 
   auto moment_nn = [&D](const Tensor<2, dim>& hess, const Tensor<1, dim>& n) {
     const std::array<double, 3> m = D.apply({hess[0][0], hess[1][1], 2 * hess[0][1]});
     return n[0] * n[0] * m[0] + n[1] * n[1] * m[1] + 2 * n[0] * n[1] * m[2];
   };
-  auto add_raw = [this, raw](const FullMatrix<double>& m, const std::vector<types::global_dof_index>& idx) {
+  std::vector<double> raw_row;
+  std::vector<types::global_dof_index> raw_cols;
+  auto add_raw = [&](const FullMatrix<double>& m, const std::vector<types::global_dof_index>& idx) {
     if (!raw) return;
-    for (unsigned int i = 0; i < idx.size(); ++i)
+    for (unsigned int i = 0; i < idx.size(); ++i) {
+      raw_cols.clear();
+      raw_row.clear();
       for (unsigned int j = 0; j < idx.size(); ++j)
-        if (m(i, j) != 0) bending_raw_.add(idx[i], idx[j], m(i, j));
+        if (m(i, j) != 0) {
+          raw_cols.push_back(idx[j]);
+          raw_row.push_back(m(i, j));
+        }
+      if (!raw_cols.empty()) bending_raw_.add(idx[i], raw_cols.size(), raw_cols.data(), raw_row.data(), false, false);
+    }
   };
+  std::vector<unsigned int> w_face;  // the interface's w DOFs (interface indices, in order)
+  std::vector<types::global_dof_index> w_face_dofs;
+  std::vector<double> jump, mnn;
+  FullMatrix<double> fm;
   auto face_terms = [&](double gamma_over_h) {
     const unsigned int n = fiv.n_current_interface_dofs();
-    FullMatrix<double> fm(n, n);
+    const auto idx = fiv.get_interface_dof_indices();
+    w_face.clear();
+    w_face_dofs.clear();
+    for (unsigned int i = 0; i < n; ++i) {
+      const auto local = fiv.interface_dof_to_dof_indices(i);
+      const unsigned int l = local[0] != numbers::invalid_unsigned_int ? local[0] : local[1];
+      if (fe_->system_to_component_index(l).first != 2) continue;
+      w_face.push_back(i);
+      w_face_dofs.push_back(idx[i]);
+    }
+    const unsigned int m = w_face.size();
+    fm.reinit(m, m);
+    jump.resize(m);
+    mnn.resize(m);
     const auto& normals = fiv.get_normal_vectors();
-    std::vector<double> jump(n), mnn(n);
     for (unsigned int q = 0; q < fiv.n_quadrature_points; ++q) {
       const Tensor<1, dim>& nq = normals[q];
-      for (unsigned int i = 0; i < n; ++i) {
-        jump[i] = fiv[w].jump_in_gradients(i, q) * nq;
-        mnn[i] = moment_nn(fiv[w].average_of_hessians(i, q), nq);
+      for (unsigned int i = 0; i < m; ++i) {
+        jump[i] = fiv[w].jump_in_gradients(w_face[i], q) * nq;
+        mnn[i] = moment_nn(fiv[w].average_of_hessians(w_face[i], q), nq);
       }
       const double jxw = fiv.JxW(q);
-      for (unsigned int i = 0; i < n; ++i) {
+      for (unsigned int i = 0; i < m; ++i) {
         if (jump[i] == 0 && mnn[i] == 0) continue;
-        for (unsigned int j = 0; j < n; ++j) {
+        for (unsigned int j = 0; j < m; ++j) {
           fm(i, j) += (-mnn[j] * jump[i] - mnn[i] * jump[j] +
                        gamma_over_h * bending_penalty_scale_ * jump[i] * jump[j]) * jxw;
         }
       }
     }
-    const auto idx = fiv.get_interface_dof_indices();
-    constraints_.distribute_local_to_global(fm, idx, bending_);
-    add_raw(fm, idx);
+    constraints_.distribute_local_to_global(fm, w_face_dofs, bending_);
+    add_raw(fm, w_face_dofs);
   };
   const double pp = p * (p + 1.0);
 
@@ -81,20 +116,20 @@ void FilmSolver::assemble_bending_matrix() {
     fe_values.reinit(cell);
     cell_matrix = 0;
     for (unsigned int q = 0; q < quadrature.size(); ++q) {
-      for (unsigned int i = 0; i < n_cell_dofs; ++i) {
-        if (fe_->system_to_component_index(i).first != 2) continue;
-        const Tensor<2, dim> hi = fe_values[w].hessian(i, q);
+      for (unsigned int j = 0; j < n_w; ++j) hess[j] = fe_values[w].hessian(w_local[j], q);
+      for (unsigned int i = 0; i < n_w; ++i) {
+        const Tensor<2, dim>& hi = hess[i];
         const std::array<double, 3> mi = D.apply({hi[0][0], hi[1][1], 2 * hi[0][1]});
-        for (unsigned int j = 0; j < n_cell_dofs; ++j) {
-          if (fe_->system_to_component_index(j).first != 2) continue;
-          const Tensor<2, dim> hj = fe_values[w].hessian(j, q);
+        for (unsigned int j = 0; j < n_w; ++j) {
+          const Tensor<2, dim>& hj = hess[j];
           cell_matrix(i, j) += (mi[0] * hj[0][0] + mi[1] * hj[1][1] + mi[2] * 2 * hj[0][1]) * fe_values.JxW(q);
         }
       }
     }
     cell->get_dof_indices(dofs);
-    constraints_.distribute_local_to_global(cell_matrix, dofs, bending_);
-    add_raw(cell_matrix, dofs);
+    for (unsigned int i = 0; i < n_w; ++i) w_dofs[i] = dofs[w_local[i]];
+    constraints_.distribute_local_to_global(cell_matrix, w_dofs, bending_);
+    add_raw(cell_matrix, w_dofs);
 
     for (const unsigned int f : cell->face_indices()) {
       const double h_cell = cell->extent_in_direction(GeometryInfo<dim>::unit_normal_direction[f]);
@@ -352,6 +387,7 @@ void FilmSolver::assemble(const Vector<double>& u, Model model, double artificia
 
   residual.reinit(dof_handler_.n_dofs());
   membrane_raw_ = 0;
+  if (want_matrix && options_.include_bending) widen_tangent();  // K + bending needs its face couplings
   if (want_matrix) tangent_ = 0;
   double energy = 0;
   // Block-local arrays: rb[c][a] residual, Kb[c][d][a][b] tangent.

@@ -119,7 +119,7 @@ JacobianCheck SolverChecks::jacobian(FilmSolver& s, double amplitude_m, int n_di
   const Model model = s.options_.model == Model::automatic ? Model::large_rotation : s.options_.model;
   Vector<double> r(u.size()), rp(u.size()), rm(u.size()), Kv(u.size()), v(u.size()), up(u.size());
   s.assemble(u, model, 0.0, true, r);
-  SparseMatrix<double> K(s.sparsity_);
+  SparseMatrix<double> K(s.tangent_.get_sparsity_pattern());
   K.copy_from(s.tangent_);
   for (int d = 0; d < n_directions; ++d) {
     for (auto& x : v) x = uni(rng);

@@ -268,6 +268,8 @@ class FilmSolver {
                          const std::vector<RimLayerPoint>* widths = nullptr);
   void set_material_ids();
   void setup_system();
+  /// tangent_ (and factorization_) on sparsity_, with bending's face couplings (no-op when it is already).
+  void widen_tangent();
   void mark_rim_w_dofs();
   void add_bending_face_couplings(DynamicSparsityPattern& dsp) const;
 
@@ -302,14 +304,17 @@ class FilmSolver {
   std::vector<double> clamp_layer_charge_error_C(const std::vector<double>& charge_C) const;
 
   // assembly.cpp
-  void assemble_bending_matrix();
+  /// bending_ (and bending_raw_ when `with_raw`) of the current rim terms (bending_rim_terms_).
+  void assemble_bending_matrix(bool with_raw = true);
   void assemble_load_vector();
   void build_geometry_cache();
   void assemble(const Vector<double>& u, Model model, double artificial_tension, bool want_matrix,
                 Vector<double>& residual);
 
   // newton.cpp
-  bool solve_linear(const Vector<double>& rhs, Vector<double>& x, std::string& message, bool factorize = true);
+  /// x = A⁻¹ rhs for A = `matrix` factorized by `factorization` (default: tangent_ by factorization_).
+  bool solve_linear(const Vector<double>& rhs, Vector<double>& x, std::string& message, bool factorize = true,
+                    const SparseMatrix<double>* matrix = nullptr, TangentFactorization* factorization = nullptr);
   /// `stage_rtol` > 0: a stepping-stone solve (an intermediate continuation stage), stopped as
   /// soon as ‖r‖ ≤ stage_rtol·‖f‖ with no increment test.
   NewtonOutcome newton(Model model, double artificial_tension, Vector<double>& u, double stage_rtol = 0);
@@ -408,7 +413,14 @@ class FilmSolver {
   DoFHandler<dim> dof_handler_;
   AffineConstraints<double> constraints_;
   AffineConstraints<double> hanging_constraints_;  // hanging nodes only (for the rim reaction)
-  SparsityPattern sparsity_;
+  SparsityPattern sparsity_;  // every coupling of the operators (bending's face terms when its pattern is kept)
+  // The tangent's own pattern while bending is left out (narrow_tangent_, set by run()): the cell
+  // couplings only. The C0IP face couplings of w more than quadruple the Cholesky's flops on seed
+  // 001's first mesh (78 -> 327 Mflop, lnz 0.70 -> 1.45 M); only the bending estimate's K + B needs
+  // them (goal_error.cpp), and assemble() widens the tangent as soon as bending is on.
+  SparsityPattern membrane_sparsity_;
+  bool narrow_tangent_ = false;   // run(): a tangent without bending may use membrane_sparsity_
+  bool tangent_narrow_ = false;   // tangent_ and factorization_ are on membrane_sparsity_
   SparseMatrix<double> tangent_;
   SparseMatrix<double> bending_;      // condensed
   SparseMatrix<double> bending_raw_;  // unconstrained (for rim reactions)

@@ -22,36 +22,39 @@ namespace pvdf::fem::detail {
 
 using namespace dealii;
 
-bool FilmSolver::solve_linear(const Vector<double>& rhs, Vector<double>& x, std::string& message, bool factorize) {
+bool FilmSolver::solve_linear(const Vector<double>& rhs, Vector<double>& x, std::string& message, bool factorize,
+                              const SparseMatrix<double>* matrix, TangentFactorization* factorization) {
   const auto t0 = Clock::now();
+  const SparseMatrix<double>& A = matrix ? *matrix : tangent_;
+  TangentFactorization& F = factorization ? *factorization : factorization_;
   PVDF_ASSERT(rhs.size() == dof_handler_.n_dofs() && x.size() == rhs.size(),
               "a linear solve's right-hand side and solution must have one value per DOF");
   bool ok = true;
   try {
     if (options_.iterative_solver && dof_handler_.n_dofs() > 0) {
       SparseILU<double> ilu;
-      ilu.initialize(tangent_, SparseILU<double>::AdditionalData(0, 0));
+      ilu.initialize(A, SparseILU<double>::AdditionalData(0, 0));
       SolverControl control(2000, 1e-12 * rhs.l2_norm());
       SolverGMRES<Vector<double>> gmres(control, SolverGMRES<Vector<double>>::AdditionalData(100));
       x = 0;
-      gmres.solve(tangent_, x, rhs, ilu);
-    } else if (!factorize && factorization_.usable()) {
+      gmres.solve(A, x, rhs, ilu);
+    } else if (!factorize && F.usable()) {
       // Chord step: the factorization of an earlier tangent of the same pattern.
-      factorization_.solve(rhs.begin(), x.begin(), x.size());
+      F.solve(rhs.begin(), x.begin(), x.size());
     } else {
-      bool good = factorization_.factorize(tangent_);
+      bool good = F.factorize(A);
       if (good) {
-        factorization_.solve(rhs.begin(), x.begin(), x.size());
+        F.solve(rhs.begin(), x.begin(), x.size());
         Vector<double> check(x.size());
-        tangent_.vmult(check, x);
+        A.vmult(check, x);
         check -= rhs;
         good = std::isfinite(check.l2_norm()) && check.l2_norm() <= 1e-6 * rhs.l2_norm() + 1e-300;
-        if (!good) factorization_.invalidate();
+        if (!good) F.invalidate();
       }
       if (!good) {  // indefinite or ill-conditioned pivots: pivoting LU
         const auto blas = blas_turn();  // UMFPACK calls the BLAS too
         SparseDirectUMFPACK direct;
-        direct.initialize(tangent_);
+        direct.initialize(A);
         direct.vmult(x, rhs);
       }
     }

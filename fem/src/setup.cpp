@@ -294,11 +294,15 @@ void FilmSolver::setup_system() {
   // Cells couple all components; faces (the C0IP bending terms) couple only w with w. Both with
   // the fill-in of the hanging-node condensation (see add_bending_face_couplings).
   DoFTools::make_sparsity_pattern(dof_handler_, dsp, constraints_, true);
+  const bool narrow = narrow_tangent_ && !residual_only_ && !options_.include_bending && bending_pattern_;
+  if (narrow) membrane_sparsity_.copy_from(dsp);  // before the face couplings (film_solver.hpp)
   if (options_.include_bending || bending_pattern_) add_bending_face_couplings(dsp);
   sparsity_.copy_from(dsp);
   if (!residual_only_) {  // the enriched space (goal_error.cpp) assembles residuals only
-    tangent_.reinit(sparsity_);
-    factorization_.set_pattern(sparsity_);
+    const SparsityPattern& pattern = narrow ? membrane_sparsity_ : sparsity_;
+    tangent_.reinit(pattern);
+    factorization_.set_pattern(pattern);
+    tangent_narrow_ = narrow;
   }
   bending_.reinit(sparsity_);
   // The unconstrained copy serves the rim reaction and the potential of the line search, neither of
@@ -313,6 +317,13 @@ void FilmSolver::setup_system() {
   assemble_bending_matrix();
   assemble_load_vector();
   summary_.setup_s += seconds_since(t0);
+}
+
+void FilmSolver::widen_tangent() {
+  if (!tangent_narrow_) return;
+  tangent_.reinit(sparsity_);
+  factorization_.set_pattern(sparsity_);
+  tangent_narrow_ = false;
 }
 
 // w DOFs on the rim: the clamped rim's vertical reaction is summed over them (outputs.cpp).

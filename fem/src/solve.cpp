@@ -62,6 +62,7 @@ namespace detail {
 Result FilmSolver::run() {
   const auto t_start = Clock::now();
   reuse_factorization_ = true;  // chord steps while Newton contracts >= 10x per step (see newton())
+  narrow_tangent_ = true;       // the tangent without bending's face couplings while bending is left out
   setup_system();
   if (total_force_ == 0) return zero_load_result(t_start);
 
