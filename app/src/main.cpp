@@ -21,6 +21,7 @@
 #include <filesystem>
 #include <iostream>
 #include <new>
+#include <utility>
 
 #include <fcntl.h>
 #include <poll.h>
@@ -331,6 +332,23 @@ int finish_stdout(int code) {
 }
 
 /// The registered subcommand names, for the "unknown command" message.
+// The command line's deepest command that was given ("pvdfkit restore scan"), and its app.
+std::pair<std::string, const CLI::App*> given_command(const CLI::App& root) {
+  std::string command = "pvdfkit";
+  const CLI::App* given = &root;
+  for (bool deeper = true; deeper;) {
+    deeper = false;
+    for (const auto* sub : given->get_subcommands([](const CLI::App*) { return true; }))
+      if (sub->parsed()) {
+        command += " " + sub->get_name();
+        given = sub;
+        deeper = true;
+        break;
+      }
+  }
+  return {command, given};
+}
+
 std::string command_list(const CLI::App& root) {
   std::string out;
   for (const auto* sub : root.get_subcommands([](const CLI::App* a) { return !a->get_group().empty(); })) {
@@ -384,13 +402,7 @@ int run(int argc, char** argv) {
       extras.erase(it);
     }
     typed.insert(typed.end(), extras.begin(), extras.end());
-    std::string command = "pvdfkit";
-    const CLI::App* given = &root;
-    for (const auto* sub : root.get_subcommands([](const CLI::App*) { return true; }))
-      if (sub->parsed()) {
-        command += " " + sub->get_name();
-        given = sub;
-      }
+    const auto [command, given] = given_command(root);
     std::string list, guess;
     for (const auto& t : typed) {
       list += (list.empty() ? "" : " ") + (t.find(' ') == std::string::npos ? pvdf::quote_cell(t) : "'" + pvdf::quote_cell(t) + "'");
@@ -405,6 +417,25 @@ int run(int argc, char** argv) {
     return fail(pvdf::exit_code::bad_input, "'" + command + "' does not take " + list +
                                                 ": not one of its options or arguments" + guess + "; run '" + command +
                                                 " --help' for those it takes");
+  } catch (const CLI::RequiredError& e) {
+    // Name the command that lacks something ("A subcommand is required" alone does not say whose).
+    const auto [command, given] = given_command(root);
+    std::string what = e.what();
+    if (what.find("subcommand") != std::string::npos) {
+      std::string names;
+      for (const auto* sub : given->get_subcommands([](const CLI::App* a) { return !a->get_group().empty(); }))
+        names += (names.empty() ? "" : ", ") + sub->get_name();
+      what = "'" + command + "' needs a command first: one of " + names;
+      const std::vector<std::string> extras = root.remaining(true);
+      for (int i = 1; i < argc; ++i)  // the first typed of those CLI11 did not take
+        if (std::find(extras.begin(), extras.end(), std::string(argv[i])) != extras.end()) {
+          what += " (" + pvdf::quote_cell(argv[i]) + " is not one of them)";
+          break;
+        }
+    } else {
+      what = "'" + command + "': " + what;
+    }
+    return fail(pvdf::exit_code::bad_input, what + "; run '" + command + " --help'");
   } catch (const CLI::ParseError& e) {
     std::string what = e.what();
     if (what.empty()) what = e.get_name();

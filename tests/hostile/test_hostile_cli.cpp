@@ -422,7 +422,10 @@ const std::vector<Row> rows = {
   {"unknown-flag-order", "solve good.json --threads 1", 2, "'pvdfkit solve' does not take --threads 1"},
   // an option typed short of its name: the ones it begins are named
   {"flag-short-name", "map good.json -o m14.h5 --spacing 0.004", 2, "--spacing is short for --spacing-m", "m14.h5"},
-  {"missing-scene-arg", "solve", 2, "SCENE is required"},
+  {"missing-scene-arg", "solve", 2, "'pvdfkit solve': SCENE is required"},
+  // a command of commands without one: its commands named, and what was typed in their place
+  {"restore-unknown-subcommand", "restore frob", 2,
+   "'pvdfkit restore' needs a command first: one of simulate, identify, apply (frob is not one of them)"},
 };
 // clang-format on
 
