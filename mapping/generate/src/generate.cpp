@@ -55,15 +55,11 @@ ChargeMap Generator::run(MapReport& report) {
     plan_time_left();  // every position, as if none were known (the checkpoint is read after the setup)
   }
   setup_sweeps([this, setup_wall0_s, setup_cpu0_s](std::size_t done, std::size_t planned) {
-    if (done == 0 || o_.n_setup_checks <= 0) return;
+    if (done == 0) return;
     std::lock_guard<std::mutex> lock(mutex_);
-    const double now_s = eta_clock_s(), cpu_s = pvdf::thread_cpu_s() - setup_cpu0_s, wall_s = now_s - setup_wall0_s;
-    if (!(cpu_s > 0 && wall_s > 0)) return;
-    time_left_.set_prior(std::size_t(fem::SweepModel::cheap), cpu_s / double(done), double(done), cpu_s / wall_s);
-    setup_left_s_ = wall_s / double(done) * double(planned - std::min(done, planned));
-    setup_left_at_s_ = now_s;
-    report_common_cost();
-    if (o_.time_left) o_.time_left(time_left_now_s(now_s));
+    const double wall_s = eta_clock_s() - setup_wall0_s;
+    report_setup_prior(pvdf::thread_cpu_s() - setup_cpu0_s, wall_s, double(done),
+                       wall_s / double(done) * double(planned - std::min(done, planned)));
   });
   const double setup_wall_s = eta_clock_s() - setup_wall0_s, setup_cpu_s = pvdf::thread_cpu_s() - setup_cpu0_s;
   hash_ = run_hash();
@@ -74,15 +70,7 @@ ChargeMap Generator::run(MapReport& report) {
     setup_left_s_ = 0;
     time_left_id_.clear();  // planned again below without the positions the checkpoint holds
     count_progress_total();
-    // The time left before any row is done: each position's solves at the setup checks' CPU seconds
-    // each (mesh included), at the setup's CPU per wall second on every thread (docs/design.md §6).
-    if (o_.n_setup_checks > 0 && setup_cpu_s > 0 && setup_wall_s > 0) {
-      time_left_.set_prior(std::size_t(fem::SweepModel::cheap), setup_cpu_s / o_.n_setup_checks, double(o_.n_setup_checks),
-                           setup_cpu_s / setup_wall_s);
-      const double now_s = eta_clock_s();
-      report_common_cost();
-      if (o_.time_left) o_.time_left(time_left_.seconds_left(now_s));
-    }
+    report_setup_prior(setup_cpu_s, setup_wall_s, double(o_.n_setup_checks), 0.0);
   }
   // The positions to do, known now: the caller's progress shows them (and the ETA above) before
   // the first row ends, which near the clamp can take a minute.
@@ -186,6 +174,19 @@ void Generator::init_map() {
   interp_err_G_.assign(adaptive_ ? nf * n * ne : 0, 0.0);
   known_.assign(n, 0);
   this_run_.assign(n, 0);
+}
+
+// The time left before any row is done: each position's solves at the setup checks' CPU seconds
+// each (mesh included), at the setup's CPU per wall second on every thread (docs/design.md §6),
+// plus `setup_left_s` of the setup still to run; stated to the caller. Nothing without a check.
+void Generator::report_setup_prior(double cpu_s, double wall_s, double n_checks, double setup_left_s) {
+  if (!(o_.n_setup_checks > 0 && n_checks > 0 && cpu_s > 0 && wall_s > 0)) return;
+  time_left_.set_prior(std::size_t(fem::SweepModel::cheap), cpu_s / n_checks, n_checks, cpu_s / wall_s);
+  const double now_s = eta_clock_s();
+  setup_left_s_ = setup_left_s;
+  setup_left_at_s_ = now_s;
+  report_common_cost();
+  if (o_.time_left) o_.time_left(time_left_now_s(now_s));
 }
 
 // Solver setup (one sweep per thread; the first here, so bad input fails before the threads).

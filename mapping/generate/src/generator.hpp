@@ -169,6 +169,8 @@ class Generator {
   /// MapOptions::time_left_now's answer at `t_s`: the positions' time left plus, during the setup,
   /// its checks still to run (setup_left_s_ counted down). The caller holds mutex_.
   double time_left_now_s(double t_s) const;
+  /// The setup checks' prior for the time left (generate.cpp), stated to the caller (holds mutex_).
+  void report_setup_prior(double cpu_s, double wall_s, double n_checks, double setup_left_s);
   void improve_by_direct_solve(double x_m, double y_m, fem::ProbeSolution& s);  // direct_solve.cpp
   void maybe_checkpoint(bool force);
   std::vector<double> known_records(bool only_this_run) const;
