@@ -29,9 +29,13 @@ using namespace dealii;
 // entries are the same numbers added in the same order; only the diagonal deal.II puts on a
 // constrained row differs (none on an in-plane row), a row the condensed system decouples.
 // `with_raw` false: the condensed operator only (bending_raw_ left as it was).
-void FilmSolver::assemble_bending_matrix(bool with_raw) {
-  const bool raw = with_raw && !bending_raw_.empty();  // empty in the enriched space (setup_system)
-  bending_ = 0;
+// `rim_only` ≠ 0: only the rim faces' terms, × rim_only, added to bending_ as it is (−1: the operator
+// without its rim terms, for the estimate of goal_error.cpp, at the cost of the rim cells alone
+// rather than of a whole assembly; the constrained rows' diagonals grow, which they may).
+void FilmSolver::assemble_bending_matrix(bool with_raw, double rim_only) {
+  const bool raw = with_raw && rim_only == 0 && !bending_raw_.empty();  // empty in the enriched space (setup_system)
+  if (bending_.empty()) return;  // an enriched space without bending has no operator (setup_system)
+  if (rim_only == 0) bending_ = 0;
   if (raw) bending_raw_ = 0;
   if (!options_.include_bending && !bending_pattern_) return;
   const unsigned int p = form_degree();  // the primal degree, also in the enriched space (consistent forms)
@@ -107,12 +111,22 @@ void FilmSolver::assemble_bending_matrix(bool with_raw) {
         }
       }
     }
+    if (rim_only != 0) fm *= rim_only;
     constraints_.distribute_local_to_global(fm, w_face_dofs, bending_);
     add_raw(fm, w_face_dofs);
   };
   const double pp = p * (p + 1.0);
 
   for (const auto& cell : dof_handler_.active_cell_iterators()) {
+    if (rim_only != 0) {
+      if (!cell->at_boundary()) continue;
+      for (const unsigned int f : cell->face_indices()) {
+        if (!cell->face(f)->at_boundary()) continue;
+        fiv.reinit(cell, f);
+        face_terms(pp / cell->extent_in_direction(GeometryInfo<dim>::unit_normal_direction[f]));
+      }
+      continue;
+    }
     fe_values.reinit(cell);
     cell_matrix = 0;
     for (unsigned int q = 0; q < quadrature.size(); ++q) {

@@ -304,8 +304,9 @@ class FilmSolver {
   std::vector<double> clamp_layer_charge_error_C(const std::vector<double>& charge_C) const;
 
   // assembly.cpp
-  /// bending_ (and bending_raw_ when `with_raw`) of the current rim terms (bending_rim_terms_).
-  void assemble_bending_matrix(bool with_raw = true);
+  /// bending_ (and bending_raw_ when `with_raw`) of the current rim terms (bending_rim_terms_); with
+  /// `rim_only` ≠ 0, the rim terms alone × rim_only added to bending_ (assembly.cpp).
+  void assemble_bending_matrix(bool with_raw = true, double rim_only = 0);
   void assemble_load_vector();
   void build_geometry_cache();
   void assemble(const Vector<double>& u, Model model, double artificial_tension, bool want_matrix,
@@ -432,6 +433,10 @@ class FilmSolver {
   // Sparse direct solver (tangent_factorization.hpp): symbolic analysis once per pattern,
   // CHOLMOD supernodal LLᵀ, simplicial LDLᵀ where indefinite; UMFPACK is the caller's fallback.
   TangentFactorization factorization_;
+  // The bending estimate's K + B while the tangent is narrow (goal_error.cpp): on sparsity_, its
+  // symbolic analysis kept across estimates on the same mesh (cleared by setup_system).
+  SparseMatrix<double> k_plus_b_;
+  TangentFactorization k_plus_b_factorization_;
   // Chord steps (probe sweeps): keep the last factorized tangent while Newton contracts fast.
   bool reuse_factorization_ = false;
   bool chord_first_step_ = false;     // the first step of the next newton() may use the old factorization

@@ -242,16 +242,19 @@ FilmSolver::GoalErrors FilmSolver::estimate_goal_errors(const Vector<double>& u,
       for (auto it = bending_.begin(); it != bending_.end(); ++it, ++k)
         if (it->value() != 0) kept_bending.emplace_back(k, it->value());
       bending_rim_terms_ = false;
-      assemble_bending_matrix(false);  // bending_raw_ keeps the rim terms
+      assemble_bending_matrix(false, -1.0);  // the rim terms off; bending_raw_ keeps them
     }
     assemble(u, model, 0.0, true, r);
-    // K + B on the pattern with bending's face couplings: tangent_ itself when it has them, else a
-    // copy of bending_ with K added (the same sums, B + K = K + B) and its own factorization.
-    SparseMatrix<double> with_bending;
-    TangentFactorization with_bending_factorization;
+    // K + B on the pattern with bending's face couplings: tangent_ itself when it has them, else
+    // k_plus_b_, a copy of bending_ with K added (the same sums, B + K = K + B), with its own
+    // factorization (its symbolic analysis made once per mesh), so that K's stays for step 2 and
+    // for a sweep's next chord step.
     if (tangent_narrow_) {
-      with_bending.reinit(sparsity_);
-      with_bending.copy_from(bending_);
+      if (k_plus_b_.empty() || k_plus_b_.m() != sparsity_.n_rows()) {
+        k_plus_b_.reinit(sparsity_);
+        k_plus_b_factorization_.set_pattern(sparsity_);
+      }
+      k_plus_b_.copy_from(bending_);
       std::vector<types::global_dof_index> cols;
       std::vector<double> vals;
       for (types::global_dof_index row = 0; row < tangent_.m(); ++row) {
@@ -261,14 +264,13 @@ FilmSolver::GoalErrors FilmSolver::estimate_goal_errors(const Vector<double>& u,
           cols.push_back(it->column());
           vals.push_back(it->value());
         }
-        with_bending.add(row, cols.size(), cols.data(), vals.data(), false, false);
+        k_plus_b_.add(row, cols.size(), cols.data(), vals.data(), false, false);
       }
-      with_bending_factorization.set_pattern(sparsity_);
     } else {
       tangent_.add(1.0, bending_);
     }
-    const SparseMatrix<double>& k_plus_b = tangent_narrow_ ? with_bending : tangent_;
-    TangentFactorization& k_plus_b_factorization = tangent_narrow_ ? with_bending_factorization : factorization_;
+    const SparseMatrix<double>& k_plus_b = tangent_narrow_ ? k_plus_b_ : tangent_;
+    TangentFactorization& k_plus_b_factorization = tangent_narrow_ ? k_plus_b_factorization_ : factorization_;
     Vector<double> bu(u.size());
     bending_.vmult(bu, u);
     constraints_.set_zero(bu);

@@ -290,21 +290,29 @@ void FilmSolver::setup_system() {
                                            Functions::ZeroFunction<dim>(3), constraints_);
   constraints_.close();
 
-  DynamicSparsityPattern dsp(dof_handler_.n_dofs());
-  // Cells couple all components; faces (the C0IP bending terms) couple only w with w. Both with
-  // the fill-in of the hanging-node condensation (see add_bending_face_couplings).
-  DoFTools::make_sparsity_pattern(dof_handler_, dsp, constraints_, true);
-  const bool narrow = narrow_tangent_ && !residual_only_ && !options_.include_bending && bending_pattern_;
-  if (narrow) membrane_sparsity_.copy_from(dsp);  // before the face couplings (film_solver.hpp)
-  if (options_.include_bending || bending_pattern_) add_bending_face_couplings(dsp);
-  sparsity_.copy_from(dsp);
-  if (!residual_only_) {  // the enriched space (goal_error.cpp) assembles residuals only
-    const SparsityPattern& pattern = narrow ? membrane_sparsity_ : sparsity_;
-    tangent_.reinit(pattern);
-    factorization_.set_pattern(pattern);
-    tangent_narrow_ = narrow;
+  k_plus_b_.clear();  // on the old sparsity_ (goal_error.cpp makes it again when it is needed)
+  if (residual_only_ && !options_.include_bending && !bending_pattern_) {
+    // The enriched space of a film without bending assembles residuals only and has no operator:
+    // no pattern at all (its Q(p+1) pattern was a tenth of a map node's time, round 23).
+    bending_.clear();
+    sparsity_.reinit(0, 0, 0);
+  } else {
+    DynamicSparsityPattern dsp(dof_handler_.n_dofs());
+    // Cells couple all components; faces (the C0IP bending terms) couple only w with w. Both with
+    // the fill-in of the hanging-node condensation (see add_bending_face_couplings).
+    DoFTools::make_sparsity_pattern(dof_handler_, dsp, constraints_, true);
+    const bool narrow = narrow_tangent_ && !residual_only_ && !options_.include_bending && bending_pattern_;
+    if (narrow) membrane_sparsity_.copy_from(dsp);  // before the face couplings (film_solver.hpp)
+    if (options_.include_bending || bending_pattern_) add_bending_face_couplings(dsp);
+    sparsity_.copy_from(dsp);
+    if (!residual_only_) {  // the enriched space (goal_error.cpp) assembles residuals only
+      const SparsityPattern& pattern = narrow ? membrane_sparsity_ : sparsity_;
+      tangent_.reinit(pattern);
+      factorization_.set_pattern(pattern);
+      tangent_narrow_ = narrow;
+    }
+    bending_.reinit(sparsity_);
   }
-  bending_.reinit(sparsity_);
   // The unconstrained copy serves the rim reaction and the potential of the line search, neither of
   // which the enriched space (form_degree_ > 0, goal_error.cpp) computes: there it is left empty
   // (on the Q3 space of a direct solve near the clamp it was 0.2 GB, heaptrack).
