@@ -433,10 +433,13 @@ class FilmSolver {
   // Sparse direct solver (tangent_factorization.hpp): symbolic analysis once per pattern,
   // CHOLMOD supernodal LLᵀ, simplicial LDLᵀ where indefinite; UMFPACK is the caller's fallback.
   TangentFactorization factorization_;
-  // The bending estimate's K + B while the tangent is narrow (goal_error.cpp): on sparsity_, its
-  // symbolic analysis kept across estimates on the same mesh (cleared by setup_system).
+  // The bending estimate's K + B while the tangent is narrow (goal_error.cpp): on sparsity_, with its
+  // factorization; kept across estimates on the same mesh (its symbolic analysis made once) where
+  // keep_k_plus_b_ (probe sweeps: every force level of a position on its mesh), else released after
+  // each estimate (solve: one estimate per mesh; it held 28 MB of seed 001's 360 MB near the clamp).
   SparseMatrix<double> k_plus_b_;
-  TangentFactorization k_plus_b_factorization_;
+  std::unique_ptr<TangentFactorization> k_plus_b_factorization_;
+  bool keep_k_plus_b_ = false;
   // Chord steps (probe sweeps): keep the last factorized tangent while Newton contracts fast.
   bool reuse_factorization_ = false;
   bool chord_first_step_ = false;     // the first step of the next newton() may use the old factorization

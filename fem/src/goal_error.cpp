@@ -250,9 +250,10 @@ FilmSolver::GoalErrors FilmSolver::estimate_goal_errors(const Vector<double>& u,
     // factorization (its symbolic analysis made once per mesh), so that K's stays for step 2 and
     // for a sweep's next chord step.
     if (tangent_narrow_) {
-      if (k_plus_b_.empty() || k_plus_b_.m() != sparsity_.n_rows()) {
+      if (k_plus_b_.empty() || !k_plus_b_factorization_) {
         k_plus_b_.reinit(sparsity_);
-        k_plus_b_factorization_.set_pattern(sparsity_);
+        k_plus_b_factorization_ = std::make_unique<TangentFactorization>();
+        k_plus_b_factorization_->set_pattern(sparsity_);
       }
       k_plus_b_.copy_from(bending_);
       std::vector<types::global_dof_index> cols;
@@ -270,7 +271,7 @@ FilmSolver::GoalErrors FilmSolver::estimate_goal_errors(const Vector<double>& u,
       tangent_.add(1.0, bending_);
     }
     const SparseMatrix<double>& k_plus_b = tangent_narrow_ ? k_plus_b_ : tangent_;
-    TangentFactorization& k_plus_b_factorization = tangent_narrow_ ? k_plus_b_factorization_ : factorization_;
+    TangentFactorization& k_plus_b_factorization = tangent_narrow_ ? *k_plus_b_factorization_ : factorization_;
     Vector<double> bu(u.size());
     bending_.vmult(bu, u);
     constraints_.set_zero(bu);
@@ -284,6 +285,10 @@ FilmSolver::GoalErrors FilmSolver::estimate_goal_errors(const Vector<double>& u,
       add_cell_shares(dof_handler_, bu, z, 1.0 / scale[j], multiplicity, ge.indicators);
     }
     if (!tangent_narrow_) tangent_.add(-1.0, bending_);  // K again, without a second assembly
+    if (!keep_k_plus_b_) {
+      k_plus_b_.clear();
+      k_plus_b_factorization_.reset();
+    }
     if (layer) {
       bending_rim_terms_ = true;
       std::size_t k = 0, next = 0;

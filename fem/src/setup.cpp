@@ -291,6 +291,7 @@ void FilmSolver::setup_system() {
   constraints_.close();
 
   k_plus_b_.clear();  // on the old sparsity_ (goal_error.cpp makes it again when it is needed)
+  k_plus_b_factorization_.reset();
   if (residual_only_ && !options_.include_bending && !bending_pattern_) {
     // The enriched space of a film without bending assembles residuals only and has no operator:
     // no pattern at all (its Q(p+1) pattern was a tenth of a map node's time, round 23).

@@ -29,6 +29,7 @@ ProbeSolver::ProbeSolver(const pvdf::Scene& scene, const Options& options, const
   // Newton's tangent without bending's face couplings while bending is left out, as solve's (round
   // 23: a quarter of the Cholesky's flops; the bending estimate's K + B has its own, wide, pattern).
   s.narrow_tangent_ = true;
+  s.keep_k_plus_b_ = true;
   if (mesh) s.make_grid_from(*mesh);
   else s.make_grid();
   if (sizes.rim_size_m > 0) {
