@@ -331,7 +331,6 @@ int finish_stdout(int code) {
                                               "); it is incomplete: check the disk space or the redirection");
 }
 
-/// The registered subcommand names, for the "unknown command" message.
 // The command line's deepest command that was given ("pvdfkit restore scan"), and its app.
 std::pair<std::string, const CLI::App*> given_command(const CLI::App& root) {
   std::string command = "pvdfkit";
@@ -349,6 +348,7 @@ std::pair<std::string, const CLI::App*> given_command(const CLI::App& root) {
   return {command, given};
 }
 
+/// The registered subcommand names, for the "unknown command" message.
 std::string command_list(const CLI::App& root) {
   std::string out;
   for (const auto* sub : root.get_subcommands([](const CLI::App* a) { return !a->get_group().empty(); })) {
