@@ -448,11 +448,21 @@ ProbeSolution ProbeSweep::solve(double x_m, double y_m, double force_N, const Sw
     rim_sector = warm_start->rim_sector;
   }
   // The rim model where the cheap model's estimate says bending matters: its model part above
-  // half the tolerance (the discretization's share is the other half), or the total above it.
-  const double cheap_model = usable(s.status) ? relative(s.charge_error_model_C, s.charge_C) : 0.0;
-  const bool want_rim = !im.rim_engines.empty() && usable(s.status) &&
-                        (im.options.rim_model == SweepOptions::RimModel::always ||
-                         cheap_model > 0.5 * tol || s.estimated_relative_error > tol);
+  // half the tolerance (the discretization's share is the other half), or the total above it; and
+  // where the cheap model did not converge at all. Next to the clamp a membrane without bending on
+  // the sweep mesh can stall in its continuation (the atlas's outermost ring on seed 001, 2 mm FE
+  // cells: "stagnated at artificial pretension 6 N/m"), where the rim model, which keeps bending and
+  // resolves the clamp's layer, is the model the press needs anyway (docs/atlas.md §3). Taut films
+  // only: a slack film's rim-model solve from flat can run for many minutes (docs/fem.md §3.3), so
+  // its failure stays a failure.
+  const auto& film = im.scene.membrane;
+  const bool taut = !(film.pretension_N_per_m < 0 || film.slack_strain > 0 || film.tension_field);
+  const bool cheap_usable = usable(s.status);
+  const std::string cheap_message = cheap_usable ? std::string() : s.message;
+  const double cheap_model = cheap_usable ? relative(s.charge_error_model_C, s.charge_C) : 0.0;
+  const bool bending_matters = cheap_usable && (im.options.rim_model == SweepOptions::RimModel::always ||
+                                                cheap_model > 0.5 * tol || s.estimated_relative_error > tol);
+  const bool want_rim = !im.rim_engines.empty() && (bending_matters || (!cheap_usable && taut));
   // First the clamp's bending layer as a boundary condition on this probe's own mesh, kept where
   // its estimate is within its share of the tolerance (3/4 of it minus bending's remaining
   // estimated effect), its Newton converged and its lagged passes settled: solve's rule
@@ -500,7 +510,7 @@ ProbeSolution ProbeSweep::solve(double x_m, double y_m, double force_N, const Sw
     ++im.rim_solves;
     im.rim_s += seconds_since(t_rim);
     if (usable(r.status)) {
-      r.cheap_model_relative_error = cheap_model;
+      r.cheap_model_relative_error = cheap_usable ? cheap_model : std::numeric_limits<double>::quiet_NaN();
       r.newton_iterations += s.newton_iterations;
       s = std::move(r);
       rim_state = std::move(rs);
@@ -508,8 +518,10 @@ ProbeSolution ProbeSweep::solve(double x_m, double y_m, double force_N, const Sw
       rim_x = x_m;
       rim_y = y_m;
       rim_sector = sector;
-    } else {
+    } else if (cheap_usable) {
       s.message += "; the rim model did not converge here (" + r.message + "), the cheap model's result is kept";
+    } else {
+      s.message += "; the rim model did not converge either (" + r.message + ")";
     }
   }
   s.x_m = x_m;
@@ -531,11 +543,14 @@ ProbeSolution ProbeSweep::solve(double x_m, double y_m, double force_N, const Sw
                       : "Newton converged; " + which + " estimated charge error " + fmt(s.estimated_relative_error);
     }
     if (!clamp_note.empty()) s.message += "; " + clamp_note + (s.model_used == SweepModel::rim ? ": rim model" : "");
+    if (!cheap_usable) s.message += "; the sweep model did not converge here (" + cheap_message + ")";
     if (state_out) {
+      // The sweep model's state: this press's, or, where the sweep model did not converge, the warm
+      // start's as given (its own position and force), so that the next press starts from it.
       state_out->dofs = std::move(state);
-      state_out->force_N = force_N;
-      state_out->x_m = x_m;
-      state_out->y_m = y_m;
+      state_out->force_N = cheap_usable ? force_N : state_force;
+      state_out->x_m = cheap_usable ? x_m : (warm ? warm_start->x_m : x_m);
+      state_out->y_m = cheap_usable ? y_m : (warm ? warm_start->y_m : y_m);
       state_out->rim_dofs = std::move(rim_state);
       state_out->rim_force_N = rim_force;
       state_out->rim_x_m = rim_x;
