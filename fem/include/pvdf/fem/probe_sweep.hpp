@@ -153,7 +153,8 @@ struct ProbeSolution {
   double estimated_relative_error = 1;
   double deflection_error_m = 0;        ///< estimated |error| of deflection_at_load_m (m)
   SweepModel model_used = SweepModel::cheap;
-  /// When the rim model solved it: the cheap model's own estimated relative model error that sent it there.
+  /// When the rim model solved it: the cheap model's own estimated relative model error that sent it
+  /// there; NaN when the cheap model did not converge at all (taut films then take the rim model).
   double cheap_model_relative_error = 0;
   /// Model clamp_layer: the condition's own estimate K·ρ·|ΔQ| relative to the largest charge (in
   /// estimated_relative_error too); otherwise 0.
