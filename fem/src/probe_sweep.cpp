@@ -32,6 +32,10 @@ using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
+// A slack or wrinkling film (the relaxed membrane of tension_field.cpp): no per-probe refinement,
+// and no rim-model fallback where its sweep model fails (ProbeSweep::solve).
+bool slack_or_wrinkling(const pvdf::Membrane& m) { return m.pretension_N_per_m < 0 || m.slack_strain > 0 || m.tension_field; }
+
 std::string fmt(double x, int precision = 3) {
   std::ostringstream os;
   os.precision(precision);
@@ -69,8 +73,7 @@ detail::SweepMeshSizes initial_mesh_sizes(const pvdf::Scene& scene, const SweepO
   // Slack and wrinkling films: no per-probe refinement. Their warm starts must carry the cone the
   // film hangs in from one press to the next (the walk of walk_probe), which the round trip
   // through the sweep mesh would smooth away (measured: the walk then no longer converges).
-  const auto& m = scene.membrane;
-  if (m.pretension_N_per_m < 0 || m.slack_strain > 0 || m.tension_field) sizes.probe_size_m = 0;
+  if (slack_or_wrinkling(scene.membrane)) sizes.probe_size_m = 0;
   if (options.probe_size_m > 0) sizes.probe_size_m = options.probe_size_m;
   if (options.probe_size_m < 0) sizes.probe_size_m = 0;
   if (options.region_size_m > 0) sizes.region_size_m = options.region_size_m;
@@ -455,8 +458,7 @@ ProbeSolution ProbeSweep::solve(double x_m, double y_m, double force_N, const Sw
   // resolves the clamp's layer, is the model the press needs anyway (docs/atlas.md §3). Taut films
   // only: a slack film's rim-model solve from flat can run for many minutes (docs/fem.md §3.3), so
   // its failure stays a failure.
-  const auto& film = im.scene.membrane;
-  const bool taut = !(film.pretension_N_per_m < 0 || film.slack_strain > 0 || film.tension_field);
+  const bool taut = !slack_or_wrinkling(im.scene.membrane);
   const bool cheap_usable = usable(s.status);
   const std::string cheap_message = cheap_usable ? std::string() : s.message;
   const double cheap_model = cheap_usable ? relative(s.charge_error_model_C, s.charge_C) : 0.0;
